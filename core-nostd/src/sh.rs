@@ -1,0 +1,347 @@
+//! Real, orthonormal spherical harmonics up to order [`MAX_ORDER`].
+//!
+//! # Convention (the one place it is stated)
+//! - Order `n` means bands `l = 0..n`, so `n²` coefficients; coefficient index `c = l² + l + m`.
+//! - Directions are unit vectors `(x, y, z)` with `z = cos θ` and `φ = atan2(y, x)`.
+//! - No Condon–Shortley phase: `y_{1,-1} = k·y`, `y_{1,0} = k·z`, `y_{1,1} = k·x` with
+//!   `k = √(3/4π)`. For `m > 0`: `y_{l,m} = √2 K_l^m P_l^m(cos θ) cos(mφ)` and
+//!   `y_{l,-m} = √2 K_l^m P_l^m(cos θ) sin(mφ)`, `K_l^m = √((2l+1)/4π · (l−m)!/(l+m)!)`.
+//! - Lighting `L` and transfer `t` are projected with the same basis; the shading integral is
+//!   the dot product `Σ_c L_c t_c` (orthonormality), and the renderer applies albedo / π.
+
+use crate::math;
+
+/// Highest supported SH order (bands `0..MAX_ORDER`).
+pub const MAX_ORDER: usize = 6;
+/// Number of coefficients at [`MAX_ORDER`].
+pub const MAX_COEFFS: usize = MAX_ORDER * MAX_ORDER;
+
+/// `Â_l = 2π ∫₀¹ t P_l(t) dt`: the clamped cosine `max(cos θ, 0)` as zonal harmonics, in the
+/// un-normalised form (π, 2π/3, π/4, 0, −π/24, 0). By Funk–Hecke its coefficient on `y_{l,m}`
+/// around a normal `n` is `Â_l · y_{l,m}(n)`.
+pub const CLAMPED_COSINE_BANDS: [f32; MAX_ORDER] = [
+    core::f32::consts::PI,
+    2.0 * core::f32::consts::PI / 3.0,
+    core::f32::consts::PI / 4.0,
+    0.0,
+    -core::f32::consts::PI / 24.0,
+    0.0,
+];
+
+/// Why an SH routine refused its input.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShError {
+    /// The order is 0 or above [`MAX_ORDER`].
+    BadOrder,
+    /// The output slice is shorter than `order²`.
+    OutputTooSmall,
+    /// The direction has zero length, or a NaN or infinite component.
+    BadDirection,
+}
+
+impl core::fmt::Display for ShError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            ShError::BadOrder => "SH order must be in 1..=6",
+            ShError::OutputTooSmall => "output slice shorter than order squared",
+            ShError::BadDirection => "direction is zero, NaN or infinite",
+        })
+    }
+}
+
+/// Number of coefficients of an order-`order` expansion.
+pub const fn coeff_count(order: usize) -> usize {
+    order * order
+}
+
+/// Coefficient index of band `l`, index `m` (−l..=l).
+pub const fn index(l: usize, m: i32) -> usize {
+    ((l * l + l) as isize + m as isize) as usize
+}
+
+fn check(order: usize, out_len: usize) -> Result<usize, ShError> {
+    if order == 0 || order > MAX_ORDER {
+        return Err(ShError::BadOrder);
+    }
+    let n2 = coeff_count(order);
+    if out_len < n2 {
+        return Err(ShError::OutputTooSmall);
+    }
+    Ok(n2)
+}
+
+fn normalise(dir: [f32; 3]) -> Result<[f32; 3], ShError> {
+    let len2 = dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2];
+    if !len2.is_finite() || len2 <= 0.0 {
+        return Err(ShError::BadDirection);
+    }
+    let inv = 1.0 / math::sqrt(len2);
+    Ok([dir[0] * inv, dir[1] * inv, dir[2] * inv])
+}
+
+/// `K_l^m` for `0 ≤ m ≤ l < MAX_ORDER`, from the factorial ratio.
+fn norm(l: usize, m: usize) -> f32 {
+    let mut ratio = 1.0f64; // (l−m)!/(l+m)!
+    for k in (l - m + 1)..=(l + m) {
+        ratio /= k as f64;
+    }
+    libm::sqrt((2 * l + 1) as f64 / (4.0 * core::f64::consts::PI) * ratio) as f32
+}
+
+/// Evaluates all `order²` basis functions in direction `dir` (normalised here) into `out`.
+///
+/// Uses the Cartesian recurrences (no trigonometry): `P_l^m / sin^m θ` by the three-term
+/// recurrence in `z`, and `sin^m θ (cos mφ, sin mφ)` as the real and imaginary parts of
+/// `(x + iy)^m`, so it is exact at the poles where `φ` is undefined.
+pub fn eval_basis(order: usize, dir: [f32; 3], out: &mut [f32]) -> Result<(), ShError> {
+    check(order, out.len())?;
+    let [x, y, z] = normalise(dir)?;
+    let (mut cm, mut sm) = (1.0f32, 0.0f32); // Re, Im of (x + iy)^m
+    let mut pmm = 1.0f32; // (2m−1)!!, P_m^m / sin^m θ without Condon–Shortley phase
+    for m in 0..order {
+        // p_prev2, p_prev: P̃_{l−2}^m, P̃_{l−1}^m
+        let mut p_prev2 = 0.0f32;
+        let mut p_prev = pmm;
+        for l in m..order {
+            let p = if l == m {
+                pmm
+            } else if l == m + 1 {
+                (2 * m + 1) as f32 * z * pmm
+            } else {
+                ((2 * l - 1) as f32 * z * p_prev - (l + m - 1) as f32 * p_prev2) / (l - m) as f32
+            };
+            if l > m {
+                p_prev2 = p_prev;
+                p_prev = p;
+            }
+            let k = norm(l, m);
+            if m == 0 {
+                out[index(l, 0)] = k * p;
+            } else {
+                let k2 = core::f32::consts::SQRT_2 * k * p;
+                out[index(l, m as i32)] = k2 * cm;
+                out[index(l, -(m as i32))] = k2 * sm;
+            }
+        }
+        let (ncm, nsm) = (cm * x - sm * y, cm * y + sm * x);
+        cm = ncm;
+        sm = nsm;
+        pmm *= (2 * m + 1) as f32;
+    }
+    Ok(())
+}
+
+/// Projects a directional light of `intensity` arriving from `dir` (pointing toward the light):
+/// a delta function, so `L_c = intensity · y_c(dir)`.
+pub fn project_directional(
+    order: usize,
+    dir: [f32; 3],
+    intensity: f32,
+    out: &mut [f32],
+) -> Result<(), ShError> {
+    let n2 = check(order, out.len())?;
+    eval_basis(order, dir, out)?;
+    for c in &mut out[..n2] {
+        *c *= intensity;
+    }
+    Ok(())
+}
+
+/// Rotates a function that is symmetric about +z, given by its un-normalised zonal bands
+/// `bands[l]` (as in [`CLAMPED_COSINE_BANDS`]), to be symmetric about `dir`:
+/// `out_{l,m} = bands[l] · y_{l,m}(dir)`.
+pub fn rotate_zonal(
+    order: usize,
+    bands: &[f32],
+    dir: [f32; 3],
+    out: &mut [f32],
+) -> Result<(), ShError> {
+    let n2 = check(order, out.len())?;
+    if bands.len() < order {
+        return Err(ShError::OutputTooSmall);
+    }
+    eval_basis(order, dir, out)?;
+    for (c, v) in out[..n2].iter_mut().enumerate() {
+        *v *= bands[band_of(c)];
+    }
+    Ok(())
+}
+
+/// The clamped cosine lobe `max(n·ω, 0)` around `normal`: the transfer vector of an
+/// unoccluded point (no albedo, no 1/π).
+pub fn clamped_cosine(order: usize, normal: [f32; 3], out: &mut [f32]) -> Result<(), ShError> {
+    rotate_zonal(order, &CLAMPED_COSINE_BANDS, normal, out)
+}
+
+/// Band `l` of coefficient index `c`.
+pub const fn band_of(c: usize) -> usize {
+    let mut l = 0;
+    while (l + 1) * (l + 1) <= c {
+        l += 1;
+    }
+    l
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const PI: f64 = core::f64::consts::PI;
+
+    /// Independent reference: the closed forms of bands 0–2 written out by hand.
+    fn low_bands(d: [f64; 3]) -> [f64; 9] {
+        let [x, y, z] = d;
+        [
+            0.5 * (1.0 / PI).sqrt(),
+            (3.0 / (4.0 * PI)).sqrt() * y,
+            (3.0 / (4.0 * PI)).sqrt() * z,
+            (3.0 / (4.0 * PI)).sqrt() * x,
+            0.5 * (15.0 / PI).sqrt() * x * y,
+            0.5 * (15.0 / PI).sqrt() * y * z,
+            0.25 * (5.0 / PI).sqrt() * (3.0 * z * z - 1.0),
+            0.5 * (15.0 / PI).sqrt() * x * z,
+            0.25 * (15.0 / PI).sqrt() * (x * x - y * y),
+        ]
+    }
+
+    #[test]
+    fn low_bands_match_closed_forms() {
+        let dirs = [[0.3f32, -0.5, 0.8], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0], [-0.2, 0.9, -0.1]];
+        for d in dirs {
+            let mut out = [0.0f32; 9];
+            eval_basis(3, d, &mut out).unwrap();
+            let len = ((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) as f64).sqrt();
+            let dn = [d[0] as f64 / len, d[1] as f64 / len, d[2] as f64 / len];
+            for (a, b) in out.iter().zip(low_bands(dn)) {
+                assert!((*a as f64 - b).abs() < 1e-6, "{d:?}: {a} vs {b}");
+            }
+        }
+    }
+
+    /// Band 3, m = ±3 and m = 0 spot values, from the standard tables (e.g. Sloan 2008).
+    #[test]
+    fn band_three_closed_forms() {
+        let d = [0.48f32, -0.6, 0.64];
+        let (x, y, z) = (0.48f64, -0.6f64, 0.64f64);
+        let mut out = [0.0f32; 16];
+        eval_basis(4, d, &mut out).unwrap();
+        let y30 = 0.25 * (7.0 / PI).sqrt() * (5.0 * z * z * z - 3.0 * z);
+        let y33 = 0.25 * (35.0 / (2.0 * PI)).sqrt() * (x * x * x - 3.0 * x * y * y);
+        let y3m3 = 0.25 * (35.0 / (2.0 * PI)).sqrt() * (3.0 * x * x * y - y * y * y);
+        assert!((out[index(3, 0)] as f64 - y30).abs() < 1e-6);
+        assert!((out[index(3, 3)] as f64 - y33).abs() < 1e-6);
+        assert!((out[index(3, -3)] as f64 - y3m3).abs() < 1e-6);
+    }
+
+    /// Orthonormality by a product Gauss–Legendre (θ) × uniform (φ) quadrature, exact for
+    /// band-limited integrands of this degree.
+    #[test]
+    fn orthonormal_by_quadrature() {
+        const NT: usize = 24;
+        const NP: usize = 48;
+        // Gauss–Legendre nodes on [-1, 1] by Newton on P_NT.
+        let mut nodes = [0.0f64; NT];
+        let mut weights = [0.0f64; NT];
+        for i in 0..NT {
+            let mut t = (PI * (i as f64 + 0.75) / (NT as f64 + 0.5)).cos();
+            for _ in 0..100 {
+                let (mut p0, mut p1) = (1.0f64, t);
+                for k in 2..=NT {
+                    let p2 = ((2 * k - 1) as f64 * t * p1 - (k - 1) as f64 * p0) / k as f64;
+                    p0 = p1;
+                    p1 = p2;
+                }
+                let dp = NT as f64 * (t * p1 - p0) / (t * t - 1.0);
+                let dt = p1 / dp;
+                t -= dt;
+                if dt.abs() < 1e-15 {
+                    weights[i] = 2.0 / ((1.0 - t * t) * dp * dp);
+                    break;
+                }
+            }
+            nodes[i] = t;
+        }
+        let mut gram = [[0.0f64; MAX_COEFFS]; MAX_COEFFS];
+        let mut y = [0.0f32; MAX_COEFFS];
+        for (t, w) in nodes.iter().zip(weights) {
+            for j in 0..NP {
+                let phi = 2.0 * PI * j as f64 / NP as f64;
+                let s = (1.0 - t * t).sqrt();
+                eval_basis(MAX_ORDER, [(s * phi.cos()) as f32, (s * phi.sin()) as f32, *t as f32], &mut y).unwrap();
+                let dw = w * 2.0 * PI / NP as f64;
+                for a in 0..MAX_COEFFS {
+                    for b in 0..MAX_COEFFS {
+                        gram[a][b] += dw * y[a] as f64 * y[b] as f64;
+                    }
+                }
+            }
+        }
+        for a in 0..MAX_COEFFS {
+            for b in 0..MAX_COEFFS {
+                let expect = if a == b { 1.0 } else { 0.0 };
+                assert!((gram[a][b] - expect).abs() < 2e-5, "<y{a}, y{b}> = {}", gram[a][b]);
+            }
+        }
+    }
+
+    #[test]
+    fn clamped_cosine_bands_are_funk_hecke_integrals() {
+        // Â_l = 2π ∫₀¹ t P_l(t) dt by Simpson's rule on Legendre polynomials.
+        for (l, expect) in CLAMPED_COSINE_BANDS.iter().enumerate() {
+            let n = 2000;
+            let mut acc = 0.0f64;
+            for i in 0..=n {
+                let t = i as f64 / n as f64;
+                let (mut p0, mut p1) = (1.0f64, t);
+                let pl = match l {
+                    0 => 1.0,
+                    _ => {
+                        for k in 2..=l {
+                            let p2 = ((2 * k - 1) as f64 * t * p1 - (k - 1) as f64 * p0) / k as f64;
+                            p0 = p1;
+                            p1 = p2;
+                        }
+                        p1
+                    }
+                };
+                let w = if i == 0 || i == n { 1.0 } else if i % 2 == 1 { 4.0 } else { 2.0 };
+                acc += w * t * pl;
+            }
+            let integral = 2.0 * PI * acc / (3.0 * n as f64);
+            assert!((integral - *expect as f64).abs() < 1e-6, "band {l}: {integral} vs {expect}");
+        }
+    }
+
+    #[test]
+    fn clamped_cosine_dc_is_pi_times_y00() {
+        let mut out = [0.0f32; 36];
+        clamped_cosine(6, [0.2, 0.3, -0.9], &mut out).unwrap();
+        assert!((out[0] - core::f32::consts::PI * 0.282_094_8).abs() < 1e-6);
+        // Against a directional light along the normal, the lobe integrates to cos 0 = 1
+        // up to the order-6 truncation of the delta function.
+        let mut light = [0.0f32; 36];
+        project_directional(6, [0.2, 0.3, -0.9], 1.0, &mut light).unwrap();
+        let e: f32 = out.iter().zip(&light).map(|(a, b)| a * b).sum();
+        // Σ_l Â_l (2l+1)/4π for l < 6: 0.25 + 0.5 + 0.3125 + 0 − 0.09375 + 0 = 0.96875
+        assert!((e - 0.96875).abs() < 1e-5, "{e}");
+    }
+
+    #[test]
+    fn rejects_bad_input() {
+        let mut out = [0.0f32; 36];
+        assert_eq!(eval_basis(0, [0.0, 0.0, 1.0], &mut out), Err(ShError::BadOrder));
+        assert_eq!(eval_basis(7, [0.0, 0.0, 1.0], &mut out), Err(ShError::BadOrder));
+        assert_eq!(eval_basis(6, [0.0, 0.0, 0.0], &mut out), Err(ShError::BadDirection));
+        assert_eq!(eval_basis(6, [f32::NAN, 0.0, 1.0], &mut out), Err(ShError::BadDirection));
+        assert_eq!(eval_basis(6, [0.0, 0.0, 1.0], &mut out[..35]), Err(ShError::OutputTooSmall));
+    }
+
+    #[test]
+    fn band_of_matches_index() {
+        for l in 0..MAX_ORDER {
+            for m in -(l as i32)..=(l as i32) {
+                assert_eq!(band_of(index(l, m)), l);
+            }
+        }
+    }
+}

@@ -1,0 +1,5 @@
+//! The `aprt` command line.
+
+fn main() {
+    println!("aprt");
+}
