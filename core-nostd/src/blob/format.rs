@@ -1,0 +1,163 @@
+//! The model blob layout: the single definition shared by the trainer's writer and the
+//! core's reader. See `FORMAT.md` at the repository root for the byte tables.
+//!
+//! ```text
+//! offset  size  field
+//! 0       8     magic  "APRTMDL\0"
+//! 8       4     format version, u32 LE
+//! 12      4     header length H, u32 LE
+//! 16      4     CRC-32 of the header bytes, u32 LE
+//! 20      H     header, postcard-encoded `Header`
+//! ...           sections, each at a multiple of SECTION_ALIGN, raw little-endian arrays
+//! ```
+
+use serde::{Deserialize, Serialize};
+
+/// First eight bytes of every model blob.
+pub const MAGIC: [u8; 8] = *b"APRTMDL\0";
+/// The format version this crate reads and writes. Breaking changes bump it.
+pub const VERSION: u32 = 1;
+/// Bytes before the header: magic, version, header length, header CRC.
+pub const PREAMBLE_LEN: usize = 20;
+/// Sections start at multiples of this many bytes, so arrays can be read in place by SIMD.
+pub const SECTION_ALIGN: u64 = 16;
+/// Most sections a header may list.
+pub const MAX_SECTIONS: usize = 16;
+/// Largest header accepted; a real header is well under 200 bytes.
+pub const MAX_HEADER_LEN: u32 = 1024;
+
+/// Most joint angles per pose the evaluator accepts.
+pub const MAX_JOINTS: usize = 512;
+/// Most pose dimensions k_a after projection.
+pub const MAX_POSE_DIMS: usize = 64;
+/// Most vertex-basis vectors k_v.
+pub const MAX_COEF_DIMS: usize = 96;
+/// Most vertices a model may have (keeps every byte count below 2³² on 32-bit targets
+/// for orders ≤ 6 and the identity basis with few pose dimensions).
+pub const MAX_VERTICES: usize = 1 << 22;
+
+/// How the vertex side of the model is represented.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Basis {
+    /// A stored basis of k_v vectors over the vertices (`VertexBasis` + `Weights` sections).
+    Stored,
+    /// No vertex reduction, the paper's full linear model (`VertexWeights` section).
+    Identity,
+}
+
+/// Element encoding of a section.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum Encoding {
+    /// IEEE 754 binary32, little-endian.
+    F32 = 0,
+    /// IEEE 754 binary16, little-endian.
+    F16 = 1,
+}
+
+impl Encoding {
+    /// Decodes the tag stored in a section entry.
+    pub const fn from_tag(tag: u8) -> Option<Encoding> {
+        match tag {
+            0 => Some(Encoding::F32),
+            1 => Some(Encoding::F16),
+            _ => None,
+        }
+    }
+
+    /// Bytes per element.
+    pub const fn size(self) -> usize {
+        match self {
+            Encoding::F32 => 4,
+            Encoding::F16 => 2,
+        }
+    }
+}
+
+/// The section kinds this version knows. Tags of unknown kinds are skipped unless required.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u16)]
+pub enum SectionKind {
+    /// Mean pose μ: `joints` values, f32.
+    PoseMean = 1,
+    /// Pose projection P: `pose_dims × joints` row-major, f32.
+    PoseProjection = 2,
+    /// Stored basis only: `n² × (1 + pose_dims) × coef_dims`; `[c][0][k]` is the intercept.
+    Weights = 3,
+    /// Stored basis only: `vertices × coef_dims`, vertex-major.
+    VertexBasis = 4,
+    /// Identity basis only: `vertices × n² × (1 + pose_dims)`, vertex-major.
+    VertexWeights = 5,
+}
+
+impl SectionKind {
+    /// All known kinds.
+    pub const ALL: [SectionKind; 5] = [
+        SectionKind::PoseMean,
+        SectionKind::PoseProjection,
+        SectionKind::Weights,
+        SectionKind::VertexBasis,
+        SectionKind::VertexWeights,
+    ];
+
+    /// Decodes a tag; `None` for kinds this version does not know.
+    pub fn from_tag(tag: u16) -> Option<SectionKind> {
+        Self::ALL.into_iter().find(|k| *k as u16 == tag)
+    }
+
+    /// Whether the kind may be stored in half precision (the big per-vertex arrays and weights).
+    pub const fn allows_f16(self) -> bool {
+        !matches!(self, SectionKind::PoseMean | SectionKind::PoseProjection)
+    }
+}
+
+/// One entry of the section table.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SectionEntry {
+    /// [`SectionKind`] tag, or a newer kind's tag.
+    pub kind: u16,
+    /// Readers that do not know `kind` must reject the blob when set, skip it otherwise.
+    pub required: bool,
+    /// [`Encoding`] tag.
+    pub encoding: u8,
+    /// Byte offset from the start of the blob; a multiple of [`SECTION_ALIGN`].
+    pub offset: u64,
+    /// Byte length.
+    pub len: u64,
+    /// CRC-32 (IEEE) of the section bytes.
+    pub crc32: u32,
+}
+
+/// The postcard-encoded header.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Header {
+    /// SH order n.
+    pub order: u8,
+    /// Vertex count v.
+    pub vertices: u32,
+    /// Joint angles per pose a.
+    pub joints: u16,
+    /// Pose dimensions k_a (0 allowed: an intercept-only model).
+    pub pose_dims: u16,
+    /// Vertex-basis dimensions k_v (equals `vertices` for the identity basis).
+    pub coef_dims: u32,
+    /// Vertex side representation.
+    pub basis: Basis,
+    /// The Tikhonov parameter the fit chose (informational).
+    pub alpha: f32,
+    /// The section table.
+    pub sections: heapless::Vec<SectionEntry, MAX_SECTIONS>,
+}
+
+/// Rounds `x` up to the next multiple of [`SECTION_ALIGN`], `None` on overflow.
+pub const fn align_up(x: u64) -> Option<u64> {
+    match x.checked_add(SECTION_ALIGN - 1) {
+        Some(y) => Some(y / SECTION_ALIGN * SECTION_ALIGN),
+        None => None,
+    }
+}
+
+/// CRC-32 (IEEE 802.3) of `bytes`, the checksum of headers and sections.
+pub fn crc32(bytes: &[u8]) -> u32 {
+    crc32fast::hash(bytes)
+}

@@ -1,0 +1,380 @@
+//! Per-frame evaluation: joint angles → pose projection → per-coefficient weights → per-vertex
+//! shading (lighting pushed through the basis) or per-vertex transfer.
+//!
+//! A frame is three steps, each with caller-owned state:
+//! 1. [`Model::set_pose`]: `z = P(a − μ)`, then `w^c = W^c z'` with `z' = [1, z]`
+//!    (O(n² k_a k_v), reads only the small sections).
+//! 2. [`Model::light`]: push an SH lighting vector `L` through the weights:
+//!    `s_k = Σ_c L_c w^c_k` (O(n² k_v), no blob access).
+//! 3. [`Model::shade`] streams the vertex rows: `shade_j = Σ_k s_k U_jk` (O(k_v) per vertex);
+//!    or [`Model::transfer`] gives the n² transfer values per vertex for a GPU (O(n² k_v)).
+//!
+//! With the identity basis (the full linear model) the rows are the per-vertex weights and the
+//! same steps cost O(n² k_a) per vertex, as in the paper.
+
+use crate::blob::{Basis, BlobSource, Encoding, Error, MAX_COEF_DIMS, MAX_JOINTS, MAX_POSE_DIMS, Model, Section};
+use crate::blob::for_each_chunk;
+use crate::sh::{MAX_COEFFS, coeff_count};
+
+/// Longest per-vertex row: k_v (stored basis) or n²(1 + k_a) (identity basis).
+pub const MAX_ROW: usize = {
+    let identity = MAX_COEFFS * (MAX_POSE_DIMS + 1);
+    if identity > MAX_COEF_DIMS { identity } else { MAX_COEF_DIMS }
+};
+
+/// The model shape that pose and lighting weights were computed for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Shape {
+    order: usize,
+    pose_dims: usize,
+    coef_dims: usize,
+    basis: Basis,
+}
+
+impl Shape {
+    fn of(m: &Model) -> Shape {
+        Shape { order: m.order, pose_dims: m.pose_dims, coef_dims: m.coef_dims, basis: m.basis }
+    }
+}
+
+/// Pose state of one frame (about 14 KiB): the projected pose and the per-coefficient weights.
+#[derive(Clone, Debug)]
+pub struct PoseWeights {
+    shape: Option<Shape>,
+    /// `z' = [1, z]`.
+    z: [f32; MAX_POSE_DIMS + 1],
+    /// Stored basis: `w[c * k_v + k]`.
+    w: [f32; MAX_COEFFS * MAX_COEF_DIMS],
+}
+
+impl Default for PoseWeights {
+    fn default() -> Self {
+        PoseWeights { shape: None, z: [0.0; MAX_POSE_DIMS + 1], w: [0.0; MAX_COEFFS * MAX_COEF_DIMS] }
+    }
+}
+
+impl PoseWeights {
+    /// The projected pose `z` (k_a values) of the last [`Model::set_pose`].
+    pub fn projected(&self) -> &[f32] {
+        let ka = self.shape.map_or(0, |s| s.pose_dims);
+        &self.z[1..1 + ka]
+    }
+}
+
+/// Lighting pushed through the pose weights (about 9 KiB): one weight per row value.
+#[derive(Clone, Debug)]
+pub struct LitWeights {
+    shape: Option<Shape>,
+    q: [f32; MAX_ROW],
+}
+
+impl Default for LitWeights {
+    fn default() -> Self {
+        LitWeights { shape: None, q: [0.0; MAX_ROW] }
+    }
+}
+
+/// Little-endian element encodings, decoded in the hot loops.
+trait Decode: Copy {
+    fn value(self) -> f32;
+}
+
+impl Decode for [u8; 4] {
+    #[inline(always)]
+    fn value(self) -> f32 {
+        f32::from_le_bytes(self)
+    }
+}
+
+impl Decode for [u8; 2] {
+    #[inline(always)]
+    fn value(self) -> f32 {
+        f16_to_f32(u16::from_le_bytes(self))
+    }
+}
+
+impl Decode for f32 {
+    #[inline(always)]
+    fn value(self) -> f32 {
+        self
+    }
+}
+
+/// Branch-free binary16 → binary32 for finite values (the blob reader rejects the others):
+/// shifting the exponent and mantissa into place and multiplying by 2^112 rebiases the
+/// exponent and turns f16 subnormals into exact f32 normals.
+#[inline(always)]
+pub fn f16_to_f32(h: u16) -> f32 {
+    const REBIAS: f32 = 5.192_297e33; // 2^112
+    let magnitude = f32::from_bits(((h & 0x7fff) as u32) << 13) * REBIAS;
+    f32::from_bits(magnitude.to_bits() | (((h & 0x8000) as u32) << 16))
+}
+
+/// Dot product with eight independent accumulators so the loop vectorises.
+#[inline(always)]
+fn dot<E: Decode>(row: &[E], q: &[f32]) -> f32 {
+    let (rc, rt) = row.as_chunks::<8>();
+    let (qc, qt) = q.as_chunks::<8>();
+    let mut acc = [0.0f32; 8];
+    for (r, q) in rc.iter().zip(qc) {
+        for l in 0..8 {
+            acc[l] += q[l] * r[l].value();
+        }
+    }
+    let mut sum = ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]));
+    for (r, q) in rt.iter().zip(qt) {
+        sum += q * r.value();
+    }
+    sum
+}
+
+/// Calls `f(index, value)` for every element of a chunk of section bytes.
+fn decode_each(encoding: Encoding, bytes: &[u8], mut f: impl FnMut(usize, f32)) {
+    match encoding {
+        Encoding::F32 => bytes.as_chunks::<4>().0.iter().enumerate().for_each(|(i, b)| f(i, b.value())),
+        Encoding::F16 => bytes.as_chunks::<2>().0.iter().enumerate().for_each(|(i, b)| f(i, b.value())),
+    }
+}
+
+fn all_finite(xs: &[f32]) -> bool {
+    xs.iter().all(|x| x.is_finite())
+}
+
+impl Model {
+    /// Streams every element of a section through `f(element index, value)`.
+    fn each_value<S: BlobSource>(
+        &self,
+        src: &mut S,
+        s: Section,
+        scratch: &mut [u8],
+        mut f: impl FnMut(usize, f32),
+    ) -> Result<(), Error> {
+        let size = s.encoding.size();
+        let count = (s.len as usize) / size;
+        for_each_chunk(src, s.offset, size, count, scratch, |first, bytes| {
+            decode_each(s.encoding, bytes, |i, v| f(first + i, v));
+            Ok(())
+        })
+    }
+
+    /// Computes the pose weights for joint angles `angles` (`joints()` values, radians as at
+    /// training). `scratch` may be empty for a resident blob, else at least 4 bytes.
+    pub fn set_pose<S: BlobSource>(
+        &self,
+        src: &mut S,
+        angles: &[f32],
+        scratch: &mut [u8],
+        pose: &mut PoseWeights,
+    ) -> Result<(), Error> {
+        if angles.len() != self.joints {
+            return Err(Error::WrongLength { expected: self.joints, found: angles.len() });
+        }
+        if !all_finite(angles) {
+            return Err(Error::NonFiniteInput);
+        }
+        pose.shape = None;
+        let (a, ka, kv) = (self.joints, self.pose_dims, self.coef_dims);
+        let mut delta = [0.0f32; MAX_JOINTS];
+        let delta = &mut delta[..a];
+        delta.copy_from_slice(angles);
+        self.each_value(src, self.pose_mean, scratch, |j, mu| delta[j] -= mu)?;
+        let z = &mut pose.z[..=ka];
+        z.fill(0.0);
+        z[0] = 1.0;
+        self.each_value(src, self.pose_projection, scratch, |idx, p| z[1 + idx / a] += p * delta[idx % a])?;
+        if let (Basis::Stored, Some(weights)) = (self.basis, self.weights) {
+            let n2 = coeff_count(self.order);
+            let w = &mut pose.w[..n2 * kv];
+            w.fill(0.0);
+            let z = &pose.z;
+            // Element (c, i, k) of W at index (c (1 + k_a) + i) k_v + k adds z'_i W to w[c][k].
+            self.each_value(src, weights, scratch, |idx, x| {
+                let (ci, k) = (idx / kv, idx % kv);
+                let (c, i) = (ci / (ka + 1), ci % (ka + 1));
+                w[c * kv + k] += z[i] * x;
+            })?;
+        }
+        pose.shape = Some(Shape::of(self));
+        Ok(())
+    }
+
+    /// Pushes the SH lighting vector `lighting` (n² values) through the pose weights.
+    pub fn light(&self, pose: &PoseWeights, lighting: &[f32], lit: &mut LitWeights) -> Result<(), Error> {
+        let shape = Shape::of(self);
+        if pose.shape != Some(shape) {
+            return Err(Error::ShapeMismatch);
+        }
+        let n2 = coeff_count(self.order);
+        if lighting.len() != n2 {
+            return Err(Error::WrongLength { expected: n2, found: lighting.len() });
+        }
+        if !all_finite(lighting) {
+            return Err(Error::NonFiniteInput);
+        }
+        let width = self.row_width();
+        let q = &mut lit.q[..width];
+        match self.basis {
+            Basis::Stored => {
+                let kv = self.coef_dims;
+                q.fill(0.0);
+                for (l, w) in lighting.iter().zip(pose.w.chunks_exact(kv)) {
+                    for (qk, wk) in q.iter_mut().zip(w) {
+                        *qk += l * wk;
+                    }
+                }
+            }
+            Basis::Identity => {
+                let z = &pose.z[..=self.pose_dims];
+                for (l, qc) in lighting.iter().zip(q.chunks_exact_mut(z.len())) {
+                    for (qi, zi) in qc.iter_mut().zip(z) {
+                        *qi = l * zi;
+                    }
+                }
+            }
+        }
+        lit.shape = Some(shape);
+        Ok(())
+    }
+
+    fn check_range(&self, first: usize, count: usize) -> Result<(), Error> {
+        match first.checked_add(count) {
+            Some(end) if end <= self.vertices => Ok(()),
+            _ => Err(Error::VertexRange { first, count }),
+        }
+    }
+
+    /// Streams the rows of vertices `first .. first + count` to `visit(vertex offset, row bytes)`.
+    fn each_row_chunk<S: BlobSource>(
+        &self,
+        src: &mut S,
+        first: usize,
+        count: usize,
+        scratch: &mut [u8],
+        visit: impl FnMut(usize, &[u8]) -> Result<(), Error>,
+    ) -> Result<(), Error> {
+        let row_bytes = self.row_bytes();
+        let offset = self.rows.offset + (first as u64) * row_bytes as u64;
+        for_each_chunk(src, offset, row_bytes, count, scratch, visit)
+    }
+
+    /// Per-vertex shading `Σ_c L_c t_c(j)` for vertices `first .. first + out.len()`, from
+    /// lighting weights of [`Model::light`]. Multiply by albedo / π for exit radiance.
+    /// `scratch` may be empty for a resident blob, else at least [`Model::row_bytes`].
+    pub fn shade<S: BlobSource>(
+        &self,
+        src: &mut S,
+        lit: &LitWeights,
+        first: usize,
+        out: &mut [f32],
+        scratch: &mut [u8],
+    ) -> Result<(), Error> {
+        if lit.shape != Some(Shape::of(self)) {
+            return Err(Error::ShapeMismatch);
+        }
+        self.check_range(first, out.len())?;
+        let width = self.row_width();
+        let q = &lit.q[..width];
+        let encoding = self.rows.encoding;
+        self.each_row_chunk(src, first, out.len(), scratch, |start, bytes| {
+            let out = &mut out[start..];
+            match encoding {
+                Encoding::F32 => shade_rows(bytes.as_chunks::<4>().0, width, q, out),
+                Encoding::F16 => shade_rows(bytes.as_chunks::<2>().0, width, q, out),
+            }
+            Ok(())
+        })
+    }
+
+    /// Per-vertex transfer vectors for vertices `first .. first + count`, written to `out`
+    /// (`count · n²` values, vertex-major), for upload to a GPU that does the lighting dot
+    /// product. `scratch` as for [`Model::shade`].
+    pub fn transfer<S: BlobSource>(
+        &self,
+        src: &mut S,
+        pose: &PoseWeights,
+        first: usize,
+        out: &mut [f32],
+        scratch: &mut [u8],
+    ) -> Result<(), Error> {
+        let shape = Shape::of(self);
+        if pose.shape != Some(shape) {
+            return Err(Error::ShapeMismatch);
+        }
+        let n2 = coeff_count(self.order);
+        if out.len() % n2 != 0 {
+            return Err(Error::WrongLength { expected: out.len() / n2 * n2, found: out.len() });
+        }
+        let count = out.len() / n2;
+        self.check_range(first, count)?;
+        let width = self.row_width();
+        let encoding = self.rows.encoding;
+        let (basis, kv, z) = (self.basis, self.coef_dims, &pose.z[..=self.pose_dims]);
+        let w = &pose.w[..n2 * kv.min(MAX_COEF_DIMS)];
+        self.each_row_chunk(src, first, count, scratch, |start, bytes| {
+            let out = &mut out[start * n2..];
+            match (basis, encoding) {
+                (Basis::Stored, Encoding::F32) => transfer_stored(bytes.as_chunks::<4>().0, w, kv, out),
+                (Basis::Stored, Encoding::F16) => transfer_stored(bytes.as_chunks::<2>().0, w, kv, out),
+                (Basis::Identity, Encoding::F32) => transfer_identity(bytes.as_chunks::<4>().0, width, z, out),
+                (Basis::Identity, Encoding::F16) => transfer_identity(bytes.as_chunks::<2>().0, width, z, out),
+            }
+            Ok(())
+        })
+    }
+}
+
+/// `out_j = q · row_j` for every row in the chunk.
+fn shade_rows<E: Decode>(rows: &[E], width: usize, q: &[f32], out: &mut [f32]) {
+    for (row, o) in rows.chunks_exact(width).zip(out) {
+        *o = dot(row, q);
+    }
+}
+
+/// Stored basis: `t_jc = w^c · U_j`; each row is decoded once, then reused for all n².
+fn transfer_stored<E: Decode>(rows: &[E], w: &[f32], kv: usize, out: &mut [f32]) {
+    let n2 = w.len() / kv;
+    let mut u = [0.0f32; MAX_COEF_DIMS];
+    for (row, t) in rows.chunks_exact(kv).zip(out.chunks_exact_mut(n2)) {
+        for (ui, r) in u.iter_mut().zip(row) {
+            *ui = r.value();
+        }
+        for (tc, wc) in t.iter_mut().zip(w.chunks_exact(kv)) {
+            *tc = dot(&u[..kv], wc);
+        }
+    }
+}
+
+/// Identity basis: `t_jc = z' · X_j[c]`, the row holding n² runs of `1 + k_a` weights.
+fn transfer_identity<E: Decode>(rows: &[E], width: usize, z: &[f32], out: &mut [f32]) {
+    let n2 = width / z.len();
+    for (row, t) in rows.chunks_exact(width).zip(out.chunks_exact_mut(n2)) {
+        for (tc, xc) in t.iter_mut().zip(row.chunks_exact(z.len())) {
+            *tc = dot(xc, z);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn f16_decode_matches_half_for_every_finite_value() {
+        for h in 0..=u16::MAX {
+            let reference = half::f16::from_bits(h);
+            if reference.is_finite() {
+                assert_eq!(f16_to_f32(h).to_bits(), reference.to_f32().to_bits(), "bits {h:#06x}");
+            }
+        }
+    }
+
+    #[test]
+    fn dot_handles_every_tail_length() {
+        for n in 0..40 {
+            let a: [f32; 40] = core::array::from_fn(|i| i as f32 * 0.5 - 3.0);
+            let b: [f32; 40] = core::array::from_fn(|i| 1.0 / (1.0 + i as f32));
+            let expect: f64 = (0..n).map(|i| a[i] as f64 * b[i] as f64).sum();
+            assert!((dot(&a[..n], &b[..n]) as f64 - expect).abs() < 1e-5, "n = {n}");
+        }
+    }
+}
