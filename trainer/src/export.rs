@@ -1,0 +1,237 @@
+//! Model blob writer: quantises a [`LinearModel`] into the layout of `aprt_core::blob`.
+
+use aprt_core::blob::{
+    Basis, Encoding, Header, MAGIC, MAX_COEF_DIMS, MAX_HEADER_LEN, MAX_JOINTS, MAX_POSE_DIMS, MAX_SECTIONS,
+    MAX_VERTICES, PREAMBLE_LEN, SectionEntry, SectionKind, VERSION, align_up, crc32,
+};
+use aprt_core::sh::MAX_ORDER;
+
+use crate::model::{LinearModel, VertexBasis};
+
+/// Storage precision of the large sections (weights and per-vertex rows); pose sections are
+/// always f32.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, serde::Serialize)]
+pub enum Precision {
+    /// 4 bytes per value.
+    #[default]
+    F32,
+    /// 2 bytes per value, about 3 significant digits.
+    F16,
+}
+
+/// Why a model cannot be written.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum ExportError {
+    /// A dimension exceeds what `aprt-core` accepts.
+    #[error("{what} = {value} exceeds the runtime limit {max}")]
+    TooLarge {
+        /// Which dimension.
+        what: &'static str,
+        /// Its value.
+        value: usize,
+        /// The limit.
+        max: usize,
+    },
+    /// A value is NaN or infinite, or overflows the chosen precision.
+    #[error("section {section:?}: value {value} at index {index} is not representable")]
+    NotRepresentable {
+        /// The section.
+        section: SectionKind,
+        /// Element index.
+        index: usize,
+        /// The value.
+        value: f64,
+    },
+    /// The arrays do not match the model's dimensions.
+    #[error("section {section:?} has {found} values, the dimensions need {expected}")]
+    Shape {
+        /// The section.
+        section: SectionKind,
+        /// Required count.
+        expected: usize,
+        /// Given count.
+        found: usize,
+    },
+}
+
+fn limit(what: &'static str, value: usize, min: usize, max: usize) -> Result<(), ExportError> {
+    if value < min || value > max {
+        return Err(ExportError::TooLarge { what, value, max });
+    }
+    Ok(())
+}
+
+/// Encodes `values` as one section's bytes, rejecting what the reader would reject.
+fn encode(section: SectionKind, values: &[f64], expected: usize, encoding: Encoding) -> Result<Vec<u8>, ExportError> {
+    if values.len() != expected {
+        return Err(ExportError::Shape { section, expected, found: values.len() });
+    }
+    let mut out = Vec::with_capacity(values.len() * encoding.size());
+    for (index, &value) in values.iter().enumerate() {
+        let bad = || ExportError::NotRepresentable { section, index, value };
+        match encoding {
+            Encoding::F32 => {
+                let x = value as f32;
+                if !x.is_finite() {
+                    return Err(bad());
+                }
+                out.extend_from_slice(&x.to_le_bytes());
+            }
+            Encoding::F16 => {
+                let x = half::f16::from_f64(value);
+                if !x.is_finite() {
+                    return Err(bad());
+                }
+                out.extend_from_slice(&x.to_le_bytes());
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Serialises `model` into a complete blob.
+pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>, ExportError> {
+    let (n2, v, a, ka) = (model.order * model.order, model.vertices, model.joints, model.pose_dims());
+    limit("order", model.order, 1, MAX_ORDER)?;
+    limit("vertices", v, 1, MAX_VERTICES)?;
+    limit("joints", a, 1, MAX_JOINTS)?;
+    limit("pose dims", ka, 0, MAX_POSE_DIMS.min(a))?;
+    let big = match precision {
+        Precision::F32 => Encoding::F32,
+        Precision::F16 => Encoding::F16,
+    };
+    let mut sections: Vec<(SectionKind, Encoding, Vec<u8>)> = vec![
+        (SectionKind::PoseMean, Encoding::F32, encode(SectionKind::PoseMean, &model.pose_mean, a, Encoding::F32)?),
+        (
+            SectionKind::PoseProjection,
+            Encoding::F32,
+            encode(SectionKind::PoseProjection, &model.pose_projection, ka * a, Encoding::F32)?,
+        ),
+    ];
+    let basis = match &model.basis {
+        VertexBasis::Stored { coef_dims, data } => {
+            limit("coef dims", *coef_dims, 1, MAX_COEF_DIMS)?;
+            let w = encode(SectionKind::Weights, &model.weights, n2 * (ka + 1) * coef_dims, big)?;
+            sections.push((SectionKind::Weights, big, w));
+            let u = encode(SectionKind::VertexBasis, data, v * coef_dims, big)?;
+            sections.push((SectionKind::VertexBasis, big, u));
+            Basis::Stored
+        }
+        VertexBasis::Identity => {
+            // Stored vertex-major so that a vertex range is one contiguous read.
+            let expected = n2 * (ka + 1) * v;
+            if model.weights.len() != expected {
+                return Err(ExportError::Shape { section: SectionKind::VertexWeights, expected, found: model.weights.len() });
+            }
+            let mut rows = Vec::with_capacity(expected);
+            for j in 0..v {
+                for ci in 0..n2 * (ka + 1) {
+                    rows.push(model.weights[ci * v + j]);
+                }
+            }
+            sections.push((SectionKind::VertexWeights, big, encode(SectionKind::VertexWeights, &rows, expected, big)?));
+            Basis::Identity
+        }
+    };
+    assemble(model, basis, &sections)
+}
+
+/// Lays out preamble, header and aligned sections. The header holds the section offsets,
+/// which depend on the header's own (varint) length: iterate until the length is stable.
+fn assemble(model: &LinearModel, basis: Basis, sections: &[(SectionKind, Encoding, Vec<u8>)]) -> Result<Vec<u8>, ExportError> {
+    let mut header_len = 0usize;
+    for _ in 0..8 {
+        let mut table = heapless::Vec::<SectionEntry, MAX_SECTIONS>::new();
+        let mut offset = align_up((PREAMBLE_LEN + header_len) as u64).unwrap_or(u64::MAX);
+        for (kind, encoding, bytes) in sections {
+            let entry = SectionEntry {
+                kind: *kind as u16,
+                required: true,
+                encoding: *encoding as u8,
+                offset,
+                len: bytes.len() as u64,
+                crc32: crc32(bytes),
+            };
+            table.push(entry).expect("fewer sections than MAX_SECTIONS");
+            offset = align_up(offset + bytes.len() as u64).unwrap_or(u64::MAX);
+        }
+        let header = Header {
+            order: model.order as u8,
+            vertices: model.vertices as u32,
+            joints: model.joints as u16,
+            pose_dims: model.pose_dims() as u16,
+            coef_dims: model.coef_dims() as u32,
+            basis,
+            alpha: model.alpha as f32,
+            sections: table.clone(),
+        };
+        let encoded = postcard::to_allocvec(&header).expect("header serialises into a Vec");
+        if encoded.len() != header_len {
+            header_len = encoded.len();
+            continue;
+        }
+        assert!(header_len <= MAX_HEADER_LEN as usize, "header of {header_len} bytes");
+        let mut blob = Vec::new();
+        blob.extend_from_slice(&MAGIC);
+        blob.extend_from_slice(&VERSION.to_le_bytes());
+        blob.extend_from_slice(&(header_len as u32).to_le_bytes());
+        blob.extend_from_slice(&crc32(&encoded).to_le_bytes());
+        blob.extend_from_slice(&encoded);
+        for (entry, (_, _, bytes)) in table.iter().zip(sections) {
+            blob.resize(entry.offset as usize, 0);
+            blob.extend_from_slice(bytes);
+        }
+        return Ok(blob);
+    }
+    unreachable!("header length converges: offsets only grow with it")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tiny(basis: VertexBasis, kv: usize) -> LinearModel {
+        let (n2, ka, v) = (4, 2, 3);
+        LinearModel {
+            order: 2,
+            vertices: v,
+            joints: 3,
+            pose_mean: vec![0.1, -0.2, 0.3],
+            pose_projection: vec![1.0, 0.0, 0.5, 0.0, 1.0, -0.5],
+            weights: (0..n2 * (ka + 1) * kv).map(|i| (i as f64 * 0.37).sin()).collect(),
+            basis,
+            alpha: 0.25,
+        }
+    }
+
+    #[test]
+    fn blob_parses_back_with_the_same_dimensions() {
+        let stored = tiny(VertexBasis::Stored { coef_dims: 2, data: vec![0.5; 6] }, 2);
+        for model in [stored, tiny(VertexBasis::Identity, 3)] {
+            for precision in [Precision::F32, Precision::F16] {
+                let blob = encode_model(&model, precision).unwrap();
+                let parsed = aprt_core::Model::parse(&blob).unwrap();
+                assert_eq!(parsed.order(), 2);
+                assert_eq!(parsed.vertices(), 3);
+                assert_eq!(parsed.pose_dims(), 2);
+                assert_eq!(parsed.coef_dims(), model.coef_dims());
+            }
+        }
+    }
+
+    #[test]
+    fn rejects_nan_and_f16_overflow() {
+        let mut m = tiny(VertexBasis::Identity, 3);
+        m.weights[5] = f64::NAN;
+        assert!(matches!(encode_model(&m, Precision::F32), Err(ExportError::NotRepresentable { section: SectionKind::VertexWeights, .. })));
+        m.weights[5] = 1e6;
+        assert!(encode_model(&m, Precision::F32).is_ok());
+        assert!(matches!(encode_model(&m, Precision::F16), Err(ExportError::NotRepresentable { .. })));
+    }
+
+    #[test]
+    fn rejects_shapes_the_runtime_cannot_hold() {
+        let m = tiny(VertexBasis::Stored { coef_dims: MAX_COEF_DIMS + 1, data: vec![] }, 1);
+        assert!(matches!(encode_model(&m, Precision::F32), Err(ExportError::TooLarge { what: "coef dims", .. })));
+    }
+}
