@@ -43,7 +43,7 @@ pub struct PoseWeights {
     shape: Option<Shape>,
     /// `z' = [1, z]`.
     z: [f32; MAX_POSE_DIMS + 1],
-    /// Stored basis: `w[c * k_v + k]`.
+    /// Stored basis: `w[k * n² + c]`, coefficient-contiguous so transfer is a sum of vectors.
     w: [f32; MAX_COEFFS * MAX_COEF_DIMS],
 }
 
@@ -110,7 +110,8 @@ pub fn f16_to_f32(h: u16) -> f32 {
     f32::from_bits(magnitude.to_bits() | (((h & 0x8000) as u32) << 16))
 }
 
-/// Dot product with eight independent accumulators so the loop vectorises.
+/// Dot product with eight independent accumulators, the tail included, so neither the loop
+/// nor the remainder forms a long dependency chain (rows are short: k_v is often ~20).
 #[inline(always)]
 fn dot<E: Decode>(row: &[E], q: &[f32]) -> f32 {
     let (rc, rt) = row.as_chunks::<8>();
@@ -121,18 +122,33 @@ fn dot<E: Decode>(row: &[E], q: &[f32]) -> f32 {
             acc[l] += q[l] * r[l].value();
         }
     }
-    let mut sum = ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]));
-    for (r, q) in rt.iter().zip(qt) {
-        sum += q * r.value();
+    for (a, (r, q)) in acc.iter_mut().zip(rt.iter().zip(qt)) {
+        *a += q * r.value();
     }
-    sum
+    ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]))
 }
 
-/// Calls `f(index, value)` for every element of a chunk of section bytes.
-fn decode_each(encoding: Encoding, bytes: &[u8], mut f: impl FnMut(usize, f32)) {
-    match encoding {
-        Encoding::F32 => bytes.as_chunks::<4>().0.iter().enumerate().for_each(|(i, b)| f(i, b.value())),
-        Encoding::F16 => bytes.as_chunks::<2>().0.iter().enumerate().for_each(|(i, b)| f(i, b.value())),
+/// One decoded-on-demand row of a section.
+#[derive(Clone, Copy)]
+enum RowRef<'a> {
+    F32(&'a [[u8; 4]]),
+    F16(&'a [[u8; 2]]),
+}
+
+impl RowRef<'_> {
+    fn values(self) -> impl Iterator<Item = f32> {
+        let (a, b) = match self {
+            RowRef::F32(r) => (Some(r.iter().map(|x| x.value())), None),
+            RowRef::F16(r) => (None, Some(r.iter().map(|x| x.value()))),
+        };
+        a.into_iter().flatten().chain(b.into_iter().flatten())
+    }
+
+    fn dot(self, q: &[f32]) -> f32 {
+        match self {
+            RowRef::F32(r) => dot(r, q),
+            RowRef::F16(r) => dot(r, q),
+        }
     }
 }
 
@@ -141,24 +157,38 @@ fn all_finite(xs: &[f32]) -> bool {
 }
 
 impl Model {
-    /// Streams every element of a section through `f(element index, value)`.
-    fn each_value<S: BlobSource>(
+    /// Streams a section as rows of `width` values: `f(row index, row)`.
+    fn each_row<S: BlobSource>(
         &self,
         src: &mut S,
         s: Section,
+        width: usize,
         scratch: &mut [u8],
-        mut f: impl FnMut(usize, f32),
+        mut f: impl FnMut(usize, RowRef<'_>),
     ) -> Result<(), Error> {
         let size = s.encoding.size();
-        let count = (s.len as usize) / size;
-        for_each_chunk(src, s.offset, size, count, scratch, |first, bytes| {
-            decode_each(s.encoding, bytes, |i, v| f(first + i, v));
+        let rows = (s.len as usize).checked_div(width * size).unwrap_or(0);
+        for_each_chunk(src, s.offset, width * size, rows, scratch, |first, bytes| {
+            match s.encoding {
+                Encoding::F32 => bytes.as_chunks::<4>().0.chunks_exact(width).enumerate().for_each(|(i, r)| f(first + i, RowRef::F32(r))),
+                Encoding::F16 => bytes.as_chunks::<2>().0.chunks_exact(width).enumerate().for_each(|(i, r)| f(first + i, RowRef::F16(r))),
+            }
             Ok(())
         })
     }
 
+    /// Least `scratch` for evaluating from a streaming source: one row of any section.
+    pub fn scratch_bytes(&self) -> usize {
+        let small = match self.basis {
+            Basis::Stored => self.coef_dims * self.weights.map_or(4, |w| w.encoding.size()),
+            Basis::Identity => 0,
+        };
+        self.row_bytes().max(self.joints * 4).max(small)
+    }
+
     /// Computes the pose weights for joint angles `angles` (`joints()` values, radians as at
-    /// training). `scratch` may be empty for a resident blob, else at least 4 bytes.
+    /// training). `scratch` may be empty for a resident blob, else at least
+    /// [`Model::scratch_bytes`].
     pub fn set_pose<S: BlobSource>(
         &self,
         src: &mut S,
@@ -177,21 +207,25 @@ impl Model {
         let mut delta = [0.0f32; MAX_JOINTS];
         let delta = &mut delta[..a];
         delta.copy_from_slice(angles);
-        self.each_value(src, self.pose_mean, scratch, |j, mu| delta[j] -= mu)?;
+        self.each_row(src, self.pose_mean, a, scratch, |_, mu| {
+            for (d, m) in delta.iter_mut().zip(mu.values()) {
+                *d -= m;
+            }
+        })?;
         let z = &mut pose.z[..=ka];
-        z.fill(0.0);
         z[0] = 1.0;
-        self.each_value(src, self.pose_projection, scratch, |idx, p| z[1 + idx / a] += p * delta[idx % a])?;
+        self.each_row(src, self.pose_projection, a, scratch, |i, p| z[1 + i] = p.dot(delta))?;
         if let (Basis::Stored, Some(weights)) = (self.basis, self.weights) {
             let n2 = coeff_count(self.order);
             let w = &mut pose.w[..n2 * kv];
             w.fill(0.0);
             let z = &pose.z;
-            // Element (c, i, k) of W at index (c (1 + k_a) + i) k_v + k adds z'_i W to w[c][k].
-            self.each_value(src, weights, scratch, |idx, x| {
-                let (ci, k) = (idx / kv, idx % kv);
-                let (c, i) = (ci / (ka + 1), ci % (ka + 1));
-                w[c * kv + k] += z[i] * x;
+            // Row (c, i) of W holds W[c][i][0..k_v]; it adds z'_i W[c][i][k] to w[k][c].
+            self.each_row(src, weights, kv, scratch, |ci, row| {
+                let (c, zi) = (ci / (ka + 1), z[ci % (ka + 1)]);
+                for (wk, x) in w[c..].iter_mut().step_by(n2).zip(row.values()) {
+                    *wk += zi * x;
+                }
             })?;
         }
         pose.shape = Some(Shape::of(self));
@@ -215,12 +249,8 @@ impl Model {
         let q = &mut lit.q[..width];
         match self.basis {
             Basis::Stored => {
-                let kv = self.coef_dims;
-                q.fill(0.0);
-                for (l, w) in lighting.iter().zip(pose.w.chunks_exact(kv)) {
-                    for (qk, wk) in q.iter_mut().zip(w) {
-                        *qk += l * wk;
-                    }
+                for (qk, wk) in q.iter_mut().zip(pose.w.chunks_exact(lighting.len())) {
+                    *qk = dot(wk, lighting);
                 }
             }
             Basis::Identity => {
@@ -330,16 +360,16 @@ fn shade_rows<E: Decode>(rows: &[E], width: usize, q: &[f32], out: &mut [f32]) {
     }
 }
 
-/// Stored basis: `t_jc = w^c · U_j`; each row is decoded once, then reused for all n².
+/// Stored basis: `t_j = Σ_k U_jk w_k`, a sum of n²-vectors that vectorises across `c`.
 fn transfer_stored<E: Decode>(rows: &[E], w: &[f32], kv: usize, out: &mut [f32]) {
     let n2 = w.len() / kv;
-    let mut u = [0.0f32; MAX_COEF_DIMS];
     for (row, t) in rows.chunks_exact(kv).zip(out.chunks_exact_mut(n2)) {
-        for (ui, r) in u.iter_mut().zip(row) {
-            *ui = r.value();
-        }
-        for (tc, wc) in t.iter_mut().zip(w.chunks_exact(kv)) {
-            *tc = dot(&u[..kv], wc);
+        t.fill(0.0);
+        for (u, wk) in row.iter().zip(w.chunks_exact(n2)) {
+            let u = u.value();
+            for (tc, x) in t.iter_mut().zip(wk) {
+                *tc += u * x;
+            }
         }
     }
 }

@@ -100,7 +100,7 @@ fn check_model(reference: &LinearModel, precision: Precision, tolerance: f64) {
     let opened = Model::open(&mut Streamed { bytes: &blob, reads: 0 }, &mut [0u8; 4]).unwrap();
     assert_eq!(opened, model);
     for extra in [0usize, 1, 13, 4096] {
-        let mut scratch = vec![0u8; model.row_bytes() + extra];
+        let mut scratch = vec![0u8; model.scratch_bytes() + extra];
         let mut src = Streamed { bytes: &blob, reads: 0 };
         let (t, s) = evaluate(&model, &mut src, &mut scratch, &angles, &light);
         assert!(src.reads > 0);
@@ -136,7 +136,7 @@ fn streaming_rejects_a_buffer_smaller_than_a_row() {
     let model = Model::parse(&blob).unwrap();
     let mut src = Streamed { bytes: &blob, reads: 0 };
     let mut pose = PoseWeights::default();
-    model.set_pose(&mut src, &[0.0; 4], &mut [0u8; 4], &mut pose).unwrap();
+    model.set_pose(&mut src, &[0.0; 4], &mut vec![0u8; model.scratch_bytes()], &mut pose).unwrap();
     let mut lit = LitWeights::default();
     model.light(&pose, &[1.0; 9], &mut lit).unwrap();
     let mut out = [0.0f32; 3];

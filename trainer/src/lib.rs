@@ -1,9 +1,12 @@
 //! aprt-trainer: bakes SH precomputed radiance transfer for posed characters, fits the
 //! pose-driven linear model, and writes model blobs that `aprt-core` evaluates.
 
+pub mod angles;
+pub mod atomic;
 pub mod export;
 pub mod mesh;
 pub mod model;
+pub mod npy;
 
 pub use mesh::Mesh;
 pub use model::{LinearModel, VertexBasis};

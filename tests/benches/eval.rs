@@ -1,0 +1,151 @@
+//! Per-frame cost of the core evaluator against a plain memory copy of the same bytes, on a
+//! model the size of the paper's Master Pai PCA(8,22): 11.5k vertices, 54 angles, order 6.
+//! One core, one run, ratios side by side. `cargo bench -p aprt-tests --bench eval`.
+
+use std::hint::black_box;
+use std::time::{Duration, Instant};
+
+use aprt_core::{BlobSource, LitWeights, Model, PoseWeights, SliceSource, SourceError};
+use aprt_trainer::{LinearModel, Precision, VertexBasis, encode_model};
+
+const VERTICES: usize = 11_500;
+const JOINTS: usize = 54;
+const ORDER: usize = 6;
+
+/// A non-resident source: each read copies from memory, as a file or flash read would.
+struct Streamed<'a>(&'a [u8]);
+
+impl BlobSource for Streamed<'_> {
+    fn len(&self) -> u64 {
+        self.0.len() as u64
+    }
+    fn read_at(&mut self, offset: u64, buf: &mut [u8]) -> Result<(), SourceError> {
+        let start = offset as usize;
+        buf.copy_from_slice(&self.0[start..start + buf.len()]);
+        Ok(())
+    }
+}
+
+fn values(seed: u64, n: usize) -> Vec<f64> {
+    let mut s = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
+    (0..n)
+        .map(|_| {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 52) as f64 - 0.5
+        })
+        .collect()
+}
+
+fn model(ka: usize, kv: Option<usize>) -> LinearModel {
+    let n2 = ORDER * ORDER;
+    LinearModel {
+        order: ORDER,
+        vertices: VERTICES,
+        joints: JOINTS,
+        pose_mean: values(1, JOINTS),
+        pose_projection: values(2, ka * JOINTS),
+        weights: values(3, n2 * (ka + 1) * kv.unwrap_or(VERTICES)),
+        basis: match kv {
+            Some(k) => VertexBasis::Stored { coef_dims: k, data: values(4, VERTICES * k) },
+            None => VertexBasis::Identity,
+        },
+        alpha: 1.0,
+    }
+}
+
+/// Median seconds per call over repeated batches lasting about `budget` in total.
+fn time(budget: Duration, mut f: impl FnMut()) -> f64 {
+    f();
+    let start = Instant::now();
+    let mut calls = 0u32;
+    while start.elapsed() < budget / 10 {
+        f();
+        calls += 1;
+    }
+    let batch = calls.max(1);
+    let mut samples: Vec<f64> = (0..9)
+        .map(|_| {
+            let t = Instant::now();
+            for _ in 0..batch {
+                f();
+            }
+            t.elapsed().as_secs_f64() / batch as f64
+        })
+        .collect();
+    samples.sort_by(f64::total_cmp);
+    samples[4]
+}
+
+fn main() {
+    let budget = Duration::from_millis(1500);
+    let angles: Vec<f32> = values(7, JOINTS).iter().map(|&x| x as f32).collect();
+    let light: Vec<f32> = values(8, ORDER * ORDER).iter().map(|&x| x as f32).collect();
+    println!("aprt-core evaluator, one core; {VERTICES} vertices, {JOINTS} angles, order {ORDER}");
+    println!(
+        "{:<34} {:>10} {:>11} {:>10} {:>9} {:>13}",
+        "model / step", "bytes", "µs/frame", "frames/s", "MFLOP", "× memcpy"
+    );
+    for (name, ka, kv, precision) in [
+        ("PCA(8,22) f32", 8, Some(22), Precision::F32),
+        ("PCA(8,22) f16", 8, Some(22), Precision::F16),
+        ("full linear (k_a 8, no k_v) f32", 8, None, Precision::F32),
+    ] {
+        let blob = encode_model(&model(ka, kv), precision).unwrap();
+        let m = Model::parse(&blob).unwrap();
+        let row_bytes = m.row_bytes() * VERTICES;
+        let rows = &blob[blob.len() - row_bytes..];
+        let mut copy = vec![0u8; row_bytes];
+        let memcpy = time(budget, || {
+            copy.copy_from_slice(black_box(rows));
+            black_box(&copy);
+        });
+        let mut pose = PoseWeights::default();
+        let mut lit = LitWeights::default();
+        let mut shading = vec![0.0f32; VERTICES];
+        let mut transfer = vec![0.0f32; VERTICES * ORDER * ORDER];
+        let mut src = SliceSource(&blob);
+        let shade = time(budget, || {
+            m.set_pose(&mut src, black_box(&angles), &mut [], &mut pose).unwrap();
+            m.light(&pose, black_box(&light), &mut lit).unwrap();
+            m.shade(&mut src, &lit, 0, &mut shading, &mut []).unwrap();
+            black_box(&shading);
+        });
+        let mut scratch = vec![0u8; 16 * 1024];
+        let mut streamed = Streamed(&blob);
+        let shade_streamed = time(budget, || {
+            m.set_pose(&mut streamed, black_box(&angles), &mut scratch, &mut pose).unwrap();
+            m.light(&pose, black_box(&light), &mut lit).unwrap();
+            m.shade(&mut streamed, &lit, 0, &mut shading, &mut scratch).unwrap();
+            black_box(&shading);
+        });
+        let full_transfer = time(budget, || {
+            m.set_pose(&mut src, black_box(&angles), &mut [], &mut pose).unwrap();
+            m.transfer(&mut src, &pose, 0, &mut transfer, &mut []).unwrap();
+            black_box(&transfer);
+        });
+        let n2 = (ORDER * ORDER) as f64;
+        let (v, ka, width) = (VERTICES as f64, ka as f64, m.row_width() as f64);
+        let pose_flops = 2.0 * ka * JOINTS as f64 + if kv.is_some() { 2.0 * n2 * (ka + 1.0) * width } else { 0.0 };
+        let light_flops = 2.0 * n2 * if kv.is_some() { width } else { ka + 1.0 };
+        let shade_flops = pose_flops + light_flops + 2.0 * width * v;
+        let transfer_flops = pose_flops + 2.0 * n2 * if kv.is_some() { width } else { ka + 1.0 } * v;
+        for (step, secs, flops) in [
+            ("memcpy of the vertex rows", memcpy, 0.0),
+            ("shade, resident", shade, shade_flops),
+            ("shade, streamed via 16 KiB", shade_streamed, shade_flops),
+            ("transfer (n² per vertex)", full_transfer, transfer_flops),
+        ] {
+            println!(
+                "{:<34} {:>10} {:>11.1} {:>10.0} {:>9.2} {:>12.2}x",
+                format!("{name}: {step}"),
+                if flops == 0.0 { row_bytes.to_string() } else { blob.len().to_string() },
+                secs * 1e6,
+                1.0 / secs,
+                flops / 1e6,
+                secs / memcpy
+            );
+        }
+    }
+}
