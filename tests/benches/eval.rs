@@ -5,54 +5,19 @@
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
-use aprt_core::{BlobSource, LitWeights, Model, PoseWeights, SliceSource, SourceError};
-use aprt_trainer::{LinearModel, Precision, VertexBasis, encode_model};
+use aprt_core::{LitWeights, Model, PoseWeights, SliceSource};
+use aprt_tests::{Streamed, noise, random_model};
+use aprt_trainer::{LinearModel, Precision, encode_model};
 
 const VERTICES: usize = 11_500;
 const JOINTS: usize = 54;
 const ORDER: usize = 6;
 
-/// A non-resident source: each read copies from memory, as a file or flash read would.
-struct Streamed<'a>(&'a [u8]);
-
-impl BlobSource for Streamed<'_> {
-    fn len(&self) -> u64 {
-        self.0.len() as u64
-    }
-    fn read_at(&mut self, offset: u64, buf: &mut [u8]) -> Result<(), SourceError> {
-        let start = offset as usize;
-        buf.copy_from_slice(&self.0[start..start + buf.len()]);
-        Ok(())
-    }
-}
-
-fn values(seed: u64, n: usize) -> Vec<f64> {
-    let mut s = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
-    (0..n)
-        .map(|_| {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 11) as f64 / (1u64 << 52) as f64 - 0.5
-        })
-        .collect()
-}
-
 fn model(ka: usize, kv: Option<usize>) -> LinearModel {
-    let n2 = ORDER * ORDER;
-    LinearModel {
-        order: ORDER,
-        vertices: VERTICES,
-        joints: JOINTS,
-        pose_mean: values(1, JOINTS),
-        pose_projection: values(2, ka * JOINTS),
-        weights: values(3, n2 * (ka + 1) * kv.unwrap_or(VERTICES)),
-        basis: match kv {
-            Some(k) => VertexBasis::Stored { coef_dims: k, data: values(4, VERTICES * k) },
-            None => VertexBasis::Identity,
-        },
-        alpha: 1.0,
-    }
+    let mut m = random_model(ORDER, VERTICES, JOINTS, ka, kv);
+    // Values in [-0.5, 0.5): realistic magnitudes, safely inside f16's range.
+    m.weights.iter_mut().for_each(|x| *x *= 0.5);
+    m
 }
 
 /// Median seconds per call over repeated batches lasting about `budget` in total.
@@ -80,8 +45,8 @@ fn time(budget: Duration, mut f: impl FnMut()) -> f64 {
 
 fn main() {
     let budget = Duration::from_millis(1500);
-    let angles: Vec<f32> = values(7, JOINTS).iter().map(|&x| x as f32).collect();
-    let light: Vec<f32> = values(8, ORDER * ORDER).iter().map(|&x| x as f32).collect();
+    let angles: Vec<f32> = noise(7, JOINTS).iter().map(|&x| x as f32).collect();
+    let light: Vec<f32> = noise(8, ORDER * ORDER).iter().map(|&x| x as f32).collect();
     println!("aprt-core evaluator, one core; {VERTICES} vertices, {JOINTS} angles, order {ORDER}");
     println!(
         "{:<34} {:>10} {:>11} {:>10} {:>9} {:>13}",
@@ -113,7 +78,7 @@ fn main() {
             black_box(&shading);
         });
         let mut scratch = vec![0u8; 16 * 1024];
-        let mut streamed = Streamed(&blob);
+        let mut streamed = Streamed::new(&blob);
         let shade_streamed = time(budget, || {
             m.set_pose(&mut streamed, black_box(&angles), &mut scratch, &mut pose).unwrap();
             m.light(&pose, black_box(&light), &mut lit).unwrap();

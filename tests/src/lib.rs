@@ -1,1 +1,64 @@
-//! Integration tests live in `tests/`; this crate has no library code.
+//! Shared support for the integration tests and benchmarks: deterministic random models and
+//! a non-resident blob source.
+
+use aprt_core::{BlobSource, SourceError};
+use aprt_trainer::{LinearModel, VertexBasis};
+
+/// A source that is not resident: every read copies, as from flash or a file, and is counted.
+pub struct Streamed<'a> {
+    /// The blob.
+    pub bytes: &'a [u8],
+    /// Reads so far.
+    pub reads: usize,
+}
+
+impl<'a> Streamed<'a> {
+    /// Streams `bytes`.
+    pub fn new(bytes: &'a [u8]) -> Self {
+        Streamed { bytes, reads: 0 }
+    }
+}
+
+impl BlobSource for Streamed<'_> {
+    fn len(&self) -> u64 {
+        self.bytes.len() as u64
+    }
+    fn read_at(&mut self, offset: u64, buf: &mut [u8]) -> Result<(), SourceError> {
+        self.reads += 1;
+        let start = usize::try_from(offset).map_err(|_| SourceError)?;
+        let end = start.checked_add(buf.len()).ok_or(SourceError)?;
+        buf.copy_from_slice(self.bytes.get(start..end).ok_or(SourceError)?);
+        Ok(())
+    }
+}
+
+/// Deterministic pseudo-random values in [-1, 1) (xorshift64).
+pub fn noise(seed: u64, n: usize) -> Vec<f64> {
+    let mut s = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
+    (0..n)
+        .map(|_| {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+        })
+        .collect()
+}
+
+/// A model of the given shape with random contents; `coef_dims: None` is the identity basis.
+pub fn random_model(order: usize, vertices: usize, joints: usize, pose_dims: usize, coef_dims: Option<usize>) -> LinearModel {
+    let n2 = order * order;
+    LinearModel {
+        order,
+        vertices,
+        joints,
+        pose_mean: noise(1, joints),
+        pose_projection: noise(2, pose_dims * joints),
+        weights: noise(3, n2 * (pose_dims + 1) * coef_dims.unwrap_or(vertices)),
+        basis: match coef_dims {
+            Some(k) => VertexBasis::Stored { coef_dims: k, data: noise(4, vertices * k) },
+            None => VertexBasis::Identity,
+        },
+        alpha: 0.5,
+    }
+}

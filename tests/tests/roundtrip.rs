@@ -1,57 +1,9 @@
 //! Trainer model → blob → aprt-core, from a resident slice and streamed through a
 //! `BlobSource` with small buffers: the same numbers as the trainer's f64 reference.
 
-use aprt_core::{BlobSource, LitWeights, Model, PoseWeights, SliceSource, SourceError};
-use aprt_trainer::{LinearModel, Precision, VertexBasis, encode_model};
-
-/// A source that is not resident: every read copies, as from flash or a file.
-struct Streamed<'a> {
-    bytes: &'a [u8],
-    reads: usize,
-}
-
-impl BlobSource for Streamed<'_> {
-    fn len(&self) -> u64 {
-        self.bytes.len() as u64
-    }
-    fn read_at(&mut self, offset: u64, buf: &mut [u8]) -> Result<(), SourceError> {
-        self.reads += 1;
-        let start = offset as usize;
-        buf.copy_from_slice(self.bytes.get(start..start + buf.len()).ok_or(SourceError)?);
-        Ok(())
-    }
-}
-
-/// Deterministic pseudo-random values in [-1, 1).
-fn noise(seed: u64, n: usize) -> Vec<f64> {
-    let mut s = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
-    (0..n)
-        .map(|_| {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-        })
-        .collect()
-}
-
-fn random_model(order: usize, v: usize, a: usize, ka: usize, kv: Option<usize>) -> LinearModel {
-    let n2 = order * order;
-    let width = kv.unwrap_or(v);
-    LinearModel {
-        order,
-        vertices: v,
-        joints: a,
-        pose_mean: noise(1, a),
-        pose_projection: noise(2, ka * a),
-        weights: noise(3, n2 * (ka + 1) * width),
-        basis: match kv {
-            Some(k) => VertexBasis::Stored { coef_dims: k, data: noise(4, v * k) },
-            None => VertexBasis::Identity,
-        },
-        alpha: 0.5,
-    }
-}
+use aprt_core::{BlobSource, LitWeights, Model, PoseWeights, SliceSource};
+use aprt_tests::{Streamed, noise, random_model};
+use aprt_trainer::{LinearModel, Precision, encode_model};
 
 /// Transfer and shading for every vertex, through the core, with the given source and scratch.
 fn evaluate<S: BlobSource>(model: &Model, src: &mut S, scratch: &mut [u8], angles: &[f32], light: &[f32]) -> (Vec<f32>, Vec<f32>) {
@@ -97,11 +49,11 @@ fn check_model(reference: &LinearModel, precision: Precision, tolerance: f64) {
     }
 
     // Streaming with buffers from one row up: bit-identical to the resident evaluation.
-    let opened = Model::open(&mut Streamed { bytes: &blob, reads: 0 }, &mut [0u8; 4]).unwrap();
+    let opened = Model::open(&mut Streamed::new(&blob), &mut [0u8; 4]).unwrap();
     assert_eq!(opened, model);
     for extra in [0usize, 1, 13, 4096] {
         let mut scratch = vec![0u8; model.scratch_bytes() + extra];
-        let mut src = Streamed { bytes: &blob, reads: 0 };
+        let mut src = Streamed::new(&blob);
         let (t, s) = evaluate(&model, &mut src, &mut scratch, &angles, &light);
         assert!(src.reads > 0);
         assert_eq!(t.iter().map(|x| x.to_bits()).collect::<Vec<_>>(), t_slice.iter().map(|x| x.to_bits()).collect::<Vec<_>>());
@@ -134,7 +86,7 @@ fn streaming_rejects_a_buffer_smaller_than_a_row() {
     let reference = random_model(3, 10, 4, 2, Some(8));
     let blob = encode_model(&reference, Precision::F32).unwrap();
     let model = Model::parse(&blob).unwrap();
-    let mut src = Streamed { bytes: &blob, reads: 0 };
+    let mut src = Streamed::new(&blob);
     let mut pose = PoseWeights::default();
     model.set_pose(&mut src, &[0.0; 4], &mut vec![0u8; model.scratch_bytes()], &mut pose).unwrap();
     let mut lit = LitWeights::default();

@@ -7,6 +7,7 @@ pub mod export;
 pub mod mesh;
 pub mod model;
 pub mod npy;
+pub mod runtime;
 
 pub use mesh::Mesh;
 pub use model::{LinearModel, VertexBasis};

@@ -1,5 +1,3 @@
 //! The `aprt` command line.
 
-fn main() {
-    println!("aprt");
-}
+fn main() {}
