@@ -12,14 +12,20 @@
 //! With the identity basis (the full linear model) the rows are the per-vertex weights and the
 //! same steps cost O(n² k_a) per vertex, as in the paper.
 
-use crate::blob::{Basis, BlobSource, Encoding, Error, MAX_COEF_DIMS, MAX_JOINTS, MAX_POSE_DIMS, Model, Section};
 use crate::blob::for_each_chunk;
+use crate::blob::{
+    Basis, BlobSource, Encoding, Error, MAX_COEF_DIMS, MAX_JOINTS, MAX_POSE_DIMS, Model, Section,
+};
 use crate::sh::{MAX_COEFFS, coeff_count};
 
 /// Longest per-vertex row: k_v (stored basis) or n²(1 + k_a) (identity basis).
 pub const MAX_ROW: usize = {
     let identity = MAX_COEFFS * (MAX_POSE_DIMS + 1);
-    if identity > MAX_COEF_DIMS { identity } else { MAX_COEF_DIMS }
+    if identity > MAX_COEF_DIMS {
+        identity
+    } else {
+        MAX_COEF_DIMS
+    }
 };
 
 /// The model shape that pose and lighting weights were computed for.
@@ -33,7 +39,12 @@ struct Shape {
 
 impl Shape {
     fn of(m: &Model) -> Shape {
-        Shape { order: m.order, pose_dims: m.pose_dims, coef_dims: m.coef_dims, basis: m.basis }
+        Shape {
+            order: m.order,
+            pose_dims: m.pose_dims,
+            coef_dims: m.coef_dims,
+            basis: m.basis,
+        }
     }
 }
 
@@ -49,7 +60,11 @@ pub struct PoseWeights {
 
 impl Default for PoseWeights {
     fn default() -> Self {
-        PoseWeights { shape: None, z: [0.0; MAX_POSE_DIMS + 1], w: [0.0; MAX_COEFFS * MAX_COEF_DIMS] }
+        PoseWeights {
+            shape: None,
+            z: [0.0; MAX_POSE_DIMS + 1],
+            w: [0.0; MAX_COEFFS * MAX_COEF_DIMS],
+        }
     }
 }
 
@@ -70,7 +85,10 @@ pub struct LitWeights {
 
 impl Default for LitWeights {
     fn default() -> Self {
-        LitWeights { shape: None, q: [0.0; MAX_ROW] }
+        LitWeights {
+            shape: None,
+            q: [0.0; MAX_ROW],
+        }
     }
 }
 
@@ -168,13 +186,30 @@ impl Model {
     ) -> Result<(), Error> {
         let size = s.encoding.size();
         let rows = (s.len as usize).checked_div(width * size).unwrap_or(0);
-        for_each_chunk(src, s.offset, width * size, rows, scratch, |first, bytes| {
-            match s.encoding {
-                Encoding::F32 => bytes.as_chunks::<4>().0.chunks_exact(width).enumerate().for_each(|(i, r)| f(first + i, RowRef::F32(r))),
-                Encoding::F16 => bytes.as_chunks::<2>().0.chunks_exact(width).enumerate().for_each(|(i, r)| f(first + i, RowRef::F16(r))),
-            }
-            Ok(())
-        })
+        for_each_chunk(
+            src,
+            s.offset,
+            width * size,
+            rows,
+            scratch,
+            |first, bytes| {
+                match s.encoding {
+                    Encoding::F32 => bytes
+                        .as_chunks::<4>()
+                        .0
+                        .chunks_exact(width)
+                        .enumerate()
+                        .for_each(|(i, r)| f(first + i, RowRef::F32(r))),
+                    Encoding::F16 => bytes
+                        .as_chunks::<2>()
+                        .0
+                        .chunks_exact(width)
+                        .enumerate()
+                        .for_each(|(i, r)| f(first + i, RowRef::F16(r))),
+                }
+                Ok(())
+            },
+        )
     }
 
     /// Least `scratch` for evaluating from a streaming source: one row of any section.
@@ -197,7 +232,10 @@ impl Model {
         pose: &mut PoseWeights,
     ) -> Result<(), Error> {
         if angles.len() != self.joints {
-            return Err(Error::WrongLength { expected: self.joints, found: angles.len() });
+            return Err(Error::WrongLength {
+                expected: self.joints,
+                found: angles.len(),
+            });
         }
         if !all_finite(angles) {
             return Err(Error::NonFiniteInput);
@@ -214,7 +252,9 @@ impl Model {
         })?;
         let z = &mut pose.z[..=ka];
         z[0] = 1.0;
-        self.each_row(src, self.pose_projection, a, scratch, |i, p| z[1 + i] = p.dot(delta))?;
+        self.each_row(src, self.pose_projection, a, scratch, |i, p| {
+            z[1 + i] = p.dot(delta)
+        })?;
         if let (Basis::Stored, Some(weights)) = (self.basis, self.weights) {
             let n2 = coeff_count(self.order);
             let w = &mut pose.w[..n2 * kv];
@@ -233,14 +273,22 @@ impl Model {
     }
 
     /// Pushes the SH lighting vector `lighting` (n² values) through the pose weights.
-    pub fn light(&self, pose: &PoseWeights, lighting: &[f32], lit: &mut LitWeights) -> Result<(), Error> {
+    pub fn light(
+        &self,
+        pose: &PoseWeights,
+        lighting: &[f32],
+        lit: &mut LitWeights,
+    ) -> Result<(), Error> {
         let shape = Shape::of(self);
         if pose.shape != Some(shape) {
             return Err(Error::ShapeMismatch);
         }
         let n2 = coeff_count(self.order);
         if lighting.len() != n2 {
-            return Err(Error::WrongLength { expected: n2, found: lighting.len() });
+            return Err(Error::WrongLength {
+                expected: n2,
+                found: lighting.len(),
+            });
         }
         if !all_finite(lighting) {
             return Err(Error::NonFiniteInput);
@@ -332,7 +380,10 @@ impl Model {
         }
         let n2 = coeff_count(self.order);
         if out.len() % n2 != 0 {
-            return Err(Error::WrongLength { expected: out.len() / n2 * n2, found: out.len() });
+            return Err(Error::WrongLength {
+                expected: out.len() / n2 * n2,
+                found: out.len(),
+            });
         }
         let count = out.len() / n2;
         self.check_range(first, count)?;
@@ -343,10 +394,18 @@ impl Model {
         self.each_row_chunk(src, first, count, scratch, |start, bytes| {
             let out = &mut out[start * n2..];
             match (basis, encoding) {
-                (Basis::Stored, Encoding::F32) => transfer_stored(bytes.as_chunks::<4>().0, w, kv, out),
-                (Basis::Stored, Encoding::F16) => transfer_stored(bytes.as_chunks::<2>().0, w, kv, out),
-                (Basis::Identity, Encoding::F32) => transfer_identity(bytes.as_chunks::<4>().0, width, z, out),
-                (Basis::Identity, Encoding::F16) => transfer_identity(bytes.as_chunks::<2>().0, width, z, out),
+                (Basis::Stored, Encoding::F32) => {
+                    transfer_stored(bytes.as_chunks::<4>().0, w, kv, out)
+                }
+                (Basis::Stored, Encoding::F16) => {
+                    transfer_stored(bytes.as_chunks::<2>().0, w, kv, out)
+                }
+                (Basis::Identity, Encoding::F32) => {
+                    transfer_identity(bytes.as_chunks::<4>().0, width, z, out)
+                }
+                (Basis::Identity, Encoding::F16) => {
+                    transfer_identity(bytes.as_chunks::<2>().0, width, z, out)
+                }
             }
             Ok(())
         })
@@ -393,7 +452,11 @@ mod tests {
         for h in 0..=u16::MAX {
             let reference = half::f16::from_bits(h);
             if reference.is_finite() {
-                assert_eq!(f16_to_f32(h).to_bits(), reference.to_f32().to_bits(), "bits {h:#06x}");
+                assert_eq!(
+                    f16_to_f32(h).to_bits(),
+                    reference.to_f32().to_bits(),
+                    "bits {h:#06x}"
+                );
             }
         }
     }
@@ -404,7 +467,10 @@ mod tests {
             let a: [f32; 40] = core::array::from_fn(|i| i as f32 * 0.5 - 3.0);
             let b: [f32; 40] = core::array::from_fn(|i| 1.0 / (1.0 + i as f32));
             let expect: f64 = (0..n).map(|i| a[i] as f64 * b[i] as f64).sum();
-            assert!((dot(&a[..n], &b[..n]) as f64 - expect).abs() < 1e-5, "n = {n}");
+            assert!(
+                (dot(&a[..n], &b[..n]) as f64 - expect).abs() < 1e-5,
+                "n = {n}"
+            );
         }
     }
 }

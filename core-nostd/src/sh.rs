@@ -206,7 +206,13 @@ mod tests {
 
     #[test]
     fn low_bands_match_closed_forms() {
-        let dirs = [[0.3f32, -0.5, 0.8], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0], [-0.2, 0.9, -0.1]];
+        let dirs = [
+            [0.3f32, -0.5, 0.8],
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, -1.0],
+            [1.0, 0.0, 0.0],
+            [-0.2, 0.9, -0.1],
+        ];
         for d in dirs {
             let mut out = [0.0f32; 9];
             eval_basis(3, d, &mut out).unwrap();
@@ -267,7 +273,12 @@ mod tests {
             for j in 0..NP {
                 let phi = 2.0 * PI * j as f64 / NP as f64;
                 let s = (1.0 - t * t).sqrt();
-                eval_basis(MAX_ORDER, [(s * phi.cos()) as f32, (s * phi.sin()) as f32, *t as f32], &mut y).unwrap();
+                eval_basis(
+                    MAX_ORDER,
+                    [(s * phi.cos()) as f32, (s * phi.sin()) as f32, *t as f32],
+                    &mut y,
+                )
+                .unwrap();
                 let dw = w * 2.0 * PI / NP as f64;
                 for a in 0..MAX_COEFFS {
                     for b in 0..MAX_COEFFS {
@@ -279,7 +290,11 @@ mod tests {
         for a in 0..MAX_COEFFS {
             for b in 0..MAX_COEFFS {
                 let expect = if a == b { 1.0 } else { 0.0 };
-                assert!((gram[a][b] - expect).abs() < 2e-5, "<y{a}, y{b}> = {}", gram[a][b]);
+                assert!(
+                    (gram[a][b] - expect).abs() < 2e-5,
+                    "<y{a}, y{b}> = {}",
+                    gram[a][b]
+                );
             }
         }
     }
@@ -304,11 +319,20 @@ mod tests {
                         p1
                     }
                 };
-                let w = if i == 0 || i == n { 1.0 } else if i % 2 == 1 { 4.0 } else { 2.0 };
+                let w = if i == 0 || i == n {
+                    1.0
+                } else if i % 2 == 1 {
+                    4.0
+                } else {
+                    2.0
+                };
                 acc += w * t * pl;
             }
             let integral = 2.0 * PI * acc / (3.0 * n as f64);
-            assert!((integral - *expect as f64).abs() < 1e-6, "band {l}: {integral} vs {expect}");
+            assert!(
+                (integral - *expect as f64).abs() < 1e-6,
+                "band {l}: {integral} vs {expect}"
+            );
         }
     }
 
@@ -329,11 +353,26 @@ mod tests {
     #[test]
     fn rejects_bad_input() {
         let mut out = [0.0f32; 36];
-        assert_eq!(eval_basis(0, [0.0, 0.0, 1.0], &mut out), Err(ShError::BadOrder));
-        assert_eq!(eval_basis(7, [0.0, 0.0, 1.0], &mut out), Err(ShError::BadOrder));
-        assert_eq!(eval_basis(6, [0.0, 0.0, 0.0], &mut out), Err(ShError::BadDirection));
-        assert_eq!(eval_basis(6, [f32::NAN, 0.0, 1.0], &mut out), Err(ShError::BadDirection));
-        assert_eq!(eval_basis(6, [0.0, 0.0, 1.0], &mut out[..35]), Err(ShError::OutputTooSmall));
+        assert_eq!(
+            eval_basis(0, [0.0, 0.0, 1.0], &mut out),
+            Err(ShError::BadOrder)
+        );
+        assert_eq!(
+            eval_basis(7, [0.0, 0.0, 1.0], &mut out),
+            Err(ShError::BadOrder)
+        );
+        assert_eq!(
+            eval_basis(6, [0.0, 0.0, 0.0], &mut out),
+            Err(ShError::BadDirection)
+        );
+        assert_eq!(
+            eval_basis(6, [f32::NAN, 0.0, 1.0], &mut out),
+            Err(ShError::BadDirection)
+        );
+        assert_eq!(
+            eval_basis(6, [0.0, 0.0, 1.0], &mut out[..35]),
+            Err(ShError::OutputTooSmall)
+        );
     }
 
     #[test]

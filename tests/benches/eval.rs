@@ -72,7 +72,8 @@ fn main() {
         let mut transfer = vec![0.0f32; VERTICES * ORDER * ORDER];
         let mut src = SliceSource(&blob);
         let shade = time(budget, || {
-            m.set_pose(&mut src, black_box(&angles), &mut [], &mut pose).unwrap();
+            m.set_pose(&mut src, black_box(&angles), &mut [], &mut pose)
+                .unwrap();
             m.light(&pose, black_box(&light), &mut lit).unwrap();
             m.shade(&mut src, &lit, 0, &mut shading, &mut []).unwrap();
             black_box(&shading);
@@ -80,22 +81,32 @@ fn main() {
         let mut scratch = vec![0u8; 16 * 1024];
         let mut streamed = Streamed::new(&blob);
         let shade_streamed = time(budget, || {
-            m.set_pose(&mut streamed, black_box(&angles), &mut scratch, &mut pose).unwrap();
+            m.set_pose(&mut streamed, black_box(&angles), &mut scratch, &mut pose)
+                .unwrap();
             m.light(&pose, black_box(&light), &mut lit).unwrap();
-            m.shade(&mut streamed, &lit, 0, &mut shading, &mut scratch).unwrap();
+            m.shade(&mut streamed, &lit, 0, &mut shading, &mut scratch)
+                .unwrap();
             black_box(&shading);
         });
         let full_transfer = time(budget, || {
-            m.set_pose(&mut src, black_box(&angles), &mut [], &mut pose).unwrap();
-            m.transfer(&mut src, &pose, 0, &mut transfer, &mut []).unwrap();
+            m.set_pose(&mut src, black_box(&angles), &mut [], &mut pose)
+                .unwrap();
+            m.transfer(&mut src, &pose, 0, &mut transfer, &mut [])
+                .unwrap();
             black_box(&transfer);
         });
         let n2 = (ORDER * ORDER) as f64;
         let (v, ka, width) = (VERTICES as f64, ka as f64, m.row_width() as f64);
-        let pose_flops = 2.0 * ka * JOINTS as f64 + if kv.is_some() { 2.0 * n2 * (ka + 1.0) * width } else { 0.0 };
+        let pose_flops = 2.0 * ka * JOINTS as f64
+            + if kv.is_some() {
+                2.0 * n2 * (ka + 1.0) * width
+            } else {
+                0.0
+            };
         let light_flops = 2.0 * n2 * if kv.is_some() { width } else { ka + 1.0 };
         let shade_flops = pose_flops + light_flops + 2.0 * width * v;
-        let transfer_flops = pose_flops + 2.0 * n2 * if kv.is_some() { width } else { ka + 1.0 } * v;
+        let transfer_flops =
+            pose_flops + 2.0 * n2 * if kv.is_some() { width } else { ka + 1.0 } * v;
         for (step, secs, flops) in [
             ("memcpy of the vertex rows", memcpy, 0.0),
             ("shade, resident", shade, shade_flops),
@@ -105,7 +116,11 @@ fn main() {
             println!(
                 "{:<34} {:>10} {:>11.1} {:>10.0} {:>9.2} {:>12.2}x",
                 format!("{name}: {step}"),
-                if flops == 0.0 { row_bytes.to_string() } else { blob.len().to_string() },
+                if flops == 0.0 {
+                    row_bytes.to_string()
+                } else {
+                    blob.len().to_string()
+                },
                 secs * 1e6,
                 1.0 / secs,
                 flops / 1e6,

@@ -46,7 +46,13 @@ pub fn noise(seed: u64, n: usize) -> Vec<f64> {
 }
 
 /// A model of the given shape with random contents; `coef_dims: None` is the identity basis.
-pub fn random_model(order: usize, vertices: usize, joints: usize, pose_dims: usize, coef_dims: Option<usize>) -> LinearModel {
+pub fn random_model(
+    order: usize,
+    vertices: usize,
+    joints: usize,
+    pose_dims: usize,
+    coef_dims: Option<usize>,
+) -> LinearModel {
     let n2 = order * order;
     LinearModel {
         order,
@@ -56,7 +62,10 @@ pub fn random_model(order: usize, vertices: usize, joints: usize, pose_dims: usi
         pose_projection: noise(2, pose_dims * joints),
         weights: noise(3, n2 * (pose_dims + 1) * coef_dims.unwrap_or(vertices)),
         basis: match coef_dims {
-            Some(k) => VertexBasis::Stored { coef_dims: k, data: noise(4, vertices * k) },
+            Some(k) => VertexBasis::Stored {
+                coef_dims: k,
+                data: noise(4, vertices * k),
+            },
             None => VertexBasis::Identity,
         },
         alpha: 0.5,

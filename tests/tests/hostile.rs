@@ -40,7 +40,9 @@ fn with_header(blob: &[u8], edit: impl FnOnce(&mut Header)) -> Vec<u8> {
     let mut shift = 0u64;
     let bytes = loop {
         let mut h = edited.clone();
-        h.sections.iter_mut().for_each(|s| s.offset = s.offset.saturating_add(shift));
+        h.sections
+            .iter_mut()
+            .for_each(|s| s.offset = s.offset.saturating_add(shift));
         let bytes = postcard::to_allocvec(&h).unwrap();
         if PREAMBLE_LEN + bytes.len() <= first + shift as usize {
             break bytes;
@@ -66,7 +68,10 @@ fn the_valid_blob_evaluates() {
 fn every_proper_prefix_is_rejected() {
     let blob = valid_blob();
     for n in 0..blob.len() {
-        assert!(exercise(&blob[..n]).is_err(), "prefix of {n} bytes accepted");
+        assert!(
+            exercise(&blob[..n]).is_err(),
+            "prefix of {n} bytes accepted"
+        );
     }
 }
 
@@ -76,7 +81,10 @@ fn every_single_bit_flip_is_caught_or_harmless() {
     let header = read_header(&blob).unwrap();
     let covered = |i: usize| {
         i < PREAMBLE_LEN + u32::from_le_bytes(blob[12..16].try_into().unwrap()) as usize
-            || header.sections.iter().any(|s| (s.offset as usize..(s.offset + s.len) as usize).contains(&i))
+            || header
+                .sections
+                .iter()
+                .any(|s| (s.offset as usize..(s.offset + s.len) as usize).contains(&i))
     };
     let mut caught = 0;
     for i in 0..blob.len() {
@@ -98,43 +106,99 @@ fn crafted_headers_get_the_right_error() {
     let blob = valid_blob();
     let mut future = blob.clone();
     future[8..12].copy_from_slice(&2u32.to_le_bytes());
-    assert_eq!(Model::parse(&future), Err(Error::UnsupportedVersion { found: 2 }));
+    assert_eq!(
+        Model::parse(&future),
+        Err(Error::UnsupportedVersion { found: 2 })
+    );
     let mut magic = blob.clone();
     magic[0] = b'X';
     assert_eq!(Model::parse(&magic), Err(Error::BadMagic));
     let mut trailing = blob.clone();
     trailing.push(0);
-    assert_eq!(Model::parse(&trailing), Err(Error::TrailingBytes { extra: 1 }));
+    assert_eq!(
+        Model::parse(&trailing),
+        Err(Error::TrailingBytes { extra: 1 })
+    );
 
     let huge = with_header(&blob, |h| h.vertices = u32::MAX);
-    assert!(matches!(Model::parse(&huge), Err(Error::BadDimension { .. })));
+    assert!(matches!(
+        Model::parse(&huge),
+        Err(Error::BadDimension { .. })
+    ));
     let overlap = with_header(&blob, |h| h.sections[1].offset = h.sections[0].offset);
-    assert!(matches!(Model::parse(&overlap), Err(Error::SectionOverlap { .. })));
+    assert!(matches!(
+        Model::parse(&overlap),
+        Err(Error::SectionOverlap { .. })
+    ));
     let outside = with_header(&blob, |h| h.sections[2].offset = u64::MAX - 15);
-    assert!(matches!(Model::parse(&outside), Err(Error::SectionOutOfRange { .. })));
+    assert!(matches!(
+        Model::parse(&outside),
+        Err(Error::SectionOutOfRange { .. })
+    ));
     let misaligned = with_header(&blob, |h| h.sections[3].offset += 4);
     assert!(Model::parse(&misaligned).is_err());
     let missing = with_header(&blob, |h| {
         h.sections.remove(0);
     });
-    assert!(matches!(Model::parse(&missing), Err(Error::MissingSection { .. }) | Err(Error::TrailingBytes { .. })));
+    assert!(matches!(
+        Model::parse(&missing),
+        Err(Error::MissingSection { .. }) | Err(Error::TrailingBytes { .. })
+    ));
 
     // A newer writer's optional section is skipped; a required one is refused.
     let mut extended = blob.clone();
     extended.resize(extended.len().next_multiple_of(16), 0);
-    let extra = SectionEntry { kind: 999, required: false, encoding: 0, offset: extended.len() as u64, len: 16, crc32: 0 };
+    let extra = SectionEntry {
+        kind: 999,
+        required: false,
+        encoding: 0,
+        offset: extended.len() as u64,
+        len: 16,
+        crc32: 0,
+    };
     extended.extend_from_slice(&[7u8; 16]);
     let optional = with_header(&extended, |h| h.sections.push(extra).unwrap());
     exercise(&optional).unwrap();
-    let required = with_header(&extended, |h| h.sections.push(SectionEntry { required: true, ..extra }).unwrap());
-    assert_eq!(Model::parse(&required), Err(Error::UnknownRequiredSection { kind: 999 }));
+    let required = with_header(&extended, |h| {
+        h.sections
+            .push(SectionEntry {
+                required: true,
+                ..extra
+            })
+            .unwrap()
+    });
+    assert_eq!(
+        Model::parse(&required),
+        Err(Error::UnknownRequiredSection { kind: 999 })
+    );
 }
 
 fn arb_entry() -> impl Strategy<Value = SectionEntry> {
     // Biased toward boundary values: small offsets, exact multiples, and near-overflow sizes.
-    let edge = prop_oneof![0u64..256, Just(u64::MAX), Just(u64::MAX - 15), (0u64..64).prop_map(|x| x * 16)];
-    (1u16..7, any::<bool>(), 0u8..3, edge.clone(), edge, any::<u32>())
-        .prop_map(|(kind, required, encoding, offset, len, crc32)| SectionEntry { kind, required, encoding, offset, len, crc32 })
+    let edge = prop_oneof![
+        0u64..256,
+        Just(u64::MAX),
+        Just(u64::MAX - 15),
+        (0u64..64).prop_map(|x| x * 16)
+    ];
+    (
+        1u16..7,
+        any::<bool>(),
+        0u8..3,
+        edge.clone(),
+        edge,
+        any::<u32>(),
+    )
+        .prop_map(
+            |(kind, required, encoding, offset, len, crc32)| SectionEntry {
+                kind,
+                required,
+                encoding,
+                offset,
+                len,
+                crc32,
+            },
+        )
 }
 
 proptest! {

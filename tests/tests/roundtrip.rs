@@ -6,7 +6,13 @@ use aprt_tests::{Streamed, noise, random_model};
 use aprt_trainer::{LinearModel, Precision, encode_model};
 
 /// Transfer and shading for every vertex, through the core, with the given source and scratch.
-fn evaluate<S: BlobSource>(model: &Model, src: &mut S, scratch: &mut [u8], angles: &[f32], light: &[f32]) -> (Vec<f32>, Vec<f32>) {
+fn evaluate<S: BlobSource>(
+    model: &Model,
+    src: &mut S,
+    scratch: &mut [u8],
+    angles: &[f32],
+    light: &[f32],
+) -> (Vec<f32>, Vec<f32>) {
     let n2 = model.order() * model.order();
     let mut pose = PoseWeights::default();
     model.set_pose(src, angles, scratch, &mut pose).unwrap();
@@ -21,8 +27,24 @@ fn evaluate<S: BlobSource>(model: &Model, src: &mut S, scratch: &mut [u8], angle
             break;
         }
         let count = (*step + i % 2).min(model.vertices() - first);
-        model.transfer(src, &pose, first, &mut transfer[first * n2..(first + count) * n2], scratch).unwrap();
-        model.shade(src, &lit, first, &mut shading[first..first + count], scratch).unwrap();
+        model
+            .transfer(
+                src,
+                &pose,
+                first,
+                &mut transfer[first * n2..(first + count) * n2],
+                scratch,
+            )
+            .unwrap();
+        model
+            .shade(
+                src,
+                &lit,
+                first,
+                &mut shading[first..first + count],
+                scratch,
+            )
+            .unwrap();
         first += count;
     }
     (transfer, shading)
@@ -41,11 +63,17 @@ fn check_model(reference: &LinearModel, precision: Precision, tolerance: f64) {
     let expect = reference.predict(&angles.iter().map(|&x| x as f64).collect::<Vec<_>>());
     let scale = expect.iter().fold(1.0f64, |m, x| m.max(x.abs()));
     for (i, (got, want)) in t_slice.iter().zip(&expect).enumerate() {
-        assert!((*got as f64 - want).abs() <= tolerance * scale, "transfer[{i}] = {got}, reference {want}");
+        assert!(
+            (*got as f64 - want).abs() <= tolerance * scale,
+            "transfer[{i}] = {got}, reference {want}"
+        );
     }
     for (j, s) in s_slice.iter().enumerate() {
         let want: f64 = (0..n2).map(|c| light[c] as f64 * expect[j * n2 + c]).sum();
-        assert!((*s as f64 - want).abs() <= tolerance * scale * n2 as f64, "shade[{j}] = {s}, reference {want}");
+        assert!(
+            (*s as f64 - want).abs() <= tolerance * scale * n2 as f64,
+            "shade[{j}] = {s}, reference {want}"
+        );
     }
 
     // Streaming with buffers from one row up: bit-identical to the resident evaluation.
@@ -56,8 +84,14 @@ fn check_model(reference: &LinearModel, precision: Precision, tolerance: f64) {
         let mut src = Streamed::new(&blob);
         let (t, s) = evaluate(&model, &mut src, &mut scratch, &angles, &light);
         assert!(src.reads > 0);
-        assert_eq!(t.iter().map(|x| x.to_bits()).collect::<Vec<_>>(), t_slice.iter().map(|x| x.to_bits()).collect::<Vec<_>>());
-        assert_eq!(s.iter().map(|x| x.to_bits()).collect::<Vec<_>>(), s_slice.iter().map(|x| x.to_bits()).collect::<Vec<_>>());
+        assert_eq!(
+            t.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+            t_slice.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+        );
+        assert_eq!(
+            s.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+            s_slice.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+        );
     }
 }
 
@@ -77,8 +111,16 @@ fn identity_basis_round_trip_f32() {
 #[test]
 fn f16_round_trip_within_half_precision() {
     // f16 has an 11-bit significand: relative rounding 2^-11 per value, accumulated over k_v terms.
-    check_model(&random_model(4, 150, 9, 5, Some(16)), Precision::F16, 16.0 * 4.9e-4);
-    check_model(&random_model(3, 40, 9, 5, None), Precision::F16, 9.0 * 4.9e-4);
+    check_model(
+        &random_model(4, 150, 9, 5, Some(16)),
+        Precision::F16,
+        16.0 * 4.9e-4,
+    );
+    check_model(
+        &random_model(3, 40, 9, 5, None),
+        Precision::F16,
+        9.0 * 4.9e-4,
+    );
 }
 
 #[test]
@@ -88,10 +130,19 @@ fn streaming_rejects_a_buffer_smaller_than_a_row() {
     let model = Model::parse(&blob).unwrap();
     let mut src = Streamed::new(&blob);
     let mut pose = PoseWeights::default();
-    model.set_pose(&mut src, &[0.0; 4], &mut vec![0u8; model.scratch_bytes()], &mut pose).unwrap();
+    model
+        .set_pose(
+            &mut src,
+            &[0.0; 4],
+            &mut vec![0u8; model.scratch_bytes()],
+            &mut pose,
+        )
+        .unwrap();
     let mut lit = LitWeights::default();
     model.light(&pose, &[1.0; 9], &mut lit).unwrap();
     let mut out = [0.0f32; 3];
-    let err = model.shade(&mut src, &lit, 0, &mut out, &mut [0u8; 31]).unwrap_err();
+    let err = model
+        .shade(&mut src, &lit, 0, &mut out, &mut [0u8; 31])
+        .unwrap_err();
     assert_eq!(err, aprt_core::Error::BufferTooSmall { needed: 32 });
 }

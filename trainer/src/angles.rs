@@ -50,7 +50,10 @@ pub enum AnglesError {
 /// Reads an angles CSV: comma-separated numbers, one row per pose. A first row that is not
 /// numeric is taken as a header; blank lines and lines starting with `#` are skipped.
 pub fn read_angles(path: &Path) -> Result<Vec<Vec<f64>>, AnglesError> {
-    let text = std::fs::read_to_string(path).map_err(|source| AnglesError::Read { path: path.into(), source })?;
+    let text = std::fs::read_to_string(path).map_err(|source| AnglesError::Read {
+        path: path.into(),
+        source,
+    })?;
     parse_angles(path, &text)
 }
 
@@ -71,7 +74,12 @@ pub fn parse_angles(path: &Path, text: &str) -> Result<Vec<Vec<f64>>, AnglesErro
         }
         let mut row = Vec::with_capacity(cells.len());
         for (j, (cell, value)) in cells.iter().zip(parsed).enumerate() {
-            let bad = |reason: String| AnglesError::Cell { path: path.into(), row: i + 1, column: j + 1, reason };
+            let bad = |reason: String| AnglesError::Cell {
+                path: path.into(),
+                row: i + 1,
+                column: j + 1,
+                reason,
+            };
             match value {
                 Ok(x) if x.is_finite() => row.push(x),
                 Ok(_) => return Err(bad(format!("'{cell}' is not finite"))),
@@ -80,7 +88,13 @@ pub fn parse_angles(path: &Path, text: &str) -> Result<Vec<Vec<f64>>, AnglesErro
         }
         if let Some(first) = rows.first() {
             if row.len() != first.len() {
-                return Err(AnglesError::Ragged { path: path.into(), row: i + 1, found: row.len(), expected: first.len(), first_row });
+                return Err(AnglesError::Ragged {
+                    path: path.into(),
+                    row: i + 1,
+                    found: row.len(),
+                    expected: first.len(),
+                    first_row,
+                });
             }
         } else {
             first_row = i + 1;
@@ -99,17 +113,27 @@ mod tests {
 
     #[test]
     fn header_row_and_comments_are_skipped() {
-        let rows = parse_angles(Path::new("a.csv"), "hip,knee\n# comment\n0.1, 0.2\n\n-1e-3,3\n").unwrap();
+        let rows = parse_angles(
+            Path::new("a.csv"),
+            "hip,knee\n# comment\n0.1, 0.2\n\n-1e-3,3\n",
+        )
+        .unwrap();
         assert_eq!(rows, vec![vec![0.1, 0.2], vec![-1e-3, 3.0]]);
     }
 
     #[test]
     fn errors_name_row_and_column() {
-        let err = parse_angles(Path::new("a.csv"), "0,1\n2,x\n").unwrap_err().to_string();
+        let err = parse_angles(Path::new("a.csv"), "0,1\n2,x\n")
+            .unwrap_err()
+            .to_string();
         assert_eq!(err, "a.csv: row 2, column 2: 'x' is not a number");
-        let err = parse_angles(Path::new("a.csv"), "0,1\n2,NaN\n").unwrap_err().to_string();
+        let err = parse_angles(Path::new("a.csv"), "0,1\n2,NaN\n")
+            .unwrap_err()
+            .to_string();
         assert_eq!(err, "a.csv: row 2, column 2: 'NaN' is not finite");
-        let err = parse_angles(Path::new("a.csv"), "0,1\n2\n").unwrap_err().to_string();
+        let err = parse_angles(Path::new("a.csv"), "0,1\n2\n")
+            .unwrap_err()
+            .to_string();
         assert_eq!(err, "a.csv: row 2 has 1 values, row 1 has 2");
         assert!(parse_angles(Path::new("a.csv"), "a,b\n").is_err());
     }

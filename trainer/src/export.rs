@@ -1,8 +1,8 @@
 //! Model blob writer: quantises a [`LinearModel`] into the layout of `aprt_core::blob`.
 
 use aprt_core::blob::{
-    Basis, Encoding, Header, MAGIC, MAX_COEF_DIMS, MAX_HEADER_LEN, MAX_JOINTS, MAX_POSE_DIMS, MAX_SECTIONS,
-    MAX_VERTICES, PREAMBLE_LEN, SectionEntry, SectionKind, VERSION, align_up, crc32,
+    Basis, Encoding, Header, MAGIC, MAX_COEF_DIMS, MAX_HEADER_LEN, MAX_JOINTS, MAX_POSE_DIMS,
+    MAX_SECTIONS, MAX_VERTICES, PREAMBLE_LEN, SectionEntry, SectionKind, VERSION, align_up, crc32,
 };
 use aprt_core::sh::MAX_ORDER;
 
@@ -62,13 +62,26 @@ fn limit(what: &'static str, value: usize, min: usize, max: usize) -> Result<(),
 }
 
 /// Encodes `values` as one section's bytes, rejecting what the reader would reject.
-fn encode(section: SectionKind, values: &[f64], expected: usize, encoding: Encoding) -> Result<Vec<u8>, ExportError> {
+fn encode(
+    section: SectionKind,
+    values: &[f64],
+    expected: usize,
+    encoding: Encoding,
+) -> Result<Vec<u8>, ExportError> {
     if values.len() != expected {
-        return Err(ExportError::Shape { section, expected, found: values.len() });
+        return Err(ExportError::Shape {
+            section,
+            expected,
+            found: values.len(),
+        });
     }
     let mut out = Vec::with_capacity(values.len() * encoding.size());
     for (index, &value) in values.iter().enumerate() {
-        let bad = || ExportError::NotRepresentable { section, index, value };
+        let bad = || ExportError::NotRepresentable {
+            section,
+            index,
+            value,
+        };
         match encoding {
             Encoding::F32 => {
                 let x = value as f32;
@@ -91,7 +104,12 @@ fn encode(section: SectionKind, values: &[f64], expected: usize, encoding: Encod
 
 /// Serialises `model` into a complete blob.
 pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>, ExportError> {
-    let (n2, v, a, ka) = (model.order * model.order, model.vertices, model.joints, model.pose_dims());
+    let (n2, v, a, ka) = (
+        model.order * model.order,
+        model.vertices,
+        model.joints,
+        model.pose_dims(),
+    );
     limit("order", model.order, 1, MAX_ORDER)?;
     limit("vertices", v, 1, MAX_VERTICES)?;
     limit("joints", a, 1, MAX_JOINTS)?;
@@ -101,17 +119,31 @@ pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>
         Precision::F16 => Encoding::F16,
     };
     let mut sections: Vec<(SectionKind, Encoding, Vec<u8>)> = vec![
-        (SectionKind::PoseMean, Encoding::F32, encode(SectionKind::PoseMean, &model.pose_mean, a, Encoding::F32)?),
+        (
+            SectionKind::PoseMean,
+            Encoding::F32,
+            encode(SectionKind::PoseMean, &model.pose_mean, a, Encoding::F32)?,
+        ),
         (
             SectionKind::PoseProjection,
             Encoding::F32,
-            encode(SectionKind::PoseProjection, &model.pose_projection, ka * a, Encoding::F32)?,
+            encode(
+                SectionKind::PoseProjection,
+                &model.pose_projection,
+                ka * a,
+                Encoding::F32,
+            )?,
         ),
     ];
     let basis = match &model.basis {
         VertexBasis::Stored { coef_dims, data } => {
             limit("coef dims", *coef_dims, 1, MAX_COEF_DIMS)?;
-            let w = encode(SectionKind::Weights, &model.weights, n2 * (ka + 1) * coef_dims, big)?;
+            let w = encode(
+                SectionKind::Weights,
+                &model.weights,
+                n2 * (ka + 1) * coef_dims,
+                big,
+            )?;
             sections.push((SectionKind::Weights, big, w));
             let u = encode(SectionKind::VertexBasis, data, v * coef_dims, big)?;
             sections.push((SectionKind::VertexBasis, big, u));
@@ -121,7 +153,11 @@ pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>
             // Stored vertex-major so that a vertex range is one contiguous read.
             let expected = n2 * (ka + 1) * v;
             if model.weights.len() != expected {
-                return Err(ExportError::Shape { section: SectionKind::VertexWeights, expected, found: model.weights.len() });
+                return Err(ExportError::Shape {
+                    section: SectionKind::VertexWeights,
+                    expected,
+                    found: model.weights.len(),
+                });
             }
             let mut rows = Vec::with_capacity(expected);
             for j in 0..v {
@@ -129,7 +165,11 @@ pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>
                     rows.push(model.weights[ci * v + j]);
                 }
             }
-            sections.push((SectionKind::VertexWeights, big, encode(SectionKind::VertexWeights, &rows, expected, big)?));
+            sections.push((
+                SectionKind::VertexWeights,
+                big,
+                encode(SectionKind::VertexWeights, &rows, expected, big)?,
+            ));
             Basis::Identity
         }
     };
@@ -138,7 +178,11 @@ pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>
 
 /// Lays out preamble, header and aligned sections. The header holds the section offsets,
 /// which depend on the header's own (varint) length: iterate until the length is stable.
-fn assemble(model: &LinearModel, basis: Basis, sections: &[(SectionKind, Encoding, Vec<u8>)]) -> Result<Vec<u8>, ExportError> {
+fn assemble(
+    model: &LinearModel,
+    basis: Basis,
+    sections: &[(SectionKind, Encoding, Vec<u8>)],
+) -> Result<Vec<u8>, ExportError> {
     let mut header_len = 0usize;
     for _ in 0..8 {
         let mut table = heapless::Vec::<SectionEntry, MAX_SECTIONS>::new();
@@ -170,7 +214,10 @@ fn assemble(model: &LinearModel, basis: Basis, sections: &[(SectionKind, Encodin
             header_len = encoded.len();
             continue;
         }
-        assert!(header_len <= MAX_HEADER_LEN as usize, "header of {header_len} bytes");
+        assert!(
+            header_len <= MAX_HEADER_LEN as usize,
+            "header of {header_len} bytes"
+        );
         let mut blob = Vec::new();
         blob.extend_from_slice(&MAGIC);
         blob.extend_from_slice(&VERSION.to_le_bytes());
@@ -198,7 +245,9 @@ mod tests {
             joints: 3,
             pose_mean: vec![0.1, -0.2, 0.3],
             pose_projection: vec![1.0, 0.0, 0.5, 0.0, 1.0, -0.5],
-            weights: (0..n2 * (ka + 1) * kv).map(|i| (i as f64 * 0.37).sin()).collect(),
+            weights: (0..n2 * (ka + 1) * kv)
+                .map(|i| (i as f64 * 0.37).sin())
+                .collect(),
             basis,
             alpha: 0.25,
         }
@@ -206,7 +255,13 @@ mod tests {
 
     #[test]
     fn blob_parses_back_with_the_same_dimensions() {
-        let stored = tiny(VertexBasis::Stored { coef_dims: 2, data: vec![0.5; 6] }, 2);
+        let stored = tiny(
+            VertexBasis::Stored {
+                coef_dims: 2,
+                data: vec![0.5; 6],
+            },
+            2,
+        );
         for model in [stored, tiny(VertexBasis::Identity, 3)] {
             for precision in [Precision::F32, Precision::F16] {
                 let blob = encode_model(&model, precision).unwrap();
@@ -223,15 +278,36 @@ mod tests {
     fn rejects_nan_and_f16_overflow() {
         let mut m = tiny(VertexBasis::Identity, 3);
         m.weights[5] = f64::NAN;
-        assert!(matches!(encode_model(&m, Precision::F32), Err(ExportError::NotRepresentable { section: SectionKind::VertexWeights, .. })));
+        assert!(matches!(
+            encode_model(&m, Precision::F32),
+            Err(ExportError::NotRepresentable {
+                section: SectionKind::VertexWeights,
+                ..
+            })
+        ));
         m.weights[5] = 1e6;
         assert!(encode_model(&m, Precision::F32).is_ok());
-        assert!(matches!(encode_model(&m, Precision::F16), Err(ExportError::NotRepresentable { .. })));
+        assert!(matches!(
+            encode_model(&m, Precision::F16),
+            Err(ExportError::NotRepresentable { .. })
+        ));
     }
 
     #[test]
     fn rejects_shapes_the_runtime_cannot_hold() {
-        let m = tiny(VertexBasis::Stored { coef_dims: MAX_COEF_DIMS + 1, data: vec![] }, 1);
-        assert!(matches!(encode_model(&m, Precision::F32), Err(ExportError::TooLarge { what: "coef dims", .. })));
+        let m = tiny(
+            VertexBasis::Stored {
+                coef_dims: MAX_COEF_DIMS + 1,
+                data: vec![],
+            },
+            1,
+        );
+        assert!(matches!(
+            encode_model(&m, Precision::F32),
+            Err(ExportError::TooLarge {
+                what: "coef dims",
+                ..
+            })
+        ));
     }
 }

@@ -9,6 +9,6 @@ pub mod model;
 pub mod npy;
 pub mod runtime;
 
+pub use export::{ExportError, Precision, encode_model};
 pub use mesh::Mesh;
 pub use model::{LinearModel, VertexBasis};
-pub use export::{ExportError, Precision, encode_model};

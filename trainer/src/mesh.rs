@@ -16,7 +16,11 @@ impl Mesh {
     /// Builds a mesh whose normals are the area-weighted average of the adjacent face normals.
     pub fn with_area_weighted_normals(positions: Vec<[f32; 3]>, triangles: Vec<[u32; 3]>) -> Self {
         let normals = area_weighted_normals(&positions, &triangles);
-        Mesh { positions, normals, triangles }
+        Mesh {
+            positions,
+            normals,
+            triangles,
+        }
     }
 
     /// Number of vertices.
@@ -40,7 +44,11 @@ pub fn area_weighted_normals(positions: &[[f32; 3]], triangles: &[[u32; 3]]) -> 
     sum.into_iter()
         .map(|n| {
             let n = n.normalize_or_zero();
-            if n == glam::DVec3::ZERO { [0.0, 0.0, 1.0] } else { n.as_vec3().to_array() }
+            if n == glam::DVec3::ZERO {
+                [0.0, 0.0, 1.0]
+            } else {
+                n.as_vec3().to_array()
+            }
         })
         .collect()
 }
@@ -52,10 +60,20 @@ mod tests {
     #[test]
     fn normals_weight_faces_by_area() {
         // A big triangle in the xy plane and a small one in the xz plane share vertex 0.
-        let positions = vec![[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 0.1], [0.1, 0.0, 0.0]];
+        let positions = vec![
+            [0.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [0.0, 2.0, 0.0],
+            [0.0, 0.0, 0.1],
+            [0.1, 0.0, 0.0],
+        ];
         let n = area_weighted_normals(&positions, &[[0, 1, 2], [0, 3, 4]]);
         let expect = glam::Vec3::new(0.0, 4.0 * 0.0 + 0.01, 4.0).normalize();
-        assert!((glam::Vec3::from(n[0]) - expect).length() < 1e-6, "{:?}", n[0]);
+        assert!(
+            (glam::Vec3::from(n[0]) - expect).length() < 1e-6,
+            "{:?}",
+            n[0]
+        );
     }
 
     #[test]

@@ -43,7 +43,10 @@ pub struct LinearModel {
 impl LinearModel {
     /// k_a, the pose dimensions after projection.
     pub fn pose_dims(&self) -> usize {
-        self.pose_projection.len().checked_div(self.joints).unwrap_or(0)
+        self.pose_projection
+            .len()
+            .checked_div(self.joints)
+            .unwrap_or(0)
     }
 
     /// k_v, the number of vertex basis vectors (`v` for the identity basis).
@@ -56,10 +59,17 @@ impl LinearModel {
 
     /// Reference prediction in f64: per-vertex transfer, `v × n²` vertex-major.
     pub fn predict(&self, angles: &[f64]) -> Vec<f64> {
-        let (a, ka, kv, n2) = (self.joints, self.pose_dims(), self.coef_dims(), self.order * self.order);
+        let (a, ka, kv, n2) = (
+            self.joints,
+            self.pose_dims(),
+            self.coef_dims(),
+            self.order * self.order,
+        );
         let mut z = vec![1.0; ka + 1];
         for (i, zi) in z[1..].iter_mut().enumerate() {
-            *zi = (0..a).map(|j| self.pose_projection[i * a + j] * (angles[j] - self.pose_mean[j])).sum();
+            *zi = (0..a)
+                .map(|j| self.pose_projection[i * a + j] * (angles[j] - self.pose_mean[j]))
+                .sum();
         }
         let mut w = vec![0.0; n2 * kv];
         for c in 0..n2 {
@@ -75,7 +85,9 @@ impl LinearModel {
             for c in 0..n2 {
                 t[j * n2 + c] = match &self.basis {
                     VertexBasis::Identity => w[c * kv + j],
-                    VertexBasis::Stored { data, .. } => (0..kv).map(|k| w[c * kv + k] * data[j * kv + k]).sum(),
+                    VertexBasis::Stored { data, .. } => {
+                        (0..kv).map(|k| w[c * kv + k] * data[j * kv + k]).sum()
+                    }
                 };
             }
         }

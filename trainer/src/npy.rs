@@ -34,8 +34,15 @@ mod tests {
         let header_len = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
         assert_eq!((10 + header_len) % 64, 0);
         let header = std::str::from_utf8(&bytes[10..10 + header_len]).unwrap();
-        assert!(header.contains("'shape': (2, 3)") && header.contains("'<f4'") && header.ends_with('\n'));
-        assert_eq!(&bytes[10 + header_len + 4..10 + header_len + 8], &1.0f32.to_le_bytes());
+        assert!(
+            header.contains("'shape': (2, 3)")
+                && header.contains("'<f4'")
+                && header.ends_with('\n')
+        );
+        assert_eq!(
+            &bytes[10 + header_len + 4..10 + header_len + 8],
+            &1.0f32.to_le_bytes()
+        );
         assert_eq!(bytes.len(), 10 + header_len + 24);
     }
 

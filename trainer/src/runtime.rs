@@ -5,7 +5,10 @@ use aprt_core::blob::{Basis, Encoding, SectionKind, read_header};
 use aprt_core::{LitWeights, Model, PoseWeights, SliceSource};
 
 /// Per-vertex transfer (`v × n²`, vertex-major) for each pose, through `aprt-core`.
-pub fn predict_transfer(blob: &[u8], poses: &[Vec<f64>]) -> Result<Vec<Vec<f32>>, aprt_core::Error> {
+pub fn predict_transfer(
+    blob: &[u8],
+    poses: &[Vec<f64>],
+) -> Result<Vec<Vec<f32>>, aprt_core::Error> {
     let model = Model::parse(blob)?;
     let n2 = model.order() * model.order();
     let mut pose = PoseWeights::default();
@@ -22,7 +25,11 @@ pub fn predict_transfer(blob: &[u8], poses: &[Vec<f64>]) -> Result<Vec<Vec<f32>>
 }
 
 /// Per-vertex shading `Σ_c L_c t_c` for one pose and SH lighting, through `aprt-core`.
-pub fn predict_shading(blob: &[u8], angles: &[f64], lighting: &[f32]) -> Result<Vec<f32>, aprt_core::Error> {
+pub fn predict_shading(
+    blob: &[u8],
+    angles: &[f64],
+    lighting: &[f32],
+) -> Result<Vec<f32>, aprt_core::Error> {
     let model = Model::parse(blob)?;
     let angles: Vec<f32> = angles.iter().map(|&a| a as f32).collect();
     let mut pose = PoseWeights::default();
@@ -82,7 +89,8 @@ pub fn describe(blob: &[u8]) -> Result<BlobInfo, aprt_core::Error> {
         .sections
         .iter()
         .map(|e| SectionInfo {
-            kind: SectionKind::from_tag(e.kind).map_or(format!("unknown({})", e.kind), |k| format!("{k:?}")),
+            kind: SectionKind::from_tag(e.kind)
+                .map_or(format!("unknown({})", e.kind), |k| format!("{k:?}")),
             encoding: match Encoding::from_tag(e.encoding) {
                 Some(Encoding::F32) => "f32".into(),
                 Some(Encoding::F16) => "f16".into(),
@@ -113,11 +121,20 @@ pub fn describe(blob: &[u8]) -> Result<BlobInfo, aprt_core::Error> {
 impl std::fmt::Display for BlobInfo {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         writeln!(f, "aprt model, format version {}", self.version)?;
-        writeln!(f, "  SH order        {} ({} coefficients)", self.order, self.order * self.order)?;
+        writeln!(
+            f,
+            "  SH order        {} ({} coefficients)",
+            self.order,
+            self.order * self.order
+        )?;
         writeln!(f, "  vertices        {}", self.vertices)?;
         writeln!(f, "  joint angles    {}", self.joints)?;
         writeln!(f, "  pose dims k_a   {}", self.pose_dims)?;
-        writeln!(f, "  coef dims k_v   {} ({} basis)", self.coef_dims, self.basis)?;
+        writeln!(
+            f,
+            "  coef dims k_v   {} ({} basis)",
+            self.coef_dims, self.basis
+        )?;
         writeln!(f, "  alpha           {:.6e}", self.alpha)?;
         writeln!(
             f,
@@ -128,7 +145,11 @@ impl std::fmt::Display for BlobInfo {
         )?;
         writeln!(f, "  sections:")?;
         for s in &self.sections {
-            writeln!(f, "    {:<16} {:<4} offset {:>10}  {:>10} bytes", s.kind, s.encoding, s.offset, s.bytes)?;
+            writeln!(
+                f,
+                "    {:<16} {:<4} offset {:>10}  {:>10} bytes",
+                s.kind, s.encoding, s.offset, s.bytes
+            )?;
         }
         Ok(())
     }

@@ -139,21 +139,36 @@ pub enum Error {
 impl core::fmt::Display for Error {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match *self {
-            Error::Truncated { needed } => write!(f, "blob truncated: needs at least {needed} bytes"),
+            Error::Truncated { needed } => {
+                write!(f, "blob truncated: needs at least {needed} bytes")
+            }
             Error::BadMagic => write!(f, "not an aprt model (bad magic)"),
             Error::UnsupportedVersion { found } => {
-                write!(f, "unsupported format version {found} (this reader knows {})", super::VERSION)
+                write!(
+                    f,
+                    "unsupported format version {found} (this reader knows {})",
+                    super::VERSION
+                )
             }
             Error::HeaderTooLarge { len } => write!(f, "header length {len} exceeds the maximum"),
             Error::HeaderChecksum => write!(f, "header checksum mismatch"),
             Error::HeaderMalformed => write!(f, "header does not decode"),
             Error::TrailingBytes { extra } => write!(f, "{extra} unexpected trailing bytes"),
-            Error::BadDimension { what, value } => write!(f, "dimension {what:?} = {value} is out of range"),
+            Error::BadDimension { what, value } => {
+                write!(f, "dimension {what:?} = {value} is out of range")
+            }
             Error::SectionOutOfRange { kind } => write!(f, "section {kind} lies outside the blob"),
             Error::SectionMisaligned { kind } => write!(f, "section {kind} is misaligned"),
             Error::SectionOverlap { kind } => write!(f, "section {kind} overlaps another section"),
-            Error::SectionLength { kind, expected, found } => {
-                write!(f, "section {kind} is {found} bytes, dimensions need {expected}")
+            Error::SectionLength {
+                kind,
+                expected,
+                found,
+            } => {
+                write!(
+                    f,
+                    "section {kind} is {found} bytes, dimensions need {expected}"
+                )
             }
             Error::LengthOverflow => write!(f, "dimension product overflows"),
             Error::DuplicateSection { kind } => write!(f, "section {kind} appears twice"),
@@ -163,7 +178,9 @@ impl core::fmt::Display for Error {
             Error::ChecksumMismatch { kind } => write!(f, "section {kind} checksum mismatch"),
             Error::NonFinite { kind } => write!(f, "section {kind} holds NaN or infinity"),
             Error::BufferTooSmall { needed } => write!(f, "buffer too small: needs {needed} bytes"),
-            Error::WrongLength { expected, found } => write!(f, "slice length {found}, expected {expected}"),
+            Error::WrongLength { expected, found } => {
+                write!(f, "slice length {found}, expected {expected}")
+            }
             Error::NonFiniteInput => write!(f, "input holds NaN or infinity"),
             Error::VertexRange { first, count } => {
                 write!(f, "vertex range {first}..{first}+{count} is out of bounds")

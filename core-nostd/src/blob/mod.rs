@@ -8,5 +8,5 @@ mod source;
 pub use error::{Dim, Error};
 pub use format::*;
 pub use model::{Model, Section, read_header};
-pub use source::{BlobSource, SliceSource, SourceError};
 pub(crate) use source::for_each_chunk;
+pub use source::{BlobSource, SliceSource, SourceError};

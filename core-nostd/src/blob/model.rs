@@ -2,8 +2,8 @@
 //! verify every section's checksum and values once, so evaluation can trust the layout.
 
 use super::format::{
-    Basis, Encoding, Header, MAGIC, MAX_COEF_DIMS, MAX_HEADER_LEN, MAX_JOINTS, MAX_POSE_DIMS, MAX_SECTIONS,
-    MAX_VERTICES, PREAMBLE_LEN, SECTION_ALIGN, SectionEntry, SectionKind, VERSION,
+    Basis, Encoding, Header, MAGIC, MAX_COEF_DIMS, MAX_HEADER_LEN, MAX_JOINTS, MAX_POSE_DIMS,
+    MAX_SECTIONS, MAX_VERTICES, PREAMBLE_LEN, SECTION_ALIGN, SectionEntry, SectionKind, VERSION,
 };
 use super::source::{BlobSource, SliceSource, for_each_chunk};
 use super::{Dim, Error};
@@ -45,10 +45,15 @@ pub fn read_header(blob: &[u8]) -> Result<Header, Error> {
 }
 
 /// Returns the header and the byte offset where the header ends.
-fn header_from<S: BlobSource>(src: &mut S, buf: &mut [u8; MAX_HEADER_LEN as usize]) -> Result<(Header, u64), Error> {
+fn header_from<S: BlobSource>(
+    src: &mut S,
+    buf: &mut [u8; MAX_HEADER_LEN as usize],
+) -> Result<(Header, u64), Error> {
     let mut pre = [0u8; PREAMBLE_LEN];
     if src.len() < PREAMBLE_LEN as u64 {
-        return Err(Error::Truncated { needed: PREAMBLE_LEN as u64 });
+        return Err(Error::Truncated {
+            needed: PREAMBLE_LEN as u64,
+        });
     }
     src.read_at(0, &mut pre).map_err(|_| Error::Source)?;
     let word = |i: usize| u32::from_le_bytes([pre[i], pre[i + 1], pre[i + 2], pre[i + 3]]);
@@ -67,13 +72,17 @@ fn header_from<S: BlobSource>(src: &mut S, buf: &mut [u8; MAX_HEADER_LEN as usiz
         return Err(Error::Truncated { needed: end });
     }
     let bytes = &mut buf[..len as usize];
-    src.read_at(PREAMBLE_LEN as u64, bytes).map_err(|_| Error::Source)?;
+    src.read_at(PREAMBLE_LEN as u64, bytes)
+        .map_err(|_| Error::Source)?;
     if super::crc32(bytes) != crc {
         return Err(Error::HeaderChecksum);
     }
-    let (header, rest) = postcard::take_from_bytes::<Header>(bytes).map_err(|_| Error::HeaderMalformed)?;
+    let (header, rest) =
+        postcard::take_from_bytes::<Header>(bytes).map_err(|_| Error::HeaderMalformed)?;
     if !rest.is_empty() {
-        return Err(Error::TrailingBytes { extra: rest.len() as u64 });
+        return Err(Error::TrailingBytes {
+            extra: rest.len() as u64,
+        });
     }
     Ok((header, end))
 }
@@ -107,10 +116,20 @@ impl Model {
         let order = dim(Dim::Order, h.order as u64, 1, MAX_ORDER as u64)?;
         let vertices = dim(Dim::Vertices, h.vertices as u64, 1, MAX_VERTICES as u64)?;
         let joints = dim(Dim::Joints, h.joints as u64, 1, MAX_JOINTS as u64)?;
-        let pose_dims = dim(Dim::PoseDims, h.pose_dims as u64, 0, MAX_POSE_DIMS.min(joints) as u64)?;
+        let pose_dims = dim(
+            Dim::PoseDims,
+            h.pose_dims as u64,
+            0,
+            MAX_POSE_DIMS.min(joints) as u64,
+        )?;
         let coef_dims = match h.basis {
             Basis::Stored => dim(Dim::CoefDims, h.coef_dims as u64, 1, MAX_COEF_DIMS as u64)?,
-            Basis::Identity => dim(Dim::CoefDims, h.coef_dims as u64, vertices as u64, vertices as u64)?,
+            Basis::Identity => dim(
+                Dim::CoefDims,
+                h.coef_dims as u64,
+                vertices as u64,
+                vertices as u64,
+            )?,
         };
         let n2 = coeff_count(order);
         let expected_elems = |kind: SectionKind| -> Option<Result<u64, Error>> {
@@ -119,7 +138,9 @@ impl Model {
                 (SectionKind::PoseProjection, _) => product(&[pose_dims, joints]),
                 (SectionKind::Weights, Basis::Stored) => product(&[n2, 1 + pose_dims, coef_dims]),
                 (SectionKind::VertexBasis, Basis::Stored) => product(&[vertices, coef_dims]),
-                (SectionKind::VertexWeights, Basis::Identity) => product(&[vertices, n2, 1 + pose_dims]),
+                (SectionKind::VertexWeights, Basis::Identity) => {
+                    product(&[vertices, n2, 1 + pose_dims])
+                }
                 _ => return None,
             })
         };
@@ -141,24 +162,39 @@ impl Model {
             let encoding = Encoding::from_tag(e.encoding)
                 .filter(|enc| *enc == Encoding::F32 || kind.allows_f16())
                 .ok_or(Error::BadEncoding { kind: e.kind })?;
-            let expected = elems?.checked_mul(encoding.size() as u64).ok_or(Error::LengthOverflow)?;
+            let expected = elems?
+                .checked_mul(encoding.size() as u64)
+                .ok_or(Error::LengthOverflow)?;
             if e.len != expected {
-                return Err(Error::SectionLength { kind: e.kind, expected, found: e.len });
+                return Err(Error::SectionLength {
+                    kind: e.kind,
+                    expected,
+                    found: e.len,
+                });
             }
             let slot = &mut found[kind as usize];
             if slot.is_some() {
                 return Err(Error::DuplicateSection { kind: e.kind });
             }
-            let section = Section { offset: e.offset, len: e.len, encoding };
+            let section = Section {
+                offset: e.offset,
+                len: e.len,
+                encoding,
+            };
             verify(src, e, section, scratch)?;
             *slot = Some(section);
         }
         if src.len() > end_of_data {
-            return Err(Error::TrailingBytes { extra: src.len() - end_of_data });
+            return Err(Error::TrailingBytes {
+                extra: src.len() - end_of_data,
+            });
         }
         let need = |kind: SectionKind| found[kind as usize].ok_or(Error::MissingSection { kind });
         let (weights, rows) = match h.basis {
-            Basis::Stored => (Some(need(SectionKind::Weights)?), need(SectionKind::VertexBasis)?),
+            Basis::Stored => (
+                Some(need(SectionKind::Weights)?),
+                need(SectionKind::VertexBasis)?,
+            ),
             Basis::Identity => (None, need(SectionKind::VertexWeights)?),
         };
         Ok(Model {
@@ -221,9 +257,16 @@ impl Model {
 }
 
 /// Sections must lie after the header, inside the blob, aligned, and not share bytes.
-fn check_no_overlap(sections: &heapless::Vec<SectionEntry, MAX_SECTIONS>, header_end: u64, len: u64) -> Result<(), Error> {
+fn check_no_overlap(
+    sections: &heapless::Vec<SectionEntry, MAX_SECTIONS>,
+    header_end: u64,
+    len: u64,
+) -> Result<(), Error> {
     for (i, e) in sections.iter().enumerate() {
-        let end = e.offset.checked_add(e.len).ok_or(Error::SectionOutOfRange { kind: e.kind })?;
+        let end = e
+            .offset
+            .checked_add(e.len)
+            .ok_or(Error::SectionOutOfRange { kind: e.kind })?;
         if e.offset < header_end || end > len {
             return Err(Error::SectionOutOfRange { kind: e.kind });
         }
@@ -240,7 +283,12 @@ fn check_no_overlap(sections: &heapless::Vec<SectionEntry, MAX_SECTIONS>, header
 }
 
 /// Checks a section's CRC and that every value is finite, streaming through `scratch`.
-fn verify<S: BlobSource>(src: &mut S, e: &SectionEntry, s: Section, scratch: &mut [u8]) -> Result<(), Error> {
+fn verify<S: BlobSource>(
+    src: &mut S,
+    e: &SectionEntry,
+    s: Section,
+    scratch: &mut [u8],
+) -> Result<(), Error> {
     let size = s.encoding.size();
     let count = usize::try_from(s.len).map_err(|_| Error::LengthOverflow)? / size;
     // Stream in chunks of whole elements: 4-byte words hold 1 f32 or 2 f16.
@@ -249,8 +297,16 @@ fn verify<S: BlobSource>(src: &mut S, e: &SectionEntry, s: Section, scratch: &mu
     for_each_chunk(src, s.offset, size, count, scratch, |_, bytes| {
         hasher.update(bytes);
         finite &= match s.encoding {
-            Encoding::F32 => bytes.as_chunks::<4>().0.iter().all(|w| f32::from_le_bytes(*w).is_finite()),
-            Encoding::F16 => bytes.as_chunks::<2>().0.iter().all(|w| half::f16::from_le_bytes(*w).is_finite()),
+            Encoding::F32 => bytes
+                .as_chunks::<4>()
+                .0
+                .iter()
+                .all(|w| f32::from_le_bytes(*w).is_finite()),
+            Encoding::F16 => bytes
+                .as_chunks::<2>()
+                .0
+                .iter()
+                .all(|w| half::f16::from_le_bytes(*w).is_finite()),
         };
         Ok(())
     })?;

@@ -61,7 +61,9 @@ pub(crate) fn for_each_chunk<S: BlobSource>(
     mut visit: impl FnMut(usize, &[u8]) -> Result<(), Error>,
 ) -> Result<(), Error> {
     let total = item_bytes.checked_mul(count).ok_or(Error::LengthOverflow)?;
-    let end = offset.checked_add(total as u64).ok_or(Error::LengthOverflow)?;
+    let end = offset
+        .checked_add(total as u64)
+        .ok_or(Error::LengthOverflow)?;
     if end > src.len() {
         return Err(Error::Truncated { needed: end });
     }
@@ -70,7 +72,9 @@ pub(crate) fn for_each_chunk<S: BlobSource>(
     }
     if let Some(all) = src.as_slice() {
         let range = usize::try_from(offset).ok().zip(usize::try_from(end).ok());
-        let bytes = range.and_then(|(a, b)| all.get(a..b)).ok_or(Error::Truncated { needed: end })?;
+        let bytes = range
+            .and_then(|(a, b)| all.get(a..b))
+            .ok_or(Error::Truncated { needed: end })?;
         return visit(0, bytes);
     }
     let per_chunk = scratch.len().checked_div(item_bytes).unwrap_or(0);
