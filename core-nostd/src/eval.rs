@@ -15,6 +15,7 @@
 use crate::blob::for_each_chunk;
 use crate::blob::{
     Basis, BlobSource, Encoding, Error, MAX_COEF_DIMS, MAX_JOINTS, MAX_POSE_DIMS, Model, Section,
+    VERTEX_BLOCK,
 };
 use crate::sh::{MAX_COEFFS, coeff_count};
 
@@ -212,13 +213,14 @@ impl Model {
         )
     }
 
-    /// Least `scratch` for evaluating from a streaming source: one row of any section.
+    /// Least `scratch` for evaluating from a streaming source: one vertex block, or one row of
+    /// the small sections.
     pub fn scratch_bytes(&self) -> usize {
         let small = match self.basis {
             Basis::Stored => self.coef_dims * self.weights.map_or(4, |w| w.encoding.size()),
             Basis::Identity => 0,
         };
-        self.row_bytes().max(self.joints * 4).max(small)
+        self.block_bytes().max(self.joints * 4).max(small)
     }
 
     /// Computes the pose weights for joint angles `angles` (`joints()` values, radians as at
@@ -321,23 +323,30 @@ impl Model {
         }
     }
 
-    /// Streams the rows of vertices `first .. first + count` to `visit(vertex offset, row bytes)`.
-    fn each_row_chunk<S: BlobSource>(
+    /// Streams the blocks holding vertices `first .. first + count` to
+    /// `visit(first vertex of the block, block bytes)`.
+    fn each_block<S: BlobSource>(
         &self,
         src: &mut S,
         first: usize,
         count: usize,
         scratch: &mut [u8],
-        visit: impl FnMut(usize, &[u8]) -> Result<(), Error>,
+        mut visit: impl FnMut(usize, &[u8]),
     ) -> Result<(), Error> {
-        let row_bytes = self.row_bytes();
-        let offset = self.rows.offset + (first as u64) * row_bytes as u64;
-        for_each_chunk(src, offset, row_bytes, count, scratch, visit)
+        let block_bytes = self.block_bytes();
+        let (b0, b1) = (first / VERTEX_BLOCK, (first + count).div_ceil(VERTEX_BLOCK));
+        let offset = self.rows.offset + (b0 as u64) * block_bytes as u64;
+        for_each_chunk(src, offset, block_bytes, b1 - b0, scratch, |i0, bytes| {
+            for (i, block) in bytes.chunks_exact(block_bytes).enumerate() {
+                visit((b0 + i0 + i) * VERTEX_BLOCK, block);
+            }
+            Ok(())
+        })
     }
 
     /// Per-vertex shading `Σ_c L_c t_c(j)` for vertices `first .. first + out.len()`, from
     /// lighting weights of [`Model::light`]. Multiply by albedo / π for exit radiance.
-    /// `scratch` may be empty for a resident blob, else at least [`Model::row_bytes`].
+    /// `scratch` may be empty for a resident blob, else at least [`Model::block_bytes`].
     pub fn shade<S: BlobSource>(
         &self,
         src: &mut S,
@@ -350,16 +359,16 @@ impl Model {
             return Err(Error::ShapeMismatch);
         }
         self.check_range(first, out.len())?;
-        let width = self.row_width();
-        let q = &lit.q[..width];
+        let q = &lit.q[..self.row_width()];
         let encoding = self.rows.encoding;
-        self.each_row_chunk(src, first, out.len(), scratch, |start, bytes| {
-            let out = &mut out[start..];
-            match encoding {
-                Encoding::F32 => shade_rows(bytes.as_chunks::<4>().0, width, q, out),
-                Encoding::F16 => shade_rows(bytes.as_chunks::<2>().0, width, q, out),
-            }
-            Ok(())
+        let end = first + out.len();
+        self.each_block(src, first, out.len(), scratch, |v0, bytes| {
+            let lanes = match encoding {
+                Encoding::F32 => shade_block(bytes.as_chunks::<4>().0, q),
+                Encoding::F16 => shade_block(bytes.as_chunks::<2>().0, q),
+            };
+            let (lo, hi) = (v0.max(first), (v0 + VERTEX_BLOCK).min(end));
+            out[lo - first..hi - first].copy_from_slice(&lanes[lo - v0..hi - v0]);
         })
     }
 
@@ -387,58 +396,84 @@ impl Model {
         }
         let count = out.len() / n2;
         self.check_range(first, count)?;
-        let width = self.row_width();
         let encoding = self.rows.encoding;
         let (basis, kv, z) = (self.basis, self.coef_dims, &pose.z[..=self.pose_dims]);
         let w = &pose.w[..n2 * kv.min(MAX_COEF_DIMS)];
-        self.each_row_chunk(src, first, count, scratch, |start, bytes| {
-            let out = &mut out[start * n2..];
+        let end = first + count;
+        let mut lanes = [0.0f32; VERTEX_BLOCK * MAX_COEFFS];
+        self.each_block(src, first, count, scratch, |v0, bytes| {
+            let t = &mut lanes[..VERTEX_BLOCK * n2];
             match (basis, encoding) {
-                (Basis::Stored, Encoding::F32) => {
-                    transfer_stored(bytes.as_chunks::<4>().0, w, kv, out)
-                }
-                (Basis::Stored, Encoding::F16) => {
-                    transfer_stored(bytes.as_chunks::<2>().0, w, kv, out)
-                }
+                (Basis::Stored, Encoding::F32) => transfer_stored(bytes.as_chunks::<4>().0, w, t),
+                (Basis::Stored, Encoding::F16) => transfer_stored(bytes.as_chunks::<2>().0, w, t),
                 (Basis::Identity, Encoding::F32) => {
-                    transfer_identity(bytes.as_chunks::<4>().0, width, z, out)
+                    transfer_identity(bytes.as_chunks::<4>().0, z, t)
                 }
                 (Basis::Identity, Encoding::F16) => {
-                    transfer_identity(bytes.as_chunks::<2>().0, width, z, out)
+                    transfer_identity(bytes.as_chunks::<2>().0, z, t)
                 }
             }
-            Ok(())
+            let (lo, hi) = (v0.max(first), (v0 + VERTEX_BLOCK).min(end));
+            out[(lo - first) * n2..(hi - first) * n2]
+                .copy_from_slice(&t[(lo - v0) * n2..(hi - v0) * n2]);
         })
     }
 }
 
-/// `out_j = q · row_j` for every row in the chunk.
-fn shade_rows<E: Decode>(rows: &[E], width: usize, q: &[f32], out: &mut [f32]) {
-    for (row, o) in rows.chunks_exact(width).zip(out) {
-        *o = dot(row, q);
+/// Shading of one block: `out_lane = Σ_r q_r U[r][lane]`, eight vertices per multiply, with
+/// two accumulator sets to halve the dependency chain of the adds.
+#[inline(always)]
+fn shade_block<E: Decode>(block: &[E], q: &[f32]) -> [f32; VERTEX_BLOCK] {
+    let rows = block.as_chunks::<VERTEX_BLOCK>().0;
+    let (pairs, rest) = rows.as_chunks::<2>();
+    let (q_pairs, q_rest) = q.as_chunks::<2>();
+    let (mut even, mut odd) = ([0.0f32; VERTEX_BLOCK], [0.0f32; VERTEX_BLOCK]);
+    for ([r0, r1], [q0, q1]) in pairs.iter().zip(q_pairs) {
+        for l in 0..VERTEX_BLOCK {
+            even[l] += q0 * r0[l].value();
+            odd[l] += q1 * r1[l].value();
+        }
     }
+    for (r, q) in rest.iter().zip(q_rest) {
+        for l in 0..VERTEX_BLOCK {
+            even[l] += q * r[l].value();
+        }
+    }
+    core::array::from_fn(|l| even[l] + odd[l])
 }
 
-/// Stored basis: `t_j = Σ_k U_jk w_k`, a sum of n²-vectors that vectorises across `c`.
-fn transfer_stored<E: Decode>(rows: &[E], w: &[f32], kv: usize, out: &mut [f32]) {
-    let n2 = w.len() / kv;
-    for (row, t) in rows.chunks_exact(kv).zip(out.chunks_exact_mut(n2)) {
-        t.fill(0.0);
-        for (u, wk) in row.iter().zip(w.chunks_exact(n2)) {
-            let u = u.value();
-            for (tc, x) in t.iter_mut().zip(wk) {
-                *tc += u * x;
+/// Stored basis, one block: `t_lane = Σ_k U[k][lane] w_k`, sums of n²-vectors (`w[k n² + c]`).
+fn transfer_stored<E: Decode>(block: &[E], w: &[f32], t: &mut [f32]) {
+    let n2 = t.len() / VERTEX_BLOCK;
+    t.fill(0.0);
+    for (u, wk) in block
+        .as_chunks::<VERTEX_BLOCK>()
+        .0
+        .iter()
+        .zip(w.chunks_exact(n2))
+    {
+        for (ul, tl) in u.iter().zip(t.chunks_exact_mut(n2)) {
+            let ul = ul.value();
+            for (tc, x) in tl.iter_mut().zip(wk) {
+                *tc += ul * x;
             }
         }
     }
 }
 
-/// Identity basis: `t_jc = z' · X_j[c]`, the row holding n² runs of `1 + k_a` weights.
-fn transfer_identity<E: Decode>(rows: &[E], width: usize, z: &[f32], out: &mut [f32]) {
-    let n2 = width / z.len();
-    for (row, t) in rows.chunks_exact(width).zip(out.chunks_exact_mut(n2)) {
-        for (tc, xc) in t.iter_mut().zip(row.chunks_exact(z.len())) {
-            *tc = dot(xc, z);
+/// Identity basis, one block: `t_lane,c = Σ_i z'_i X[c (1 + k_a) + i][lane]`.
+fn transfer_identity<E: Decode>(block: &[E], z: &[f32], t: &mut [f32]) {
+    let n2 = t.len() / VERTEX_BLOCK;
+    let rows = block.as_chunks::<VERTEX_BLOCK>().0;
+    for (c, xc) in rows.chunks_exact(z.len()).enumerate().take(n2) {
+        let mut acc = [0.0f32; VERTEX_BLOCK];
+        for (x, zi) in xc.iter().zip(z) {
+            for l in 0..VERTEX_BLOCK {
+                acc[l] += zi * x[l].value();
+            }
+        }
+        for (l, a) in acc.iter().enumerate() {
+            t[l * n2 + c] = *a;
         }
     }
 }

@@ -59,7 +59,7 @@ fn main() {
     ] {
         let blob = encode_model(&model(ka, kv), precision).unwrap();
         let m = Model::parse(&blob).unwrap();
-        let row_bytes = m.row_bytes() * VERTICES;
+        let row_bytes = m.block_bytes() * VERTICES.div_ceil(aprt_core::blob::VERTEX_BLOCK);
         let rows = &blob[blob.len() - row_bytes..];
         let mut copy = vec![0u8; row_bytes];
         let memcpy = time(budget, || {

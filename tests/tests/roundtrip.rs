@@ -124,7 +124,7 @@ fn f16_round_trip_within_half_precision() {
 }
 
 #[test]
-fn streaming_rejects_a_buffer_smaller_than_a_row() {
+fn streaming_rejects_a_buffer_smaller_than_a_block() {
     let reference = random_model(3, 10, 4, 2, Some(8));
     let blob = encode_model(&reference, Precision::F32).unwrap();
     let model = Model::parse(&blob).unwrap();
@@ -142,7 +142,7 @@ fn streaming_rejects_a_buffer_smaller_than_a_row() {
     model.light(&pose, &[1.0; 9], &mut lit).unwrap();
     let mut out = [0.0f32; 3];
     let err = model
-        .shade(&mut src, &lit, 0, &mut out, &mut [0u8; 31])
+        .shade(&mut src, &lit, 0, &mut out, &mut [0u8; 255])
         .unwrap_err();
-    assert_eq!(err, aprt_core::Error::BufferTooSmall { needed: 32 });
+    assert_eq!(err, aprt_core::Error::BufferTooSmall { needed: 8 * 8 * 4 });
 }

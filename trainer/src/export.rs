@@ -2,7 +2,8 @@
 
 use aprt_core::blob::{
     Basis, Encoding, Header, MAGIC, MAX_COEF_DIMS, MAX_HEADER_LEN, MAX_JOINTS, MAX_POSE_DIMS,
-    MAX_SECTIONS, MAX_VERTICES, PREAMBLE_LEN, SectionEntry, SectionKind, VERSION, align_up, crc32,
+    MAX_SECTIONS, MAX_VERTICES, PREAMBLE_LEN, SectionEntry, SectionKind, VERSION, VERTEX_BLOCK,
+    align_up, crc32, padded_vertices,
 };
 use aprt_core::sh::MAX_ORDER;
 
@@ -68,13 +69,7 @@ fn encode(
     expected: usize,
     encoding: Encoding,
 ) -> Result<Vec<u8>, ExportError> {
-    if values.len() != expected {
-        return Err(ExportError::Shape {
-            section,
-            expected,
-            found: values.len(),
-        });
-    }
+    check_len(section, values.len(), expected)?;
     let mut out = Vec::with_capacity(values.len() * encoding.size());
     for (index, &value) in values.iter().enumerate() {
         let bad = || ExportError::NotRepresentable {
@@ -100,6 +95,32 @@ fn encode(
         }
     }
     Ok(out)
+}
+
+fn check_len(section: SectionKind, found: usize, expected: usize) -> Result<(), ExportError> {
+    if found != expected {
+        return Err(ExportError::Shape {
+            section,
+            expected,
+            found,
+        });
+    }
+    Ok(())
+}
+
+/// Per-vertex values `get(j, r)` (`r < width`) in the core's blocked layout: blocks of
+/// `VERTEX_BLOCK` vertices, value-major within a block, the last block zero-padded.
+fn blocked(vertices: usize, width: usize, get: impl Fn(usize, usize) -> f64) -> Vec<f64> {
+    let mut out = Vec::with_capacity(padded_vertices(vertices) * width);
+    for b in 0..padded_vertices(vertices) / VERTEX_BLOCK {
+        for r in 0..width {
+            for lane in 0..VERTEX_BLOCK {
+                let j = b * VERTEX_BLOCK + lane;
+                out.push(if j < vertices { get(j, r) } else { 0.0 });
+            }
+        }
+    }
+    out
 }
 
 /// Serialises `model` into a complete blob.
@@ -137,39 +158,27 @@ pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>
     ];
     let basis = match &model.basis {
         VertexBasis::Stored { coef_dims, data } => {
-            limit("coef dims", *coef_dims, 1, MAX_COEF_DIMS)?;
+            let kv = *coef_dims;
+            limit("coef dims", kv, 1, MAX_COEF_DIMS)?;
             let w = encode(
                 SectionKind::Weights,
                 &model.weights,
-                n2 * (ka + 1) * coef_dims,
+                n2 * (ka + 1) * kv,
                 big,
             )?;
             sections.push((SectionKind::Weights, big, w));
-            let u = encode(SectionKind::VertexBasis, data, v * coef_dims, big)?;
+            check_len(SectionKind::VertexBasis, data.len(), v * kv)?;
+            let u = blocked(v, kv, |j, k| data[j * kv + k]);
+            let u = encode(SectionKind::VertexBasis, &u, u.len(), big)?;
             sections.push((SectionKind::VertexBasis, big, u));
             Basis::Stored
         }
         VertexBasis::Identity => {
-            // Stored vertex-major so that a vertex range is one contiguous read.
-            let expected = n2 * (ka + 1) * v;
-            if model.weights.len() != expected {
-                return Err(ExportError::Shape {
-                    section: SectionKind::VertexWeights,
-                    expected,
-                    found: model.weights.len(),
-                });
-            }
-            let mut rows = Vec::with_capacity(expected);
-            for j in 0..v {
-                for ci in 0..n2 * (ka + 1) {
-                    rows.push(model.weights[ci * v + j]);
-                }
-            }
-            sections.push((
-                SectionKind::VertexWeights,
-                big,
-                encode(SectionKind::VertexWeights, &rows, expected, big)?,
-            ));
+            let width = n2 * (ka + 1);
+            check_len(SectionKind::VertexWeights, model.weights.len(), width * v)?;
+            let rows = blocked(v, width, |j, r| model.weights[r * v + j]);
+            let rows = encode(SectionKind::VertexWeights, &rows, rows.len(), big)?;
+            sections.push((SectionKind::VertexWeights, big, rows));
             Basis::Identity
         }
     };

@@ -32,6 +32,16 @@ pub const MAX_JOINTS: usize = 512;
 pub const MAX_POSE_DIMS: usize = 64;
 /// Most vertex-basis vectors k_v.
 pub const MAX_COEF_DIMS: usize = 96;
+/// Vertices per block of the per-vertex sections. Within a block the values are stored
+/// value-major (`[value][lane]`), so one lighting weight multiplies eight vertices at once
+/// and the per-frame loops vectorise with no horizontal sums. The last block is zero-padded.
+pub const VERTEX_BLOCK: usize = 8;
+
+/// Vertices rounded up to whole blocks: the per-vertex sections store this many.
+pub const fn padded_vertices(vertices: usize) -> usize {
+    vertices.div_ceil(VERTEX_BLOCK) * VERTEX_BLOCK
+}
+
 /// Most vertices a model may have (keeps every byte count below 2³² on 32-bit targets
 /// for orders ≤ 6 and the identity basis with few pose dimensions).
 pub const MAX_VERTICES: usize = 1 << 22;
@@ -84,9 +94,11 @@ pub enum SectionKind {
     PoseProjection = 2,
     /// Stored basis only: `n² × (1 + pose_dims) × coef_dims`; `[c][0][k]` is the intercept.
     Weights = 3,
-    /// Stored basis only: `vertices × coef_dims`, vertex-major.
+    /// Stored basis only: U, `coef_dims` values per vertex, in blocks of [`VERTEX_BLOCK`]
+    /// vertices: value `(j, k)` at `(j / 8) · 8 k_v + 8 k + j % 8`.
     VertexBasis = 4,
-    /// Identity basis only: `vertices × n² × (1 + pose_dims)`, vertex-major.
+    /// Identity basis only: `n² × (1 + pose_dims)` values `(c, i)` per vertex, blocked like
+    /// `VertexBasis` with row index `r = c (1 + k_a) + i`.
     VertexWeights = 5,
 }
 

@@ -4,6 +4,7 @@
 use super::format::{
     Basis, Encoding, Header, MAGIC, MAX_COEF_DIMS, MAX_HEADER_LEN, MAX_JOINTS, MAX_POSE_DIMS,
     MAX_SECTIONS, MAX_VERTICES, PREAMBLE_LEN, SECTION_ALIGN, SectionEntry, SectionKind, VERSION,
+    VERTEX_BLOCK, padded_vertices,
 };
 use super::source::{BlobSource, SliceSource, for_each_chunk};
 use super::{Dim, Error};
@@ -132,14 +133,15 @@ impl Model {
             )?,
         };
         let n2 = coeff_count(order);
+        let padded = padded_vertices(vertices);
         let expected_elems = |kind: SectionKind| -> Option<Result<u64, Error>> {
             Some(match (kind, h.basis) {
                 (SectionKind::PoseMean, _) => product(&[joints]),
                 (SectionKind::PoseProjection, _) => product(&[pose_dims, joints]),
                 (SectionKind::Weights, Basis::Stored) => product(&[n2, 1 + pose_dims, coef_dims]),
-                (SectionKind::VertexBasis, Basis::Stored) => product(&[vertices, coef_dims]),
+                (SectionKind::VertexBasis, Basis::Stored) => product(&[padded, coef_dims]),
                 (SectionKind::VertexWeights, Basis::Identity) => {
-                    product(&[vertices, n2, 1 + pose_dims])
+                    product(&[padded, n2, 1 + pose_dims])
                 }
                 _ => return None,
             })
@@ -249,10 +251,9 @@ impl Model {
         }
     }
 
-    /// Bytes of one streamed vertex row: the least scratch the evaluator accepts. More scratch
-    /// means fewer, larger reads from a streaming source.
-    pub fn row_bytes(&self) -> usize {
-        self.row_width() * self.rows.encoding.size()
+    /// Bytes of one streamed block of [`VERTEX_BLOCK`] vertex rows, the unit of streaming.
+    pub fn block_bytes(&self) -> usize {
+        VERTEX_BLOCK * self.row_width() * self.rows.encoding.size()
     }
 }
 
