@@ -8,6 +8,7 @@ pub mod mesh;
 pub mod model;
 pub mod npy;
 pub mod runtime;
+pub mod sh_rotate;
 
 pub use export::{ExportError, Precision, encode_model};
 pub use mesh::Mesh;
