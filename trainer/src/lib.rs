@@ -3,6 +3,7 @@
 
 pub mod angles;
 pub mod atomic;
+pub mod evaluate;
 pub mod export;
 pub mod mesh;
 pub mod model;
