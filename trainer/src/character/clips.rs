@@ -186,7 +186,7 @@ fn reach(angles: &[JointAngle]) -> Clip {
         let e = ease(t, 0.0, 1.8);
         set("spine_flex", 0.45 * e);
         set("chest_flex", 0.3 * e);
-        set("l_shoulder_flex", 1.3 * e);
+        set("l_shoulder_flex", 0.7 * e);
         set("l_shoulder_abduct", abduct_rest + (0.35 - abduct_rest) * e);
         set("l_elbow_flex", 0.25 * e);
         set("r_shoulder_flex", -0.2 * e);

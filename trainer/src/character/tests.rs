@@ -293,3 +293,50 @@ fn character_novel_clips_are_not_training_poses() {
         );
     }
 }
+
+#[test]
+fn character_angle_signs_match_the_documented_conventions() {
+    // (angle, value, which bind vertices to watch, direction they must move). The character
+    // faces −y and its left is +x.
+    type Region = fn(&[f32; 3]) -> bool;
+    let left_hand: Region = |p| p[0] > 0.55;
+    let right_hand: Region = |p| p[0] < -0.55;
+    let left_foot: Region = |p| p[0] > 0.0 && p[2] < 0.1;
+    let head: Region = |p| p[2] > 1.6 && p[0].abs() < 0.1 && p[1].abs() < 0.1;
+    let nose: Region = |p| p[1] < -0.11 && (1.65..1.73).contains(&p[2]);
+    let cases: [(&str, f64, Region, glam::Vec3); 7] = [
+        ("l_shoulder_flex", 1.2, left_hand, glam::Vec3::NEG_Y),
+        ("r_shoulder_abduct", 2.2, right_hand, glam::Vec3::Z),
+        ("l_knee_flex", 1.2, left_foot, glam::Vec3::Y),
+        (
+            "l_ankle_flex",
+            0.4,
+            |p| p[0] > 0.0 && p[1] < -0.1 && p[2] < 0.1,
+            glam::Vec3::Z,
+        ),
+        ("spine_flex", 0.5, head, glam::Vec3::NEG_Y),
+        ("spine_lean", 0.3, head, glam::Vec3::X),
+        ("neck_twist", 0.6, nose, glam::Vec3::X),
+    ];
+    let c = character();
+    let bind = c.bind_mesh();
+    for (name, value, region, direction) in cases {
+        let mut angles = c.rest_pose();
+        angles[c.angle_names().iter().position(|n| *n == name).unwrap()] = value;
+        let posed = c.pose(&angles).unwrap();
+        let (sum, count) = bind
+            .positions
+            .iter()
+            .zip(&posed.positions)
+            .filter(|(p, _)| region(p))
+            .fold((glam::Vec3::ZERO, 0), |(s, n), (p, q)| {
+                (s + glam::Vec3::from(*q) - glam::Vec3::from(*p), n + 1)
+            });
+        assert!(count > 0, "{name}: empty region");
+        let mean = sum / count as f32;
+        assert!(
+            mean.dot(direction) > 0.5 * mean.length() && mean.length() > 0.02,
+            "{name}: moved {mean}"
+        );
+    }
+}
