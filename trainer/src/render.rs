@@ -66,7 +66,7 @@ const MARGIN: f32 = 0.04;
 pub struct View {
     /// Rotation about z, radians.
     pub yaw: f32,
-    /// Elevation, radians, in (−π/2, π/2).
+    /// Elevation, radians; ±π/2 looks straight down or up (the basis stays defined).
     pub pitch: f32,
 }
 
