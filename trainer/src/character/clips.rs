@@ -94,11 +94,7 @@ fn scripted(
         .map(|f| {
             let mut frame: Vec<f64> = angles.iter().map(|a| a.rest).collect();
             pose(f as f64 / FPS, &mut |angle_name, value| {
-                let index = angles
-                    .iter()
-                    .position(|a| a.name == angle_name)
-                    .unwrap_or_else(|| panic!("clip {name} names unknown angle {angle_name}"));
-                frame[index] = value;
+                frame[index_of(angles, angle_name)] = value;
             });
             frame
         })
@@ -110,6 +106,15 @@ fn scripted(
     }
 }
 
+/// Index of the angle called `name`. The scripted clips only name built-in angles, and the
+/// clip tests run every script, so a typo fails those tests rather than a caller.
+fn index_of(angles: &[JointAngle], name: &str) -> usize {
+    angles
+        .iter()
+        .position(|a| a.name == name)
+        .unwrap_or_else(|| panic!("a built-in clip names unknown angle {name}"))
+}
+
 /// 0 → 1 with zero slope at both ends, over `[start, end]` seconds.
 fn ease(t: f64, start: f64, end: f64) -> f64 {
     let x = ((t - start) / (end - start)).clamp(0.0, 1.0);
@@ -119,13 +124,7 @@ fn ease(t: f64, start: f64, end: f64) -> f64 {
 /// Raises the right arm high and waves the forearm at 1.5 Hz while the head turns toward it.
 /// Training never holds one arm high while the other rests, nor oscillates this fast.
 fn wave(angles: &[JointAngle]) -> Clip {
-    let rest = |name: &str| {
-        angles
-            .iter()
-            .find(|a| a.name == name)
-            .map_or(0.0, |a| a.rest)
-    };
-    let abduct_rest = rest("r_shoulder_abduct");
+    let abduct_rest = angles[index_of(angles, "r_shoulder_abduct")].rest;
     scripted(angles, "wave", 90, |t, set| {
         let up = ease(t, 0.0, 0.7);
         let w = std::f64::consts::TAU * 1.5 * t;
@@ -175,13 +174,7 @@ fn walk(angles: &[JointAngle]) -> Clip {
 
 /// Bends forward and reaches down and ahead with the left arm, bending the knees, then holds.
 fn reach(angles: &[JointAngle]) -> Clip {
-    let rest = |name: &str| {
-        angles
-            .iter()
-            .find(|a| a.name == name)
-            .map_or(0.0, |a| a.rest)
-    };
-    let abduct_rest = rest("l_shoulder_abduct");
+    let abduct_rest = angles[index_of(angles, "l_shoulder_abduct")].rest;
     scripted(angles, "reach", 72, |t, set| {
         let e = ease(t, 0.0, 1.8);
         set("spine_flex", 0.45 * e);
