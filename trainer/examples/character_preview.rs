@@ -82,13 +82,14 @@ fn main() -> anyhow::Result<()> {
             let mesh = character.pose(&clip.frames[f])?;
             panels.push(shaded(
                 &mesh,
-                if clip.name == "walk" {
-                    View {
+                match clip.name.as_str() {
+                    // Side-on shows the stride; front-on shows the waving forearm.
+                    "walk" | "reach" => View {
                         yaw: 1.2,
                         pitch: 0.15,
-                    }
-                } else {
-                    three_quarter
+                    },
+                    "wave" => front,
+                    _ => three_quarter,
                 },
             )?);
         }

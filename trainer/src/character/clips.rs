@@ -173,13 +173,15 @@ fn walk(angles: &[JointAngle]) -> Clip {
 }
 
 /// Bends forward and reaches down and ahead with the left arm, bending the knees, then holds.
+/// (Shoulder flex is relative to the chest, so it must exceed the 0.75 rad forward bend for
+/// the arm to point ahead of vertical.)
 fn reach(angles: &[JointAngle]) -> Clip {
     let abduct_rest = angles[index_of(angles, "l_shoulder_abduct")].rest;
     scripted(angles, "reach", 72, |t, set| {
         let e = ease(t, 0.0, 1.8);
         set("spine_flex", 0.45 * e);
         set("chest_flex", 0.3 * e);
-        set("l_shoulder_flex", 0.7 * e);
+        set("l_shoulder_flex", 1.5 * e);
         set("l_shoulder_abduct", abduct_rest + (0.35 - abduct_rest) * e);
         set("l_elbow_flex", 0.25 * e);
         set("r_shoulder_flex", -0.2 * e);

@@ -58,6 +58,8 @@ pub enum CharacterError {
 
 /// One named joint angle: its bind-pose value and the range poses and clips stay within.
 /// Angles outside the limits are still posed (they are a sampling range, not a constraint).
+/// Poses are not collision-checked: near the limits, limbs can pass through the body or the
+/// hat's brim, as with any joint-limit-only rig.
 #[derive(Clone, Debug, PartialEq)]
 pub struct JointAngle {
     /// Stable name, e.g. `l_elbow_flex`; see the skeleton docs for sign conventions.
