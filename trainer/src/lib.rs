@@ -10,5 +10,7 @@ pub mod skin;
 pub use character::{Character, CharacterError, Clip, JointAngle};
 pub use mesh::Mesh;
 pub use model::{LinearModel, VertexBasis};
-pub use render::{Colormap, RenderError, View, lambert, render_scalar, save_png_atomic, side_by_side};
+pub use render::{
+    Colormap, RenderError, View, lambert, render_scalar, save_png_atomic, side_by_side,
+};
 pub use skin::{Skin, SkinError, skin};
