@@ -3,14 +3,22 @@
 
 pub mod angles;
 pub mod atomic;
+pub mod character;
 pub mod evaluate;
 pub mod export;
 pub mod mesh;
 pub mod model;
 pub mod npy;
+pub mod render;
 pub mod runtime;
 pub mod sh_rotate;
+pub mod skin;
 
+pub use character::{Character, CharacterError, Clip, JointAngle};
 pub use export::{ExportError, Precision, encode_model};
 pub use mesh::Mesh;
 pub use model::{LinearModel, VertexBasis};
+pub use render::{
+    Colormap, RenderError, View, lambert, render_scalar, save_png_atomic, side_by_side,
+};
+pub use skin::{Skin, SkinError, skin};
