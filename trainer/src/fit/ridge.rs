@@ -243,7 +243,7 @@ impl<'a> GramCv<'a> {
             .par_iter()
             .map(|&c| {
                 let block = y.columns(c, GRAM_COLUMNS_PER_BLOCK.min(q - c));
-                &block * block.transpose()
+                block * block.transpose()
             })
             .collect();
         let k = parts
@@ -275,12 +275,12 @@ impl<'a> GramCv<'a> {
             let (u_s, uf_s) = (u.rows(start, len), uf.rows(start, len));
             // Residual Gram of the segment: [(I − H) K (I − H)]_SS with H = 11ᵀ/p + U F Uᵀ;
             // the 11ᵀ/p part vanishes against the centred K.
-            let cross = &uf_s * self.ku.columns(start, len);
+            let cross = uf_s * self.ku.columns(start, len);
             let g = self.k.view((start, start), (len, len)) - &cross - cross.transpose()
-                + &uf_s * &self.m * uf_s.transpose();
+                + uf_s * &self.m * uf_s.transpose();
             let i_minus_h = DMatrix::identity(len, len)
                 - DMatrix::from_element(len, len, 1.0 / p as f64)
-                - &uf_s * u_s.transpose();
+                - uf_s * u_s.transpose();
             train += g.trace();
             cv += match i_minus_h.cholesky() {
                 // e_S = (I − H_SS)⁻¹ r_S, so Σ‖e_S‖² = tr((I − H_SS)⁻¹ G (I − H_SS)⁻¹).
