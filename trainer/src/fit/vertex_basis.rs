@@ -206,3 +206,75 @@ pub fn raw_rows(rows: &PoseRows<'_>) -> DMatrix<f64> {
         f64::from(rows.transfers[i][(col % v) * n2 + col / v])
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 21 poses (blocks of 8, 8, 5), 4 coefficients, 7 vertices, distinct values.
+    fn sample() -> (Vec<Vec<f32>>, DMatrix<f64>) {
+        let (p, n2, v) = (21, 4, 7);
+        let transfers: Vec<Vec<f32>> = (0..p)
+            .map(|i| {
+                (0..v * n2)
+                    .map(|idx| (i * 1000 + idx) as f32 * 0.25 - 300.0)
+                    .collect()
+            })
+            .collect();
+        // Dense R: row i·n² + c, column j holds t_i[j·n² + c].
+        let dense = DMatrix::from_fn(p * n2, v, |r, j| {
+            f64::from(transfers[r / n2][j * n2 + r % n2])
+        });
+        (transfers, dense)
+    }
+
+    #[test]
+    fn pose_rows_products_match_the_dense_row_matrix() {
+        let (transfers, dense) = sample();
+        let rows = PoseRows::new(&transfers, 4, 7);
+        assert_eq!((rows.nrows(), rows.ncols()), dense.shape());
+        let x = DMatrix::from_fn(7, 3, |i, j| (i as f64 - 2.0) * (j as f64 + 0.5));
+        let y = DMatrix::from_fn(84, 3, |i, j| ((i * 7 + j) % 11) as f64 - 5.0);
+        assert!((rows.mul(&x) - &dense * &x).amax() <= 1e-9);
+        assert!((rows.tr_mul(&y) - dense.tr_mul(&y)).amax() <= 1e-9);
+        assert!((rows.frobenius_sq() - dense.norm_squared()).abs() <= 1e-12 * dense.norm_squared());
+    }
+
+    #[test]
+    fn outputs_are_laid_out_coefficient_major() {
+        let (transfers, dense) = sample();
+        let rows = PoseRows::new(&transfers, 4, 7);
+        let raw = raw_rows(&rows);
+        assert_eq!(raw.shape(), (21, 28));
+        // [i][c·v + j] = t_i[j·n² + c]
+        assert_eq!(raw[(3, 2 * 7 + 5)], f64::from(transfers[3][5 * 4 + 2]));
+        let basis = DMatrix::<f64>::identity(7, 7).columns(0, 2).into_owned();
+        let projected = project_rows(&rows, &basis);
+        assert_eq!(projected.shape(), (21, 8));
+        // [i][c·k_v + k] = U_kᵀ b_i^c, here the k-th vertex value.
+        assert_eq!(projected[(9, 3 * 2 + 1)], dense[(9 * 4 + 3, 1)]);
+    }
+
+    #[test]
+    fn basis_spans_the_uncentred_rows() {
+        // Every row is a multiple of one positive vector: centred PCA would see only the
+        // variation of the multiples, the uncentred basis must return that vector itself.
+        let shape: Vec<f64> = (0..30)
+            .map(|j| 1.0 + (j as f64 * 0.3).sin().abs())
+            .collect();
+        let transfers: Vec<Vec<f32>> = (0..6)
+            .map(|i| {
+                (0..30 * 4)
+                    .map(|idx| (shape[idx / 4] * (1.0 + 0.1 * (i * 4 + idx % 4) as f64)) as f32)
+                    .collect()
+            })
+            .collect();
+        let rows = PoseRows::new(&transfers, 4, 30);
+        let fit = fit_vertex_basis(&rows, Dims::Variance(0.999_999));
+        assert_eq!(fit.basis.ncols(), 1);
+        let u = fit.basis.column(0);
+        let s = nalgebra::DVector::from_vec(shape.clone()).normalize();
+        assert!(1.0 - u.dot(&s).abs() < 1e-12);
+        assert!((fit.energies[0] - fit.total_energy).abs() < 1e-6 * fit.total_energy);
+    }
+}
