@@ -4,7 +4,8 @@
 //!
 //! Transfer is smooth in the angles: a mean field, a linear response, a nonlinear (sinusoidal)
 //! response with decaying strength, and f32-level noise, all spread over 48 latent vertex
-//! fields. Run with `cargo bench -p aprt-trainer --bench fit`.
+//! fields. Run with `cargo bench -p aprt-trainer --bench fit`. Pose dimensions are chosen at
+//! 99.9 % of the angle variance; the table prints seconds per stage.
 
 use std::time::Instant;
 
@@ -111,6 +112,8 @@ fn main() {
             CoefDims::Variance(0.999),
             Alpha::Loso { segment: None },
         ),
+        // The full model: 432 000 outputs per pose, where the p × p Gram keeps CV cheap.
+        ("full, LOSO", CoefDims::Full, Alpha::Loso { segment: None }),
     ];
     println!(
         "{:<16} {:>4} {:>4} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>10} {:>10}",
