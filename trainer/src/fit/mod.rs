@@ -44,7 +44,8 @@ pub enum Alpha {
     Loo,
     /// Leave-one-segment-out over contiguous runs of `segment` poses (closed form). Frames
     /// of a clip are strongly correlated, so LOO rewards interpolating a neighbour; holding
-    /// out whole runs measures generalisation to unseen motion. `None` picks `⌈p / 10⌉`.
+    /// out whole runs measures generalisation to unseen motion. `None` picks `⌈p / 10⌉`;
+    /// `Some(0)` is treated as 1 (leave-one-out). The last run may be shorter.
     Loso {
         /// Poses per held-out run.
         segment: Option<usize>,

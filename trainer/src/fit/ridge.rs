@@ -12,6 +12,8 @@
 //! `p × p` Gram `K = Y_c Y_cᵀ`: the residual Gram is `(I − H) K (I − H)`, and expanding it in
 //! `K' = Uᵀ K` and `M = Uᵀ K U` makes each α cost `O(p·L·r²)` (segment length L, rank r)
 //! whatever the output width — the full model has ~400k outputs per pose.
+//! The price of the Gram form is resolution: residuals below about `√ε · ‖Y_c‖` cancel in
+//! `K` and read as zero, which only matters once the fit is already exact to ~1e-8.
 
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
