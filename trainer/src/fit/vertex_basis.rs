@@ -40,7 +40,8 @@ pub struct PoseRows<'a> {
 
 impl<'a> PoseRows<'a> {
     /// `transfers[i]` is pose i's `v × n²` vertex-major transfer (`[j·n² + c]`); every entry
-    /// must have length `vertices · coefs` (the caller validates).
+    /// must have length `vertices · coefs`: [`crate::fit::fit`] validates this, direct callers
+    /// must too (a shorter array makes the products panic on a slice bound).
     pub fn new(transfers: &'a [Vec<f32>], coefs: usize, vertices: usize) -> Self {
         Self {
             transfers,
