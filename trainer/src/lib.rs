@@ -6,6 +6,7 @@ pub mod atomic;
 pub mod character;
 pub mod evaluate;
 pub mod export;
+pub mod fit;
 pub mod mesh;
 pub mod model;
 pub mod npy;
@@ -16,6 +17,7 @@ pub mod skin;
 
 pub use character::{Character, CharacterError, Clip, JointAngle};
 pub use export::{ExportError, Precision, encode_model};
+pub use fit::{Alpha, CoefDims, Dims, Fit, FitError, FitOptions, FitReport, fit};
 pub use mesh::Mesh;
 pub use model::{LinearModel, VertexBasis};
 pub use render::{

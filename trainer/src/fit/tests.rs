@@ -1,0 +1,413 @@
+//! End-to-end checks of [`fit`] through the runtime semantics of [`LinearModel::predict`],
+//! against independent computations.
+
+use nalgebra::{DMatrix, DVector};
+
+use super::*;
+
+fn uniform(rows: usize, cols: usize, seed: u64) -> DMatrix<f64> {
+    let mut state = seed;
+    DMatrix::from_fn(rows, cols, |_, _| {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    })
+}
+
+/// Transfer of every pose from a `p × (v·n²)` matrix (rows already vertex-major).
+fn to_transfers(t: &DMatrix<f64>) -> Vec<Vec<f32>> {
+    t.row_iter()
+        .map(|r| r.iter().map(|&x| x as f32).collect())
+        .collect()
+}
+
+/// The f32 transfer back in f64, `p × (v·n²)`.
+fn as_matrix(transfers: &[Vec<f32>]) -> DMatrix<f64> {
+    DMatrix::from_fn(transfers.len(), transfers[0].len(), |i, j| {
+        f64::from(transfers[i][j])
+    })
+}
+
+/// Transfer affine in the angles plus a smooth nonlinearity: `t = c + A G + ε sin(A H)`.
+fn smooth_transfer(
+    angles: &DMatrix<f64>,
+    width: usize,
+    nonlinearity: f64,
+    seed: u64,
+) -> Vec<Vec<f32>> {
+    let a = angles.ncols();
+    let g = uniform(a, width, seed);
+    let h = uniform(a, width, seed + 1) * 3.0;
+    let offset = uniform(1, width, seed + 2).add_scalar(1.0);
+    let linear = angles * g;
+    let bent = (angles * h).map(f64::sin);
+    to_transfers(&DMatrix::from_fn(angles.nrows(), width, |i, j| {
+        offset[j] + linear[(i, j)] + nonlinearity * bent[(i, j)]
+    }))
+}
+
+fn predictions(model: &crate::LinearModel, angles: &DMatrix<f64>) -> DMatrix<f64> {
+    let rows: Vec<Vec<f64>> = angles
+        .row_iter()
+        .map(|r| model.predict(r.transpose().as_slice()))
+        .collect();
+    DMatrix::from_fn(rows.len(), rows[0].len(), |i, j| rows[i][j])
+}
+
+fn relative(a: &DMatrix<f64>, b: &DMatrix<f64>) -> f64 {
+    (a - b).amax() / b.amax()
+}
+
+fn full(alpha: Alpha) -> FitOptions {
+    FitOptions {
+        pose_dims: Dims::All,
+        coef_dims: CoefDims::Full,
+        alpha,
+    }
+}
+
+#[test]
+fn single_pose_model_is_that_pose() {
+    let angles = uniform(1, 6, 1);
+    let transfers = smooth_transfer(&angles, 40 * 9, 0.2, 2);
+    let truth = as_matrix(&transfers);
+    for coef_dims in [CoefDims::Full, CoefDims::Count(50), CoefDims::Variance(1.0)] {
+        let fit = fit(
+            &angles,
+            &transfers,
+            3,
+            &FitOptions {
+                coef_dims,
+                ..FitOptions::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(fit.model.pose_dims(), 0);
+        // Nine coefficient rows of one pose: the basis has at most rank 9.
+        assert!(fit.model.coef_dims() <= 9 || coef_dims == CoefDims::Full);
+        let novel = uniform(1, 6, 9);
+        for a in [&angles, &novel] {
+            assert!(
+                relative(&predictions(&fit.model, a), &truth) < 1e-12,
+                "{coef_dims:?}"
+            );
+        }
+        assert!(fit.report.cv_curve.is_empty());
+    }
+}
+
+#[test]
+fn huge_alpha_predicts_the_mean_transfer() {
+    let angles = uniform(30, 5, 3);
+    let transfers = smooth_transfer(&angles, 25 * 4, 0.3, 4);
+    let fit = fit(&angles, &transfers, 2, &full(Alpha::Fixed(1e12))).unwrap();
+    let t = as_matrix(&transfers);
+    let mean = DMatrix::from_fn(1, t.ncols(), |_, j| t.column(j).mean());
+    let novel = uniform(1, 5, 77) * 10.0;
+    assert!(relative(&predictions(&fit.model, &novel), &mean) < 1e-12);
+}
+
+#[test]
+fn zero_alpha_with_full_rank_poses_is_least_squares() {
+    let angles = uniform(30, 5, 5);
+    let transfers = smooth_transfer(&angles, 20 * 4, 0.5, 6);
+    let fit = fit(&angles, &transfers, 2, &full(Alpha::Fixed(0.0))).unwrap();
+    assert_eq!(fit.model.pose_dims(), 5);
+    // Independent OLS on the raw angles: QR least squares of [1 A] β = T.
+    let x = angles.clone().insert_column(0, 1.0);
+    let beta = x
+        .clone()
+        .svd(true, true)
+        .solve(&as_matrix(&transfers), 1e-14)
+        .unwrap();
+    let novel = uniform(4, 5, 8) * 2.0;
+    let reference = novel.clone().insert_column(0, 1.0) * beta;
+    assert!(relative(&predictions(&fit.model, &novel), &reference) < 1e-10);
+}
+
+#[test]
+fn full_model_with_enough_poses_has_near_zero_train_error() {
+    // Exactly affine transfer: LOO must pick a tiny α and the fit reproduces every pose.
+    let angles = uniform(40, 6, 9);
+    let transfers = smooth_transfer(&angles, 30 * 9, 0.0, 10);
+    let fit = fit(&angles, &transfers, 3, &full(Alpha::Loo)).unwrap();
+    let t = as_matrix(&transfers);
+    // f32 storage of the truth is the only noise: 6e-8 relative.
+    assert!(relative(&predictions(&fit.model, &angles), &t) < 1e-6);
+    let best = fit
+        .report
+        .cv_curve
+        .iter()
+        .map(|c| c.cv_error)
+        .fold(f64::INFINITY, f64::min);
+    let worst = fit
+        .report
+        .cv_curve
+        .iter()
+        .map(|c| c.cv_error)
+        .fold(0.0, f64::max);
+    assert!(best < 1e-10 * worst, "{best} vs {worst}");
+}
+
+#[test]
+fn collinear_and_constant_joints_match_the_well_posed_problem() {
+    let free = uniform(25, 3, 11);
+    // Joints: 3 free, one constant, one collinear combination of the free ones.
+    let angles = DMatrix::from_fn(25, 5, |i, j| match j {
+        0..=2 => free[(i, j)],
+        3 => 0.4,
+        _ => free[(i, 0)] - 3.0 * free[(i, 2)],
+    });
+    let transfers = smooth_transfer(&free, 16 * 4, 0.4, 12);
+    let degenerate = fit(&angles, &transfers, 2, &full(Alpha::Fixed(0.0))).unwrap();
+    let well_posed = fit(&free, &transfers, 2, &full(Alpha::Fixed(0.0))).unwrap();
+    assert_eq!(degenerate.model.pose_dims(), 3);
+    let novel_free = uniform(5, 3, 13);
+    let novel = DMatrix::from_fn(5, 5, |i, j| match j {
+        0..=2 => novel_free[(i, j)],
+        3 => 0.4,
+        _ => novel_free[(i, 0)] - 3.0 * novel_free[(i, 2)],
+    });
+    let reference = predictions(&well_posed.model, &novel_free);
+    assert!(relative(&predictions(&degenerate.model, &novel), &reference) < 1e-10);
+    // Minimum norm: the weights do not grow along the missing directions (P has orthonormal
+    // rows and no component on the constant joint).
+    let p = DMatrix::from_row_slice(3, 5, &degenerate.model.pose_projection);
+    assert!((&p * p.transpose() - DMatrix::identity(3, 3)).amax() < 1e-12);
+    assert!(p.column(3).amax() < 1e-12);
+    // Cross validation runs on the degenerate problem too.
+    assert!(
+        fit(&angles, &transfers, 2, &full(Alpha::Loo))
+            .unwrap()
+            .report
+            .alpha
+            > 0.0
+    );
+}
+
+#[test]
+fn more_angles_than_poses_interpolates_the_poses() {
+    let angles = uniform(6, 20, 14);
+    let transfers = smooth_transfer(&angles, 10 * 4, 0.5, 15);
+    let fit = fit(&angles, &transfers, 2, &full(Alpha::Fixed(0.0))).unwrap();
+    assert_eq!(fit.model.pose_dims(), 5);
+    assert!(relative(&predictions(&fit.model, &angles), &as_matrix(&transfers)) < 1e-10);
+    // And CV is well defined.
+    let loso = super::fit(
+        &angles,
+        &transfers,
+        2,
+        &full(Alpha::Loso { segment: Some(2) }),
+    )
+    .unwrap();
+    assert_eq!(loso.report.cv_segment, Some(2));
+    assert!(loso.report.cv_curve.iter().any(|c| c.cv_error.is_finite()));
+}
+
+#[test]
+fn duplicated_poses_equal_unique_poses_with_scaled_alpha() {
+    // Doubling every pose doubles s², so α·√2 on the duplicated set is α on the unique one.
+    let angles = uniform(20, 4, 16);
+    let transfers = smooth_transfer(&angles, 12 * 4, 0.5, 17);
+    let doubled_angles = DMatrix::from_fn(40, 4, |i, j| angles[(i / 2, j)]);
+    let doubled: Vec<Vec<f32>> = (0..40).map(|i| transfers[i / 2].clone()).collect();
+    let alpha = 0.3;
+    let unique = fit(&angles, &transfers, 2, &full(Alpha::Fixed(alpha))).unwrap();
+    let dup = fit(
+        &doubled_angles,
+        &doubled,
+        2,
+        &full(Alpha::Fixed(alpha * 2f64.sqrt())),
+    )
+    .unwrap();
+    let novel = uniform(3, 4, 18);
+    let reference = predictions(&unique.model, &novel);
+    assert!(relative(&predictions(&dup.model, &novel), &reference) < 1e-10);
+    // LOO keeps each twin in the training set, so the duplicate is predicted by its twin:
+    // finite CV everywhere, and LOSO with pairs held out is finite too.
+    let loo = fit(&doubled_angles, &doubled, 2, &full(Alpha::Loo)).unwrap();
+    assert!(loo.report.cv_curve.iter().all(|c| c.cv_error.is_finite()));
+    assert!(
+        fit(
+            &doubled_angles,
+            &doubled,
+            2,
+            &full(Alpha::Loso { segment: Some(2) })
+        )
+        .is_ok()
+    );
+}
+
+/// Rows `b_i^c` with an exactly known uncentred spectrum: `R = Σ σ_k u_k w_kᵀ`.
+fn known_spectrum(p: usize, n2: usize, v: usize, sigma: &[f64]) -> Vec<Vec<f32>> {
+    let k = sigma.len();
+    let u = uniform(p * n2, k, 31).qr().q();
+    let w = uniform(v, k, 32).qr().q();
+    let r = u * DMatrix::from_diagonal(&DVector::from_column_slice(sigma)) * w.transpose();
+    (0..p)
+        .map(|i| {
+            (0..v * n2)
+                .map(|idx| r[(i * n2 + idx % n2, idx / n2)] as f32)
+                .collect()
+        })
+        .collect()
+}
+
+#[test]
+fn variance_fraction_picks_the_right_vertex_count() {
+    let sigma = [10.0, 5.0, 2.0, 1.0, 0.1];
+    let transfers = known_spectrum(12, 4, 60, &sigma);
+    let angles = uniform(12, 3, 33);
+    // Energies 100, 25, 4, 1, 0.01 of 130.01: 99 % needs 3, 99.9 % needs 4, 80 % needs 1.
+    for (fraction, count) in [(0.99, 3), (0.999, 4), (0.75, 1), (1.0, 5)] {
+        let opts = FitOptions {
+            coef_dims: CoefDims::Variance(fraction),
+            ..FitOptions::default()
+        };
+        let fit = fit(&angles, &transfers, 2, &opts).unwrap();
+        assert_eq!(fit.model.coef_dims(), count, "fraction {fraction}");
+        assert!((fit.report.coef_total_energy - 130.01).abs() < 1e-5);
+        for (e, s) in fit.report.coef_energy.iter().zip(sigma) {
+            assert!((e - s * s).abs() < 1e-5 * 100.0, "{e} vs {}", s * s);
+        }
+    }
+    // More vectors than the rank are never stored.
+    let fit = fit(
+        &angles,
+        &transfers,
+        2,
+        &FitOptions {
+            coef_dims: CoefDims::Count(9),
+            ..FitOptions::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(fit.model.coef_dims(), 5);
+}
+
+#[test]
+fn reduced_model_reproduces_low_rank_transfer() {
+    // Transfer in a 3-dim vertex subspace, affine in the angles: Count(3) and a tiny α must
+    // reproduce every training pose, and the stored basis is orthonormal.
+    let (p, n2, v) = (30, 9, 50);
+    let angles = uniform(p, 4, 40);
+    let w = uniform(v, 3, 41).qr().q();
+    let coefficients = smooth_transfer(&angles, n2 * 3, 0.0, 42);
+    let transfers: Vec<Vec<f32>> = coefficients
+        .iter()
+        .map(|c| {
+            (0..v * n2)
+                .map(|idx| {
+                    (0..3)
+                        .map(|k| f64::from(c[(idx % n2) * 3 + k]) * w[(idx / n2, k)])
+                        .sum::<f64>() as f32
+                })
+                .collect()
+        })
+        .collect();
+    let opts = FitOptions {
+        coef_dims: CoefDims::Count(3),
+        alpha: Alpha::Fixed(1e-9),
+        ..FitOptions::default()
+    };
+    let fit = fit(&angles, &transfers, 3, &opts).unwrap();
+    assert!(relative(&predictions(&fit.model, &angles), &as_matrix(&transfers)) < 1e-6);
+    let crate::model::VertexBasis::Stored { coef_dims, data } = &fit.model.basis else {
+        panic!("stored basis expected")
+    };
+    let u = DMatrix::from_row_slice(v, *coef_dims, data);
+    assert!((u.transpose() * &u - DMatrix::identity(3, 3)).amax() < 1e-12);
+}
+
+#[test]
+fn default_options_cross_validate_by_segments() {
+    let angles = uniform(50, 6, 50);
+    let transfers = smooth_transfer(&angles, 30 * 9, 0.5, 51);
+    let first = fit(&angles, &transfers, 3, &FitOptions::default()).unwrap();
+    assert_eq!(first.report.cv_segment, Some(5));
+    assert!(first.report.alpha > 0.0);
+    assert_eq!(first.model.alpha, first.report.alpha);
+    // Deterministic whatever the scheduling.
+    let second = fit(&angles, &transfers, 3, &FitOptions::default()).unwrap();
+    assert_eq!(first.model, second.model);
+}
+
+#[test]
+fn invalid_inputs_are_named() {
+    let angles = uniform(4, 3, 60);
+    let transfers = smooth_transfer(&angles, 5 * 4, 0.1, 61);
+    let opts = FitOptions::default();
+    assert_eq!(
+        fit(&DMatrix::zeros(0, 3), &[], 2, &opts).unwrap_err(),
+        FitError::NoPoses
+    );
+    assert_eq!(
+        fit(&angles, &transfers[..3], 2, &opts).unwrap_err(),
+        FitError::PoseCountMismatch {
+            angles: 4,
+            transfers: 3
+        }
+    );
+    assert_eq!(
+        fit(&angles, &transfers, 0, &opts).unwrap_err(),
+        FitError::ZeroOrder
+    );
+    assert_eq!(
+        fit(&angles, &transfers, 3, &opts).unwrap_err(),
+        FitError::TransferLength {
+            pose: 0,
+            len: 20,
+            expected: 27,
+            coefs: 9
+        }
+    );
+    let mut short = transfers.clone();
+    short[2].pop();
+    assert!(matches!(
+        fit(&angles, &short, 2, &opts).unwrap_err(),
+        FitError::TransferLength { pose: 2, .. }
+    ));
+    let mut nan = transfers.clone();
+    nan[3][7] = f32::NAN;
+    assert_eq!(
+        fit(&angles, &nan, 2, &opts).unwrap_err(),
+        FitError::NonFiniteTransfer { pose: 3, index: 7 }
+    );
+    let mut bad_angles = angles.clone();
+    bad_angles[(1, 2)] = f64::INFINITY;
+    assert_eq!(
+        fit(&bad_angles, &transfers, 2, &opts).unwrap_err(),
+        FitError::NonFiniteAngle { pose: 1, joint: 2 }
+    );
+    let empty: Vec<Vec<f32>> = vec![Vec::new(); 4];
+    assert_eq!(
+        fit(&angles, &empty, 2, &opts).unwrap_err(),
+        FitError::NoVertices
+    );
+    assert_eq!(
+        fit(&angles, &transfers, 2, &full(Alpha::Fixed(-1.0))).unwrap_err(),
+        FitError::InvalidAlpha(-1.0)
+    );
+    let bad_fraction = FitOptions {
+        coef_dims: CoefDims::Variance(1.5),
+        ..opts
+    };
+    assert_eq!(
+        fit(&angles, &transfers, 2, &bad_fraction).unwrap_err(),
+        FitError::InvalidFraction(1.5)
+    );
+    assert_eq!(
+        fit(
+            &angles,
+            &transfers,
+            2,
+            &full(Alpha::Loso { segment: Some(4) })
+        )
+        .unwrap_err(),
+        FitError::SegmentTooLong {
+            segment: 4,
+            poses: 4
+        }
+    );
+}
