@@ -3,7 +3,7 @@
 //! For a vertex at `x` with normal `n` the direct transfer is the paper's
 //! `t_c(x) = ∫ V(x, ω) max(n·ω, 0) y_c(ω) dω` — no albedo and no `1/π`: the renderer applies
 //! `albedo/π` once, so baked data stays valid for any material colour. It is estimated with a
-//! cosine-weighted low-discrepancy pattern (see [`directions`]) as
+//! cosine-weighted low-discrepancy pattern (see the `directions` module) as
 //! `t_c ≈ (π/N) Σ V(ω_i) y_c(ω_i)`, accumulated in f64 and returned as f32.
 //!
 //! Optional inter-reflections (the paper's Figure 7): with albedo ρ,
