@@ -45,6 +45,11 @@ use crate::mesh::{Mesh, area_weighted_normals};
 pub const ORIGIN_OFFSET: f64 = 1e-4;
 /// Hits closer than this fraction of the bounding-box diagonal are ignored.
 pub const T_MIN: f64 = 1e-4;
+/// Largest accepted `max |coordinate| + bounding-box diagonal`: far beyond any character in
+/// any unit, and small enough that the triple products inside the ray–triangle test (cubes of
+/// coordinates, at most ~1e36 here) stay below `f32::MAX` (3.4e38) instead of overflowing
+/// into infinities that would silently turn occluders into misses.
+pub const MAX_EXTENT: f64 = 1e12;
 /// Upper bound on rays per vertex: 65 536 already puts QMC error far below f32 resolution of
 /// the transfer, and bounce bakes store one hit per occluded ray.
 pub const MAX_RAYS: usize = 1 << 16;
@@ -111,6 +116,12 @@ pub enum BakeError {
         vertex: usize,
         /// Its position.
         position: [f32; 3],
+    },
+    /// The mesh is so large (or so far from the origin) that ray arithmetic would overflow f32.
+    #[error("mesh extent {extent:e} is beyond what f32 ray arithmetic can represent")]
+    ExtentTooLarge {
+        /// Largest absolute coordinate plus the bounding-box diagonal.
+        extent: f64,
     },
     /// The mesh has a different number of normals than positions.
     #[error("mesh has {positions} positions but {normals} normals")]
@@ -281,6 +292,17 @@ impl<'a> Prepared<'a> {
             }
         }
         let diagonal = bounding_diagonal(&mesh.positions);
+        // Ray origins and hit points stay within |p| + diagonal; keep a margin below f32::MAX
+        // so the intersection arithmetic cannot overflow into infinities.
+        let largest = mesh
+            .positions
+            .iter()
+            .flatten()
+            .fold(0.0f64, |m, &x| m.max(f64::from(x).abs()));
+        let extent = largest + diagonal;
+        if extent > MAX_EXTENT {
+            return Err(BakeError::ExtentTooLarge { extent });
+        }
         Ok(Prepared {
             mesh,
             settings: *settings,

@@ -503,6 +503,12 @@ fn invalid_input_gives_typed_errors() {
         bake_pose(&inf, &s),
         Err(BakeError::NonFinitePosition { vertex: 5, .. })
     ));
+    let mut far = good.clone();
+    far.positions[0] = [2e12, 0.0, 0.0];
+    assert!(matches!(
+        bake_pose(&far, &s),
+        Err(BakeError::ExtentTooLarge { .. })
+    ));
     let mut short = good.clone();
     short.normals.pop();
     assert!(matches!(
