@@ -79,14 +79,46 @@ fn normalise(dir: [f32; 3]) -> Result<[f32; 3], ShError> {
     Ok([dir[0] * inv, dir[1] * inv, dir[2] * inv])
 }
 
-/// `K_l^m` for `0 ≤ m ≤ l < MAX_ORDER`, from the factorial ratio.
-fn norm(l: usize, m: usize) -> f32 {
+/// `K_l^m` for `0 ≤ m ≤ l < MAX_ORDER`, from the factorial ratio, in f64.
+const fn norm_f64(l: usize, m: usize) -> f64 {
     let mut ratio = 1.0f64; // (l−m)!/(l+m)!
-    for k in (l - m + 1)..=(l + m) {
+    let mut k = l - m + 1;
+    while k <= l + m {
         ratio /= k as f64;
+        k += 1;
     }
-    libm::sqrt((2 * l + 1) as f64 / (4.0 * core::f64::consts::PI) * ratio) as f32
+    const_sqrt((2 * l + 1) as f64 / (4.0 * core::f64::consts::PI) * ratio)
 }
+
+/// Square root for constant evaluation (`f64::sqrt` is not `const`): Newton's iteration from
+/// an over-estimate decreases monotonically to ⌊√x⌋ or ⌈√x⌉ in f64, far below f32 resolution.
+const fn const_sqrt(x: f64) -> f64 {
+    let mut y = if x > 1.0 { x } else { 1.0 };
+    loop {
+        let next = 0.5 * (y + x / y);
+        if next >= y {
+            return y;
+        }
+        y = next;
+    }
+}
+
+/// `NORMS[l][m] = K_l^m` as f32, computed at compile time: [`eval_basis`] runs once per ray in
+/// the bake (millions of calls per pose) and recomputing factorial ratios and square roots
+/// there cost about a quarter of the bake's time.
+const NORMS: [[f32; MAX_ORDER]; MAX_ORDER] = {
+    let mut table = [[0.0f32; MAX_ORDER]; MAX_ORDER];
+    let mut l = 0;
+    while l < MAX_ORDER {
+        let mut m = 0;
+        while m <= l {
+            table[l][m] = norm_f64(l, m) as f32;
+            m += 1;
+        }
+        l += 1;
+    }
+    table
+};
 
 /// Evaluates all `order²` basis functions in direction `dir` (normalised here) into `out`.
 ///
@@ -114,7 +146,7 @@ pub fn eval_basis(order: usize, dir: [f32; 3], out: &mut [f32]) -> Result<(), Sh
                 p_prev2 = p_prev;
                 p_prev = p;
             }
-            let k = norm(l, m);
+            let k = NORMS[l][m];
             if m == 0 {
                 out[index(l, 0)] = k * p;
             } else {
@@ -187,6 +219,20 @@ mod tests {
     use super::*;
 
     const PI: f64 = core::f64::consts::PI;
+
+    #[test]
+    fn compile_time_norms_match_the_runtime_formula() {
+        for (l, row) in NORMS.iter().enumerate() {
+            for (m, &table) in row.iter().enumerate().take(l + 1) {
+                let mut ratio = 1.0f64;
+                for k in (l - m + 1)..=(l + m) {
+                    ratio /= k as f64;
+                }
+                let k = libm::sqrt((2 * l + 1) as f64 / (4.0 * PI) * ratio) as f32;
+                assert_eq!(table.to_bits(), k.to_bits(), "l={l} m={m}");
+            }
+        }
+    }
 
     /// Independent reference: the closed forms of bands 0–2 written out by hand.
     fn low_bands(d: [f64; 3]) -> [f64; 9] {

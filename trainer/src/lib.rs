@@ -3,23 +3,31 @@
 
 pub mod angles;
 pub mod atomic;
+pub mod bake;
 pub mod character;
+pub mod cli;
+pub mod demo;
 pub mod evaluate;
 pub mod export;
 pub mod fit;
 pub mod mesh;
 pub mod model;
 pub mod npy;
+pub mod obj;
 pub mod render;
 pub mod runtime;
 pub mod sh_rotate;
 pub mod skin;
 
+pub use bake::{
+    Accel, BakeError, BakeSettings, bake_pose, bake_pose_with, bake_poses, bake_vertices,
+};
 pub use character::{Character, CharacterError, Clip, JointAngle};
 pub use export::{ExportError, Precision, encode_model};
 pub use fit::{Alpha, CoefDims, Dims, Fit, FitError, FitOptions, FitReport, fit};
 pub use mesh::Mesh;
 pub use model::{LinearModel, VertexBasis};
+pub use obj::{LineError, ObjError, read_obj};
 pub use render::{
     Colormap, RenderError, View, lambert, render_scalar, save_png_atomic, side_by_side,
 };
