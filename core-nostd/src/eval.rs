@@ -14,9 +14,10 @@
 
 use crate::blob::for_each_chunk;
 use crate::blob::{
-    Basis, BlobSource, Encoding, Error, MAX_COEF_DIMS, MAX_JOINTS, MAX_POSE_DIMS, Model, Section,
-    VERTEX_BLOCK,
+    Basis, BlobSource, Encoding, Error, Frame, MAX_COEF_DIMS, MAX_JOINTS, MAX_LIT, MAX_POSE_DIMS,
+    Model, Section, VERTEX_BLOCK,
 };
+use crate::rotate::{ShRotation, is_rotation};
 use crate::sh::{MAX_COEFFS, coeff_count};
 
 /// Longest per-vertex row: k_v (stored basis) or n²(1 + k_a) (identity basis).
@@ -77,18 +78,19 @@ impl PoseWeights {
     }
 }
 
-/// Lighting pushed through the pose weights (about 9 KiB): one weight per row value.
+/// Lighting pushed through the pose weights (64 KiB): one weight per row value, per bone for
+/// bone-frame models.
 #[derive(Clone, Debug)]
 pub struct LitWeights {
     shape: Option<Shape>,
-    q: [f32; MAX_ROW],
+    q: [f32; MAX_LIT],
 }
 
 impl Default for LitWeights {
     fn default() -> Self {
         LitWeights {
             shape: None,
-            q: [0.0; MAX_ROW],
+            q: [0.0; MAX_LIT],
         }
     }
 }
@@ -274,15 +276,68 @@ impl Model {
         Ok(())
     }
 
-    /// Pushes the SH lighting vector `lighting` (n² values) through the pose weights.
+    /// Pushes the world SH lighting vector `lighting` (n² values) through the pose weights,
+    /// for world-frame models.
     pub fn light(
         &self,
         pose: &PoseWeights,
         lighting: &[f32],
         lit: &mut LitWeights,
     ) -> Result<(), Error> {
-        let shape = Shape::of(self);
-        if pose.shape != Some(shape) {
+        if self.frame != Frame::World {
+            return Err(Error::FrameMismatch);
+        }
+        self.check_lighting(pose, lighting)?;
+        lit.shape = None;
+        self.push(pose, lighting, &mut lit.q[..self.row_width()]);
+        lit.shape = Some(Shape::of(self));
+        Ok(())
+    }
+
+    /// For bone-frame models: rotates the world lighting into each bone's frame
+    /// (`rotations[b]`, the bone's world rotation, row-major) and pushes each through the
+    /// pose weights. `rotation` is the caller's [`ShRotation`] for this model's order.
+    pub fn light_skinned(
+        &self,
+        pose: &PoseWeights,
+        lighting: &[f32],
+        rotations: &[[[f32; 3]; 3]],
+        rotation: &ShRotation,
+        lit: &mut LitWeights,
+    ) -> Result<(), Error> {
+        let Frame::Bones { count } = self.frame else {
+            return Err(Error::FrameMismatch);
+        };
+        if rotations.len() != count as usize {
+            return Err(Error::WrongLength {
+                expected: count as usize,
+                found: rotations.len(),
+            });
+        }
+        if rotation.order() != self.order {
+            return Err(Error::ShapeMismatch);
+        }
+        self.check_lighting(pose, lighting)?;
+        lit.shape = None;
+        let width = self.row_width();
+        let mut local = [0.0f32; MAX_COEFFS];
+        for (r, q) in rotations.iter().zip(lit.q.chunks_exact_mut(width)) {
+            if !r.iter().flatten().all(|x| x.is_finite()) || !is_rotation(r, 1e-3) {
+                return Err(Error::BadRotation);
+            }
+            // Bone-frame lighting is the world lighting rotated by Rᵀ.
+            let rt = core::array::from_fn(|i| core::array::from_fn(|j| r[j][i]));
+            rotation
+                .rotate(&rt, lighting, &mut local)
+                .map_err(|_| Error::ShapeMismatch)?;
+            self.push(pose, &local[..lighting.len()], q);
+        }
+        lit.shape = Some(Shape::of(self));
+        Ok(())
+    }
+
+    fn check_lighting(&self, pose: &PoseWeights, lighting: &[f32]) -> Result<(), Error> {
+        if pose.shape != Some(Shape::of(self)) {
             return Err(Error::ShapeMismatch);
         }
         let n2 = coeff_count(self.order);
@@ -295,8 +350,12 @@ impl Model {
         if !all_finite(lighting) {
             return Err(Error::NonFiniteInput);
         }
-        let width = self.row_width();
-        let q = &mut lit.q[..width];
+        Ok(())
+    }
+
+    /// `q` = the lighting pushed through the pose weights: `s_k = Σ_c L_c w^c_k` (stored
+    /// basis) or `L_c z'_i` (identity basis).
+    fn push(&self, pose: &PoseWeights, lighting: &[f32], q: &mut [f32]) {
         match self.basis {
             Basis::Stored => {
                 for (qk, wk) in q.iter_mut().zip(pose.w.chunks_exact(lighting.len())) {
@@ -312,8 +371,6 @@ impl Model {
                 }
             }
         }
-        lit.shape = Some(shape);
-        Ok(())
     }
 
     fn check_range(&self, first: usize, count: usize) -> Result<(), Error> {
@@ -324,28 +381,75 @@ impl Model {
     }
 
     /// Streams the blocks holding vertices `first .. first + count` to
-    /// `visit(first vertex of the block, block bytes)`.
+    /// `visit(first vertex of the block, bone lanes, row bytes)`; the bone lanes are all 0 for
+    /// world-frame models.
     fn each_block<S: BlobSource>(
         &self,
         src: &mut S,
         first: usize,
         count: usize,
         scratch: &mut [u8],
-        mut visit: impl FnMut(usize, &[u8]),
+        mut visit: impl FnMut(usize, [usize; VERTEX_BLOCK], &[u8]),
     ) -> Result<(), Error> {
         let block_bytes = self.block_bytes();
+        let encoding = self.rows.encoding;
+        let lead_bytes = self.lead_rows() * VERTEX_BLOCK * encoding.size();
         let (b0, b1) = (first / VERTEX_BLOCK, (first + count).div_ceil(VERTEX_BLOCK));
         let offset = self.rows.offset + (b0 as u64) * block_bytes as u64;
         for_each_chunk(src, offset, block_bytes, b1 - b0, scratch, |i0, bytes| {
             for (i, block) in bytes.chunks_exact(block_bytes).enumerate() {
-                visit((b0 + i0 + i) * VERTEX_BLOCK, block);
+                let (lead, rows) = block.split_at(lead_bytes);
+                let mut bones = [0usize; VERTEX_BLOCK];
+                // Validated at open: exact integers below the bone count.
+                match encoding {
+                    Encoding::F32 => lead
+                        .as_chunks::<4>()
+                        .0
+                        .iter()
+                        .zip(&mut bones)
+                        .for_each(|(x, b)| *b = x.value() as usize),
+                    Encoding::F16 => lead
+                        .as_chunks::<2>()
+                        .0
+                        .iter()
+                        .zip(&mut bones)
+                        .for_each(|(x, b)| *b = x.value() as usize),
+                }
+                visit((b0 + i0 + i) * VERTEX_BLOCK, bones, rows);
             }
             Ok(())
         })
     }
 
+    /// Number of lighting frames: the bone count, or 1 for world-frame models.
+    fn bones(&self) -> usize {
+        match self.frame {
+            Frame::World => 1,
+            Frame::Bones { count } => count as usize,
+        }
+    }
+
+    /// The bone of each vertex `first .. first + out.len()` (all 0 for world-frame models),
+    /// for engines that light [`Model::transfer`] output on the GPU.
+    pub fn vertex_bones<S: BlobSource>(
+        &self,
+        src: &mut S,
+        first: usize,
+        out: &mut [u16],
+        scratch: &mut [u8],
+    ) -> Result<(), Error> {
+        self.check_range(first, out.len())?;
+        let end = first + out.len();
+        self.each_block(src, first, out.len(), scratch, |v0, bones, _| {
+            for j in v0.max(first)..(v0 + VERTEX_BLOCK).min(end) {
+                out[j - first] = bones[j - v0] as u16;
+            }
+        })
+    }
+
     /// Per-vertex shading `Σ_c L_c t_c(j)` for vertices `first .. first + out.len()`, from
-    /// lighting weights of [`Model::light`]. Multiply by albedo / π for exit radiance.
+    /// lighting weights of [`Model::light`] or [`Model::light_skinned`]. Multiply by albedo / π
+    /// for exit radiance.
     /// `scratch` may be empty for a resident blob, else at least [`Model::block_bytes`].
     pub fn shade<S: BlobSource>(
         &self,
@@ -359,13 +463,14 @@ impl Model {
             return Err(Error::ShapeMismatch);
         }
         self.check_range(first, out.len())?;
-        let q = &lit.q[..self.row_width()];
+        let width = self.row_width();
+        let q = &lit.q[..width * self.bones()];
         let encoding = self.rows.encoding;
         let end = first + out.len();
-        self.each_block(src, first, out.len(), scratch, |v0, bytes| {
+        self.each_block(src, first, out.len(), scratch, |v0, bones, bytes| {
             let lanes = match encoding {
-                Encoding::F32 => shade_block(bytes.as_chunks::<4>().0, q),
-                Encoding::F16 => shade_block(bytes.as_chunks::<2>().0, q),
+                Encoding::F32 => shade_block(bytes.as_chunks::<4>().0, q, width, bones),
+                Encoding::F16 => shade_block(bytes.as_chunks::<2>().0, q, width, bones),
             };
             let (lo, hi) = (v0.max(first), (v0 + VERTEX_BLOCK).min(end));
             out[lo - first..hi - first].copy_from_slice(&lanes[lo - v0..hi - v0]);
@@ -374,7 +479,9 @@ impl Model {
 
     /// Per-vertex transfer vectors for vertices `first .. first + count`, written to `out`
     /// (`count · n²` values, vertex-major), for upload to a GPU that does the lighting dot
-    /// product. `scratch` as for [`Model::shade`].
+    /// product. Bone-frame models give transfer in each vertex's bone frame (see
+    /// [`Model::vertex_bones`]): light it with that bone's rotated lighting.
+    /// `scratch` as for [`Model::shade`].
     pub fn transfer<S: BlobSource>(
         &self,
         src: &mut S,
@@ -401,7 +508,7 @@ impl Model {
         let w = &pose.w[..n2 * kv.min(MAX_COEF_DIMS)];
         let end = first + count;
         let mut lanes = [0.0f32; VERTEX_BLOCK * MAX_COEFFS];
-        self.each_block(src, first, count, scratch, |v0, bytes| {
+        self.each_block(src, first, count, scratch, |v0, _, bytes| {
             let t = &mut lanes[..VERTEX_BLOCK * n2];
             match (basis, encoding) {
                 (Basis::Stored, Encoding::F32) => transfer_stored(bytes.as_chunks::<4>().0, w, t),
@@ -420,11 +527,24 @@ impl Model {
     }
 }
 
-/// Shading of one block: `out_lane = Σ_r q_r U[r][lane]`, eight vertices per multiply, with
-/// two accumulator sets to halve the dependency chain of the adds.
+/// Shading of one block: `out_lane = Σ_r q[bone_lane][r] U[r][lane]`. When the eight vertices
+/// share a bone (the common case), one lighting weight multiplies eight vertices at once,
+/// with two accumulator sets to halve the dependency chain of the adds.
 #[inline(always)]
-fn shade_block<E: Decode>(block: &[E], q: &[f32]) -> [f32; VERTEX_BLOCK] {
+fn shade_block<E: Decode>(
+    block: &[E],
+    q: &[f32],
+    width: usize,
+    bones: [usize; VERTEX_BLOCK],
+) -> [f32; VERTEX_BLOCK] {
     let rows = block.as_chunks::<VERTEX_BLOCK>().0;
+    if bones.iter().any(|&b| b != bones[0]) {
+        return core::array::from_fn(|l| {
+            let qb = &q[bones[l] * width..][..width];
+            rows.iter().zip(qb).map(|(r, q)| q * r[l].value()).sum()
+        });
+    }
+    let q = &q[bones[0] * width..][..width];
     let (pairs, rest) = rows.as_chunks::<2>();
     let (q_pairs, q_rest) = q.as_chunks::<2>();
     let (mut even, mut odd) = ([0.0f32; VERTEX_BLOCK], [0.0f32; VERTEX_BLOCK]);

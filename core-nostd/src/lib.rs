@@ -18,6 +18,7 @@
 pub mod blob;
 pub mod eval;
 pub mod math;
+pub mod rotate;
 pub mod sh;
 
 pub use blob::{BlobSource, Error, Model, SliceSource, SourceError};

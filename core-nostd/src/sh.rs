@@ -49,6 +49,8 @@ impl core::fmt::Display for ShError {
     }
 }
 
+impl core::error::Error for ShError {}
+
 /// Number of coefficients of an order-`order` expansion.
 pub const fn coeff_count(order: usize) -> usize {
     order * order

@@ -69,5 +69,6 @@ pub fn random_model(
             None => VertexBasis::Identity,
         },
         alpha: 0.5,
+        bones: None,
     }
 }

@@ -16,9 +16,12 @@ use crate::evaluate::{mean_transfer, nearest_pose, relative_error, skinned_trans
 use crate::export::{Precision, encode_model};
 use crate::fit::{Alpha, CoefDims, Dims, FitOptions, fit};
 use crate::mesh::Mesh;
+use crate::model::BoneFrames;
 use crate::render::{Colormap, View, render_scalar, save_png_atomic, side_by_side};
-use crate::sh_rotate::ShRotator;
+use crate::sh_rotate::{nearest_rotation, rotate_each, row_major};
+use aprt_core::rotate::ShRotation;
 use aprt_core::{LitWeights, Model, PoseWeights, SliceSource};
+use glam::DMat3;
 
 /// One row of the report table.
 #[derive(Debug, serde::Serialize)]
@@ -50,7 +53,49 @@ struct Baked {
     name: String,
     angles: Vec<Vec<f64>>,
     meshes: Vec<Mesh>,
+    /// World-frame ground truth.
     transfer: Vec<Vec<f32>>,
+    /// Per frame, every bone's world rotation.
+    rotations: Vec<Vec<DMat3>>,
+}
+
+/// Every bone's world rotation in a pose: the rotation part of its skinning matrix.
+fn bone_rotations(character: &Character, angles: &[f64]) -> Result<Vec<DMat3>> {
+    Ok(character
+        .joint_matrices(angles)?
+        .iter()
+        .map(|m| nearest_rotation(DMat3::from_mat4(m.as_dmat4())))
+        .collect())
+}
+
+/// Each vertex's bone: its most influential joint. Its transfer is learned in that frame.
+fn dominant_bones(character: &Character) -> BoneFrames {
+    let skin = character.skin();
+    let vertex_bone = (0..skin.vertex_count())
+        .map(|j| {
+            skin.influences(j)
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+                .map_or(0, |(b, _)| b as u16)
+        })
+        .collect();
+    BoneFrames {
+        count: skin.joint_count(),
+        vertex_bone,
+    }
+}
+
+/// Transfer moved between world and bone frames: into the bone frame (`Rᵀ`) or out of it.
+fn change_frame(
+    rotation: &ShRotation,
+    transfer: &[f32],
+    bones: &BoneFrames,
+    rotations: &[DMat3],
+    into_bone: bool,
+) -> Vec<f32> {
+    rotate_each(rotation, transfer, |j| {
+        let r = rotations[bones.vertex_bone[j] as usize];
+        if into_bone { r.transpose() } else { r }
+    })
 }
 
 fn bake_clip(
@@ -75,12 +120,17 @@ fn bake_clip(
         angles.len(),
         per_frame
     );
+    let rotations = angles
+        .iter()
+        .map(|a| bone_rotations(character, a))
+        .collect::<Result<Vec<_>>>()?;
     Ok((
         Baked {
             name: clip.name.clone(),
             angles,
             meshes,
             transfer,
+            rotations,
         },
         per_frame,
     ))
@@ -100,8 +150,14 @@ fn median_seconds(mut f: impl FnMut()) -> f64 {
 }
 
 /// Per-frame cost through aprt-core on one pose: (shade µs, transfer µs).
-fn time_core(blob: &[u8], angles: &[f64], lighting: &[f32]) -> Result<(f64, f64)> {
+fn time_core(
+    blob: &[u8],
+    angles: &[f64],
+    rotations: &[[[f32; 3]; 3]],
+    lighting: &[f32],
+) -> Result<(f64, f64)> {
     let model = Model::parse(blob)?;
+    let rotation = ShRotation::new(model.order())?;
     let a: Vec<f32> = angles.iter().map(|&x| x as f32).collect();
     let mut pose = PoseWeights::default();
     let mut lit = LitWeights::default();
@@ -112,7 +168,9 @@ fn time_core(blob: &[u8], angles: &[f64], lighting: &[f32]) -> Result<(f64, f64)
     let shade = median_seconds(|| {
         result = result
             .and(model.set_pose(&mut src, &a, &mut [], &mut pose))
-            .and(model.light(&pose, lighting, &mut lit))
+            .and(crate::runtime::light(
+                &model, &pose, lighting, rotations, &rotation, &mut lit,
+            ))
             .and(model.shade(&mut src, &lit, 0, &mut shading, &mut []));
     });
     let full = median_seconds(|| {
@@ -154,10 +212,11 @@ pub fn demo_lighting(order: usize, to_light: Vec3) -> Vec<f32> {
     l
 }
 
+/// Shading `Σ_c L_c t_c` per vertex (shown directly as grey: an albedo of π).
 fn shade_with(transfer: &[f32], lighting: &[f32]) -> Vec<f32> {
     transfer
         .chunks_exact(lighting.len())
-        .map(|t| t.iter().zip(lighting).map(|(a, b)| a * b).sum::<f32>() / std::f32::consts::PI)
+        .map(|t| t.iter().zip(lighting).map(|(a, b)| a * b).sum::<f32>())
         .collect()
 }
 
@@ -198,59 +257,103 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     let frame_bytes = bind.vertex_count() * n2 * 4;
     let lighting = demo_lighting(order, Vec3::new(0.5, -0.8, 0.9));
 
-    let configs: Vec<(&str, FitOptions)> = vec![
-        ("default: PCA(variance) + LOSO α", FitOptions::default()),
+    let bones = dominant_bones(&character);
+    let rotation = ShRotation::new(order)?;
+    let to_world = |set: &Baked, frame: usize, t: &[f32]| {
+        change_frame(&rotation, t, &bones, &set.rotations[frame], false)
+    };
+    let train_local: Vec<Vec<f32>> = train
+        .transfer
+        .iter()
+        .enumerate()
+        .map(|(f, t)| change_frame(&rotation, t, &bones, &train.rotations[f], true))
+        .collect();
+    let default = FitOptions::default();
+    let configs: Vec<(&str, FitOptions, bool)> = vec![
+        ("default: bone frame, LOSO α", default, true),
         (
             "default shape, LOO α",
             FitOptions {
                 alpha: Alpha::Loo,
-                ..FitOptions::default()
+                ..default
             },
+            true,
         ),
+        ("default shape, world frame", default, false),
         (
             "full linear",
             FitOptions {
                 pose_dims: Dims::All,
                 coef_dims: CoefDims::Full,
-                ..FitOptions::default()
+                ..default
             },
+            true,
         ),
         (
             "PCA(8, 22)",
             FitOptions {
                 pose_dims: Dims::Count(8),
                 coef_dims: CoefDims::Count(22),
-                ..FitOptions::default()
+                ..default
             },
+            true,
         ),
         (
             "PCA(4, 12)",
             FitOptions {
                 pose_dims: Dims::Count(4),
                 coef_dims: CoefDims::Count(12),
-                ..FitOptions::default()
+                ..default
             },
+            true,
         ),
     ];
+    let f32_rotations = |set: &Baked, frame: usize| -> Vec<[[f32; 3]; 3]> {
+        set.rotations[frame].iter().map(|r| row_major(*r)).collect()
+    };
     let mut rows = Vec::new();
     let mut default_blob = Vec::new();
-    for (i, (name, options)) in configs.iter().enumerate() {
+    for (i, (name, options, bone_frame)) in configs.iter().enumerate() {
         eprintln!("fitting {name}");
-        let fitted = fit(&angles, &train.transfer, order, options)
-            .with_context(|| format!("fitting {name}"))?;
+        let targets = if *bone_frame {
+            &train_local
+        } else {
+            &train.transfer
+        };
+        let mut fitted =
+            fit(&angles, targets, order, options).with_context(|| format!("fitting {name}"))?;
+        if *bone_frame {
+            fitted.model.bones = Some(bones.clone());
+        }
         let s = &fitted.report.seconds;
         let fit_s =
             s.validate + s.pose_pca + s.vertex_basis + s.projection + s.cross_validation + s.solve;
         let blob = encode_model(&fitted.model, Precision::F32)
             .with_context(|| format!("writing {name}"))?;
         let model = Model::parse(&blob)?;
-        let predict = |set: &Baked| crate::runtime::predict_transfer(&blob, &set.angles);
+        // World-frame predictions through aprt-core.
+        let predict = |set: &Baked| -> Result<Vec<Vec<f32>>> {
+            let raw = crate::runtime::predict_transfer(&blob, &set.angles)?;
+            Ok(if *bone_frame {
+                raw.iter()
+                    .enumerate()
+                    .map(|(f, t)| to_world(set, f, t))
+                    .collect()
+            } else {
+                raw
+            })
+        };
         let train_error = relative_error(&predict(&train)?, &train.transfer);
         let test_errors = tests
             .iter()
             .map(|t| Ok(relative_error(&predict(t)?, &t.transfer)))
             .collect::<Result<Vec<_>>>()?;
-        let (shade_us, transfer_us) = time_core(&blob, &tests[0].angles[0], &lighting)?;
+        let rotations = if *bone_frame {
+            f32_rotations(&tests[0], 0)
+        } else {
+            Vec::new()
+        };
+        let (shade_us, transfer_us) = time_core(&blob, &tests[0].angles[0], &rotations, &lighting)?;
         rows.push(Row {
             name: (*name).into(),
             bytes: blob.len(),
@@ -279,7 +382,6 @@ pub fn run(args: &DemoArgs) -> Result<()> {
             .map(|a| train.transfer[nearest_pose(&train.angles, a)].clone())
             .collect::<Vec<_>>()
     };
-    let rotator = ShRotator::new(order);
     let bind_transfer = bake_poses(std::slice::from_ref(bind), &settings, false)?.remove(0);
     let skin = character.skin();
     let skinned_of = |set: &Baked| -> Result<Vec<Vec<f32>>> {
@@ -288,9 +390,8 @@ pub fn run(args: &DemoArgs) -> Result<()> {
             .map(|a| {
                 let matrices = character.joint_matrices(a)?;
                 Ok(skinned_transfer(
-                    &rotator,
+                    &rotation,
                     &bind_transfer,
-                    n2,
                     |j| skin.influences(j).collect(),
                     &matrices,
                 ))
@@ -336,11 +437,14 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     // Pictures of one novel pose: ground truth | model | 4× error.
     let test = &tests[0];
     let frame = test.angles.len() / 2;
-    let predicted =
-        crate::runtime::predict_transfer(&default_blob, std::slice::from_ref(&test.angles[frame]))?
-            .remove(0);
     let truth_shade = shade_with(&test.transfer[frame], &lighting);
-    let model_shade = shade_with(&predicted, &lighting);
+    // The model's shading straight from the core's bone-frame shading path.
+    let model_shade = crate::runtime::predict_shading(
+        &default_blob,
+        &test.angles[frame],
+        &f32_rotations(test, frame),
+        &lighting,
+    )?;
     let error: Vec<f32> = truth_shade
         .iter()
         .zip(&model_shade)

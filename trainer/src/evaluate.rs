@@ -1,9 +1,9 @@
 //! Accuracy against ground truth, and the baselines every model is measured against.
 
+use aprt_core::rotate::ShRotation;
 use glam::{DMat3, Mat4};
-use rayon::prelude::*;
 
-use crate::sh_rotate::{ShRotator, nearest_rotation};
+use crate::sh_rotate::{nearest_rotation, rotate_each};
 
 /// Relative error `‖pred − truth‖ / ‖truth‖` over all frames, vertices and coefficients:
 /// the transfer error of the reports (0 is perfect, 1 is as wrong as predicting zero).
@@ -51,25 +51,18 @@ pub fn nearest_pose(train_angles: &[Vec<f64>], angles: &[f64]) -> usize {
 /// nearest rotation to its blended skinning matrix. Right for rigid motion of an isolated
 /// part; blind to the shadows that other parts cast as they move.
 pub fn skinned_transfer(
-    rotator: &ShRotator,
+    rotation: &ShRotation,
     bind_transfer: &[f32],
-    n2: usize,
     influences: impl Fn(usize) -> Vec<(u32, f32)> + Sync,
     joint_matrices: &[Mat4],
 ) -> Vec<f32> {
-    let mut out = vec![0.0f32; bind_transfer.len()];
-    out.par_chunks_mut(n2)
-        .zip(bind_transfer.par_chunks(n2))
-        .enumerate()
-        .for_each(|(j, (o, t))| {
-            let mut blend = DMat3::ZERO;
-            for (joint, w) in influences(j) {
-                let m = joint_matrices[joint as usize].as_dmat4();
-                blend += DMat3::from_mat4(m) * w as f64;
-            }
-            rotator.rotate(nearest_rotation(blend), t, o);
-        });
-    out
+    rotate_each(rotation, bind_transfer, |j| {
+        let mut blend = DMat3::ZERO;
+        for (joint, w) in influences(j) {
+            blend += DMat3::from_mat4(joint_matrices[joint as usize].as_dmat4()) * w as f64;
+        }
+        nearest_rotation(blend)
+    })
 }
 
 #[cfg(test)]
@@ -98,11 +91,11 @@ mod tests {
     #[test]
     fn skinning_rotates_transfer_with_a_rigid_joint() {
         let order = 3;
-        let rot = ShRotator::new(order);
+        let rot = ShRotation::new(order).unwrap();
         let mut t = [0.0f32; 9];
         aprt_core::sh::clamped_cosine(order, [0.0, 0.0, 1.0], &mut t).unwrap();
         let m = Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2);
-        let out = skinned_transfer(&rot, &t, 9, |_| vec![(0, 1.0)], &[m]);
+        let out = skinned_transfer(&rot, &t, |_| vec![(0, 1.0)], &[m]);
         // +z rotated a quarter turn about x points along −y.
         let mut expect = [0.0f32; 9];
         aprt_core::sh::clamped_cosine(order, [0.0, -1.0, 0.0], &mut expect).unwrap();

@@ -1,13 +1,13 @@
 //! Model blob writer: quantises a [`LinearModel`] into the layout of `aprt_core::blob`.
 
 use aprt_core::blob::{
-    Basis, Encoding, Header, MAGIC, MAX_COEF_DIMS, MAX_HEADER_LEN, MAX_JOINTS, MAX_POSE_DIMS,
-    MAX_SECTIONS, MAX_VERTICES, PREAMBLE_LEN, SectionEntry, SectionKind, VERSION, VERTEX_BLOCK,
-    align_up, crc32, padded_vertices,
+    Basis, Encoding, Frame, Header, MAGIC, MAX_BONES, MAX_COEF_DIMS, MAX_HEADER_LEN, MAX_JOINTS,
+    MAX_POSE_DIMS, MAX_SECTIONS, MAX_VERTICES, PREAMBLE_LEN, SectionEntry, SectionKind, VERSION,
+    VERTEX_BLOCK, align_up, crc32, padded_vertices,
 };
 use aprt_core::sh::MAX_ORDER;
 
-use crate::model::{LinearModel, VertexBasis};
+use crate::model::{BoneFrames, LinearModel, VertexBasis};
 
 /// Storage precision of the large sections (weights and per-vertex rows); pose sections are
 /// always f32.
@@ -109,10 +109,23 @@ fn check_len(section: SectionKind, found: usize, expected: usize) -> Result<(), 
 }
 
 /// Per-vertex values `get(j, r)` (`r < width`) in the core's blocked layout: blocks of
-/// `VERTEX_BLOCK` vertices, value-major within a block, the last block zero-padded.
-fn blocked(vertices: usize, width: usize, get: impl Fn(usize, usize) -> f64) -> Vec<f64> {
-    let mut out = Vec::with_capacity(padded_vertices(vertices) * width);
+/// `VERTEX_BLOCK` vertices, value-major within a block, the last block zero-padded; for
+/// bone-frame models each block starts with a row of the vertices' bone indices.
+fn blocked(
+    vertices: usize,
+    width: usize,
+    bones: Option<&BoneFrames>,
+    get: impl Fn(usize, usize) -> f64,
+) -> Vec<f64> {
+    let lead = usize::from(bones.is_some());
+    let mut out = Vec::with_capacity(padded_vertices(vertices) * (lead + width));
     for b in 0..padded_vertices(vertices) / VERTEX_BLOCK {
+        if let Some(frames) = bones {
+            for lane in 0..VERTEX_BLOCK {
+                let j = b * VERTEX_BLOCK + lane;
+                out.push(frames.vertex_bone.get(j).map_or(0.0, |&x| x as f64));
+            }
+        }
         for r in 0..width {
             for lane in 0..VERTEX_BLOCK {
                 let j = b * VERTEX_BLOCK + lane;
@@ -135,6 +148,23 @@ pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>
     limit("vertices", v, 1, MAX_VERTICES)?;
     limit("joints", a, 1, MAX_JOINTS)?;
     limit("pose dims", ka, 0, MAX_POSE_DIMS.min(a))?;
+    let frame = match &model.bones {
+        None => Frame::World,
+        Some(b) => {
+            limit("bones", b.count, 1, MAX_BONES)?;
+            check_len(SectionKind::VertexBasis, b.vertex_bone.len(), v)?;
+            if let Some(&bad) = b.vertex_bone.iter().find(|&&x| x as usize >= b.count) {
+                return Err(ExportError::TooLarge {
+                    what: "vertex bone",
+                    value: bad as usize,
+                    max: b.count - 1,
+                });
+            }
+            Frame::Bones {
+                count: b.count as u16,
+            }
+        }
+    };
     let big = match precision {
         Precision::F32 => Encoding::F32,
         Precision::F16 => Encoding::F16,
@@ -168,7 +198,7 @@ pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>
             )?;
             sections.push((SectionKind::Weights, big, w));
             check_len(SectionKind::VertexBasis, data.len(), v * kv)?;
-            let u = blocked(v, kv, |j, k| data[j * kv + k]);
+            let u = blocked(v, kv, model.bones.as_ref(), |j, k| data[j * kv + k]);
             let u = encode(SectionKind::VertexBasis, &u, u.len(), big)?;
             sections.push((SectionKind::VertexBasis, big, u));
             Basis::Stored
@@ -176,13 +206,15 @@ pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>
         VertexBasis::Identity => {
             let width = n2 * (ka + 1);
             check_len(SectionKind::VertexWeights, model.weights.len(), width * v)?;
-            let rows = blocked(v, width, |j, r| model.weights[r * v + j]);
+            let rows = blocked(v, width, model.bones.as_ref(), |j, r| {
+                model.weights[r * v + j]
+            });
             let rows = encode(SectionKind::VertexWeights, &rows, rows.len(), big)?;
             sections.push((SectionKind::VertexWeights, big, rows));
             Basis::Identity
         }
     };
-    assemble(model, basis, &sections)
+    assemble(model, basis, frame, &sections)
 }
 
 /// Lays out preamble, header and aligned sections. The header holds the section offsets,
@@ -190,6 +222,7 @@ pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>
 fn assemble(
     model: &LinearModel,
     basis: Basis,
+    frame: Frame,
     sections: &[(SectionKind, Encoding, Vec<u8>)],
 ) -> Result<Vec<u8>, ExportError> {
     let mut header_len = 0usize;
@@ -215,6 +248,7 @@ fn assemble(
             pose_dims: model.pose_dims() as u16,
             coef_dims: model.coef_dims() as u32,
             basis,
+            frame,
             alpha: model.alpha as f32,
             sections: table.clone(),
         };
@@ -259,6 +293,7 @@ mod tests {
                 .collect(),
             basis,
             alpha: 0.25,
+            bones: None,
         }
     }
 

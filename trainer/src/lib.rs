@@ -26,7 +26,7 @@ pub use character::{Character, CharacterError, Clip, JointAngle};
 pub use export::{ExportError, Precision, encode_model};
 pub use fit::{Alpha, CoefDims, Dims, Fit, FitError, FitOptions, FitReport, fit};
 pub use mesh::Mesh;
-pub use model::{LinearModel, VertexBasis};
+pub use model::{BoneFrames, LinearModel, VertexBasis};
 pub use obj::{LineError, ObjError, read_obj};
 pub use render::{
     Colormap, RenderError, View, lambert, render_scalar, save_png_atomic, side_by_side,

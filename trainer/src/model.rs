@@ -19,6 +19,15 @@ pub enum VertexBasis {
     },
 }
 
+/// For bone-frame models: which bone's frame each vertex's transfer is expressed in.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BoneFrames {
+    /// Number of bones.
+    pub count: usize,
+    /// The bone of each vertex.
+    pub vertex_bone: Vec<u16>,
+}
+
 /// A fitted model: everything the blob stores, in f64.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LinearModel {
@@ -38,6 +47,9 @@ pub struct LinearModel {
     pub basis: VertexBasis,
     /// The Tikhonov parameter the fit used.
     pub alpha: f64,
+    /// `None`: transfer in world space; otherwise in each vertex's bone frame, and
+    /// [`LinearModel::predict`] gives bone-frame transfer.
+    pub bones: Option<BoneFrames>,
 }
 
 impl LinearModel {

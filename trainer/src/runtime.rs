@@ -1,10 +1,12 @@
 //! The trainer's view of a written model: evaluation through `aprt-core`, exactly as an
 //! engine would run it, and a description of the blob for `aprt inspect`.
 
-use aprt_core::blob::{Basis, Encoding, SectionKind, read_header};
+use aprt_core::blob::{Basis, Encoding, Frame, SectionKind, read_header};
+use aprt_core::rotate::ShRotation;
 use aprt_core::{LitWeights, Model, PoseWeights, SliceSource};
 
-/// Per-vertex transfer (`v × n²`, vertex-major) for each pose, through `aprt-core`.
+/// Per-vertex transfer (`v × n²`, vertex-major) for each pose, through `aprt-core`, in the
+/// model's frame (world, or each vertex's bone).
 pub fn predict_transfer(
     blob: &[u8],
     poses: &[Vec<f64>],
@@ -24,18 +26,37 @@ pub fn predict_transfer(
         .collect()
 }
 
-/// Per-vertex shading `Σ_c L_c t_c` for one pose and SH lighting, through `aprt-core`.
+/// Pushes world lighting through the pose weights, rotating it into each bone's frame first
+/// for bone-frame models (`rotations`: each bone's world rotation, row-major; empty for
+/// world-frame models).
+pub fn light(
+    model: &Model,
+    pose: &PoseWeights,
+    lighting: &[f32],
+    rotations: &[[[f32; 3]; 3]],
+    rotation: &ShRotation,
+    lit: &mut LitWeights,
+) -> Result<(), aprt_core::Error> {
+    match model.frame() {
+        Frame::World => model.light(pose, lighting, lit),
+        Frame::Bones { .. } => model.light_skinned(pose, lighting, rotations, rotation, lit),
+    }
+}
+
+/// Per-vertex shading `Σ_c L_c t_c` for one pose and world SH lighting, through `aprt-core`.
 pub fn predict_shading(
     blob: &[u8],
     angles: &[f64],
+    rotations: &[[[f32; 3]; 3]],
     lighting: &[f32],
 ) -> Result<Vec<f32>, aprt_core::Error> {
     let model = Model::parse(blob)?;
+    let rotation = ShRotation::new(model.order()).map_err(|_| aprt_core::Error::ShapeMismatch)?;
     let angles: Vec<f32> = angles.iter().map(|&a| a as f32).collect();
     let mut pose = PoseWeights::default();
     model.set_pose(&mut SliceSource(blob), &angles, &mut [], &mut pose)?;
     let mut lit = LitWeights::default();
-    model.light(&pose, lighting, &mut lit)?;
+    light(&model, &pose, lighting, rotations, &rotation, &mut lit)?;
     let mut out = vec![0.0f32; model.vertices()];
     model.shade(&mut SliceSource(blob), &lit, 0, &mut out, &mut [])?;
     Ok(out)

@@ -15,6 +15,8 @@ pub enum Dim {
     PoseDims,
     /// Vertex-basis dimensions k_v.
     CoefDims,
+    /// Bones of a skinned-frame model.
+    Bones,
 }
 
 /// Everything that can go wrong reading a blob or evaluating a model.
@@ -132,6 +134,13 @@ pub enum Error {
     },
     /// The pose or lighting weights were computed for another model shape.
     ShapeMismatch,
+    /// A vertex's bone index is not an integer below the bone count.
+    BadBoneIndex,
+    /// The call does not match the model's frame: `light` is for world-frame models,
+    /// `light_skinned` for bone-frame models.
+    FrameMismatch,
+    /// A bone rotation is not orthonormal or holds NaN.
+    BadRotation,
     /// The [`BlobSource`](super::BlobSource) failed to read.
     Source,
 }
@@ -186,6 +195,9 @@ impl core::fmt::Display for Error {
                 write!(f, "vertex range {first}..{first}+{count} is out of bounds")
             }
             Error::ShapeMismatch => write!(f, "weights were computed for a different model"),
+            Error::BadBoneIndex => write!(f, "vertex bone index out of range"),
+            Error::FrameMismatch => write!(f, "lighting call does not match the model's frame"),
+            Error::BadRotation => write!(f, "bone rotation is not orthonormal"),
             Error::Source => write!(f, "blob source read failed"),
         }
     }

@@ -46,6 +46,26 @@ pub const fn padded_vertices(vertices: usize) -> usize {
 /// for orders ≤ 6 and the identity basis with few pose dimensions).
 pub const MAX_VERTICES: usize = 1 << 22;
 
+/// Most bones a skinned-frame model may have.
+pub const MAX_BONES: usize = 256;
+/// Capacity of the per-frame lighting weights: bones × row width for skinned-frame models.
+pub const MAX_LIT: usize = 16384;
+
+/// The frame the model's transfer is expressed in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Frame {
+    /// World space: one lighting vector shades every vertex.
+    World,
+    /// Each vertex's bone frame: transfer moves rigidly with the bone, so the model only has
+    /// to learn how shadowing changes with the pose. Lighting is rotated into each bone once
+    /// per frame. Every block of the per-vertex section then starts with one extra row: the
+    /// bone index of each of its eight vertices, as an exact small integer.
+    Bones {
+        /// Number of bones.
+        count: u16,
+    },
+}
+
 /// How the vertex side of the model is represented.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Basis {
@@ -155,6 +175,8 @@ pub struct Header {
     pub coef_dims: u32,
     /// Vertex side representation.
     pub basis: Basis,
+    /// The frame transfer is expressed in.
+    pub frame: Frame,
     /// The Tikhonov parameter the fit chose (informational).
     pub alpha: f32,
     /// The section table.

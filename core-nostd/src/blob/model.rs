@@ -2,9 +2,9 @@
 //! verify every section's checksum and values once, so evaluation can trust the layout.
 
 use super::format::{
-    Basis, Encoding, Header, MAGIC, MAX_COEF_DIMS, MAX_HEADER_LEN, MAX_JOINTS, MAX_POSE_DIMS,
-    MAX_SECTIONS, MAX_VERTICES, PREAMBLE_LEN, SECTION_ALIGN, SectionEntry, SectionKind, VERSION,
-    VERTEX_BLOCK, padded_vertices,
+    Basis, Encoding, Frame, Header, MAGIC, MAX_BONES, MAX_COEF_DIMS, MAX_HEADER_LEN, MAX_JOINTS,
+    MAX_LIT, MAX_POSE_DIMS, MAX_SECTIONS, MAX_VERTICES, PREAMBLE_LEN, SECTION_ALIGN, SectionEntry,
+    SectionKind, VERSION, VERTEX_BLOCK, padded_vertices,
 };
 use super::source::{BlobSource, SliceSource, for_each_chunk};
 use super::{Dim, Error};
@@ -31,6 +31,7 @@ pub struct Model {
     pub(crate) pose_dims: usize,
     pub(crate) coef_dims: usize,
     pub(crate) basis: Basis,
+    pub(crate) frame: Frame,
     pub(crate) alpha: f32,
     pub(crate) pose_mean: Section,
     pub(crate) pose_projection: Section,
@@ -134,14 +135,31 @@ impl Model {
         };
         let n2 = coeff_count(order);
         let padded = padded_vertices(vertices);
+        let lead = match h.frame {
+            Frame::World => 0,
+            Frame::Bones { count } => {
+                let bones = dim(Dim::Bones, count as u64, 1, MAX_BONES as u64)?;
+                let width = match h.basis {
+                    Basis::Stored => coef_dims,
+                    Basis::Identity => n2 * (1 + pose_dims),
+                };
+                if bones * width > MAX_LIT {
+                    return Err(Error::BadDimension {
+                        what: Dim::Bones,
+                        value: bones as u64,
+                    });
+                }
+                1
+            }
+        };
         let expected_elems = |kind: SectionKind| -> Option<Result<u64, Error>> {
             Some(match (kind, h.basis) {
                 (SectionKind::PoseMean, _) => product(&[joints]),
                 (SectionKind::PoseProjection, _) => product(&[pose_dims, joints]),
                 (SectionKind::Weights, Basis::Stored) => product(&[n2, 1 + pose_dims, coef_dims]),
-                (SectionKind::VertexBasis, Basis::Stored) => product(&[padded, coef_dims]),
+                (SectionKind::VertexBasis, Basis::Stored) => product(&[padded, lead + coef_dims]),
                 (SectionKind::VertexWeights, Basis::Identity) => {
-                    product(&[padded, n2, 1 + pose_dims])
+                    product(&[padded, lead + n2 * (1 + pose_dims)])
                 }
                 _ => return None,
             })
@@ -199,19 +217,67 @@ impl Model {
             ),
             Basis::Identity => (None, need(SectionKind::VertexWeights)?),
         };
-        Ok(Model {
+        let model = Model {
             order,
             vertices,
             joints,
             pose_dims,
             coef_dims,
             basis: h.basis,
+            frame: h.frame,
             alpha: h.alpha,
             pose_mean: need(SectionKind::PoseMean)?,
             pose_projection: need(SectionKind::PoseProjection)?,
             weights,
             rows,
-        })
+        };
+        model.verify_bones(src, scratch)?;
+        Ok(model)
+    }
+
+    /// Checks every block's bone row: integers below the bone count.
+    fn verify_bones<S: BlobSource>(&self, src: &mut S, scratch: &mut [u8]) -> Result<(), Error> {
+        let Frame::Bones { count } = self.frame else {
+            return Ok(());
+        };
+        let size = self.rows.encoding.size();
+        let blocks = padded_vertices(self.vertices) / VERTEX_BLOCK;
+        let lead_bytes = VERTEX_BLOCK * size;
+        let mut ok = true;
+        for b in 0..blocks {
+            let offset = self.rows.offset + (b * self.block_bytes()) as u64;
+            for_each_chunk(src, offset, lead_bytes, 1, scratch, |_, bytes| {
+                for i in 0..VERTEX_BLOCK {
+                    let v = match self.rows.encoding {
+                        Encoding::F32 => f32::from_le_bytes([
+                            bytes[4 * i],
+                            bytes[4 * i + 1],
+                            bytes[4 * i + 2],
+                            bytes[4 * i + 3],
+                        ]),
+                        Encoding::F16 => {
+                            half::f16::from_le_bytes([bytes[2 * i], bytes[2 * i + 1]]).to_f32()
+                        }
+                    };
+                    ok &= v >= 0.0 && v < count as f32 && v == (v as u32) as f32;
+                }
+                Ok(())
+            })?;
+        }
+        if ok { Ok(()) } else { Err(Error::BadBoneIndex) }
+    }
+
+    /// The frame transfer is expressed in.
+    pub fn frame(&self) -> Frame {
+        self.frame
+    }
+
+    /// Extra leading rows per block: 1 (the bone indices) for bone-frame models, else 0.
+    pub(crate) fn lead_rows(&self) -> usize {
+        match self.frame {
+            Frame::World => 0,
+            Frame::Bones { .. } => 1,
+        }
     }
 
     /// SH order n.
@@ -253,7 +319,7 @@ impl Model {
 
     /// Bytes of one streamed block of [`VERTEX_BLOCK`] vertex rows, the unit of streaming.
     pub fn block_bytes(&self) -> usize {
-        VERTEX_BLOCK * self.row_width() * self.rows.encoding.size()
+        VERTEX_BLOCK * (self.lead_rows() + self.row_width()) * self.rows.encoding.size()
     }
 }
 

@@ -270,6 +270,7 @@ pub fn fit(
             None => VertexBasis::Identity,
         },
         alpha,
+        bones: None,
     };
     seconds.solve = clock.elapsed().as_secs_f64();
 
