@@ -179,7 +179,7 @@ fn all_finite(xs: &[f32]) -> bool {
 
 impl Model {
     /// Streams a section as rows of `width` values: `f(row index, row)`.
-    fn each_row<S: BlobSource>(
+    fn each_row<S: BlobSource + ?Sized>(
         &self,
         src: &mut S,
         s: Section,
@@ -228,7 +228,7 @@ impl Model {
     /// Computes the pose weights for joint angles `angles` (`joints()` values, radians as at
     /// training). `scratch` may be empty for a resident blob, else at least
     /// [`Model::scratch_bytes`].
-    pub fn set_pose<S: BlobSource>(
+    pub fn set_pose<S: BlobSource + ?Sized>(
         &self,
         src: &mut S,
         angles: &[f32],
@@ -383,7 +383,7 @@ impl Model {
     /// Streams the blocks holding vertices `first .. first + count` to
     /// `visit(first vertex of the block, bone lanes, row bytes)`; the bone lanes are all 0 for
     /// world-frame models.
-    fn each_block<S: BlobSource>(
+    fn each_block<S: BlobSource + ?Sized>(
         &self,
         src: &mut S,
         first: usize,
@@ -431,7 +431,7 @@ impl Model {
 
     /// The bone of each vertex `first .. first + out.len()` (all 0 for world-frame models),
     /// for engines that light [`Model::transfer`] output on the GPU.
-    pub fn vertex_bones<S: BlobSource>(
+    pub fn vertex_bones<S: BlobSource + ?Sized>(
         &self,
         src: &mut S,
         first: usize,
@@ -451,7 +451,7 @@ impl Model {
     /// lighting weights of [`Model::light`] or [`Model::light_skinned`]. Multiply by albedo / π
     /// for exit radiance.
     /// `scratch` may be empty for a resident blob, else at least [`Model::block_bytes`].
-    pub fn shade<S: BlobSource>(
+    pub fn shade<S: BlobSource + ?Sized>(
         &self,
         src: &mut S,
         lit: &LitWeights,
@@ -482,7 +482,7 @@ impl Model {
     /// product. Bone-frame models give transfer in each vertex's bone frame (see
     /// [`Model::vertex_bones`]): light it with that bone's rotated lighting.
     /// `scratch` as for [`Model::shade`].
-    pub fn transfer<S: BlobSource>(
+    pub fn transfer<S: BlobSource + ?Sized>(
         &self,
         src: &mut S,
         pose: &PoseWeights,
@@ -495,7 +495,7 @@ impl Model {
             return Err(Error::ShapeMismatch);
         }
         let n2 = coeff_count(self.order);
-        if out.len() % n2 != 0 {
+        if !out.len().is_multiple_of(n2) {
             return Err(Error::WrongLength {
                 expected: out.len() / n2 * n2,
                 found: out.len(),

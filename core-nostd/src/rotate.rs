@@ -22,7 +22,8 @@ pub struct ShRotation {
     weighted: [f32; MAX_NODES * MAX_COEFFS],
 }
 
-/// Nodes and weights of the n-point Gauss–Legendre rule on [−1, 1] (n ≤ [`MAX_ORDER`]), by
+/// Nodes and weights of the n-point Gauss–Legendre rule on [−1, 1] (into the first n slots of
+/// `nodes` and `weights`), by
 /// Newton's method on the Legendre recurrence, in f64.
 pub fn gauss_legendre(n: usize, nodes: &mut [f64], weights: &mut [f64]) {
     for i in 0..n.min(nodes.len()).min(weights.len()) {

@@ -293,28 +293,8 @@ mod tests {
     fn orthonormal_by_quadrature() {
         const NT: usize = 24;
         const NP: usize = 48;
-        // Gauss–Legendre nodes on [-1, 1] by Newton on P_NT.
-        let mut nodes = [0.0f64; NT];
-        let mut weights = [0.0f64; NT];
-        for i in 0..NT {
-            let mut t = (PI * (i as f64 + 0.75) / (NT as f64 + 0.5)).cos();
-            for _ in 0..100 {
-                let (mut p0, mut p1) = (1.0f64, t);
-                for k in 2..=NT {
-                    let p2 = ((2 * k - 1) as f64 * t * p1 - (k - 1) as f64 * p0) / k as f64;
-                    p0 = p1;
-                    p1 = p2;
-                }
-                let dp = NT as f64 * (t * p1 - p0) / (t * t - 1.0);
-                let dt = p1 / dp;
-                t -= dt;
-                if dt.abs() < 1e-15 {
-                    weights[i] = 2.0 / ((1.0 - t * t) * dp * dp);
-                    break;
-                }
-            }
-            nodes[i] = t;
-        }
+        let (mut nodes, mut weights) = ([0.0f64; NT], [0.0f64; NT]);
+        crate::rotate::gauss_legendre(NT, &mut nodes, &mut weights);
         let mut gram = [[0.0f64; MAX_COEFFS]; MAX_COEFFS];
         let mut y = [0.0f32; MAX_COEFFS];
         for (t, w) in nodes.iter().zip(weights) {
@@ -328,21 +308,17 @@ mod tests {
                 )
                 .unwrap();
                 let dw = w * 2.0 * PI / NP as f64;
-                for a in 0..MAX_COEFFS {
-                    for b in 0..MAX_COEFFS {
-                        gram[a][b] += dw * y[a] as f64 * y[b] as f64;
+                for (row, ya) in gram.iter_mut().zip(&y) {
+                    for (g, yb) in row.iter_mut().zip(&y) {
+                        *g += dw * *ya as f64 * *yb as f64;
                     }
                 }
             }
         }
-        for a in 0..MAX_COEFFS {
-            for b in 0..MAX_COEFFS {
+        for (a, row) in gram.iter().enumerate() {
+            for (b, g) in row.iter().enumerate() {
                 let expect = if a == b { 1.0 } else { 0.0 };
-                assert!(
-                    (gram[a][b] - expect).abs() < 2e-5,
-                    "<y{a}, y{b}> = {}",
-                    gram[a][b]
-                );
+                assert!((g - expect).abs() < 2e-5, "<y{a}, y{b}> = {g}");
             }
         }
     }

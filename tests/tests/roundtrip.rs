@@ -146,3 +146,81 @@ fn streaming_rejects_a_buffer_smaller_than_a_block() {
         .unwrap_err();
     assert_eq!(err, aprt_core::Error::BufferTooSmall { needed: 8 * 8 * 4 });
 }
+
+/// Bone-frame models: `transfer` gives bone-frame transfer equal to the trainer's reference,
+/// and `light_skinned` + `shade` equal world lighting rotated into each vertex's bone frame
+/// dotted with that transfer, for resident and streamed blobs alike.
+#[test]
+fn bone_frame_model_shades_with_per_bone_lighting() {
+    use aprt_core::rotate::ShRotation;
+    use aprt_trainer::BoneFrames;
+    for (order, kv) in [(3usize, Some(7usize)), (2, None)] {
+        let mut reference = random_model(order, 45, 6, 3, kv);
+        let bones = 4;
+        reference.bones = Some(BoneFrames {
+            count: bones,
+            vertex_bone: (0..45).map(|j| ((j * 7 / 5) % bones) as u16).collect(),
+        });
+        let blob = encode_model(&reference, Precision::F32).unwrap();
+        let model = Model::parse(&blob).unwrap();
+        let n2 = order * order;
+        let angles: Vec<f32> = noise(11, 6).iter().map(|&x| x as f32).collect();
+        let light: Vec<f32> = noise(12, n2).iter().map(|&x| x as f32).collect();
+        // Rotations about different axes per bone.
+        let rotations: Vec<[[f32; 3]; 3]> = (0..bones)
+            .map(|b| {
+                let (s, c) = (0.4 * b as f32 + 0.3).sin_cos();
+                match b % 2 {
+                    0 => [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]],
+                    _ => [[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]],
+                }
+            })
+            .collect();
+        let rotation = ShRotation::new(order).unwrap();
+        let expect = reference.predict(&angles.iter().map(|&x| x as f64).collect::<Vec<_>>());
+        for streamed in [false, true] {
+            let mut scratch = vec![0u8; if streamed { model.scratch_bytes() } else { 0 }];
+            let run = |src: &mut dyn BlobSource, scratch: &mut [u8]| {
+                let mut pose = PoseWeights::default();
+                let mut lit = LitWeights::default();
+                let (mut transfer, mut shading, mut bones_out) =
+                    (vec![0.0f32; 45 * n2], vec![0.0f32; 45], vec![0u16; 45]);
+                model.set_pose(src, &angles, scratch, &mut pose).unwrap();
+                assert_eq!(
+                    model.light(&pose, &light, &mut lit),
+                    Err(aprt_core::Error::FrameMismatch)
+                );
+                model
+                    .light_skinned(&pose, &light, &rotations, &rotation, &mut lit)
+                    .unwrap();
+                model
+                    .transfer(src, &pose, 0, &mut transfer, scratch)
+                    .unwrap();
+                model.shade(src, &lit, 0, &mut shading, scratch).unwrap();
+                model.vertex_bones(src, 0, &mut bones_out, scratch).unwrap();
+                (transfer, shading, bones_out)
+            };
+            let (transfer, shading, vertex_bones) = if streamed {
+                run(&mut Streamed::new(&blob), &mut scratch)
+            } else {
+                run(&mut SliceSource(&blob), &mut scratch)
+            };
+            assert_eq!(vertex_bones, reference.bones.as_ref().unwrap().vertex_bone);
+            for (got, want) in transfer.iter().zip(&expect) {
+                assert!((*got as f64 - want).abs() < 1e-5, "{got} vs {want}");
+            }
+            for j in 0..45 {
+                let r = rotations[vertex_bones[j] as usize];
+                let rt: [[f32; 3]; 3] = std::array::from_fn(|a| std::array::from_fn(|b| r[b][a]));
+                let mut local = vec![0.0f32; n2];
+                rotation.rotate(&rt, &light, &mut local).unwrap();
+                let want: f64 = (0..n2).map(|c| local[c] as f64 * expect[j * n2 + c]).sum();
+                assert!(
+                    (shading[j] as f64 - want).abs() < 1e-4,
+                    "vertex {j}: {} vs {want}",
+                    shading[j]
+                );
+            }
+        }
+    }
+}

@@ -43,10 +43,10 @@ pub struct DemoArgs {
     #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u8).range(1..=6))]
     pub order: u8,
     /// Directions per vertex for the ground-truth bakes.
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 128)]
     pub rays: usize,
-    /// Use every k-th frame of the clips (1 = all): a faster, coarser demo.
-    #[arg(long, default_value_t = 1)]
+    /// Use every k-th frame of the clips (1 = all 250 training frames; larger is faster).
+    #[arg(long, default_value_t = 2)]
     pub stride: usize,
 }
 

@@ -47,7 +47,7 @@ pub fn read_header(blob: &[u8]) -> Result<Header, Error> {
 }
 
 /// Returns the header and the byte offset where the header ends.
-fn header_from<S: BlobSource>(
+fn header_from<S: BlobSource + ?Sized>(
     src: &mut S,
     buf: &mut [u8; MAX_HEADER_LEN as usize],
 ) -> Result<(Header, u64), Error> {
@@ -113,7 +113,7 @@ impl Model {
     /// table, checksums and finiteness of every value. Section bytes are streamed through
     /// `scratch`; any size of at least 4 bytes works (larger reads fewer times). A resident
     /// source needs no scratch.
-    pub fn open<S: BlobSource>(src: &mut S, scratch: &mut [u8]) -> Result<Model, Error> {
+    pub fn open<S: BlobSource + ?Sized>(src: &mut S, scratch: &mut [u8]) -> Result<Model, Error> {
         let (h, header_end) = header_from(src, &mut [0u8; MAX_HEADER_LEN as usize])?;
         let order = dim(Dim::Order, h.order as u64, 1, MAX_ORDER as u64)?;
         let vertices = dim(Dim::Vertices, h.vertices as u64, 1, MAX_VERTICES as u64)?;
@@ -236,7 +236,11 @@ impl Model {
     }
 
     /// Checks every block's bone row: integers below the bone count.
-    fn verify_bones<S: BlobSource>(&self, src: &mut S, scratch: &mut [u8]) -> Result<(), Error> {
+    fn verify_bones<S: BlobSource + ?Sized>(
+        &self,
+        src: &mut S,
+        scratch: &mut [u8],
+    ) -> Result<(), Error> {
         let Frame::Bones { count } = self.frame else {
             return Ok(());
         };
@@ -350,7 +354,7 @@ fn check_no_overlap(
 }
 
 /// Checks a section's CRC and that every value is finite, streaming through `scratch`.
-fn verify<S: BlobSource>(
+fn verify<S: BlobSource + ?Sized>(
     src: &mut S,
     e: &SectionEntry,
     s: Section,

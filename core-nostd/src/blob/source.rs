@@ -52,7 +52,7 @@ impl BlobSource for SliceSource<'_> {
 /// chunks of whole items, as `(index of the chunk's first item, bytes)`. A resident source
 /// yields one chunk in place; otherwise chunks are read into `scratch`, which must hold at
 /// least one item.
-pub(crate) fn for_each_chunk<S: BlobSource>(
+pub(crate) fn for_each_chunk<S: BlobSource + ?Sized>(
     src: &mut S,
     offset: u64,
     item_bytes: usize,

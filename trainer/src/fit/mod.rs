@@ -324,7 +324,7 @@ fn validate(
     }
     let n2 = order * order;
     let len0 = transfers[0].len();
-    if len0 % n2 != 0 {
+    if !len0.is_multiple_of(n2) {
         return Err(FitError::TransferLength {
             pose: 0,
             len: len0,
