@@ -136,9 +136,9 @@ fn bake_clip(
     ))
 }
 
-/// Median seconds of `f` over a few calls.
+/// Median seconds of `f` over 31 calls (robust to a busy machine).
 fn median_seconds(mut f: impl FnMut()) -> f64 {
-    let mut samples: Vec<f64> = (0..7)
+    let mut samples: Vec<f64> = (0..31)
         .map(|_| {
             let t = Instant::now();
             f();
@@ -146,7 +146,7 @@ fn median_seconds(mut f: impl FnMut()) -> f64 {
         })
         .collect();
     samples.sort_by(f64::total_cmp);
-    samples[3]
+    samples[15]
 }
 
 /// Per-frame cost through aprt-core on one pose: (shade µs, transfer µs).
