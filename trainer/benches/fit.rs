@@ -1,103 +1,46 @@
-//! Fitting-stage benchmark on synthetic but realistically sized data: 250 poses, 24 joint
-//! angles, SH order 6 (36 coefficients), 12 000 vertices — the scale of the paper's Master Pai
-//! (11.5k vertices; fitting 73 s + PCA 324 s there).
+//! Fitting-stage benchmark on the built-in character at the paper's scale: 250 training
+//! poses, 23 joint angles, SH order 6 (36 coefficients), 13,022 vertices (Master Pai: 11.5k
+//! vertices; fitting 73 s + PCA 324 s in the paper).
 //!
-//! Transfer is smooth in the angles: a mean field, a linear response, a nonlinear (sinusoidal)
-//! response with decaying strength, and f32-level noise, all spread over 48 latent vertex
-//! fields. Run with `cargo bench -p aprt-trainer --bench fit`. Pose dimensions are chosen at
-//! 99.9 % of the angle variance; the table prints seconds per stage, the energy fraction the
-//! vertex basis captures, and the held-out error at the chosen α as a mean squared error per
-//! transfer value (within the span of the basis, so comparable across k_v).
+//! The transfer is baked with 32 rays per vertex (not timed: the fit's cost does not depend on
+//! the ray count) and expressed in each vertex's bone frame, as the demo fits it. Run with
+//! `cargo bench -p aprt-trainer --bench fit`. The table prints seconds per stage, the energy
+//! fraction the vertex basis captures, and the held-out error at the chosen α as a mean
+//! squared error per transfer value.
 
 use std::time::Instant;
 
-use aprt_trainer::{Alpha, CoefDims, Dims, FitOptions, fit};
+use aprt_trainer::{Alpha, BakeSettings, Character, CoefDims, Dims, FitOptions, bake_poses, fit};
 use nalgebra::DMatrix;
-use rayon::prelude::*;
 
-const POSES: usize = 250;
-const JOINTS: usize = 24;
 const ORDER: usize = 6;
-const VERTICES: usize = 12_000;
-const LATENT: usize = 48;
-
-/// SplitMix64 hash of a counter: uniform in [−0.5, 0.5).
-fn noise(counter: u64) -> f64 {
-    let mut z = counter
-        .wrapping_mul(0x9E37_79B9_7F4A_7C15)
-        .wrapping_add(0x1234_5678);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^= z >> 31;
-    (z >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-}
-
-/// Three clips of smooth motion; joint 5 never moves and joint 7 is a fixed mix of 1 and 2.
-fn angles() -> DMatrix<f64> {
-    DMatrix::from_fn(POSES, JOINTS, |i, j| {
-        let (clip, t) = (i / 84, (i % 84) as f64 / 30.0);
-        let phase = |k: usize| 6.0 * noise((clip * 100 + k) as u64 + 7);
-        match j {
-            5 => 0.2,
-            7 => 0.6 * (1.3 * t + phase(1)).sin() - 0.3 * (0.9 * t + phase(2)).sin(),
-            _ => {
-                let speed = 0.5 + 2.0 * (noise(j as u64) + 0.5);
-                (0.3 + 0.5 * (noise(j as u64 + 50) + 0.5)) * (speed * t + phase(j)).sin()
-            }
-        }
-    })
-}
-
-/// Per-pose latent weights: 1 (mean), 16 linear responses, 31 nonlinear ones decaying 1/k.
-fn latent_weights(angles: &DMatrix<f64>) -> DMatrix<f64> {
-    let mix = DMatrix::from_fn(JOINTS, LATENT, |j, k| {
-        noise((j * LATENT + k) as u64 + 1_000)
-    });
-    let projected = angles * mix;
-    DMatrix::from_fn(POSES, LATENT, |i, k| match k {
-        0 => 4.0,
-        1..=16 => projected[(i, k)],
-        _ => (2.0 * projected[(i, k)]).sin() * 1.5 / (k - 15) as f64,
-    })
-}
-
-/// `v × n²` vertex-major transfer per pose from latent fields smooth over the vertex index.
-fn transfers(weights: &DMatrix<f64>) -> Vec<Vec<f32>> {
-    let n2 = ORDER * ORDER;
-    let fields: Vec<Vec<f32>> = (0..LATENT)
-        .map(|k| {
-            (0..VERTICES * n2)
-                .map(|idx| {
-                    let (j, c) = ((idx / n2) as f64, (idx % n2) as u64);
-                    let freq = 0.001 * (1 + k) as f64;
-                    ((freq * j + noise(c * 31 + k as u64)).sin()
-                        * (1.0 + noise(c + 100 * k as u64))) as f32
-                })
-                .collect()
-        })
-        .collect();
-    (0..POSES)
-        .into_par_iter()
-        .map(|i| {
-            let mut t = vec![0f32; VERTICES * n2];
-            for (k, field) in fields.iter().enumerate() {
-                let w = weights[(i, k)] as f32;
-                t.iter_mut().zip(field).for_each(|(x, f)| *x += w * f);
-            }
-            for (idx, x) in t.iter_mut().enumerate() {
-                *x += 1e-3 * noise((i * VERTICES * n2 + idx) as u64) as f32;
-            }
-            t
-        })
-        .collect()
-}
 
 fn main() {
     let clock = Instant::now();
-    let angles = angles();
-    let transfers = transfers(&latent_weights(&angles));
+    let character = Character::builtin();
+    let clip = character.training_clip();
+    let meshes: Vec<_> = clip
+        .frames
+        .iter()
+        .map(|a| character.pose(a).expect("clip poses are valid"))
+        .collect();
+    let settings = BakeSettings {
+        order: ORDER,
+        rays: 32,
+        bounces: 0,
+        albedo: 0.0,
+    };
+    let world = bake_poses(&meshes, &settings, true).expect("the character bakes");
+    let transfers = aprt_trainer::demo::to_bone_frames(&character, &clip.frames, &world)
+        .expect("clip poses are valid");
+    let angles = DMatrix::from_fn(clip.frames.len(), character.joint_angle_count(), |i, j| {
+        clip.frames[i][j]
+    });
+    let vertices = character.bind_mesh().vertex_count();
     println!(
-        "data: {POSES} poses × {JOINTS} angles, order {ORDER}, {VERTICES} vertices ({:.1} s to generate, {} threads)",
+        "data: built-in character, {} poses × {} angles, order {ORDER}, {vertices} vertices ({:.1} s to bake, {} threads)",
+        angles.nrows(),
+        angles.ncols(),
         clock.elapsed().as_secs_f64(),
         rayon::current_num_threads()
     );
@@ -134,12 +77,12 @@ fn main() {
     );
     for (name, coef_dims, alpha) in configs {
         let options = FitOptions {
-            pose_dims: Dims::Variance(0.999),
+            pose_dims: Dims::All,
             coef_dims,
             alpha,
         };
         let clock = Instant::now();
-        let fit = fit(&angles, &transfers, ORDER, &options).expect("synthetic data is valid");
+        let fit = fit(&angles, &transfers, ORDER, &options).expect("baked data is valid");
         let total = clock.elapsed().as_secs_f64();
         let s = fit.report.seconds;
         let kv = fit.model.coef_dims();
@@ -166,7 +109,7 @@ fn main() {
             s.solve,
             total,
             fit.report.alpha,
-            best.map_or(f64::NAN, |b| b.cv_error) * kv as f64 / VERTICES as f64,
+            best.map_or(f64::NAN, |b| b.cv_error) * kv as f64 / vertices as f64,
         );
     }
 }

@@ -84,6 +84,34 @@ fn dominant_bones(character: &Character) -> BoneFrames {
     }
 }
 
+/// World-frame transfer of each pose re-expressed in each vertex's bone frame: the targets the
+/// demo fits.
+pub fn to_bone_frames(
+    character: &Character,
+    poses: &[Vec<f64>],
+    world: &[Vec<f32>],
+) -> Result<Vec<Vec<f32>>> {
+    let bones = dominant_bones(character);
+    let order = (world
+        .first()
+        .map_or(0, |t| t.len() / character.bind_mesh().vertex_count()) as f64)
+        .sqrt() as usize;
+    let rotation = ShRotation::new(order)?;
+    poses
+        .iter()
+        .zip(world)
+        .map(|(a, t)| {
+            Ok(change_frame(
+                &rotation,
+                t,
+                &bones,
+                &bone_rotations(character, a)?,
+                true,
+            ))
+        })
+        .collect()
+}
+
 /// Transfer moved between world and bone frames: into the bone frame (`Rᵀ`) or out of it.
 fn change_frame(
     rotation: &ShRotation,
@@ -262,12 +290,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     let to_world = |set: &Baked, frame: usize, t: &[f32]| {
         change_frame(&rotation, t, &bones, &set.rotations[frame], false)
     };
-    let train_local: Vec<Vec<f32>> = train
-        .transfer
-        .iter()
-        .enumerate()
-        .map(|(f, t)| change_frame(&rotation, t, &bones, &train.rotations[f], true))
-        .collect();
+    let train_local = to_bone_frames(&character, &train.angles, &train.transfer)?;
     let default = FitOptions::default();
     let configs: Vec<(&str, FitOptions, bool)> = vec![
         ("default: bone frame, LOSO α", default, true),
