@@ -31,7 +31,7 @@ fn main() {
         albedo: 0.0,
     };
     let world = bake_poses(&meshes, &settings, true).expect("the character bakes");
-    let transfers = aprt_trainer::demo::to_bone_frames(&character, &clip.frames, &world)
+    let transfers = aprt_trainer::bone_frames::to_bone_frames(&character, &clip.frames, &world)
         .expect("clip poses are valid");
     let angles = DMatrix::from_fn(clip.frames.len(), character.joint_angle_count(), |i, j| {
         clip.frames[i][j]

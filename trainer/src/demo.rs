@@ -10,15 +10,15 @@ use nalgebra::DMatrix;
 
 use crate::atomic::write_atomic;
 use crate::bake::{BakeSettings, bake_poses};
+use crate::bone_frames::{bone_rotations, change_frame, dominant_bones, to_bone_frames};
 use crate::character::{Character, Clip};
 use crate::cli::DemoArgs;
 use crate::evaluate::{mean_transfer, nearest_pose, relative_error, skinned_transfer};
 use crate::export::{Precision, encode_model};
 use crate::fit::{Alpha, CoefDims, Dims, FitOptions, fit};
 use crate::mesh::Mesh;
-use crate::model::BoneFrames;
 use crate::render::{Colormap, View, render_scalar, save_png_atomic, side_by_side};
-use crate::sh_rotate::{nearest_rotation, rotate_each, row_major};
+use crate::sh_rotate::row_major;
 use aprt_core::rotate::ShRotation;
 use aprt_core::{LitWeights, Model, PoseWeights, SliceSource};
 use glam::DMat3;
@@ -57,73 +57,6 @@ struct Baked {
     transfer: Vec<Vec<f32>>,
     /// Per frame, every bone's world rotation.
     rotations: Vec<Vec<DMat3>>,
-}
-
-/// Every bone's world rotation in a pose: the rotation part of its skinning matrix.
-fn bone_rotations(character: &Character, angles: &[f64]) -> Result<Vec<DMat3>> {
-    Ok(character
-        .joint_matrices(angles)?
-        .iter()
-        .map(|m| nearest_rotation(DMat3::from_mat4(m.as_dmat4())))
-        .collect())
-}
-
-/// Each vertex's bone: its most influential joint. Its transfer is learned in that frame.
-fn dominant_bones(character: &Character) -> BoneFrames {
-    let skin = character.skin();
-    let vertex_bone = (0..skin.vertex_count())
-        .map(|j| {
-            skin.influences(j)
-                .max_by(|a, b| a.1.total_cmp(&b.1))
-                .map_or(0, |(b, _)| b as u16)
-        })
-        .collect();
-    BoneFrames {
-        count: skin.joint_count(),
-        vertex_bone,
-    }
-}
-
-/// World-frame transfer of each pose re-expressed in each vertex's bone frame: the targets the
-/// demo fits.
-pub fn to_bone_frames(
-    character: &Character,
-    poses: &[Vec<f64>],
-    world: &[Vec<f32>],
-) -> Result<Vec<Vec<f32>>> {
-    let bones = dominant_bones(character);
-    let order = (world
-        .first()
-        .map_or(0, |t| t.len() / character.bind_mesh().vertex_count()) as f64)
-        .sqrt() as usize;
-    let rotation = ShRotation::new(order)?;
-    poses
-        .iter()
-        .zip(world)
-        .map(|(a, t)| {
-            Ok(change_frame(
-                &rotation,
-                t,
-                &bones,
-                &bone_rotations(character, a)?,
-                true,
-            ))
-        })
-        .collect()
-}
-
-/// Transfer moved between world and bone frames: into the bone frame (`Rᵀ`) or out of it.
-fn change_frame(
-    rotation: &ShRotation,
-    transfer: &[f32],
-    bones: &BoneFrames,
-    rotations: &[DMat3],
-    into_bone: bool,
-) -> Vec<f32> {
-    rotate_each(rotation, transfer, |j| {
-        let r = rotations[bones.vertex_bone[j] as usize];
-        if into_bone { r.transpose() } else { r }
-    })
 }
 
 fn bake_clip(
@@ -309,6 +242,15 @@ pub fn run(args: &DemoArgs) -> Result<()> {
                 pose_dims: Dims::All,
                 coef_dims: CoefDims::Full,
                 ..default
+            },
+            true,
+        ),
+        (
+            "full linear, least squares (α = 0)",
+            FitOptions {
+                pose_dims: Dims::All,
+                coef_dims: CoefDims::Full,
+                alpha: Alpha::Fixed(0.0),
             },
             true,
         ),

@@ -4,6 +4,7 @@
 pub mod angles;
 pub mod atomic;
 pub mod bake;
+pub mod bone_frames;
 pub mod character;
 pub mod cli;
 pub mod demo;
