@@ -35,29 +35,45 @@ pub fn dominant_bones(character: &Character) -> BoneFrames {
     }
 }
 
-/// World-frame transfer of each pose re-expressed in each vertex's bone frame: the targets the
-/// demo fits.
+/// World-frame transfer of each pose re-expressed in each vertex's bone frame: the targets a
+/// bone-frame model is fitted to.
 pub fn to_bone_frames(
     character: &Character,
     poses: &[Vec<f64>],
     world: &[Vec<f32>],
 ) -> Result<Vec<Vec<f32>>> {
+    change_frames(character, poses, world, true)
+}
+
+/// Bone-frame transfer of each pose (as a bone-frame model predicts it) back in world space.
+pub fn to_world_frames(
+    character: &Character,
+    poses: &[Vec<f64>],
+    local: &[Vec<f32>],
+) -> Result<Vec<Vec<f32>>> {
+    change_frames(character, poses, local, false)
+}
+
+fn change_frames(
+    character: &Character,
+    poses: &[Vec<f64>],
+    transfer: &[Vec<f32>],
+    into_bone: bool,
+) -> Result<Vec<Vec<f32>>> {
     let bones = dominant_bones(character);
-    let order = (world
-        .first()
-        .map_or(0, |t| t.len() / character.bind_mesh().vertex_count()) as f64)
-        .sqrt() as usize;
+    let vertices = character.bind_mesh().vertex_count();
+    let order = (transfer.first().map_or(0, |t| t.len() / vertices) as f64).sqrt() as usize;
     let rotation = ShRotation::new(order)?;
     poses
         .iter()
-        .zip(world)
+        .zip(transfer)
         .map(|(a, t)| {
             Ok(change_frame(
                 &rotation,
                 t,
                 &bones,
                 &bone_rotations(character, a)?,
-                true,
+                into_bone,
             ))
         })
         .collect()
@@ -75,31 +91,4 @@ pub fn change_frame(
         let r = rotations[bones.vertex_bone[j] as usize];
         if into_bone { r.transpose() } else { r }
     })
-}
-
-/// Bone-frame transfer of each pose (as a bone-frame model predicts it) back in world space.
-pub fn to_world_frames(
-    character: &Character,
-    poses: &[Vec<f64>],
-    local: &[Vec<f32>],
-) -> Result<Vec<Vec<f32>>> {
-    let bones = dominant_bones(character);
-    let order = (local
-        .first()
-        .map_or(0, |t| t.len() / character.bind_mesh().vertex_count()) as f64)
-        .sqrt() as usize;
-    let rotation = ShRotation::new(order)?;
-    poses
-        .iter()
-        .zip(local)
-        .map(|(a, t)| {
-            Ok(change_frame(
-                &rotation,
-                t,
-                &bones,
-                &bone_rotations(character, a)?,
-                false,
-            ))
-        })
-        .collect()
 }

@@ -52,7 +52,9 @@ fn default_model_beats_mean_and_nearest_baselines_on_novel_poses() {
         .map(|a| train_truth[nearest_pose(&train, a)].clone())
         .collect();
     let nearest_error = relative_error(&nearest, &test_truth);
-    eprintln!("novel `wave` poses: model {model_error:.3}, mean {mean_error:.3}, nearest {nearest_error:.3}");
+    eprintln!(
+        "novel `wave` poses: model {model_error:.3}, mean {mean_error:.3}, nearest {nearest_error:.3}"
+    );
     assert!(
         model_error < 0.7 * mean_error.min(nearest_error),
         "model {model_error:.3}, mean {mean_error:.3}, nearest {nearest_error:.3}"

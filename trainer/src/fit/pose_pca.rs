@@ -72,19 +72,11 @@ impl PosePca {
 mod tests {
     use super::*;
 
-    fn lcg_matrix(rows: usize, cols: usize, seed: u64) -> DMatrix<f64> {
-        let mut state = seed;
-        DMatrix::from_fn(rows, cols, |_, _| {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        })
-    }
+    use crate::fit::tests::uniform;
 
     #[test]
     fn constant_and_collinear_joints_are_cut_at_the_rank() {
-        let base = lcg_matrix(20, 3, 1);
+        let base = uniform(20, 3, 1);
         // Columns: 3 free, one constant, one collinear (2·a0 − a2 + 0.3).
         let angles = DMatrix::from_fn(20, 5, |i, j| match j {
             0..=2 => base[(i, j)],
@@ -110,7 +102,7 @@ mod tests {
 
     #[test]
     fn eigenvalues_are_sample_covariance_eigenvalues() {
-        let angles = lcg_matrix(30, 4, 7);
+        let angles = uniform(30, 4, 7);
         let pca = PosePca::fit(&angles, Dims::Count(2));
         let mut c = angles.clone();
         for j in 0..4 {
@@ -128,9 +120,9 @@ mod tests {
 
     #[test]
     fn more_angles_than_poses_and_single_pose() {
-        let angles = lcg_matrix(4, 10, 3);
+        let angles = uniform(4, 10, 3);
         assert_eq!(PosePca::fit(&angles, Dims::All).dims(), 3);
-        let one = lcg_matrix(1, 10, 3);
+        let one = uniform(1, 10, 3);
         let pca = PosePca::fit(&one, Dims::All);
         assert_eq!(pca.dims(), 0);
         assert_eq!(pca.project(&one).shape(), (1, 0));

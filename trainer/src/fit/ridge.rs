@@ -303,15 +303,7 @@ impl<'a> GramCv<'a> {
 mod tests {
     use super::*;
 
-    fn uniform(rows: usize, cols: usize, seed: u64) -> DMatrix<f64> {
-        let mut state = seed;
-        DMatrix::from_fn(rows, cols, |_, _| {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        })
-    }
+    use crate::fit::tests::uniform;
 
     /// Independent reference: normal equations of `[1 Z] β ≈ y` with penalty `diag(0, α² I)`,
     /// solved by LU. Returns (intercept, coefficients).

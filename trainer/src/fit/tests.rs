@@ -5,7 +5,8 @@ use nalgebra::{DMatrix, DVector};
 
 use super::*;
 
-fn uniform(rows: usize, cols: usize, seed: u64) -> DMatrix<f64> {
+/// Deterministic uniform values in [−0.5, 0.5) (an LCG), shared by the fit module tests.
+pub(crate) fn uniform(rows: usize, cols: usize, seed: u64) -> DMatrix<f64> {
     let mut state = seed;
     DMatrix::from_fn(rows, cols, |_, _| {
         state = state
