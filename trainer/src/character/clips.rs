@@ -38,42 +38,41 @@ impl SplitMix {
     }
 }
 
-/// Every angle is the midpoint of its limits plus a sum of three sinusoids with random
-/// (hence incommensurate) frequencies in 0.12–0.55 Hz and random phases, weighted 0.5/0.3/0.2
-/// so the sum stays within ±1. Angles therefore wander independently over their whole range,
-/// and no frequency is faster than ~55 frames per cycle, as smooth as real animation.
+/// Every angle follows its own smooth random walk through key values: keys every 12–20
+/// frames (a different period per angle), each a step of at most ±40 % of the range from the
+/// last, kept within `TRAINING_REACH` of the limits, joined by cosine ease (C¹, as smooth as
+/// keyframed animation).
+///
+/// Why not sums of slow sinusoids: motion band-limited to B Hz over T seconds spans only about
+/// 2·B·T dimensions, so 250 frames of 0.1–0.5 Hz waves left the pose matrix with about ten
+/// significant singular values out of 23; the fit then never saw the other directions and
+/// novel poses along them were extrapolated wildly. Independent key schedules per angle make
+/// the training poses span all 23 dimensions.
 pub(crate) fn training(angles: &[JointAngle]) -> Clip {
-    const AMPLITUDES: [f64; 3] = [0.5, 0.3, 0.2];
     let mut rng = SplitMix(0x0A9B_7C0D_E5F1_2345);
-    let waves: Vec<[(f64, f64); 3]> = angles
+    let tracks: Vec<Vec<f64>> = angles
         .iter()
-        .map(|_| {
-            std::array::from_fn(|_| {
-                let frequency = 0.12 + 0.43 * rng.next_unit();
-                let phase = std::f64::consts::TAU * rng.next_unit();
-                (frequency, phase)
-            })
-        })
-        .collect();
-    let frames = (0..TRAINING_FRAMES)
-        .map(|f| {
-            let t = f as f64 / FPS;
-            angles
-                .iter()
-                .zip(&waves)
-                .map(|(angle, waves)| {
-                    let sum: f64 = AMPLITUDES
-                        .iter()
-                        .zip(waves)
-                        .map(|(a, (frequency, phase))| {
-                            a * (std::f64::consts::TAU * frequency * t + phase).sin()
-                        })
-                        .sum();
-                    0.5 * (angle.min + angle.max)
-                        + TRAINING_REACH * 0.5 * (angle.max - angle.min) * sum
+        .map(|angle| {
+            let period = 12 + (rng.next_unit() * 9.0) as usize;
+            let (mid, half) = (0.5 * (angle.min + angle.max), 0.5 * (angle.max - angle.min));
+            let (lo, hi) = (mid - TRAINING_REACH * half, mid + TRAINING_REACH * half);
+            let mut key = mid + (2.0 * rng.next_unit() - 1.0) * TRAINING_REACH * half;
+            let mut keys = vec![key];
+            while (keys.len() - 1) * period < TRAINING_FRAMES + period {
+                key = (key + (2.0 * rng.next_unit() - 1.0) * 0.8 * half).clamp(lo, hi);
+                keys.push(key);
+            }
+            (0..TRAINING_FRAMES)
+                .map(|f| {
+                    let (k, s) = (f / period, (f % period) as f64 / period as f64);
+                    let ease = 0.5 - 0.5 * (std::f64::consts::PI * s).cos();
+                    keys[k] + (keys[k + 1] - keys[k]) * ease
                 })
                 .collect()
         })
+        .collect();
+    let frames = (0..TRAINING_FRAMES)
+        .map(|f| tracks.iter().map(|track| track[f]).collect())
         .collect();
     Clip {
         name: "training".into(),
