@@ -412,3 +412,12 @@ fn invalid_inputs_are_named() {
         }
     );
 }
+
+/// A flat spectrum (white noise) needs nearly every component for 99.99 % of the energy: the
+/// energy-fraction basis stops at the runtime's limit instead of outgrowing it.
+#[test]
+fn variance_fraction_stops_at_the_runtime_limit() {
+    let rows = uniform(160, 300, 77);
+    let fit = fit_vertex_basis(&rows, Dims::Variance(0.9999));
+    assert_eq!(fit.basis.ncols(), aprt_core::blob::MAX_COEF_DIMS);
+}
