@@ -5,9 +5,11 @@
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
+use aprt_core::rotate::ShRotation;
 use aprt_core::{LitWeights, Model, PoseWeights, SliceSource};
 use aprt_tests::{Streamed, noise, random_model};
-use aprt_trainer::{LinearModel, Precision, encode_model};
+use aprt_trainer::runtime::light as push_light;
+use aprt_trainer::{BoneFrames, LinearModel, Precision, encode_model};
 
 const VERTICES: usize = 11_500;
 const JOINTS: usize = 54;
@@ -52,12 +54,43 @@ fn main() {
         "{:<34} {:>10} {:>11} {:>10} {:>9} {:>13}",
         "model / step", "bytes", "µs/frame", "frames/s", "MFLOP", "× memcpy"
     );
-    for (name, ka, kv, precision) in [
-        ("PCA(8,22) f32", 8, Some(22), Precision::F32),
-        ("PCA(8,22) f16", 8, Some(22), Precision::F16),
-        ("full linear (k_a 8, no k_v) f32", 8, None, Precision::F32),
+    for (name, ka, kv, precision, bones) in [
+        ("PCA(8,22) f32", 8, Some(22), Precision::F32, 0),
+        ("PCA(8,22) f16", 8, Some(22), Precision::F16, 0),
+        (
+            "PCA(8,22) f32, 30 bone frames",
+            8,
+            Some(22),
+            Precision::F32,
+            30,
+        ),
+        (
+            "full linear (k_a 8, no k_v) f32",
+            8,
+            None,
+            Precision::F32,
+            0,
+        ),
     ] {
-        let blob = encode_model(&model(ka, kv), precision).unwrap();
+        let mut reference = model(ka, kv);
+        if bones > 0 {
+            // Contiguous runs of vertices per bone, as body parts are in real meshes.
+            let vertex_bone = (0..VERTICES)
+                .map(|j| (j * bones / VERTICES) as u16)
+                .collect();
+            reference.bones = Some(BoneFrames {
+                count: bones,
+                vertex_bone,
+            });
+        }
+        let rotations: Vec<[[f32; 3]; 3]> = (0..bones)
+            .map(|b| {
+                let (s, c) = (0.1 * b as f32).sin_cos();
+                [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
+            })
+            .collect();
+        let rotation = ShRotation::new(ORDER).unwrap();
+        let blob = encode_model(&reference, precision).unwrap();
         let m = Model::parse(&blob).unwrap();
         let row_bytes = m.block_bytes() * VERTICES.div_ceil(aprt_core::blob::VERTEX_BLOCK);
         let rows = &blob[blob.len() - row_bytes..];
@@ -74,7 +107,15 @@ fn main() {
         let shade = time(budget, || {
             m.set_pose(&mut src, black_box(&angles), &mut [], &mut pose)
                 .unwrap();
-            m.light(&pose, black_box(&light), &mut lit).unwrap();
+            push_light(
+                &m,
+                &pose,
+                black_box(&light),
+                &rotations,
+                &rotation,
+                &mut lit,
+            )
+            .unwrap();
             m.shade(&mut src, &lit, 0, &mut shading, &mut []).unwrap();
             black_box(&shading);
         });
@@ -83,7 +124,15 @@ fn main() {
         let shade_streamed = time(budget, || {
             m.set_pose(&mut streamed, black_box(&angles), &mut scratch, &mut pose)
                 .unwrap();
-            m.light(&pose, black_box(&light), &mut lit).unwrap();
+            push_light(
+                &m,
+                &pose,
+                black_box(&light),
+                &rotations,
+                &rotation,
+                &mut lit,
+            )
+            .unwrap();
             m.shade(&mut streamed, &lit, 0, &mut shading, &mut scratch)
                 .unwrap();
             black_box(&shading);
