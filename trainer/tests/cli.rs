@@ -14,6 +14,22 @@ fn aprt(args: &[&str]) -> std::process::Output {
         .expect("run aprt")
 }
 
+/// `aprt train` on an OBJ sequence and an angles file, with extra model options.
+fn train(seq: &Path, angles: &Path, model: &Path, options: &[&str]) -> std::process::Output {
+    let paths = [seq, angles, model].map(|p| p.to_str().unwrap().to_owned());
+    let mut args = vec![
+        "train",
+        "--obj-seq",
+        &paths[0],
+        "--angles",
+        &paths[1],
+        "-o",
+        &paths[2],
+    ];
+    args.extend_from_slice(options);
+    aprt(&args)
+}
+
 /// A floor quad and a box "arm" hinged above it, rotated by `angle` about the y axis: the
 /// arm's shadow on the floor moves with the angle.
 fn scene_obj(angle: f64) -> String {
@@ -89,21 +105,12 @@ fn train_inspect_eval_and_stream_agree() {
     let dir = tempfile::tempdir().unwrap();
     let (seq, angles) = setup(dir.path(), 9);
     let model_path = dir.path().join("m.aprt");
-    let out = aprt(&[
-        "train",
-        "--obj-seq",
-        seq.to_str().unwrap(),
-        "--angles",
-        angles.to_str().unwrap(),
-        "-o",
-        model_path.to_str().unwrap(),
-        "--order",
-        "3",
-        "--rays",
-        "64",
-        "--coef-dims",
-        "6",
-    ]);
+    let out = train(
+        &seq,
+        &angles,
+        &model_path,
+        &["--order", "3", "--rays", "64", "--coef-dims", "6"],
+    );
     assert!(
         out.status.success(),
         "{}",
@@ -208,21 +215,7 @@ fn bad_input_fails_clearly_and_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let (seq, angles) = setup(dir.path(), 4);
     let model_path = dir.path().join("m.aprt");
-    let train = |angles: &Path| {
-        aprt(&[
-            "train",
-            "--obj-seq",
-            seq.to_str().unwrap(),
-            "--angles",
-            angles.to_str().unwrap(),
-            "-o",
-            model_path.to_str().unwrap(),
-            "--order",
-            "2",
-            "--rays",
-            "16",
-        ])
-    };
+    let train = |angles: &Path| train(&seq, angles, &model_path, &["--order", "2", "--rays", "16"]);
     let check = |out: std::process::Output, needle: &str| {
         assert!(!out.status.success());
         let err = String::from_utf8_lossy(&out.stderr);
