@@ -17,7 +17,7 @@ use crate::blob::{
     Basis, BlobSource, Encoding, Error, Frame, MAX_COEF_DIMS, MAX_JOINTS, MAX_LIT, MAX_POSE_DIMS,
     Model, Section, VERTEX_BLOCK,
 };
-use crate::rotate::{ShRotation, is_rotation};
+use crate::rotate::{ShRotationMatrix, is_rotation};
 use crate::sh::{MAX_COEFFS, coeff_count};
 
 /// Longest per-vertex row: k_v (stored basis) or n²(1 + k_a) (identity basis).
@@ -295,14 +295,13 @@ impl Model {
     }
 
     /// For bone-frame models: rotates the world lighting into each bone's frame
-    /// (`rotations[b]`, the bone's world rotation, row-major) and pushes each through the
-    /// pose weights. `rotation` is the caller's [`ShRotation`] for this model's order.
+    /// (`rotations[b]`, the bone's world rotation, row-major) with the Ivanic–Ruedenberg
+    /// recurrences and pushes each through the pose weights.
     pub fn light_skinned(
         &self,
         pose: &PoseWeights,
         lighting: &[f32],
         rotations: &[[[f32; 3]; 3]],
-        rotation: &ShRotation,
         lit: &mut LitWeights,
     ) -> Result<(), Error> {
         let Frame::Bones { count } = self.frame else {
@@ -314,9 +313,6 @@ impl Model {
                 found: rotations.len(),
             });
         }
-        if rotation.order() != self.order {
-            return Err(Error::ShapeMismatch);
-        }
         self.check_lighting(pose, lighting)?;
         lit.shape = None;
         let width = self.row_width();
@@ -327,8 +323,8 @@ impl Model {
             }
             // Bone-frame lighting is the world lighting rotated by Rᵀ.
             let rt = core::array::from_fn(|i| core::array::from_fn(|j| r[j][i]));
-            rotation
-                .rotate(&rt, lighting, &mut local)
+            ShRotationMatrix::new(self.order, &rt)
+                .and_then(|m| m.apply(lighting, &mut local))
                 .map_err(|_| Error::ShapeMismatch)?;
             self.push(pose, &local[..lighting.len()], q);
         }

@@ -5,7 +5,6 @@
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
-use aprt_core::rotate::ShRotation;
 use aprt_core::{LitWeights, Model, PoseWeights, SliceSource};
 use aprt_tests::{Streamed, noise, random_model};
 use aprt_trainer::runtime::light as push_light;
@@ -89,7 +88,6 @@ fn main() {
                 [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
             })
             .collect();
-        let rotation = ShRotation::new(ORDER).unwrap();
         let blob = encode_model(&reference, precision).unwrap();
         let m = Model::parse(&blob).unwrap();
         let row_bytes = m.block_bytes() * VERTICES.div_ceil(aprt_core::blob::VERTEX_BLOCK);
@@ -107,15 +105,7 @@ fn main() {
         let shade = time(budget, || {
             m.set_pose(&mut src, black_box(&angles), &mut [], &mut pose)
                 .unwrap();
-            push_light(
-                &m,
-                &pose,
-                black_box(&light),
-                &rotations,
-                &rotation,
-                &mut lit,
-            )
-            .unwrap();
+            push_light(&m, &pose, black_box(&light), &rotations, &mut lit).unwrap();
             m.shade(&mut src, &lit, 0, &mut shading, &mut []).unwrap();
             black_box(&shading);
         });
@@ -124,15 +114,7 @@ fn main() {
         let shade_streamed = time(budget, || {
             m.set_pose(&mut streamed, black_box(&angles), &mut scratch, &mut pose)
                 .unwrap();
-            push_light(
-                &m,
-                &pose,
-                black_box(&light),
-                &rotations,
-                &rotation,
-                &mut lit,
-            )
-            .unwrap();
+            push_light(&m, &pose, black_box(&light), &rotations, &mut lit).unwrap();
             m.shade(&mut streamed, &lit, 0, &mut shading, &mut scratch)
                 .unwrap();
             black_box(&shading);

@@ -191,7 +191,7 @@ fn bone_frame_model_shades_with_per_bone_lighting() {
                     Err(aprt_core::Error::FrameMismatch)
                 );
                 model
-                    .light_skinned(&pose, &light, &rotations, &rotation, &mut lit)
+                    .light_skinned(&pose, &light, &rotations, &mut lit)
                     .unwrap();
                 model
                     .transfer(src, &pose, 0, &mut transfer, scratch)

@@ -118,7 +118,6 @@ fn time_core(
     lighting: &[f32],
 ) -> Result<(f64, f64)> {
     let model = Model::parse(blob)?;
-    let rotation = ShRotation::new(model.order())?;
     let a: Vec<f32> = angles.iter().map(|&x| x as f32).collect();
     let mut pose = PoseWeights::default();
     let mut lit = LitWeights::default();
@@ -130,7 +129,7 @@ fn time_core(
         result = result
             .and(model.set_pose(&mut src, &a, &mut [], &mut pose))
             .and(crate::runtime::light(
-                &model, &pose, lighting, rotations, &rotation, &mut lit,
+                &model, &pose, lighting, rotations, &mut lit,
             ))
             .and(model.shade(&mut src, &lit, 0, &mut shading, &mut []));
     });

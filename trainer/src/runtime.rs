@@ -2,7 +2,6 @@
 //! engine would run it, and a description of the blob for `aprt inspect`.
 
 use aprt_core::blob::{Basis, Encoding, Frame, SectionKind, read_header};
-use aprt_core::rotate::ShRotation;
 use aprt_core::{LitWeights, Model, PoseWeights, SliceSource};
 
 /// Per-vertex transfer (`v × n²`, vertex-major) for each pose, through `aprt-core`, in the
@@ -34,12 +33,11 @@ pub fn light(
     pose: &PoseWeights,
     lighting: &[f32],
     rotations: &[[[f32; 3]; 3]],
-    rotation: &ShRotation,
     lit: &mut LitWeights,
 ) -> Result<(), aprt_core::Error> {
     match model.frame() {
         Frame::World => model.light(pose, lighting, lit),
-        Frame::Bones { .. } => model.light_skinned(pose, lighting, rotations, rotation, lit),
+        Frame::Bones { .. } => model.light_skinned(pose, lighting, rotations, lit),
     }
 }
 
@@ -51,12 +49,11 @@ pub fn predict_shading(
     lighting: &[f32],
 ) -> Result<Vec<f32>, aprt_core::Error> {
     let model = Model::parse(blob)?;
-    let rotation = ShRotation::new(model.order()).map_err(|_| aprt_core::Error::ShapeMismatch)?;
     let angles: Vec<f32> = angles.iter().map(|&a| a as f32).collect();
     let mut pose = PoseWeights::default();
     model.set_pose(&mut SliceSource(blob), &angles, &mut [], &mut pose)?;
     let mut lit = LitWeights::default();
-    light(&model, &pose, lighting, rotations, &rotation, &mut lit)?;
+    light(&model, &pose, lighting, rotations, &mut lit)?;
     let mut out = vec![0.0f32; model.vertices()];
     model.shade(&mut SliceSource(blob), &lit, 0, &mut out, &mut [])?;
     Ok(out)
