@@ -37,6 +37,8 @@ struct Shape {
     pose_dims: usize,
     coef_dims: usize,
     basis: Basis,
+    /// Bone count matters too: lighting weights hold one vector per bone.
+    frame: Frame,
 }
 
 impl Shape {
@@ -46,6 +48,7 @@ impl Shape {
             pose_dims: m.pose_dims,
             coef_dims: m.coef_dims,
             basis: m.basis,
+            frame: m.frame,
         }
     }
 }

@@ -224,3 +224,35 @@ fn bone_frame_model_shades_with_per_bone_lighting() {
         }
     }
 }
+
+/// Weights computed for one model are refused by a model of another shape or frame, even when
+/// their dimensions agree: they would shade with another model's numbers.
+#[test]
+fn weights_of_another_model_are_refused() {
+    use aprt_trainer::BoneFrames;
+    let world = random_model(2, 16, 3, 2, Some(4));
+    let mut skinned = world.clone();
+    skinned.bones = Some(BoneFrames {
+        count: 2,
+        vertex_bone: vec![1; 16],
+    });
+    let (a, b) = (
+        encode_model(&world, Precision::F32).unwrap(),
+        encode_model(&skinned, Precision::F32).unwrap(),
+    );
+    let (ma, mb) = (Model::parse(&a).unwrap(), Model::parse(&b).unwrap());
+    let mut pose = PoseWeights::default();
+    ma.set_pose(&mut SliceSource(&a), &[0.1; 3], &mut [], &mut pose)
+        .unwrap();
+    let mut lit = LitWeights::default();
+    ma.light(&pose, &[1.0; 4], &mut lit).unwrap();
+    let mut out = [0.0f32; 16];
+    assert_eq!(
+        mb.shade(&mut SliceSource(&b), &lit, 0, &mut out, &mut []),
+        Err(aprt_core::Error::ShapeMismatch)
+    );
+    assert_eq!(
+        mb.transfer(&mut SliceSource(&b), &pose, 0, &mut [0.0; 64], &mut []),
+        Err(aprt_core::Error::ShapeMismatch)
+    );
+}
