@@ -10,7 +10,9 @@
 
 use std::time::Instant;
 
-use aprt_trainer::{Alpha, BakeSettings, Character, CoefDims, Dims, FitOptions, bake_poses, fit};
+use aprt_trainer::{
+    Alpha, BakeSettings, Character, CoefDims, Dims, FitOptions, Rig, bake_poses, fit,
+};
 use nalgebra::DMatrix;
 
 const ORDER: usize = 6;

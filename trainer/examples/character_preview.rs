@@ -7,7 +7,7 @@
 use std::path::PathBuf;
 
 use aprt_trainer::{
-    Character, Colormap, Mesh, View, lambert, render_scalar, save_png_atomic, side_by_side,
+    Character, Colormap, Mesh, Rig, View, lambert, render_scalar, save_png_atomic, side_by_side,
 };
 use glam::Vec3;
 

@@ -6,13 +6,13 @@ use anyhow::Result;
 use aprt_core::rotate::ShRotation;
 use glam::DMat3;
 
-use crate::character::Character;
 use crate::model::BoneFrames;
+use crate::rig::Rig;
 use crate::sh_rotate::{nearest_rotation, rotate_each};
 
 /// Every bone's world rotation in a pose: the rotation part of its skinning matrix.
-pub fn bone_rotations(character: &Character, angles: &[f64]) -> Result<Vec<DMat3>> {
-    Ok(character
+pub fn bone_rotations(rig: &dyn Rig, angles: &[f64]) -> Result<Vec<DMat3>> {
+    Ok(rig
         .joint_matrices(angles)?
         .iter()
         .map(|m| nearest_rotation(DMat3::from_mat4(m.as_dmat4())))
@@ -20,8 +20,8 @@ pub fn bone_rotations(character: &Character, angles: &[f64]) -> Result<Vec<DMat3
 }
 
 /// Each vertex's bone: its most influential joint. Its transfer is learned in that frame.
-pub fn dominant_bones(character: &Character) -> BoneFrames {
-    let skin = character.skin();
+pub fn dominant_bones(rig: &dyn Rig) -> BoneFrames {
+    let skin = rig.skin();
     let vertex_bone = (0..skin.vertex_count())
         .map(|j| {
             skin.influences(j)
@@ -38,30 +38,30 @@ pub fn dominant_bones(character: &Character) -> BoneFrames {
 /// World-frame transfer of each pose re-expressed in each vertex's bone frame: the targets a
 /// bone-frame model is fitted to.
 pub fn to_bone_frames(
-    character: &Character,
+    rig: &dyn Rig,
     poses: &[Vec<f64>],
     world: &[Vec<f32>],
 ) -> Result<Vec<Vec<f32>>> {
-    change_frames(character, poses, world, true)
+    change_frames(rig, poses, world, true)
 }
 
 /// Bone-frame transfer of each pose (as a bone-frame model predicts it) back in world space.
 pub fn to_world_frames(
-    character: &Character,
+    rig: &dyn Rig,
     poses: &[Vec<f64>],
     local: &[Vec<f32>],
 ) -> Result<Vec<Vec<f32>>> {
-    change_frames(character, poses, local, false)
+    change_frames(rig, poses, local, false)
 }
 
 fn change_frames(
-    character: &Character,
+    rig: &dyn Rig,
     poses: &[Vec<f64>],
     transfer: &[Vec<f32>],
     into_bone: bool,
 ) -> Result<Vec<Vec<f32>>> {
-    let bones = dominant_bones(character);
-    let vertices = character.bind_mesh().vertex_count();
+    let bones = dominant_bones(rig);
+    let vertices = rig.bind_mesh().vertex_count();
     let order = (transfer.first().map_or(0, |t| t.len() / vertices) as f64).sqrt() as usize;
     let rotation = ShRotation::new(order)?;
     poses
@@ -72,7 +72,7 @@ fn change_frames(
                 &rotation,
                 t,
                 &bones,
-                &bone_rotations(character, a)?,
+                &bone_rotations(rig, a)?,
                 into_bone,
             ))
         })

@@ -11,13 +11,14 @@ use nalgebra::DMatrix;
 use crate::atomic::write_atomic;
 use crate::bake::{BakeSettings, bake_poses};
 use crate::bone_frames::{bone_rotations, change_frame, dominant_bones, to_bone_frames};
-use crate::character::{Character, Clip};
+use crate::character::Character;
 use crate::cli::DemoArgs;
 use crate::evaluate::{mean_transfer, nearest_pose, relative_error, skinned_transfer};
 use crate::export::{Precision, encode_model};
 use crate::fit::{Alpha, CoefDims, Dims, FitOptions, fit};
 use crate::mesh::Mesh;
 use crate::render::{Colormap, View, render_scalar, save_png_atomic, side_by_side};
+use crate::rig::{Clip, Rig};
 use crate::sh_rotate::row_major;
 use aprt_core::rotate::ShRotation;
 use aprt_core::{LitWeights, Model, PoseWeights, SliceSource};
@@ -60,7 +61,7 @@ struct Baked {
 }
 
 fn bake_clip(
-    character: &Character,
+    rig: &dyn Rig,
     clip: &Clip,
     stride: usize,
     settings: &BakeSettings,
@@ -68,7 +69,7 @@ fn bake_clip(
     let angles: Vec<Vec<f64>> = clip.frames.iter().step_by(stride.max(1)).cloned().collect();
     let meshes = angles
         .iter()
-        .map(|a| character.pose(a))
+        .map(|a| rig.pose(a))
         .collect::<Result<Vec<_>, _>>()
         .with_context(|| format!("posing clip {}", clip.name))?;
     let start = Instant::now();
@@ -83,7 +84,7 @@ fn bake_clip(
     );
     let rotations = angles
         .iter()
-        .map(|a| bone_rotations(character, a))
+        .map(|a| bone_rotations(rig, a))
         .collect::<Result<Vec<_>>>()?;
     Ok((
         Baked {

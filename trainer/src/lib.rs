@@ -16,6 +16,7 @@ pub mod model;
 pub mod npy;
 pub mod obj;
 pub mod render;
+pub mod rig;
 pub mod runtime;
 pub mod sh_rotate;
 pub mod skin;
@@ -23,7 +24,7 @@ pub mod skin;
 pub use bake::{
     Accel, BakeError, BakeSettings, bake_pose, bake_pose_with, bake_poses, bake_vertices,
 };
-pub use character::{Character, CharacterError, Clip, JointAngle};
+pub use character::{Character, CharacterError, JointAngle};
 pub use export::{ExportError, Precision, encode_model};
 pub use fit::{Alpha, CoefDims, Dims, Fit, FitError, FitOptions, FitReport, fit};
 pub use mesh::Mesh;
@@ -32,4 +33,5 @@ pub use obj::{LineError, ObjError, read_obj};
 pub use render::{
     Colormap, RenderError, View, lambert, render_scalar, save_png_atomic, side_by_side,
 };
+pub use rig::{Clip, Rig};
 pub use skin::{Skin, SkinError, skin};

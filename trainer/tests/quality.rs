@@ -5,7 +5,9 @@
 use aprt_trainer::bone_frames::{dominant_bones, to_bone_frames, to_world_frames};
 use aprt_trainer::evaluate::{mean_transfer, nearest_pose, relative_error};
 use aprt_trainer::runtime::predict_transfer;
-use aprt_trainer::{BakeSettings, Character, FitOptions, Precision, bake_poses, encode_model, fit};
+use aprt_trainer::{
+    BakeSettings, Character, FitOptions, Precision, Rig, bake_poses, encode_model, fit,
+};
 use nalgebra::DMatrix;
 
 #[test]

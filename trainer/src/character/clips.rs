@@ -2,18 +2,7 @@
 //! space, and novel test clips with motions the training clip never performs.
 
 use super::JointAngle;
-
-/// A sequence of poses sampled at a fixed rate. Each frame has one value per joint angle, in
-/// the character's angle order, in radians.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Clip {
-    /// Name used to select the clip (`Character::clip`).
-    pub name: String,
-    /// Frames per second.
-    pub fps: f64,
-    /// The poses.
-    pub frames: Vec<Vec<f64>>,
-}
+use crate::rig::Clip;
 
 /// Frame rate of every built-in clip.
 const FPS: f64 = 30.0;

@@ -16,10 +16,9 @@ use std::ops::Range;
 
 use glam::Mat4;
 
-pub use clips::Clip;
-
 use crate::mesh::Mesh;
-use crate::skin::{Skin, SkinError, skin};
+use crate::rig::{Clip, Rig};
+use crate::skin::{Skin, SkinError};
 use skeleton::{Dof, Skeleton};
 
 /// Why a pose or clip request failed.
@@ -123,11 +122,6 @@ impl Character {
         &self.angles
     }
 
-    /// Names of the joint angles, in pose order.
-    pub fn angle_names(&self) -> Vec<&'static str> {
-        self.angles.iter().map(|a| a.name).collect()
-    }
-
     /// `(min, max)` of each joint angle, in pose order.
     pub fn limits(&self) -> Vec<(f64, f64)> {
         self.angles.iter().map(|a| (a.min, a.max)).collect()
@@ -136,16 +130,6 @@ impl Character {
     /// The bind pose: the angles for which `pose` returns the bind mesh.
     pub fn rest_pose(&self) -> Vec<f64> {
         self.angles.iter().map(|a| a.rest).collect()
-    }
-
-    /// The mesh in the bind pose.
-    pub fn bind_mesh(&self) -> &Mesh {
-        &self.bind
-    }
-
-    /// The per-vertex joint influences.
-    pub fn skin(&self) -> &Skin {
-        &self.skin
     }
 
     /// Skinning matrices (bind space → posed space) for each joint at `angles`.
@@ -164,11 +148,6 @@ impl Character {
             });
         }
         Ok(skeleton::joint_matrices(&self.skeleton, &self.dofs, angles))
-    }
-
-    /// The mesh posed at `angles` (forward kinematics, then linear blend skinning).
-    pub fn pose(&self, angles: &[f64]) -> Result<Mesh, CharacterError> {
-        Ok(skin(&self.bind, &self.skin, &self.joint_matrices(angles)?)?)
     }
 
     /// The training clip ("training", 250 frames at 30 fps) that spans the pose space.
@@ -204,6 +183,33 @@ impl Character {
     /// Names and triangle ranges of the closed parts the mesh is made of, in mesh order.
     pub fn parts(&self) -> impl Iterator<Item = (&'static str, Range<usize>)> + '_ {
         self.parts.iter().cloned()
+    }
+}
+
+/// The built-in character as a [`Rig`]: the typed methods above, behind the common interface.
+impl Rig for Character {
+    fn angle_names(&self) -> Vec<String> {
+        self.angles.iter().map(|a| a.name.to_owned()).collect()
+    }
+
+    fn bind_mesh(&self) -> &Mesh {
+        &self.bind
+    }
+
+    fn skin(&self) -> &Skin {
+        &self.skin
+    }
+
+    fn joint_matrices(&self, pose: &[f64]) -> anyhow::Result<Vec<Mat4>> {
+        Ok(Character::joint_matrices(self, pose)?)
+    }
+
+    fn clip_names(&self) -> Vec<String> {
+        Character::clip_names(self)
+    }
+
+    fn clip(&self, name: &str) -> anyhow::Result<Clip> {
+        Ok(Character::clip(self, name)?)
     }
 }
 

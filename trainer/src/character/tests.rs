@@ -190,7 +190,7 @@ fn character_angles_move_the_expected_side() {
 fn character_pose_rejects_bad_input() {
     let c = character();
     assert_eq!(
-        c.pose(&[0.0; 3]),
+        c.joint_matrices(&[0.0; 3]),
         Err(CharacterError::AngleCount {
             expected: c.joint_angle_count(),
             got: 3
@@ -199,7 +199,7 @@ fn character_pose_rejects_bad_input() {
     let mut angles = c.rest_pose();
     angles[4] = f64::NAN;
     assert!(matches!(
-        c.pose(&angles),
+        c.joint_matrices(&angles),
         Err(CharacterError::NonFiniteAngle { index: 4, .. })
     ));
 }

@@ -1,0 +1,53 @@
+//! What every training source provides: a skinned character driven by a pose vector, and
+//! named clips of pose vectors. The built-in character, glTF skins and BVH-driven mannequins
+//! all implement [`Rig`], so baking, fitting, bone frames and reports are written once.
+
+use anyhow::Result;
+use glam::Mat4;
+
+use crate::mesh::Mesh;
+use crate::skin::{Skin, skin};
+
+/// A sequence of poses sampled at a fixed rate. Each frame has one value per pose-vector
+/// entry, in the rig's [`Rig::angle_names`] order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Clip {
+    /// Name used to select the clip ([`Rig::clip`]).
+    pub name: String,
+    /// Frames per second.
+    pub fps: f64,
+    /// The poses.
+    pub frames: Vec<Vec<f64>>,
+}
+
+/// A skinned character posed by a vector of joint parameters.
+pub trait Rig: Sync {
+    /// Names of the pose vector's entries, in order (for example `l_elbow_flex` or
+    /// `LeftArm.y`); a model blob records the ones it was trained on.
+    fn angle_names(&self) -> Vec<String>;
+
+    /// The mesh in the bind pose, with its normals.
+    fn bind_mesh(&self) -> &Mesh;
+
+    /// Per-vertex joint influences over the joints [`Rig::joint_matrices`] returns.
+    fn skin(&self) -> &Skin;
+
+    /// Skinning matrices (bind space → posed space), one per joint, for a pose vector.
+    /// Errors name the entry that is wrong (count, NaN).
+    fn joint_matrices(&self, pose: &[f64]) -> Result<Vec<Mat4>>;
+
+    /// The mesh posed by linear blend skinning.
+    fn pose(&self, pose: &[f64]) -> Result<Mesh> {
+        Ok(skin(
+            self.bind_mesh(),
+            self.skin(),
+            &self.joint_matrices(pose)?,
+        )?)
+    }
+
+    /// Names of every clip [`Rig::clip`] accepts.
+    fn clip_names(&self) -> Vec<String>;
+
+    /// The clip called `name`; the error lists the names that exist.
+    fn clip(&self, name: &str) -> Result<Clip>;
+}
