@@ -70,5 +70,6 @@ pub fn random_model(
         },
         alpha: 0.5,
         bones: None,
+        angle_names: (0..joints).map(|i| format!("joint{i}")).collect(),
     }
 }

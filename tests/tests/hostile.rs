@@ -154,7 +154,8 @@ fn crafted_headers_get_the_right_error() {
         Err(Error::MissingSection { .. }) | Err(Error::TrailingBytes { .. })
     ));
 
-    // A newer writer's optional section is skipped; a required one is refused.
+    // A newer writer's optional section is skipped, but its checksum still counts; a required
+    // one is refused.
     let mut extended = blob.clone();
     extended.resize(extended.len().next_multiple_of(16), 0);
     let extra = SectionEntry {
@@ -163,11 +164,18 @@ fn crafted_headers_get_the_right_error() {
         encoding: 0,
         offset: extended.len() as u64,
         len: 16,
-        crc32: 0,
+        crc32: aprt_core::blob::crc32(&[7u8; 16]),
     };
     extended.extend_from_slice(&[7u8; 16]);
     let optional = with_header(&extended, |h| h.sections.push(extra).unwrap());
     exercise(&optional).unwrap();
+    let corrupt = with_header(&extended, |h| {
+        h.sections.push(SectionEntry { crc32: 0, ..extra }).unwrap()
+    });
+    assert_eq!(
+        Model::parse(&corrupt),
+        Err(Error::ChecksumMismatch { kind: 999 })
+    );
     let required = with_header(&extended, |h| {
         h.sections
             .push(SectionEntry {

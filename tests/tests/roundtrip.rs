@@ -53,6 +53,10 @@ fn evaluate<S: BlobSource>(
 fn check_model(reference: &LinearModel, precision: Precision, tolerance: f64) {
     let blob = encode_model(reference, precision).unwrap();
     let model = Model::parse(&blob).unwrap();
+    assert_eq!(
+        aprt_trainer::export::read_angle_names(&blob).as_deref(),
+        Some(&reference.angle_names[..])
+    );
     let n2 = reference.order * reference.order;
     let angles64 = noise(9, reference.joints);
     let angles: Vec<f32> = angles64.iter().map(|&x| x as f32).collect();

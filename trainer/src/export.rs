@@ -1,9 +1,9 @@
 //! Model blob writer: quantises a [`LinearModel`] into the layout of `aprt_core::blob`.
 
 use aprt_core::blob::{
-    Basis, Encoding, Frame, Header, MAGIC, MAX_BONES, MAX_COEF_DIMS, MAX_HEADER_LEN, MAX_JOINTS,
-    MAX_POSE_DIMS, MAX_SECTIONS, MAX_VERTICES, PREAMBLE_LEN, SectionEntry, SectionKind, VERSION,
-    VERTEX_BLOCK, align_up, crc32, padded_vertices,
+    ANGLE_NAMES_TAG, Basis, Encoding, Frame, Header, MAGIC, MAX_BONES, MAX_COEF_DIMS,
+    MAX_HEADER_LEN, MAX_JOINTS, MAX_POSE_DIMS, MAX_SECTIONS, MAX_VERTICES, PREAMBLE_LEN,
+    SectionEntry, SectionKind, VERSION, VERTEX_BLOCK, align_up, crc32, padded_vertices,
 };
 use aprt_core::sh::MAX_ORDER;
 
@@ -52,6 +52,12 @@ pub enum ExportError {
         expected: usize,
         /// Given count.
         found: usize,
+    },
+    /// The pose-entry names cannot be recorded.
+    #[error("angle names: {problem}")]
+    AngleNames {
+        /// What is wrong.
+        problem: String,
     },
 }
 
@@ -214,7 +220,61 @@ pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>
             Basis::Identity
         }
     };
-    assemble(model, basis, frame, &sections)
+    let mut table: Vec<SectionBytes> = sections
+        .into_iter()
+        .map(|(kind, encoding, bytes)| SectionBytes {
+            tag: kind as u16,
+            required: true,
+            encoding,
+            bytes,
+        })
+        .collect();
+    if !model.angle_names.is_empty() {
+        table.push(angle_names_section(&model.angle_names, a)?);
+    }
+    assemble(model, basis, frame, &table)
+}
+
+/// One section ready to lay out.
+struct SectionBytes {
+    tag: u16,
+    required: bool,
+    encoding: Encoding,
+    bytes: Vec<u8>,
+}
+
+/// The optional section of pose-entry names: one per line, so a name may not hold a newline.
+fn angle_names_section(names: &[String], joints: usize) -> Result<SectionBytes, ExportError> {
+    if names.len() != joints {
+        return Err(ExportError::AngleNames {
+            problem: format!("{} names for {joints} pose entries", names.len()),
+        });
+    }
+    if let Some(bad) = names.iter().find(|n| n.is_empty() || n.contains('\n')) {
+        return Err(ExportError::AngleNames {
+            problem: format!("{bad:?} is empty or holds a newline"),
+        });
+    }
+    let bytes = names
+        .iter()
+        .flat_map(|n| n.bytes().chain([b'\n']))
+        .collect();
+    Ok(SectionBytes {
+        tag: ANGLE_NAMES_TAG,
+        required: false,
+        encoding: Encoding::F32,
+        bytes,
+    })
+}
+
+/// The pose-entry names recorded in a blob, if it has them. The blob must already have been
+/// validated (its CRCs checked) by `Model::parse`.
+pub fn read_angle_names(blob: &[u8]) -> Option<Vec<String>> {
+    let header = aprt_core::blob::read_header(blob).ok()?;
+    let entry = header.sections.iter().find(|e| e.kind == ANGLE_NAMES_TAG)?;
+    let bytes = blob.get(entry.offset as usize..(entry.offset + entry.len) as usize)?;
+    let text = std::str::from_utf8(bytes).ok()?;
+    Some(text.lines().map(str::to_owned).collect())
 }
 
 /// Lays out preamble, header and aligned sections. The header holds the section offsets,
@@ -223,23 +283,23 @@ fn assemble(
     model: &LinearModel,
     basis: Basis,
     frame: Frame,
-    sections: &[(SectionKind, Encoding, Vec<u8>)],
+    sections: &[SectionBytes],
 ) -> Result<Vec<u8>, ExportError> {
     let mut header_len = 0usize;
     for _ in 0..8 {
         let mut table = heapless::Vec::<SectionEntry, MAX_SECTIONS>::new();
         let mut offset = align_up((PREAMBLE_LEN + header_len) as u64).unwrap_or(u64::MAX);
-        for (kind, encoding, bytes) in sections {
+        for section in sections {
             let entry = SectionEntry {
-                kind: *kind as u16,
-                required: true,
-                encoding: *encoding as u8,
+                kind: section.tag,
+                required: section.required,
+                encoding: section.encoding as u8,
                 offset,
-                len: bytes.len() as u64,
-                crc32: crc32(bytes),
+                len: section.bytes.len() as u64,
+                crc32: crc32(&section.bytes),
             };
             table.push(entry).expect("fewer sections than MAX_SECTIONS");
-            offset = align_up(offset + bytes.len() as u64).unwrap_or(u64::MAX);
+            offset = align_up(offset + section.bytes.len() as u64).unwrap_or(u64::MAX);
         }
         let header = Header {
             order: model.order as u8,
@@ -267,9 +327,9 @@ fn assemble(
         blob.extend_from_slice(&(header_len as u32).to_le_bytes());
         blob.extend_from_slice(&crc32(&encoded).to_le_bytes());
         blob.extend_from_slice(&encoded);
-        for (entry, (_, _, bytes)) in table.iter().zip(sections) {
+        for (entry, section) in table.iter().zip(sections) {
             blob.resize(entry.offset as usize, 0);
-            blob.extend_from_slice(bytes);
+            blob.extend_from_slice(&section.bytes);
         }
         return Ok(blob);
     }
@@ -294,6 +354,7 @@ mod tests {
             basis,
             alpha: 0.25,
             bones: None,
+            angle_names: Vec::new(),
         }
     }
 

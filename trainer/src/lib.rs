@@ -15,6 +15,7 @@ pub mod mesh;
 pub mod model;
 pub mod npy;
 pub mod obj;
+pub mod pose_layout;
 pub mod render;
 pub mod rig;
 pub mod runtime;

@@ -50,6 +50,9 @@ pub struct LinearModel {
     /// `None`: transfer in world space; otherwise in each vertex's bone frame, and
     /// [`LinearModel::predict`] gives bone-frame transfer.
     pub bones: Option<BoneFrames>,
+    /// Names of the `joints` pose entries, so tools can map a clip onto the model's pose
+    /// vector; empty when the source had none (an unnamed angle CSV).
+    pub angle_names: Vec<String>,
 }
 
 impl LinearModel {

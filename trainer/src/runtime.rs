@@ -1,7 +1,7 @@
 //! The trainer's view of a written model: evaluation through `aprt-core`, exactly as an
 //! engine would run it, and a description of the blob for `aprt inspect`.
 
-use aprt_core::blob::{Basis, Encoding, Frame, SectionKind, read_header};
+use aprt_core::blob::{ANGLE_NAMES_TAG, Basis, Encoding, Frame, SectionKind, read_header};
 use aprt_core::{LitWeights, Model, PoseWeights, SliceSource};
 
 /// Per-vertex transfer (`v × n²`, vertex-major) for each pose, through `aprt-core`, in the
@@ -97,6 +97,8 @@ pub struct BlobInfo {
     pub frame_prt_bytes: usize,
     /// The section table.
     pub sections: Vec<SectionInfo>,
+    /// Names of the pose entries, in pose-vector order (empty when the blob records none).
+    pub angle_names: Vec<String>,
 }
 
 /// Validates `blob` completely and describes it.
@@ -107,8 +109,11 @@ pub fn describe(blob: &[u8]) -> Result<BlobInfo, aprt_core::Error> {
         .sections
         .iter()
         .map(|e| SectionInfo {
-            kind: SectionKind::from_tag(e.kind)
-                .map_or(format!("unknown({})", e.kind), |k| format!("{k:?}")),
+            kind: match SectionKind::from_tag(e.kind) {
+                Some(k) => format!("{k:?}"),
+                None if e.kind == ANGLE_NAMES_TAG => "AngleNames".into(),
+                None => format!("unknown({})", e.kind),
+            },
             encoding: match Encoding::from_tag(e.encoding) {
                 Some(Encoding::F32) => "f32".into(),
                 Some(Encoding::F16) => "f16".into(),
@@ -133,6 +138,7 @@ pub fn describe(blob: &[u8]) -> Result<BlobInfo, aprt_core::Error> {
         bytes: blob.len(),
         frame_prt_bytes: model.vertices() * model.order() * model.order() * 4,
         sections,
+        angle_names: crate::export::read_angle_names(blob).unwrap_or_default(),
     })
 }
 
@@ -161,6 +167,9 @@ impl std::fmt::Display for BlobInfo {
             100.0 * self.bytes as f64 / self.frame_prt_bytes as f64,
             self.frame_prt_bytes
         )?;
+        if !self.angle_names.is_empty() {
+            writeln!(f, "  pose entries    {}", self.angle_names.join(" "))?;
+        }
         writeln!(f, "  sections:")?;
         for s in &self.sections {
             writeln!(

@@ -143,6 +143,12 @@ impl SectionKind {
     }
 }
 
+/// Tag of the optional section in which the trainer records the names of the pose entries
+/// (UTF-8, one name per `\n`-terminated line, `joints` lines), so tools can map a clip's joints
+/// onto the model's pose vector. The core checks its CRC and otherwise ignores it: an engine
+/// binds its skeleton to the pose vector once, offline.
+pub const ANGLE_NAMES_TAG: u16 = 6;
+
 /// One entry of the section table.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct SectionEntry {

@@ -174,10 +174,13 @@ impl Model {
                 if e.required {
                     return Err(Error::UnknownRequiredSection { kind: e.kind });
                 }
-                continue; // an optional section from a newer writer
+                // An optional section from a newer writer, or metadata for tools.
+                check_crc(src, e, scratch)?;
+                continue;
             };
             let Some(elems) = expected_elems(kind) else {
-                continue; // a known section that this basis does not use
+                check_crc(src, e, scratch)?; // a known section that this basis does not use
+                continue;
             };
             let encoding = Encoding::from_tag(e.encoding)
                 .filter(|enc| *enc == Encoding::F32 || kind.allows_f16())
@@ -349,6 +352,25 @@ fn check_no_overlap(
                 return Err(Error::SectionOverlap { kind: e.kind });
             }
         }
+    }
+    Ok(())
+}
+
+/// Checks the CRC of a section the reader does not interpret, so a flipped bit anywhere in a
+/// blob is caught, whatever the section.
+fn check_crc<S: BlobSource + ?Sized>(
+    src: &mut S,
+    e: &SectionEntry,
+    scratch: &mut [u8],
+) -> Result<(), Error> {
+    let len = usize::try_from(e.len).map_err(|_| Error::LengthOverflow)?;
+    let mut hasher = crc32fast::Hasher::new();
+    for_each_chunk(src, e.offset, 1, len, scratch, |_, bytes| {
+        hasher.update(bytes);
+        Ok(())
+    })?;
+    if hasher.finalize() != e.crc32 {
+        return Err(Error::ChecksumMismatch { kind: e.kind });
     }
     Ok(())
 }

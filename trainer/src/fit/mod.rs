@@ -271,6 +271,7 @@ pub fn fit(
         },
         alpha,
         bones: None,
+        angle_names: Vec::new(),
     };
     seconds.solve = clock.elapsed().as_secs_f64();
 
