@@ -7,7 +7,12 @@ use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
 
 use crate::atomic::write_atomic;
+use crate::bone_frames::bone_rotations;
+use crate::experiment::{bake_clip, fit_clip, predict_world};
 use crate::export::Precision;
+use crate::fit::fit;
+use crate::pose_layout::PoseLayout;
+use crate::source::{Poses, SourceArgs};
 
 /// Pose-driven precomputed radiance transfer for skinned characters.
 #[derive(Debug, Parser)]
@@ -25,9 +30,12 @@ pub enum Command {
     Demo(DemoArgs),
     /// Bake the static transfer of one OBJ mesh into a (vertices, n²) float32 .npy.
     Transfer(TransferArgs),
-    /// Train a model from an OBJ sequence and a joint-angle CSV.
+    /// Train a model on a character's clip, or on an OBJ sequence with a joint-angle CSV.
     Train(TrainArgs),
-    /// Predict transfer for joint angles through aprt-core into a (poses, vertices, n²) .npy.
+    /// Bake the ground-truth transfer of every frame into a (frames, vertices, n²) .npy.
+    Simulate(SimulateArgs),
+    /// Predict transfer through aprt-core into a (frames, vertices, n²) .npy, for a clip of the
+    /// model's character or rows of joint angles.
     Eval(EvalArgs),
     /// Validate a model blob and print its header, dimensions and section sizes.
     Inspect(InspectArgs),
@@ -109,15 +117,16 @@ pub struct FitArgs {
 /// `aprt train`.
 #[derive(Debug, Args)]
 pub struct TrainArgs {
-    /// Directory of OBJ files, one per pose, sorted by file name, all with the same vertices.
-    #[arg(long)]
-    pub obj_seq: PathBuf,
-    /// CSV with one row of joint angles per pose (a header row is allowed).
-    #[arg(long)]
-    pub angles: PathBuf,
+    /// The training poses.
+    #[command(flatten)]
+    pub source: SourceArgs,
     /// Output model file.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// For characters: learn transfer in world space instead of each vertex's bone frame
+    /// (bone frames generalise better; world frame needs no bone rotations at runtime).
+    #[arg(long)]
+    pub world_frame: bool,
     /// Simulation settings.
     #[command(flatten)]
     pub bake: BakeArgs,
@@ -126,15 +135,29 @@ pub struct TrainArgs {
     pub fit: FitArgs,
 }
 
+/// `aprt simulate`.
+#[derive(Debug, Args)]
+pub struct SimulateArgs {
+    /// The poses.
+    #[command(flatten)]
+    pub source: SourceArgs,
+    /// Simulation settings.
+    #[command(flatten)]
+    pub bake: BakeArgs,
+    /// Output .npy file, float32 (frames, vertices, n²).
+    #[arg(long)]
+    pub npy: PathBuf,
+}
+
 /// `aprt eval`.
 #[derive(Debug, Args)]
 pub struct EvalArgs {
     /// The model.
     pub model: PathBuf,
-    /// CSV with one row of joint angles per pose.
-    #[arg(long)]
-    pub angles: PathBuf,
-    /// Output .npy file, float32 (poses, vertices, n²).
+    /// The poses: a clip of the model's character, or --angles alone.
+    #[command(flatten)]
+    pub source: SourceArgs,
+    /// Output .npy file, float32 (frames, vertices, n²), world-frame transfer.
     #[arg(long)]
     pub npy: PathBuf,
 }
@@ -155,6 +178,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Demo(args) => crate::demo::run(&args),
         Command::Transfer(args) => transfer(&args),
         Command::Train(args) => train(&args),
+        Command::Simulate(args) => simulate(&args),
         Command::Eval(args) => eval(&args),
         Command::Inspect(args) => inspect(&args),
     }
@@ -185,22 +209,51 @@ fn eval(args: &EvalArgs) -> Result<()> {
     let blob = read_file(&args.model)?;
     let info = crate::runtime::describe(&blob)
         .with_context(|| format!("{}: invalid model", args.model.display()))?;
-    let poses = crate::angles::read_angles(&args.angles)?;
-    if let Some(row) = poses.first().filter(|r| r.len() != info.joints) {
-        bail!(
-            "{}: rows have {} angles, the model {} takes {}",
-            args.angles.display(),
-            row.len(),
-            args.model.display(),
-            info.joints
-        );
+    let model_name = args.model.display();
+    let transfer = if args.source.names_rig() {
+        let (rig, clip) = args.source.rig()?;
+        if info.angle_names.is_empty() {
+            bail!("{model_name} records no pose-entry names, so a clip cannot be mapped onto it; use --angles");
+        }
+        let layout = PoseLayout::from_names(&rig.angle_names(), &info.angle_names)
+            .with_context(|| format!("{model_name} does not fit this character"))?;
+        if rig.bind_mesh().vertex_count() != info.vertices {
+            bail!(
+                "{model_name} has {} vertices, the character has {}",
+                info.vertices,
+                rig.bind_mesh().vertex_count()
+            );
+        }
+        let angles: Vec<Vec<f64>> = clip.frames.iter().map(|p| layout.reduce(p)).collect();
+        let rotations = clip
+            .frames
+            .iter()
+            .map(|p| bone_rotations(rig.as_ref(), p))
+            .collect::<Result<Vec<_>>>()?;
+        predict_world(&blob, &angles, &rotations)
+    } else {
+        let Some(csv) = &args.source.angles else {
+            bail!("give the poses: --angles FILE, or a clip of the model's character");
+        };
+        let poses = crate::angles::read_angles(csv)?;
+        if let Some(row) = poses.first().filter(|r| r.len() != info.joints) {
+            bail!(
+                "{}: rows have {} angles, the model {model_name} takes {}",
+                csv.display(),
+                row.len(),
+                info.joints
+            );
+        }
+        if crate::runtime::bone_frames(&blob)?.is_some() {
+            bail!("{model_name} learns transfer in bone frames: give its character's clip (not --angles) so the bones' rotations are known");
+        }
+        predict_world(&blob, &poses, &[])
     }
-    let transfer = crate::runtime::predict_transfer(&blob, &poses)
-        .with_context(|| format!("evaluating {}", args.model.display()))?;
+    .with_context(|| format!("evaluating {model_name}"))?;
     let flat: Vec<f32> = transfer.concat();
     write_npy(
         &args.npy,
-        &[poses.len(), info.vertices, info.order * info.order],
+        &[transfer.len(), info.vertices, info.order * info.order],
         &flat,
     )
 }
@@ -256,65 +309,58 @@ fn transfer(args: &TransferArgs) -> Result<()> {
     write_npy(&args.npy, &[mesh.vertex_count(), n2], &transfer[0])
 }
 
-/// The OBJ files of a sequence directory, sorted by file name.
-fn obj_sequence(dir: &Path) -> Result<Vec<PathBuf>> {
-    let entries = std::fs::read_dir(dir)
-        .with_context(|| format!("cannot read directory {}", dir.display()))?;
-    let mut files = Vec::new();
-    for entry in entries {
-        let path = entry
-            .with_context(|| format!("cannot list {}", dir.display()))?
-            .path();
-        if path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
-        {
-            files.push(path);
-        }
-    }
-    files.sort();
-    if files.is_empty() {
-        bail!("{}: no .obj files", dir.display());
-    }
-    Ok(files)
+fn simulate(args: &SimulateArgs) -> Result<()> {
+    let settings = bake_settings(&args.bake);
+    let meshes = match args.source.poses()? {
+        Poses::Meshes { meshes, .. } => meshes,
+        Poses::Rig { rig, clip } => clip
+            .frames
+            .iter()
+            .map(|p| rig.pose(p))
+            .collect::<Result<Vec<_>>>()
+            .with_context(|| format!("posing clip {}", clip.name))?,
+    };
+    let transfer = crate::bake::bake_poses(&meshes, &settings, true)?;
+    let n2 = settings.order * settings.order;
+    write_npy(
+        &args.npy,
+        &[meshes.len(), meshes[0].vertex_count(), n2],
+        &transfer.concat(),
+    )
 }
 
 fn train(args: &TrainArgs) -> Result<()> {
     let options = args.fit.options()?;
-    let files = obj_sequence(&args.obj_seq)?;
-    let poses = crate::angles::read_angles(&args.angles)?;
-    if poses.len() != files.len() {
-        bail!(
-            "{} has {} rows of angles but {} holds {} OBJ files: one row per pose is needed",
-            args.angles.display(),
-            poses.len(),
-            args.obj_seq.display(),
-            files.len()
-        );
-    }
-    let mut meshes = Vec::with_capacity(files.len());
-    for file in &files {
-        let mesh = crate::obj::read_obj(file)?;
-        if let Some(first) = meshes.first() {
-            let first: &crate::Mesh = first;
-            if mesh.vertex_count() != first.vertex_count() || mesh.triangles != first.triangles {
-                bail!(
-                    "{}: {} vertices and {} triangles, but {} has {} and {}; every pose must share the same mesh",
-                    file.display(),
-                    mesh.vertex_count(),
-                    mesh.triangles.len(),
-                    files[0].display(),
-                    first.vertex_count(),
-                    first.triangles.len()
+    let settings = bake_settings(&args.bake);
+    let (fitted, poses) = match args.source.poses()? {
+        Poses::Meshes { meshes, angles } => {
+            let transfers = crate::bake::bake_poses(&meshes, &settings, true)?;
+            let a = nalgebra::DMatrix::from_fn(angles.len(), angles[0].len(), |i, j| angles[i][j]);
+            (fit(&a, &transfers, settings.order, &options)?, angles.len())
+        }
+        Poses::Rig { rig, clip } => {
+            let layout = PoseLayout::from_training(&rig.angle_names(), &clip.frames)
+                .with_context(|| format!("clip {}", clip.name))?;
+            if !layout.dropped().is_empty() {
+                eprintln!(
+                    "joints that never move in {} and are left out of the model: {}",
+                    clip.name,
+                    layout.dropped().join(", ")
                 );
             }
+            let frames = clip.frames.len();
+            let (baked, _) = bake_clip(rig.as_ref(), &layout, &clip.name, clip.frames, &settings)?;
+            let fitted = fit_clip(
+                rig.as_ref(),
+                &layout,
+                &baked,
+                settings.order,
+                &options,
+                !args.world_frame,
+            )?;
+            (fitted, frames)
         }
-        meshes.push(mesh);
-    }
-    let settings = bake_settings(&args.bake);
-    let transfers = crate::bake::bake_poses(&meshes, &settings, true)?;
-    let angles = nalgebra::DMatrix::from_fn(poses.len(), poses[0].len(), |i, j| poses[i][j]);
-    let fitted = crate::fit::fit(&angles, &transfers, settings.order, &options)?;
+    };
     let blob = crate::export::encode_model(&fitted.model, args.fit.precision)?;
     write_atomic(&args.output, &blob)
         .with_context(|| format!("cannot write {}", args.output.display()))?;
@@ -322,7 +368,7 @@ fn train(args: &TrainArgs) -> Result<()> {
     eprintln!(
         "wrote {}: {} poses, k_a {}, k_v {}, alpha {:.3e}, {} bytes",
         args.output.display(),
-        poses.len(),
+        poses,
         info.pose_dims,
         info.coef_dims,
         info.alpha,

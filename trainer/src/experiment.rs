@@ -81,10 +81,11 @@ pub fn bake_clip(
     ))
 }
 
-/// Transfer of every frame of `clip` moved into (or out of) each vertex's bone frame.
+/// Transfer of every frame moved into (or out of) each vertex's bone frame; `rotations` are
+/// each frame's bone rotations.
 fn change_frames(
-    clip: &BakedClip,
     transfer: &[Vec<f32>],
+    rotations: &[Vec<DMat3>],
     bones: &BoneFrames,
     into_bone: bool,
 ) -> Result<Vec<Vec<f32>>> {
@@ -93,7 +94,7 @@ fn change_frames(
     let rotation = ShRotation::new(order)?;
     Ok(transfer
         .iter()
-        .zip(&clip.rotations)
+        .zip(rotations)
         .map(|(t, r)| change_frame(&rotation, t, bones, r, into_bone))
         .collect())
 }
@@ -110,7 +111,7 @@ pub fn fit_clip(
 ) -> Result<Fit> {
     let bones = bone_frame.then(|| dominant_bones(rig));
     let targets = match &bones {
-        Some(b) => Cow::Owned(change_frames(train, &train.transfer, b, true)?),
+        Some(b) => Cow::Owned(change_frames(&train.transfer, &train.rotations, b, true)?),
         None => Cow::Borrowed(&train.transfer),
     };
     let a = layout.names().len();
@@ -121,15 +122,16 @@ pub fn fit_clip(
     Ok(fitted)
 }
 
-/// World-frame transfer a blob predicts for every frame of `clip`, through aprt-core.
+/// World-frame transfer a blob predicts through aprt-core for model pose vectors `angles`;
+/// `rotations` (each frame's bone rotations) are used when the model is in bone frames.
 pub fn predict_world(
     blob: &[u8],
-    clip: &BakedClip,
-    bones: Option<&BoneFrames>,
+    angles: &[Vec<f64>],
+    rotations: &[Vec<DMat3>],
 ) -> Result<Vec<Vec<f32>>> {
-    let raw = crate::runtime::predict_transfer(blob, &clip.angles)?;
-    match bones {
-        Some(b) => change_frames(clip, &raw, b, false),
+    let raw = crate::runtime::predict_transfer(blob, angles)?;
+    match crate::runtime::bone_frames(blob)? {
+        Some(b) => change_frames(&raw, rotations, &b, false),
         None => Ok(raw),
     }
 }
@@ -280,17 +282,12 @@ pub fn run(
         let blob = encode_model(&fitted.model, Precision::F32)
             .with_context(|| format!("writing {}", config.name))?;
         let model = Model::parse(&blob)?;
-        let bones = fitted.model.bones.as_ref();
-        let train_error = relative_error(&predict_world(&blob, train, bones)?, &train.transfer);
-        let test_errors = tests
-            .iter()
-            .map(|t| {
-                Ok(relative_error(
-                    &predict_world(&blob, t, bones)?,
-                    &t.transfer,
-                ))
-            })
-            .collect::<Result<Vec<_>>>()?;
+        let error = |clip: &BakedClip| -> Result<f64> {
+            let predicted = predict_world(&blob, &clip.angles, &clip.rotations)?;
+            Ok(relative_error(&predicted, &clip.transfer))
+        };
+        let train_error = error(train)?;
+        let test_errors = tests.iter().map(error).collect::<Result<Vec<_>>>()?;
         let rotations = if config.bone_frame {
             timing_clip.core_rotations(0)
         } else {

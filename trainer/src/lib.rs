@@ -23,6 +23,7 @@ pub mod rig;
 pub mod runtime;
 pub mod sh_rotate;
 pub mod skin;
+pub mod source;
 
 pub use bake::{
     Accel, BakeError, BakeSettings, bake_pose, bake_pose_with, bake_poses, bake_vertices,

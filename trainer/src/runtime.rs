@@ -4,6 +4,8 @@
 use aprt_core::blob::{ANGLE_NAMES_TAG, Basis, Encoding, Frame, SectionKind, read_header};
 use aprt_core::{LitWeights, Model, PoseWeights, SliceSource};
 
+use crate::model::BoneFrames;
+
 /// Per-vertex transfer (`v × n²`, vertex-major) for each pose, through `aprt-core`, in the
 /// model's frame (world, or each vertex's bone).
 pub fn predict_transfer(
@@ -23,6 +25,20 @@ pub fn predict_transfer(
             Ok(out)
         })
         .collect()
+}
+
+/// The bone of each vertex, for bone-frame models; `None` for world-frame models.
+pub fn bone_frames(blob: &[u8]) -> Result<Option<BoneFrames>, aprt_core::Error> {
+    let model = Model::parse(blob)?;
+    let Frame::Bones { count } = model.frame() else {
+        return Ok(None);
+    };
+    let mut vertex_bone = vec![0u16; model.vertices()];
+    model.vertex_bones(&mut SliceSource(blob), 0, &mut vertex_bone, &mut [])?;
+    Ok(Some(BoneFrames {
+        count: count as usize,
+        vertex_bone,
+    }))
 }
 
 /// Pushes world lighting through the pose weights, rotating it into each bone's frame first
