@@ -11,6 +11,7 @@ pub mod demo;
 pub mod evaluate;
 pub mod export;
 pub mod fit;
+pub mod gltf_rig;
 pub mod mesh;
 pub mod model;
 pub mod npy;
@@ -27,6 +28,7 @@ pub use bake::{
 pub use character::{Character, CharacterError, JointAngle};
 pub use export::{ExportError, Precision, encode_model};
 pub use fit::{Alpha, CoefDims, Dims, Fit, FitError, FitOptions, FitReport, fit};
+pub use gltf_rig::{GltfError, GltfRig, HeldChannel};
 pub use mesh::Mesh;
 pub use model::{BoneFrames, LinearModel, VertexBasis};
 pub use obj::{LineError, ObjError, read_obj};
