@@ -13,6 +13,7 @@ pub mod experiment;
 pub mod export;
 pub mod figures;
 pub mod fit;
+pub mod gltf_rig;
 pub mod mesh;
 pub mod model;
 pub mod npy;
@@ -33,6 +34,7 @@ pub use bake::{
 pub use character::{Character, CharacterError, JointAngle};
 pub use export::{ExportError, Precision, encode_model};
 pub use fit::{Alpha, CoefDims, Dims, Fit, FitError, FitOptions, FitReport, fit};
+pub use gltf_rig::{GltfError, GltfRig, HeldChannel};
 pub use mesh::Mesh;
 pub use model::{BoneFrames, LinearModel, VertexBasis};
 pub use obj::{LineError, ObjError, read_obj};
