@@ -185,16 +185,7 @@ fn eval(args: &EvalArgs) -> Result<()> {
     let blob = read_file(&args.model)?;
     let info = crate::runtime::describe(&blob)
         .with_context(|| format!("{}: invalid model", args.model.display()))?;
-    let poses = crate::angles::read_angles(&args.angles)?;
-    if let Some(row) = poses.first().filter(|r| r.len() != info.joints) {
-        bail!(
-            "{}: rows have {} angles, the model {} takes {}",
-            args.angles.display(),
-            row.len(),
-            args.model.display(),
-            info.joints
-        );
-    }
+    let poses = crate::angles::read_angles_for(&args.angles, info.joints)?;
     let transfer = crate::runtime::predict_transfer(&blob, &poses)
         .with_context(|| format!("evaluating {}", args.model.display()))?;
     let flat: Vec<f32> = transfer.concat();
