@@ -7,6 +7,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
 
 use crate::atomic::write_atomic;
+use crate::checkpoint::{Checkpoint, NamedMeshes};
 use crate::export::Precision;
 
 /// Pose-driven precomputed radiance transfer for skinned characters.
@@ -124,6 +125,13 @@ pub struct TrainArgs {
     /// Model shape.
     #[command(flatten)]
     pub fit: FitArgs,
+    /// Checkpoint directory: every baked pose is saved there until the model is written
+    /// (default: OUTPUT.bake beside the model).
+    #[arg(long)]
+    pub checkpoint: Option<PathBuf>,
+    /// Continue an interrupted bake from its checkpoint (same inputs and bake settings).
+    #[arg(long)]
+    pub resume: bool,
 }
 
 /// `aprt eval`.
@@ -303,12 +311,22 @@ fn train(args: &TrainArgs) -> Result<()> {
         meshes.push(mesh);
     }
     let settings = bake_settings(&args.bake);
-    let transfers = crate::bake::bake_poses(&meshes, &settings, true)?;
+    let checkpoint_dir = args
+        .checkpoint
+        .clone()
+        .unwrap_or_else(|| Checkpoint::default_dir(&args.output));
+    let mut source = NamedMeshes {
+        meshes: &meshes,
+        names: &files,
+    };
+    let mut checkpoint = Checkpoint::open(&checkpoint_dir, args.resume, &settings, &mut source)?;
+    let transfers = checkpoint.bake(&mut source, true)?;
     let angles = nalgebra::DMatrix::from_fn(poses.len(), poses[0].len(), |i, j| poses[i][j]);
     let fitted = crate::fit::fit(&angles, &transfers, settings.order, &options)?;
     let blob = crate::export::encode_model(&fitted.model, args.fit.precision)?;
     write_atomic(&args.output, &blob)
         .with_context(|| format!("cannot write {}", args.output.display()))?;
+    checkpoint.remove()?;
     let info = crate::runtime::describe(&blob)?;
     eprintln!(
         "wrote {}: {} poses, k_a {}, k_v {}, alpha {:.3e}, {} bytes",
