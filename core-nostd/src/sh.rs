@@ -72,13 +72,26 @@ fn check(order: usize, out_len: usize) -> Result<usize, ShError> {
     Ok(n2)
 }
 
+/// The unit vector along `dir`. Any finite non-zero `dir` is accepted: when the squared length
+/// would underflow into subnormals (components below ~1e-19, where it loses digits and the
+/// result is no longer unit length) or overflow (above ~1e19), the components are first
+/// divided by the largest one. The common case pays one extra comparison.
 fn normalise(dir: [f32; 3]) -> Result<[f32; 3], ShError> {
     let len2 = dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2];
-    if !len2.is_finite() || len2 <= 0.0 {
+    if len2.is_normal() {
+        let inv = 1.0 / math::sqrt(len2);
+        return Ok([dir[0] * inv, dir[1] * inv, dir[2] * inv]);
+    }
+    if !dir.iter().all(|x| x.is_finite()) {
         return Err(ShError::BadDirection);
     }
-    let inv = 1.0 / math::sqrt(len2);
-    Ok([dir[0] * inv, dir[1] * inv, dir[2] * inv])
+    let largest = dir.iter().fold(0.0f32, |m, x| m.max(x.abs()));
+    if largest == 0.0 {
+        return Err(ShError::BadDirection);
+    }
+    let d = dir.map(|x| x / largest);
+    let inv = 1.0 / math::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    Ok(d.map(|x| x * inv))
 }
 
 /// `K_l^m` for `0 ≤ m ≤ l < MAX_ORDER`, from the factorial ratio, in f64.
@@ -396,6 +409,96 @@ mod tests {
         assert_eq!(
             eval_basis(6, [0.0, 0.0, 1.0], &mut out[..35]),
             Err(ShError::OutputTooSmall)
+        );
+    }
+
+    /// Independent reference by the trigonometric definition in f64: `θ` from `acos z`, `φ`
+    /// from `atan2(y, x)`, `P_l^m` by the textbook recurrence in `cos θ` and `sin θ`.
+    fn trig_reference(order: usize, d: [f64; 3]) -> [f64; 36] {
+        let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let (theta, phi) = ((d[2] / len).clamp(-1.0, 1.0).acos(), d[1].atan2(d[0]));
+        let (ct, st) = (theta.cos(), theta.sin());
+        let mut out = [0.0f64; 36];
+        for m in 0..order {
+            let pmm = (1..=m).fold(1.0, |p, k| p * (2 * k - 1) as f64 * st);
+            let (mut p2, mut p1) = (0.0, pmm);
+            for l in m..order {
+                let p = match l - m {
+                    0 => pmm,
+                    1 => (2 * m + 1) as f64 * ct * pmm,
+                    _ => ((2 * l - 1) as f64 * ct * p1 - (l + m - 1) as f64 * p2) / (l - m) as f64,
+                };
+                if l > m {
+                    (p2, p1) = (p1, p);
+                }
+                let k = norm_f64(l, m);
+                if m == 0 {
+                    out[index(l, 0)] = k * p;
+                } else {
+                    let mf = m as f64;
+                    out[index(l, m as i32)] = 2f64.sqrt() * k * p * (mf * phi).cos();
+                    out[index(l, -(m as i32))] = 2f64.sqrt() * k * p * (mf * phi).sin();
+                }
+            }
+        }
+        out
+    }
+
+    /// Order 6 at the poles, along every axis, next to the poles and at extreme direction
+    /// lengths. Expected: the poles give exactly the zonal closed form `y_l0(±z) =
+    /// (±1)^l √((2l+1)/4π)` with every m ≠ 0 term exactly 0 (the Cartesian recurrence never
+    /// divides by sin θ nor calls atan2, so there is nothing to go NaN); elsewhere f32 agrees
+    /// with the f64 trigonometric definition to 2e-6 (coefficients are at most 0.93 at order
+    /// 6, so this is a few f32 ulps); and the length of `dir` never matters, from 1e-30 to
+    /// 1e30 (before the rescaling fix 1e-22 gave a vector of length 1.06 and 1e20 was refused).
+    #[test]
+    fn order_six_at_poles_axes_and_extreme_lengths() {
+        let mut out = [0.0f32; 36];
+        for sign in [1.0f32, -1.0] {
+            eval_basis(6, [0.0, 0.0, sign], &mut out).unwrap();
+            for l in 0..6 {
+                for m in -(l as i32)..=(l as i32) {
+                    let got = out[index(l, m)];
+                    if m == 0 {
+                        let want =
+                            sign.powi(l as i32) * ((2 * l + 1) as f32 / (4.0 * PI as f32)).sqrt();
+                        assert!(
+                            (got - want).abs() <= 2.0 * f32::EPSILON * want.abs(),
+                            "{l} {got} {want}"
+                        );
+                    } else {
+                        assert_eq!(got, 0.0, "pole {sign}, l {l} m {m}");
+                    }
+                }
+            }
+        }
+        let near = 1e-20f32;
+        let axes_and_poles = [
+            [1.0f32, 0.0, 0.0],
+            [-1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [near, 0.0, 1.0],
+            [0.0, -near, -1.0],
+            [1e-4, 1e-4, 1.0],
+            [-0.6, 0.0, 0.8],
+        ];
+        let scaled = [1e-30f32, 1e-22, 1e-19, 1e19, 1e20, 1e30]
+            .into_iter()
+            .flat_map(|s| [[0.3 * s, -0.5 * s, 0.8 * s], [0.0, 0.0, -s]]);
+        for d in axes_and_poles.into_iter().chain(scaled) {
+            eval_basis(6, d, &mut out).unwrap();
+            let want = trig_reference(6, d.map(f64::from));
+            for (c, (&a, b)) in out.iter().zip(want).enumerate() {
+                assert!(
+                    a.is_finite() && (a as f64 - b).abs() < 2e-6,
+                    "{d:?} c {c}: {a} vs {b}"
+                );
+            }
+        }
+        assert_eq!(
+            eval_basis(6, [f32::INFINITY, 0.0, 0.0], &mut out),
+            Err(ShError::BadDirection)
         );
     }
 

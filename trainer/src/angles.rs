@@ -39,6 +39,18 @@ pub enum AnglesError {
         /// Line of the first data row.
         first_row: usize,
     },
+    /// A row has a different number of cells than the model has joints.
+    #[error("{path}: row {row} has {found} angles, the model takes {expected}")]
+    Width {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number.
+        row: usize,
+        /// Cells found.
+        found: usize,
+        /// The model's joint count.
+        expected: usize,
+    },
     /// No data rows.
     #[error("{path}: no rows of joint angles")]
     Empty {
@@ -54,11 +66,26 @@ pub fn read_angles(path: &Path) -> Result<Vec<Vec<f64>>, AnglesError> {
         path: path.into(),
         source,
     })?;
-    parse_angles(path, &text)
+    parse_angles(path, &text, None)
 }
 
-/// Parses angles CSV text; `path` only names the source in errors.
-pub fn parse_angles(path: &Path, text: &str) -> Result<Vec<Vec<f64>>, AnglesError> {
+/// [`read_angles`] for a model of `joints` joints: a row of another width is an error naming
+/// that row.
+pub fn read_angles_for(path: &Path, joints: usize) -> Result<Vec<Vec<f64>>, AnglesError> {
+    let text = std::fs::read_to_string(path).map_err(|source| AnglesError::Read {
+        path: path.into(),
+        source,
+    })?;
+    parse_angles(path, &text, Some(joints))
+}
+
+/// Parses angles CSV text; `path` only names the source in errors. With `joints`, every row
+/// must have that many cells; without, as many as the first data row.
+pub fn parse_angles(
+    path: &Path,
+    text: &str,
+    joints: Option<usize>,
+) -> Result<Vec<Vec<f64>>, AnglesError> {
     let mut rows: Vec<Vec<f64>> = Vec::new();
     let mut first_row = 0;
     for (i, line) in text.lines().enumerate() {
@@ -85,6 +112,14 @@ pub fn parse_angles(path: &Path, text: &str) -> Result<Vec<Vec<f64>>, AnglesErro
                 Ok(_) => return Err(bad(format!("'{cell}' is not finite"))),
                 Err(_) => return Err(bad(format!("'{cell}' is not a number"))),
             }
+        }
+        if let Some(expected) = joints.filter(|&j| j != row.len()) {
+            return Err(AnglesError::Width {
+                path: path.into(),
+                row: i + 1,
+                found: row.len(),
+                expected,
+            });
         }
         if let Some(first) = rows.first() {
             if row.len() != first.len() {
@@ -116,6 +151,7 @@ mod tests {
         let rows = parse_angles(
             Path::new("a.csv"),
             "hip,knee\n# comment\n0.1, 0.2\n\n-1e-3,3\n",
+            Some(2),
         )
         .unwrap();
         assert_eq!(rows, vec![vec![0.1, 0.2], vec![-1e-3, 3.0]]);
@@ -123,18 +159,22 @@ mod tests {
 
     #[test]
     fn errors_name_row_and_column() {
-        let err = parse_angles(Path::new("a.csv"), "0,1\n2,x\n")
+        let err = parse_angles(Path::new("a.csv"), "0,1\n2,x\n", None)
             .unwrap_err()
             .to_string();
         assert_eq!(err, "a.csv: row 2, column 2: 'x' is not a number");
-        let err = parse_angles(Path::new("a.csv"), "0,1\n2,NaN\n")
+        let err = parse_angles(Path::new("a.csv"), "0,1\n2,NaN\n", None)
             .unwrap_err()
             .to_string();
         assert_eq!(err, "a.csv: row 2, column 2: 'NaN' is not finite");
-        let err = parse_angles(Path::new("a.csv"), "0,1\n2\n")
+        let err = parse_angles(Path::new("a.csv"), "0,1\n2\n", None)
             .unwrap_err()
             .to_string();
         assert_eq!(err, "a.csv: row 2 has 1 values, row 1 has 2");
-        assert!(parse_angles(Path::new("a.csv"), "a,b\n").is_err());
+        assert!(parse_angles(Path::new("a.csv"), "a,b\n", None).is_err());
+        let err = parse_angles(Path::new("a.csv"), "a,b\n0,1\n", Some(3))
+            .unwrap_err()
+            .to_string();
+        assert_eq!(err, "a.csv: row 2 has 2 angles, the model takes 3");
     }
 }

@@ -8,7 +8,8 @@ use clap::{Args, Parser, Subcommand};
 
 use crate::atomic::write_atomic;
 use crate::bone_frames::bone_rotations;
-use crate::experiment::{bake_clip, fit_clip, predict_world};
+use crate::checkpoint::{Checkpoint, NamedMeshes};
+use crate::experiment::{BakedClip, fit_clip, pose_all, predict_world};
 use crate::export::Precision;
 use crate::fit::fit;
 use crate::pose_layout::PoseLayout;
@@ -133,6 +134,13 @@ pub struct TrainArgs {
     /// Model shape.
     #[command(flatten)]
     pub fit: FitArgs,
+    /// Checkpoint directory: every baked pose is saved there until the model is written
+    /// (default: OUTPUT.bake beside the model).
+    #[arg(long)]
+    pub checkpoint: Option<PathBuf>,
+    /// Continue an interrupted bake from its checkpoint (same inputs and bake settings).
+    #[arg(long)]
+    pub resume: bool,
 }
 
 /// `aprt simulate`.
@@ -235,15 +243,7 @@ fn eval(args: &EvalArgs) -> Result<()> {
         let Some(csv) = &args.source.angles else {
             bail!("give the poses: --angles FILE, or a clip of the model's character");
         };
-        let poses = crate::angles::read_angles(csv)?;
-        if let Some(row) = poses.first().filter(|r| r.len() != info.joints) {
-            bail!(
-                "{}: rows have {} angles, the model {model_name} takes {}",
-                csv.display(),
-                row.len(),
-                info.joints
-            );
-        }
+        let poses = crate::angles::read_angles_for(csv, info.joints)?;
         if crate::runtime::bone_frames(&blob)?.is_some() {
             bail!("{model_name} learns transfer in bone frames: give its character's clip (not --angles) so the bones' rotations are known");
         }
@@ -332,11 +332,26 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
 fn train(args: &TrainArgs) -> Result<()> {
     let options = args.fit.options()?;
     let settings = bake_settings(&args.bake);
-    let (fitted, poses) = match args.source.poses()? {
-        Poses::Meshes { meshes, angles } => {
-            let transfers = crate::bake::bake_poses(&meshes, &settings, true)?;
+    let checkpoint_dir = args
+        .checkpoint
+        .clone()
+        .unwrap_or_else(|| Checkpoint::default_dir(&args.output));
+    let (fitted, checkpoint, poses) = match args.source.poses()? {
+        Poses::Meshes {
+            files,
+            meshes,
+            angles,
+        } => {
+            let mut source = NamedMeshes {
+                meshes: &meshes,
+                names: &files,
+            };
+            let mut checkpoint =
+                Checkpoint::open(&checkpoint_dir, args.resume, &settings, &mut source)?;
+            let transfers = checkpoint.bake(&mut source, true)?;
             let a = nalgebra::DMatrix::from_fn(angles.len(), angles[0].len(), |i, j| angles[i][j]);
-            (fit(&a, &transfers, settings.order, &options)?, angles.len())
+            let fitted = fit(&a, &transfers, settings.order, &options)?;
+            (fitted, checkpoint, angles.len())
         }
         Poses::Rig { rig, clip } => {
             let layout = PoseLayout::from_training(&rig.angle_names(), &clip.frames)
@@ -348,8 +363,19 @@ fn train(args: &TrainArgs) -> Result<()> {
                     layout.dropped().join(", ")
                 );
             }
+            let mut meshes = pose_all(rig.as_ref(), &clip.name, &clip.frames)?;
+            let mut checkpoint =
+                Checkpoint::open(&checkpoint_dir, args.resume, &settings, &mut meshes[..])?;
+            let transfer = checkpoint.bake(&mut meshes[..], true)?;
             let frames = clip.frames.len();
-            let (baked, _) = bake_clip(rig.as_ref(), &layout, &clip.name, clip.frames, &settings)?;
+            let baked = BakedClip::new(
+                rig.as_ref(),
+                &layout,
+                &clip.name,
+                clip.frames,
+                meshes,
+                transfer,
+            )?;
             let fitted = fit_clip(
                 rig.as_ref(),
                 &layout,
@@ -358,12 +384,13 @@ fn train(args: &TrainArgs) -> Result<()> {
                 &options,
                 !args.world_frame,
             )?;
-            (fitted, frames)
+            (fitted, checkpoint, frames)
         }
     };
     let blob = crate::export::encode_model(&fitted.model, args.fit.precision)?;
     write_atomic(&args.output, &blob)
         .with_context(|| format!("cannot write {}", args.output.display()))?;
+    checkpoint.remove()?;
     let info = crate::runtime::describe(&blob)?;
     eprintln!(
         "wrote {}: {} poses, k_a {}, k_v {}, alpha {:.3e}, {} bytes",

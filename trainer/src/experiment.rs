@@ -39,13 +39,6 @@ pub struct BakedClip {
     pub rotations: Vec<Vec<DMat3>>,
 }
 
-impl BakedClip {
-    /// Frame `f`'s bone rotations as aprt-core takes them (row-major f32).
-    pub fn core_rotations(&self, f: usize) -> Vec<[[f32; 3]; 3]> {
-        self.rotations[f].iter().map(|r| row_major(*r)).collect()
-    }
-}
-
 /// Poses and bakes `poses` of `rig`; returns the clip and the bake's seconds per frame.
 pub fn bake_clip(
     rig: &dyn Rig,
@@ -54,31 +47,55 @@ pub fn bake_clip(
     poses: Vec<Vec<f64>>,
     settings: &BakeSettings,
 ) -> Result<(BakedClip, f64)> {
-    let meshes = poses
-        .iter()
-        .map(|p| rig.pose(p))
-        .collect::<Result<Vec<_>>>()
-        .with_context(|| format!("posing clip {name}"))?;
+    let meshes = pose_all(rig, name, &poses)?;
     let start = Instant::now();
     let transfer =
         bake_poses(&meshes, settings, true).with_context(|| format!("baking clip {name}"))?;
     let per_frame = start.elapsed().as_secs_f64() / poses.len().max(1) as f64;
     eprintln!("  {name}: {} frames, {per_frame:.2} s/frame", poses.len());
-    let rotations = poses
-        .iter()
-        .map(|p| bone_rotations(rig, p))
-        .collect::<Result<Vec<_>>>()?;
     Ok((
-        BakedClip {
+        BakedClip::new(rig, layout, name, poses, meshes, transfer)?,
+        per_frame,
+    ))
+}
+
+/// Every pose of a clip skinned.
+pub fn pose_all(rig: &dyn Rig, name: &str, poses: &[Vec<f64>]) -> Result<Vec<Mesh>> {
+    poses
+        .iter()
+        .map(|p| rig.pose(p))
+        .collect::<Result<Vec<_>>>()
+        .with_context(|| format!("posing clip {name}"))
+}
+
+impl BakedClip {
+    /// A clip whose meshes were baked elsewhere (for example through a checkpoint).
+    pub fn new(
+        rig: &dyn Rig,
+        layout: &PoseLayout,
+        name: &str,
+        poses: Vec<Vec<f64>>,
+        meshes: Vec<Mesh>,
+        transfer: Vec<Vec<f32>>,
+    ) -> Result<BakedClip> {
+        let rotations = poses
+            .iter()
+            .map(|p| bone_rotations(rig, p))
+            .collect::<Result<Vec<_>>>()?;
+        Ok(BakedClip {
             name: name.to_owned(),
             angles: poses.iter().map(|p| layout.reduce(p)).collect(),
             poses,
             meshes,
             transfer,
             rotations,
-        },
-        per_frame,
-    ))
+        })
+    }
+
+    /// Frame `f`'s bone rotations as aprt-core takes them (row-major f32).
+    pub fn core_rotations(&self, f: usize) -> Vec<[[f32; 3]; 3]> {
+        self.rotations[f].iter().map(|r| row_major(*r)).collect()
+    }
 }
 
 /// Transfer of every frame moved into (or out of) each vertex's bone frame; `rotations` are

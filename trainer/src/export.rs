@@ -16,7 +16,10 @@ pub enum Precision {
     /// 4 bytes per value.
     #[default]
     F32,
-    /// 2 bytes per value, about 3 significant digits.
+    /// 2 bytes per value, about 3 significant digits: IEEE half, rounded to nearest, so the
+    /// stored value is within 2⁻¹¹ relative of the f64 one above 6.1e-5 and within 2⁻²⁵ ≈ 3e-8
+    /// absolute below (subnormals; smaller values become 0). Values beyond ±65504 are refused
+    /// with [`ExportError::NotRepresentable`], never clamped.
     F16,
 }
 
@@ -34,7 +37,9 @@ pub enum ExportError {
         max: usize,
     },
     /// A value is NaN or infinite, or overflows the chosen precision.
-    #[error("section {section:?}: value {value} at index {index} is not representable")]
+    #[error(
+        "section {section:?}: value {value} at index {index} is not representable (NaN, infinite, or beyond the precision's range: ±3.4e38 for f32, ±65504 for f16)"
+    )]
     NotRepresentable {
         /// The section.
         section: SectionKind,

@@ -6,6 +6,7 @@ pub mod atomic;
 pub mod bake;
 pub mod bone_frames;
 pub mod character;
+pub mod checkpoint;
 pub mod cli;
 pub mod demo;
 pub mod evaluate;

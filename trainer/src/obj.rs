@@ -415,6 +415,22 @@ mod tests {
         );
     }
 
+    /// Zero-length normals. Expected: `vn 0 0 0` names no direction, so it contributes nothing
+    /// to its vertices' average; a vertex whose only normals are zero (or cancel out, `+z` and
+    /// `−z`) falls back to the area-weighted geometric normal instead of becoming NaN.
+    #[test]
+    fn zero_length_and_cancelling_normals_fall_back_to_geometry() {
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvn 0 0 0\nvn 0 0 1\nvn 0 0 -1\n\
+                    f 1//1 2//1 3//2\nf 2//2 4//1 3//3\n";
+        let mesh = parse(text).unwrap();
+        let geometric = area_weighted_normals(&mesh.positions, &mesh.triangles);
+        assert_eq!(mesh.normals[0], geometric[0]);
+        assert_eq!(mesh.normals[1], [0.0, 0.0, 1.0]);
+        assert_eq!(mesh.normals[2], geometric[2]);
+        assert_eq!(mesh.normals[3], geometric[3]);
+        assert!(mesh.normals.iter().flatten().all(|x| x.is_finite()));
+    }
+
     #[test]
     fn empty_files_are_rejected() {
         assert!(matches!(

@@ -32,7 +32,9 @@ pub struct SourceArgs {
 pub enum Poses {
     /// Meshes read from files, with one row of angles each.
     Meshes {
-        /// The meshes, in file-name order.
+        /// The files, sorted by name.
+        files: Vec<PathBuf>,
+        /// The meshes, in file order.
         meshes: Vec<Mesh>,
         /// One row of joint angles per mesh.
         angles: Vec<Vec<f64>>,
@@ -93,6 +95,7 @@ impl SourceArgs {
         }
         Ok(Poses::Meshes {
             meshes: read_same_meshes(&files)?,
+            files,
             angles,
         })
     }

@@ -185,17 +185,7 @@ pub fn bake_poses(
 ) -> Result<Vec<Vec<f32>>, BakeError> {
     settings.validate()?;
     let total: usize = meshes.iter().map(Mesh::vertex_count).sum();
-    let bar = if progress {
-        let bar = ProgressBar::new(total as u64);
-        if let Ok(style) = ProgressStyle::with_template(
-            "baking {msg} [{elapsed_precise}] {wide_bar} {pos}/{len} vertices ({eta} left)",
-        ) {
-            bar.set_style(style);
-        }
-        bar
-    } else {
-        ProgressBar::hidden()
-    };
+    let bar = progress_bar(total, progress);
     let mut out = Vec::with_capacity(meshes.len());
     for (p, mesh) in meshes.iter().enumerate() {
         bar.set_message(format!("pose {}/{}", p + 1, meshes.len()));
@@ -203,6 +193,33 @@ pub fn bake_poses(
     }
     bar.finish_and_clear();
     Ok(out)
+}
+
+/// A progress bar over `vertices` vertices on stderr, or a hidden one when `visible` is false.
+/// Shared by [`bake_poses`] and the pose-by-pose bakes (checkpointing) so every long bake
+/// reports its progress the same way.
+pub fn progress_bar(vertices: usize, visible: bool) -> ProgressBar {
+    if !visible {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(vertices as u64);
+    if let Ok(style) = ProgressStyle::with_template(
+        "baking {msg} [{elapsed_precise}] {wide_bar} {pos}/{len} vertices ({eta} left)",
+    ) {
+        bar.set_style(style);
+    }
+    bar
+}
+
+/// [`bake_pose`] advancing a caller's progress bar by one per vertex, for callers that bake
+/// poses one at a time (checkpointing) yet show one bar over all of them. Bit-identical to
+/// [`bake_pose`] and to the same pose in [`bake_poses`].
+pub fn bake_pose_progress(
+    mesh: &Mesh,
+    settings: &BakeSettings,
+    bar: &ProgressBar,
+) -> Result<Vec<f32>, BakeError> {
+    bake_pose_inner(mesh, settings, Accel::default(), bar)
 }
 
 /// Direct (shadowed, no bounce) transfer of the vertices in `vertices` only, vertex-major like

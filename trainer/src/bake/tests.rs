@@ -538,3 +538,170 @@ fn invalid_input_gives_typed_errors() {
         Err(BakeError::BouncesNeedWholeMesh)
     );
 }
+
+/// A closed cube `[-h, h]³` centred at `c`, each face a 3 × 3 vertex grid wound outward
+/// (faces do not share vertices, but their edges coincide exactly).
+fn cube(c: DVec3, h: f64) -> Vec<Part> {
+    let s = [0.0, 0.5, 1.0];
+    let w = 2.0 * h;
+    let lo = c - DVec3::splat(h);
+    let (x, y, z) = (DVec3::X * w, DVec3::Y * w, DVec3::Z * w);
+    [
+        (lo + z, x, y),
+        (lo, y, x),
+        (lo + x, y, z),
+        (lo, z, y),
+        (lo + y, z, x),
+        (lo, x, z),
+    ]
+    .into_iter()
+    .map(|(o, du, dv)| quad_grid(o, du, dv, &s, &s))
+    .collect()
+}
+
+/// A vertex inside closed geometry. Expected: every ray hits the cube, so every coefficient
+/// is exactly 0.0 (not merely small), with every ray structure and with bounces too (the
+/// inside of an outward-wound cube is back-facing, and back faces reflect nothing).
+#[test]
+fn vertex_inside_a_closed_cube_has_exactly_zero_transfer() {
+    let mut mesh = merge(&cube(DVec3::ZERO, 1.0));
+    let inside = mesh.vertex_count();
+    mesh.positions.push([0.1, -0.2, 0.3]);
+    mesh.normals.push([0.3, 0.4, 0.5]);
+    for accel in [Accel::CwBvh, Accel::Bvh2, Accel::BruteForce] {
+        for bounces in [0, 2] {
+            let s = BakeSettings {
+                bounces,
+                albedo: 0.9,
+                ..settings(6, 512)
+            };
+            let t = bake_pose_with(&mesh, &s, accel).unwrap();
+            assert!(
+                t[inside * 36..].iter().all(|&x| x == 0.0),
+                "{accel:?} {bounces}: {:?}",
+                &t[inside * 36..inside * 36 + 4]
+            );
+        }
+    }
+}
+
+/// The first vertices of [`cube_over_floor`]: the cube's top face, open to the sky.
+const TOP_FACE: usize = 9;
+
+/// A cube above a floor: real occlusion (the floor under the cube, the cube's sides and
+/// bottom) and convex vertices that must see no self-hit (the top face).
+fn cube_over_floor(scale: f64, shift: f64) -> Mesh {
+    let d = DVec3::splat(shift);
+    let mut parts = cube(DVec3::new(0.0, 0.0, 1.5) + d, 1.0);
+    let floor = steps(-3.0, 3.0, 6);
+    parts.push(quad_grid(d, DVec3::X, DVec3::Y, &floor, &floor));
+    let mut mesh = merge(&parts);
+    for p in &mut mesh.positions {
+        *p = p.map(|x| (f64::from(x) * scale) as f32);
+    }
+    mesh.normals = crate::mesh::area_weighted_normals(&mesh.positions, &mesh.triangles);
+    mesh
+}
+
+/// Transfer is scale invariant. Expected: scaling by a power of two changes no rounding
+/// anywhere (positions, normals, the bbox-relative self-hit offset and t_min, every
+/// intersection product scale exactly), so the bake is bit-identical from 2⁻¹⁰ to 2¹³;
+/// decimal scales from 1e-3 to 1e4 round the positions differently, which can flip rays that
+/// graze an edge, so they agree to within one or two rays' weight (π/N per ray, |y_c| ≤ 1).
+/// The 9 vertices of the cube's top face (corners, edges, centre) see nothing but sky and must
+/// see no self-hit at any scale: their DC term is exactly the unoccluded π·y₀₀, which shows
+/// the offset grows with the model.
+#[test]
+fn the_same_mesh_at_any_scale_bakes_to_the_same_transfer() {
+    let s = settings(3, 256);
+    let reference = bake_pose(&cube_over_floor(1.0, 0.0), &s).unwrap();
+    for k in [-10, -3, 5, 13] {
+        let scaled = bake_pose(&cube_over_floor(2f64.powi(k), 0.0), &s).unwrap();
+        assert!(scaled == reference, "2^{k}");
+    }
+    let ray = PI / 256.0;
+    for scale in [1e-3, 1e-2, 0.1, 10.0, 1e2, 1e3, 1e4] {
+        let t = bake_pose(&cube_over_floor(scale, 0.0), &s).unwrap();
+        let worst = t
+            .iter()
+            .zip(&reference)
+            .map(|(a, b)| f64::from((a - b).abs()))
+            .fold(0.0, f64::max);
+        let self_hit = (0..TOP_FACE)
+            .filter(|&j| (dc(&t, 9, j) - PI * Y00).abs() > 1e-6)
+            .count();
+        eprintln!(
+            "scale {scale:e}: max |Δt| {worst:.2e} = {:.2} rays, {self_hit} top-face vertices self-shadowed",
+            worst / ray
+        );
+        assert!(worst <= 2.0 * ray, "scale {scale}: {worst}");
+        assert_eq!(self_hit, 0, "scale {scale}");
+    }
+}
+
+/// Far from the origin. Expected: f32 positions far from the origin are coarse (ulp(10⁴) ≈
+/// 10⁻³ is about the self-hit offset of this 9-unit scene), so the origin offset can round
+/// away; the bbox-relative `T_MIN` still ignores the ray's own surface, and a scene whose
+/// coordinates stay representable bakes exactly as at home, with no self-shadowing.
+#[test]
+fn a_mesh_far_from_the_origin_bakes_as_at_the_origin() {
+    let s = settings(3, 256);
+    let reference = bake_pose(&cube_over_floor(1.0, 0.0), &s).unwrap();
+    for shift in [1e2, 1e3, 1e4, 1e5] {
+        let t = bake_pose(&cube_over_floor(1.0, shift), &s).unwrap();
+        let worst = t
+            .iter()
+            .zip(&reference)
+            .map(|(a, b)| f64::from((a - b).abs()))
+            .fold(0.0, f64::max);
+        let self_hit = (0..TOP_FACE)
+            .filter(|&j| (dc(&t, 9, j) - PI * Y00).abs() > 1e-6)
+            .count();
+        eprintln!(
+            "shift {shift:e}: max |Δt| {worst:.2e}, {self_hit} top-face vertices self-shadowed"
+        );
+        assert_eq!(self_hit, 0, "shift {shift}");
+    }
+}
+
+/// Nearly coincident vertices and sliver triangles. Expected: a floor whose two triangles use
+/// vertices one f32 ulp apart, and a sliver (1 × 1e-6) hanging over it, bake to finite values;
+/// the floor sees an occluder of about 1e-6 sr, so its DC term loses at most one of 1024 rays
+/// (π·y₀₀/1024 ≈ 8.7e-4); the near-duplicate vertices get the same transfer up to that ray.
+#[test]
+fn near_duplicate_vertices_and_slivers_bake_to_finite_plausible_transfer() {
+    let next = f32::from_bits(1.0f32.to_bits() + 1);
+    let mesh = Mesh::with_area_weighted_normals(
+        vec![
+            [-1.0, -1.0, 0.0],
+            [1.0, -1.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [next, 1.0, 0.0],
+            [-1.0, 1.0, 0.0],
+            [-1.0, 0.0, 1.0],
+            [1.0, 0.0, 1.0],
+            [1.0, 1e-6, 1.0],
+        ],
+        vec![[0, 1, 2], [0, 3, 4], [5, 7, 6]],
+    );
+    let t = bake_pose(&mesh, &settings(4, 1024)).unwrap();
+    assert!(t.iter().all(|x| x.is_finite()));
+    let full = PI * Y00;
+    for j in 0..5 {
+        assert!(
+            dc(&t, 16, j) >= full * (1.0 - 1.0 / 1024.0) - 1e-6,
+            "vertex {j}"
+        );
+    }
+    let (a, b) = (&t[2 * 16..3 * 16], &t[3 * 16..4 * 16]);
+    let diff = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| f64::from((x - y).abs()))
+        .fold(0.0, f64::max);
+    assert!(diff <= PI / 1024.0, "{diff}");
+    // The sliver's own vertices face down onto the floor (wound clockwise from above).
+    for j in 5..8 {
+        assert!(dc(&t, 16, j).is_finite());
+    }
+}

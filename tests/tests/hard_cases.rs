@@ -1,0 +1,78 @@
+//! Hard numerical cases that cross the trainer → blob → core boundary.
+
+use aprt_core::{Model, PoseWeights, SliceSource};
+use aprt_trainer::{ExportError, LinearModel, Precision, VertexBasis, encode_model};
+
+/// A model whose transfer is the constant `values` (order 1, one coefficient per vertex, no
+/// pose dimensions): what the core returns is exactly what the f16 section stored.
+fn constant_model(values: &[f64]) -> LinearModel {
+    LinearModel {
+        order: 1,
+        vertices: values.len(),
+        joints: 1,
+        pose_mean: vec![0.0],
+        pose_projection: Vec::new(),
+        weights: values.to_vec(),
+        basis: VertexBasis::Identity,
+        alpha: 0.0,
+        bones: None,
+    }
+}
+
+/// f16 sections with a large dynamic range. Expected (the documented bound of
+/// `Precision::F16`): round to nearest, so within 2⁻¹¹ relative in the normal range
+/// (down to 6.1e-5) and 2⁻²⁵ absolute among the subnormals, where values under 3e-8 become 0;
+/// 65504 is the largest finite value and 65519 still rounds down to it, while 65520 rounds to
+/// infinity and the export fails, naming the section and the index, instead of clamping.
+#[test]
+fn f16_sections_keep_the_documented_bound_and_refuse_overflow() {
+    let values = [
+        65504.0,
+        -65504.0,
+        65519.0,
+        1.0 + 1.0 / 2048.0,
+        std::f64::consts::PI,
+        6.103_515_625e-5,
+        1e-5,
+        1e-7,
+        -1e-7,
+        2.9e-8,
+        1e-30,
+        0.0,
+    ];
+    let blob = encode_model(&constant_model(&values), Precision::F16).unwrap();
+    let model = Model::parse(&blob).unwrap();
+    let mut pose = PoseWeights::default();
+    model
+        .set_pose(&mut SliceSource(&blob), &[0.3], &mut [], &mut pose)
+        .unwrap();
+    let mut got = vec![0.0f32; values.len()];
+    model
+        .transfer(&mut SliceSource(&blob), &pose, 0, &mut got, &mut [])
+        .unwrap();
+    for (&want, &got) in values.iter().zip(&got) {
+        let bound = (want.abs() * 2f64.powi(-11)).max(2f64.powi(-25));
+        let err = (f64::from(got) - want).abs();
+        assert!(
+            got.is_finite() && err <= bound,
+            "{want:e} stored as {got:e}"
+        );
+    }
+    assert_eq!(got[2], 65504.0);
+    assert_eq!((got[9], got[10]), (0.0, 0.0));
+
+    for (index, too_big) in [(3, 65520.0), (1, -1e6), (0, f64::INFINITY)] {
+        let mut v = values;
+        v[index] = too_big;
+        let err = encode_model(&constant_model(&v), Precision::F16).unwrap_err();
+        assert!(
+            matches!(err, ExportError::NotRepresentable { index: i, .. } if i == index),
+            "{err}"
+        );
+        assert!(err.to_string().contains("±65504 for f16"), "{err}");
+    }
+    // f32 takes what f16 cannot.
+    let mut v = values;
+    v[3] = 1e6;
+    assert!(encode_model(&constant_model(&v), Precision::F32).is_ok());
+}
