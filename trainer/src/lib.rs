@@ -11,6 +11,7 @@ pub mod demo;
 pub mod evaluate;
 pub mod export;
 pub mod fit;
+pub(crate) mod lathe;
 pub mod mesh;
 pub mod model;
 pub mod npy;
