@@ -5,6 +5,7 @@ pub mod angles;
 pub mod atomic;
 pub mod bake;
 pub mod bone_frames;
+pub mod bvh;
 pub mod character;
 pub mod cli;
 pub mod demo;
