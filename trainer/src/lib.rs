@@ -13,6 +13,7 @@ pub mod evaluate;
 pub mod export;
 pub mod fit;
 pub(crate) mod lathe;
+pub mod mannequin;
 pub mod mesh;
 pub mod model;
 pub mod npy;
@@ -26,9 +27,11 @@ pub mod skin;
 pub use bake::{
     Accel, BakeError, BakeSettings, bake_pose, bake_pose_with, bake_poses, bake_vertices,
 };
+pub use bvh::{Bvh, BvhError};
 pub use character::{Character, CharacterError, JointAngle};
 pub use export::{ExportError, Precision, encode_model};
 pub use fit::{Alpha, CoefDims, Dims, Fit, FitError, FitOptions, FitReport, fit};
+pub use mannequin::{BvhOptions, BvhRig, BvhRigError, Retargeted};
 pub use mesh::Mesh;
 pub use model::{BoneFrames, LinearModel, VertexBasis};
 pub use obj::{LineError, ObjError, read_obj};
