@@ -145,7 +145,7 @@ fn forward_kinematics_chains_parent_transforms_and_position_channels() {
     let arm = DVec3::new(10.0, 21.0, 30.0) + root * DVec3::new(3.5, 0.0, 0.0);
     assert!(world[2].translation.abs_diff_eq(arm, 1e-12));
     assert!(
-        DMat3::from(world[2].matrix3).abs_diff_eq(root * rz(90.0), 1e-12),
+        world[2].matrix3.abs_diff_eq(root * rz(90.0), 1e-12),
         "rotations accumulate down the chain"
     );
 }
