@@ -8,7 +8,7 @@
 //! Frame: z up, feet on z = 0, facing −y (the character's left is +x). Units are metres and
 //! joint angles are radians.
 
-mod body;
+pub(crate) mod body;
 mod clips;
 mod skeleton;
 
@@ -88,7 +88,7 @@ impl Character {
     pub fn builtin() -> Character {
         let skeleton = Skeleton::new();
         let dofs = skeleton::dofs();
-        let body = body::build(&skeleton);
+        let (body, names) = body::build(&skeleton);
         let bind = Mesh::with_area_weighted_normals(body.positions, body.triangles);
         let skin = Skin::from_influences(&body.influences).unwrap_or_else(|e| {
             unreachable!("built-in weights are positive partitions of unity: {e}")
@@ -108,7 +108,7 @@ impl Character {
             skeleton,
             dofs,
             angles,
-            parts: body.parts,
+            parts: names.into_iter().zip(body.parts).collect(),
         }
     }
 
