@@ -29,6 +29,7 @@ mod directions;
 #[cfg(test)]
 mod tests;
 mod tracer;
+mod wide;
 
 pub use tracer::Accel;
 

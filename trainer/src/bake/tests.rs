@@ -383,7 +383,8 @@ fn ray_structures_agree_bit_for_bit() {
         (wall.positions, wall.triangles)
     }]);
     let s = settings(3, 128);
-    let bvh = bake_pose_with(&mesh, &s, Accel::CwBvh).unwrap();
+    let bvh = bake_pose_with(&mesh, &s, Accel::Bvh4).unwrap();
+    assert_eq!(bvh, bake_pose_with(&mesh, &s, Accel::CwBvh).unwrap());
     assert_eq!(bvh, bake_pose_with(&mesh, &s, Accel::Bvh2).unwrap());
     assert_eq!(bvh, bake_pose_with(&mesh, &s, Accel::BruteForce).unwrap());
     // A vertex range is the same slice of the whole bake.

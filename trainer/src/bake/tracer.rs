@@ -1,10 +1,11 @@
 //! Ray queries against one posed mesh: shadow (any-hit) and closest-hit with barycentrics.
 //!
-//! Two obvhs hierarchies are offered so their speed can be measured on real scenes (see
-//! `benches/bake.rs`), plus a brute-force loop over every triangle that is the reference the
-//! hierarchies must agree with and the baseline the benchmark reports the speed-up against.
-//! All three use the same ray–triangle test (obvhs' Möller–Trumbore), so on the same ray they
-//! take the same decision.
+//! The default hierarchy is this crate's four-wide BVH (the `wide` module), built from obvhs'
+//! binary BVH; obvhs' own two hierarchies stay selectable so their speed can be measured on
+//! real scenes (see `benches/bake.rs`). A brute-force loop over every triangle is the reference
+//! the hierarchies must agree with and the baseline the benchmark reports the speed-up against.
+//! All use the same ray–triangle test (obvhs' Möller–Trumbore), so on the same ray they take
+//! the same decision.
 
 use glam::{DVec3, Vec3A};
 use obvhs::{
@@ -16,13 +17,21 @@ use obvhs::{
 };
 use std::time::Duration;
 
+use super::wide::Bvh4;
+
 /// Which acceleration structure answers the bake's ray queries.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Accel {
-    /// obvhs' compressed 8-wide BVH. The default: on the 11.5k-vertex benchmark scene
-    /// (`benches/bake.rs`, 500 rays, order 6) it took 3.3 CPU seconds per pose against 3.6 for
-    /// [`Accel::Bvh2`], build included.
+    /// A four-wide BVH with exact `f32` boxes collapsed from obvhs' binary BVH and traversed by
+    /// this crate (see the `wide` module). The default: on the 11.5k-vertex benchmark scene
+    /// (`benches/bake.rs`, 500 rays, order 6) it took 2.09 CPU seconds per pose against 2.99
+    /// for [`Accel::CwBvh`] and 3.57 for [`Accel::Bvh2`], build included, with bit-identical
+    /// transfer.
     #[default]
+    Bvh4,
+    /// obvhs' compressed 8-wide BVH (the previous default), kept selectable so the choice stays
+    /// measurable: its 8-bit child boxes cost more to decompress than the extra node visits of
+    /// the four-wide tree.
     CwBvh,
     /// obvhs' binary BVH, kept selectable so the choice stays measurable.
     Bvh2,
@@ -44,6 +53,7 @@ pub(crate) struct Hit {
 }
 
 enum Structure {
+    Wide(Bvh4),
     Cw(CwBvh),
     Bvh2(Bvh2),
     /// Also used when no triangle has area: nothing to build a hierarchy over.
@@ -79,25 +89,36 @@ impl Tracer {
                 structure: Structure::BruteForce,
             };
         }
-        let params = BvhBuildParams::medium_build();
         let mut build_time = Duration::ZERO;
         let (structure, order) = match accel {
+            Accel::Bvh4 => {
+                // One triangle per leaf: on the benchmark scene the default leaves of up to
+                // eight triangles cost 17–24% more traversal instructions (callgrind) for a
+                // build saving of 2% of the pose.
+                let params = BvhBuildParams {
+                    max_prims_per_leaf: 1,
+                    ..BvhBuildParams::medium_build()
+                };
+                let bvh = build_bvh2_from_tris(&tris, params, &mut build_time);
+                reorder(&mut tris, &mut source, &bvh.primitive_indices);
+                (Structure::Wide(Bvh4::new(&bvh, &tris)), None)
+            }
             Accel::CwBvh => {
-                let bvh = build_cwbvh_from_tris(&tris, params, &mut build_time);
+                let bvh =
+                    build_cwbvh_from_tris(&tris, BvhBuildParams::medium_build(), &mut build_time);
                 let order = bvh.primitive_indices.clone();
                 (Structure::Cw(bvh), Some(order))
             }
             Accel::Bvh2 => {
-                let bvh = build_bvh2_from_tris(&tris, params, &mut build_time);
+                let bvh =
+                    build_bvh2_from_tris(&tris, BvhBuildParams::medium_build(), &mut build_time);
                 let order = bvh.primitive_indices.clone();
                 (Structure::Bvh2(bvh), Some(order))
             }
             Accel::BruteForce => (Structure::BruteForce, None),
         };
-        // Reorder the primitives as the leaves reference them: one indirection less per test.
         if let Some(order) = order {
-            tris = order.iter().map(|&k| tris[k as usize]).collect();
-            source = order.iter().map(|&k| source[k as usize]).collect();
+            reorder(&mut tris, &mut source, &order);
         }
         Tracer {
             tris,
@@ -111,6 +132,7 @@ impl Tracer {
         let tris = &self.tris;
         let test = |r: &Ray, id: usize| tris[id].intersect(r);
         match &self.structure {
+            Structure::Wide(bvh) => bvh.occluded(tris, &ray),
             Structure::Cw(bvh) => !bvh.ray_traverse_miss(ray, test),
             Structure::Bvh2(bvh) => !bvh.ray_traverse_miss(ray, test),
             Structure::BruteForce => tris.iter().any(|t| t.intersect(&ray) < f32::INFINITY),
@@ -123,6 +145,7 @@ impl Tracer {
         let test = |r: &Ray, id: usize| tris[id].intersect(r);
         let mut hit = RayHit::none();
         let found = match &self.structure {
+            Structure::Wide(bvh) => bvh.closest(tris, ray, &mut hit),
             Structure::Cw(bvh) => bvh.ray_traverse(ray, &mut hit, test),
             Structure::Bvh2(bvh) => bvh.ray_traverse(ray, &mut hit, test),
             Structure::BruteForce => {
@@ -152,6 +175,13 @@ impl Tracer {
             front_facing: normal.dot(ray.direction.as_dvec3()) < 0.0,
         })
     }
+}
+
+/// Lays the triangles (and their source ids) out in the order the leaves reference them: one
+/// indirection less per intersection test.
+fn reorder(tris: &mut Vec<Triangle>, source: &mut Vec<u32>, order: &[u32]) {
+    *tris = order.iter().map(|&k| tris[k as usize]).collect();
+    *source = order.iter().map(|&k| source[k as usize]).collect();
 }
 
 /// A ray for [`Tracer`] queries. Signed zeros in the direction are turned into +0: obvhs'
@@ -192,7 +222,7 @@ mod tests {
     #[test]
     fn closest_hit_reports_source_triangle_barycentrics_and_facing() {
         let (p, t) = quad_scene();
-        for accel in [Accel::CwBvh, Accel::Bvh2, Accel::BruteForce] {
+        for accel in [Accel::Bvh4, Accel::CwBvh, Accel::Bvh2, Accel::BruteForce] {
             let tracer = Tracer::new(&p, &t, accel);
             let up = ray(Vec3A::new(0.75, 0.25, 0.0), Vec3A::Z, 0.0, f32::INFINITY);
             let hit = tracer.closest(up).expect("hits the square");
