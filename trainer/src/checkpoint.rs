@@ -133,7 +133,7 @@ pub enum CheckpointError {
         now: String,
     },
     /// A pose's mesh could not be produced.
-    #[error("{name}: {source}")]
+    #[error("{name}")]
     Source {
         /// The pose's name.
         name: String,
@@ -142,7 +142,7 @@ pub enum CheckpointError {
         source: Box<dyn std::error::Error + Send + Sync>,
     },
     /// A pose could not be baked.
-    #[error("{name}: baking: {source}")]
+    #[error("{name}: baking")]
     Bake {
         /// The pose's name.
         name: String,
@@ -635,9 +635,10 @@ mod tests {
         poses[0].positions[0] = [2e12, 0.0, 0.0];
         let mut c = Checkpoint::open(&ck, false, &SETTINGS, &mut poses[..]).unwrap();
         let err = c.bake(&mut poses[..], false).unwrap_err();
+        let message = format!("{:#}", anyhow::Error::from(err));
         assert!(
-            err.to_string().starts_with("pose 0: baking: mesh extent"),
-            "{err}"
+            message.starts_with("pose 0: baking: mesh extent"),
+            "{message}"
         );
         assert!(!ck.exists());
     }

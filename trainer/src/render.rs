@@ -33,7 +33,7 @@ pub enum RenderError {
         height: u32,
     },
     /// Writing the file failed.
-    #[error("writing {path}: {source}")]
+    #[error("writing {path}")]
     Io {
         /// The file being written.
         path: PathBuf,
@@ -41,7 +41,7 @@ pub enum RenderError {
         source: std::io::Error,
     },
     /// PNG encoding failed.
-    #[error("encoding {path} as PNG: {source}")]
+    #[error("encoding {path} as PNG")]
     Encode {
         /// The file being written.
         path: PathBuf,

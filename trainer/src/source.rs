@@ -1,11 +1,15 @@
 //! Where the command line's poses come from: an OBJ sequence with a joint-angle CSV, or a
 //! rig (the built-in character, a glTF skin, a BVH-driven mannequin) and one of its clips.
 
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 
+use crate::bvh::Bvh;
 use crate::character::Character;
+use crate::gltf_rig::GltfRig;
+use crate::mannequin::{BvhOptions, BvhRig};
 use crate::mesh::Mesh;
 use crate::rig::{Clip, Rig};
 
@@ -21,12 +25,57 @@ pub struct SourceArgs {
     pub angles: Option<PathBuf>,
     /// The built-in procedural character; pick its clip with --clip (training, wave, walk,
     /// reach).
-    #[arg(long)]
+    #[arg(long, conflicts_with_all = ["gltf", "bvh"])]
     pub builtin: bool,
-    /// The clip to use.
+    /// A glTF 2.0 character (.gltf with embedded or external buffers, or .glb) with a skin;
+    /// pick its animation with --clip.
+    #[arg(long, conflicts_with_all = ["bvh", "obj_seq"])]
+    pub gltf: Option<PathBuf>,
+    /// A BVH motion-capture file driving a mannequin built from its skeleton (or from
+    /// --mannequin's).
+    #[arg(long, conflicts_with = "obj_seq")]
+    pub bvh: Option<PathBuf>,
+    /// The clip to use: a glTF animation or a built-in clip.
     #[arg(long)]
     pub clip: Option<String>,
+    /// Sampling rate of the clip in frames per second (glTF default 30; BVH default: the
+    /// file's own rate).
+    #[arg(long)]
+    pub fps: Option<f64>,
+    /// BVH frames A..B (half-open, at the file's rate, before resampling); default all.
+    #[arg(long, value_parser = parse_range)]
+    pub frames: Option<Range<usize>>,
+    /// Build the mannequin from this BVH's skeleton and retarget --bvh's motion onto it by
+    /// joint name, so a model trained on one file can be evaluated on another.
+    #[arg(long, requires = "bvh")]
+    pub mannequin: Option<PathBuf>,
+    /// Leave the hat off the BVH mannequin.
+    #[arg(long, requires = "bvh")]
+    pub no_hat: bool,
+    /// Keep the BVH root's translation as pose entries (transfer does not depend on it).
+    #[arg(long, requires = "bvh")]
+    pub root_translation: bool,
 }
+
+/// Parses `A..B` (half-open frame indices).
+fn parse_range(text: &str) -> Result<Range<usize>, String> {
+    let (a, b) = text
+        .split_once("..")
+        .ok_or_else(|| format!("{text:?}: expected A..B, e.g. 0..120"))?;
+    let number = |s: &str| {
+        s.trim()
+            .parse::<usize>()
+            .map_err(|_| format!("{text:?}: {s:?} is not a frame index"))
+    };
+    let range = number(a)?..number(b)?;
+    if range.is_empty() {
+        return Err(format!("{text:?}: the range is empty"));
+    }
+    Ok(range)
+}
+
+/// The rate glTF clips are sampled at unless --fps says otherwise.
+const GLTF_FPS: f64 = 30.0;
 
 /// Poses from a source, ready to bake or evaluate.
 pub enum Poses {
@@ -51,7 +100,7 @@ pub enum Poses {
 impl SourceArgs {
     /// Whether a rig (rather than files of meshes or angles) was named.
     pub fn names_rig(&self) -> bool {
-        self.builtin
+        self.builtin || self.gltf.is_some() || self.bvh.is_some()
     }
 
     /// The rig and clip the options name. Errors when they name no rig.
@@ -61,7 +110,45 @@ impl SourceArgs {
             let clip = Rig::clip(&character, self.clip_name(&character)?)?;
             return Ok((Box::new(character), clip));
         }
-        bail!("no character given: use --builtin (or --obj-seq with --angles)")
+        if let Some(path) = &self.gltf {
+            let rig = GltfRig::load(path, self.fps.unwrap_or(GLTF_FPS))?;
+            let clip = GltfRig::clip(&rig, self.clip_name(&rig)?)?;
+            return Ok((Box::new(rig), clip));
+        }
+        if let Some(path) = &self.bvh {
+            return self.bvh_rig(path);
+        }
+        bail!("no character given: use --builtin, --gltf or --bvh (or --obj-seq with --angles)")
+    }
+
+    /// The mannequin (of --mannequin's skeleton, or the file's own) and the file's motion.
+    fn bvh_rig(&self, path: &Path) -> Result<(Box<dyn Rig>, Clip)> {
+        let options = BvhOptions {
+            root_translation: self.root_translation,
+            hat: !self.no_hat,
+            fps: self.fps,
+        };
+        let Some(skeleton) = &self.mannequin else {
+            let rig = BvhRig::from_file(path, &options)?;
+            let frames = self.frames.clone().unwrap_or(0..rig.bvh().frame_count());
+            let clip = rig.clip_range(frames)?;
+            return Ok((Box::new(rig), clip));
+        };
+        let rig = BvhRig::from_file(skeleton, &options)?;
+        let motion = Bvh::read(path)?;
+        let frames = self.frames.clone().unwrap_or(0..motion.frame_count());
+        let name = path
+            .file_stem()
+            .map_or_else(|| "motion".into(), |s| s.to_string_lossy().into_owned());
+        let retargeted = rig.retarget(&motion, &name, frames)?;
+        if !retargeted.missing.is_empty() {
+            eprintln!(
+                "joints of the mannequin that {} does not animate (kept at rest): {}",
+                path.display(),
+                retargeted.missing.join(", ")
+            );
+        }
+        Ok((Box::new(rig), retargeted.clip))
     }
 
     fn clip_name<'a>(&'a self, rig: &dyn Rig) -> Result<&'a str> {
@@ -80,7 +167,9 @@ impl SourceArgs {
             return Ok(Poses::Rig { rig, clip });
         }
         let (Some(dir), Some(csv)) = (&self.obj_seq, &self.angles) else {
-            bail!("give a character (--builtin) or --obj-seq DIR with --angles FILE");
+            bail!(
+                "give a character (--builtin, --gltf or --bvh) or --obj-seq DIR with --angles FILE"
+            );
         };
         let files = obj_sequence(dir)?;
         let angles = crate::angles::read_angles(csv)?;

@@ -17,7 +17,7 @@ use super::{Bvh, Channel, Joint};
 #[derive(Debug, thiserror::Error)]
 pub enum BvhError {
     /// The file could not be read.
-    #[error("{path}: {source}")]
+    #[error("cannot read {path}")]
     Read {
         /// The file.
         path: PathBuf,

@@ -69,7 +69,7 @@ const MAX_FRAMES: usize = 240 * 3600;
 #[derive(Debug, thiserror::Error)]
 pub enum GltfError {
     /// The file could not be read or parsed, or a buffer could not be loaded.
-    #[error("{path}: {source}", path = path.display())]
+    #[error("cannot read {path}", path = path.display())]
     Read {
         /// The file.
         path: PathBuf,
@@ -101,7 +101,7 @@ pub enum GltfError {
         problem: String,
     },
     /// The merged skin weights are invalid (vertex index in merged order).
-    #[error("{path}: {source}", path = path.display())]
+    #[error("{path}: skin weights", path = path.display())]
     Skin {
         /// The file.
         path: PathBuf,
