@@ -40,6 +40,25 @@ pub enum Command {
     Eval(EvalArgs),
     /// Validate a model blob and print its header, dimensions and section sizes.
     Inspect(InspectArgs),
+    /// Regenerate the results document on the real glTF characters and BVH motion capture.
+    Results(ResultsArgs),
+}
+
+/// `aprt results`.
+#[derive(Debug, Args)]
+pub struct ResultsArgs {
+    /// The assets directory (with gltf/ and bvh/); default $APRT_ASSETS or ../shared/assets.
+    #[arg(long)]
+    pub assets: Option<PathBuf>,
+    /// Output directory for README.md and the PNG figures.
+    #[arg(long, default_value = "docs/results")]
+    pub out: PathBuf,
+    /// SH order of the ground truth and the models.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u8).range(1..=6))]
+    pub order: u8,
+    /// Directions per vertex for the ground-truth bakes.
+    #[arg(long, default_value_t = 128)]
+    pub rays: usize,
 }
 
 /// `aprt demo`.
@@ -189,6 +208,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Simulate(args) => simulate(&args),
         Command::Eval(args) => eval(&args),
         Command::Inspect(args) => inspect(&args),
+        Command::Results(args) => results(&args),
     }
 }
 
@@ -307,6 +327,31 @@ fn transfer(args: &TransferArgs) -> Result<()> {
         .with_context(|| format!("baking {}", args.mesh.display()))?;
     let n2 = settings.order * settings.order;
     write_npy(&args.npy, &[mesh.vertex_count(), n2], &transfer[0])
+}
+
+fn results(args: &ResultsArgs) -> Result<()> {
+    use crate::results::{ResultsSettings, asset_studies, default_assets, write_document};
+    let assets = args.assets.clone().unwrap_or_else(default_assets);
+    let studies = asset_studies(&assets)
+        .with_context(|| format!("loading the assets in {}", assets.display()))?;
+    let settings = ResultsSettings {
+        bake: crate::bake::BakeSettings {
+            order: args.order as usize,
+            rays: args.rays,
+            bounces: 0,
+            albedo: 0.0,
+        },
+        alphas: (-6..=3).map(|e| 10f64.powi(e)).collect(),
+    };
+    let command = format!(
+        "cargo run --release -p aprt-trainer --bin aprt -- results --out {} --order {} --rays {}",
+        args.out.display(),
+        args.order,
+        args.rays
+    );
+    let path = write_document(&studies, &settings, &args.out, &command)?;
+    eprintln!("wrote {}", path.display());
+    Ok(())
 }
 
 fn simulate(args: &SimulateArgs) -> Result<()> {

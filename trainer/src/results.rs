@@ -11,6 +11,9 @@ use anyhow::{Context, Result};
 use glam::{Quat, Vec3};
 
 use crate::atomic::write_atomic;
+use crate::bvh::Bvh;
+use crate::gltf_rig::GltfRig;
+use crate::mannequin::{BvhOptions, BvhRig};
 use crate::bake::BakeSettings;
 use crate::evaluate::relative_error;
 use crate::experiment::{
@@ -407,6 +410,91 @@ fn residual_plots(hist_path: &Path, cdf_path: &Path, title: &str, residuals: &[f
             markers: false,
         }],
     )
+}
+
+/// Where the real assets are: `$APRT_ASSETS`, else `../shared/assets` (the repository's
+/// neighbour, as CI has it).
+pub fn default_assets() -> PathBuf {
+    std::env::var_os("APRT_ASSETS").map_or_else(|| PathBuf::from("../shared/assets"), PathBuf::from)
+}
+
+/// Rate the studies sample clips at: the paper's 30 Hz animation rate.
+const STUDY_FPS: f64 = 30.0;
+
+/// The studies of the results document over the assets in `assets`: every glTF character
+/// (train on one clip and test on the others, or on the rest of a single clip) and the CMU
+/// motion capture driving a mannequin (train on subject 01's clip, test on its later frames
+/// and on another subject's walk, retargeted by joint name).
+pub fn asset_studies(assets: &Path) -> Result<Vec<Study>> {
+    let gltf = assets.join("gltf");
+    let bvh = assets.join("bvh");
+    let mut studies = Vec::new();
+    for (file, title) in [
+        ("CesiumMan.gltf", "CesiumMan (glTF)"),
+        ("RiggedFigure.glb", "RiggedFigure (glb)"),
+        ("RiggedSimple.gltf", "RiggedSimple (glTF)"),
+    ] {
+        let rig = GltfRig::load(&gltf.join(file), STUDY_FPS)?;
+        let name = rig.clip_names()[0].clone();
+        let frames = GltfRig::clip(&rig, &name)?.frames;
+        let count = frames.len();
+        let (train, test) = split_clip(&name, frames, 2.0 / 3.0);
+        studies.push(Study {
+            id: file.split('.').next().unwrap_or(file).to_lowercase(),
+            title: title.into(),
+            about: format!(
+                "Khronos sample `{file}`, its only animation sampled at {STUDY_FPS} fps ({count} frames): the first two thirds train, the last third tests."
+            ),
+            up: rig.up(),
+            rig: Box::new(rig),
+            train,
+            tests: vec![test],
+        });
+    }
+    let fox = GltfRig::load(&gltf.join("Fox.gltf"), STUDY_FPS)?;
+    let clip = |name: &str| -> Result<(String, Vec<Vec<f64>>)> {
+        Ok((name.to_owned(), GltfRig::clip(&fox, name)?.frames))
+    };
+    let (train, tests) = (clip("Survey")?, vec![clip("Walk")?, clip("Run")?]);
+    studies.push(Study {
+        id: "fox".into(),
+        title: "Fox (glTF)".into(),
+        about: format!(
+            "Khronos sample `Fox.gltf` (no normals in the file: flat normals are computed), sampled at {STUDY_FPS} fps: trained on `Survey`, tested on `Walk` and `Run`."
+        ),
+        up: fox.up(),
+        rig: Box::new(fox),
+        train,
+        tests,
+    });
+
+    let options = BvhOptions {
+        fps: Some(STUDY_FPS),
+        ..BvhOptions::default()
+    };
+    let subject = BvhRig::from_file(&bvh.join("cmu_01_01.bvh"), &options)?;
+    let walk = Bvh::read(&bvh.join("cmu_walk_delfem2.bvh"))?;
+    let train = subject.clip_range(0..1200)?.frames;
+    let later = subject.clip_range(1200..1800)?.frames;
+    let retargeted = subject
+        .retarget(&walk, "cmu_walk_delfem2", 0..walk.frame_count())?
+        .clip
+        .frames;
+    studies.push(Study {
+        id: "cmu".into(),
+        title: "CMU motion capture on a mannequin (BVH)".into(),
+        about: format!(
+            "A mannequin built from the skeleton of CMU subject 01 (`cmu_01_01.bvh`, with the hat), resampled from 120 to {STUDY_FPS} fps: trained on file frames 0..1200, tested on frames 1200..1800 and on another subject's walk (`cmu_walk_delfem2.bvh`) retargeted by joint name."
+        ),
+        up: Vec3::Z,
+        rig: Box::new(subject),
+        train: ("cmu_01_01 [0, 1200)".into(), train),
+        tests: vec![
+            ("cmu_01_01 [1200, 1800)".into(), later),
+            ("cmu_walk_delfem2".into(), retargeted),
+        ],
+    });
+    Ok(studies)
 }
 
 /// Runs every study and writes `out/README.md` with their sections.
