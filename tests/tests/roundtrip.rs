@@ -256,3 +256,24 @@ fn weights_of_another_model_are_refused() {
         Err(aprt_core::Error::ShapeMismatch)
     );
 }
+
+/// Regression (found by the fuzz harness): `Model::open` promises that any scratch of at least
+/// 4 bytes works, but checked a bone-frame model's bone rows a whole block at a time and
+/// refused buffers under 32 bytes.
+#[test]
+fn bone_frame_model_opens_with_the_smallest_scratch() {
+    use aprt_trainer::BoneFrames;
+    let mut reference = random_model(2, 13, 3, 1, Some(5));
+    reference.bones = Some(BoneFrames {
+        count: 3,
+        vertex_bone: (0..13).map(|j| (j % 3) as u16).collect(),
+    });
+    for precision in [Precision::F32, Precision::F16] {
+        let blob = encode_model(&reference, precision).unwrap();
+        let model = Model::parse(&blob).unwrap();
+        assert_eq!(
+            Model::open(&mut Streamed::new(&blob), &mut [0u8; 4]),
+            Ok(model)
+        );
+    }
+}
