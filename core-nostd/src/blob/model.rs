@@ -86,6 +86,10 @@ fn header_from<S: BlobSource + ?Sized>(
             extra: rest.len() as u64,
         });
     }
+    // NaN never leaves the trainer, and a NaN α would make the model unequal to itself.
+    if !header.alpha.is_finite() {
+        return Err(Error::HeaderMalformed);
+    }
     Ok((header, end))
 }
 
