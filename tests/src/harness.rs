@@ -166,7 +166,9 @@ pub fn exercise(blob: &[u8], probe: &Probe) -> Result<Evaluation, Error> {
     let inputs = probe.sanitised();
     let eval = evaluate(&model, &mut SliceSource(blob), &inputs, &mut [])
         .expect("a valid model evaluates finite inputs from a resident blob");
-    check_streamed(&model, blob, &inputs, &eval);
+    let len = model.scratch_bytes();
+    let len = len.saturating_add_signed(inputs.scratch_delta as isize);
+    check_streamed(&model, blob, &inputs, &eval, len);
     check_range(&model, blob, probe, &eval);
     let stored = decode(blob).expect("FORMAT.md reads every blob the core accepts");
     reference::assert_matches(&stored, &eval, |_| 0.0);
@@ -330,24 +332,32 @@ fn check_refusals(model: &Model, blob: &[u8], probe: &Probe) {
     }
 }
 
-/// Streamed evaluation with the probe's scratch size: bit-identical to resident evaluation when
+/// Streamed evaluation with `len` bytes of scratch: bit-identical to resident evaluation when
 /// it succeeds, which it must when the scratch is at least `Model::scratch_bytes`.
-fn check_streamed(model: &Model, blob: &[u8], inputs: &Probe, resident: &Evaluation) {
+fn check_streamed(model: &Model, blob: &[u8], inputs: &Probe, resident: &Evaluation, len: usize) {
     let least = model.scratch_bytes();
-    let mut scratch = vec![0u8; least.saturating_add_signed(inputs.scratch_delta as isize)];
-    let mut src = Streamed::new(blob);
-    match evaluate(model, &mut src, inputs, &mut scratch) {
+    let mut scratch = vec![0u8; len];
+    match evaluate(model, &mut Streamed::new(blob), inputs, &mut scratch) {
         Ok(streamed) => assert!(
             bits(&streamed) == bits(resident),
-            "streamed evaluation with {} bytes of scratch differs",
-            scratch.len()
+            "streamed evaluation with {len} bytes of scratch differs"
         ),
         Err(Error::BufferTooSmall { needed }) => assert!(
-            scratch.len() < least && needed > scratch.len(),
-            "scratch of {} bytes refused (least {least}, needed {needed})",
-            scratch.len()
+            len < least && needed > len,
+            "scratch of {len} bytes refused (least {least}, needed {needed})"
         ),
         Err(e) => panic!("streamed evaluation failed: {e:?}"),
+    }
+}
+
+/// [`check_streamed`] for every scratch length in `lens`, against one resident evaluation of
+/// the valid blob `blob` at the probe's inputs made finite.
+pub fn check_streaming(blob: &[u8], probe: &Probe, lens: impl IntoIterator<Item = usize>) {
+    let model = Model::parse(blob).expect("a valid blob");
+    let inputs = probe.sanitised();
+    let resident = evaluate(&model, &mut SliceSource(blob), &inputs, &mut []).unwrap();
+    for len in lens {
+        check_streamed(&model, blob, &inputs, &resident, len);
     }
 }
 

@@ -47,24 +47,31 @@ fn max_abs(xs: &[f64]) -> f64 {
     xs.iter().fold(0.0, |m, x| m.max(x.abs()))
 }
 
-/// Relative error bound of the f32 evaluation: rounding steps along the longest chain of f32 operations from the inputs to one shading
-/// value (subtraction of the mean, projection, weights, lighting, basis, rotation), doubled
-/// for margin by using ε = 2u per step.
-pub fn rounding(model: &LinearModel) -> f64 {
+/// Rounding steps along the longest chain of f32 operations from the inputs to one shading
+/// value (subtraction of the mean, projection, weights, lighting, basis, rotation).
+fn steps(model: &LinearModel) -> usize {
     let n2 = model.order * model.order;
     let kv = match model.basis {
         VertexBasis::Stored { coef_dims, .. } => coef_dims,
         VertexBasis::Identity => 0,
     };
-    let steps = model.joints + (model.pose_dims() + 1) * (n2 + 1) + kv + 2 * model.order + 16;
-    steps as f64 * f32::EPSILON as f64
+    model.joints + (model.pose_dims() + 1) * (n2 + 1) + kv + 2 * model.order + 16
 }
 
+/// Relative error bound of the f32 evaluation: ε = 2u per rounding step, doubled for margin.
+pub fn rounding(model: &LinearModel) -> f64 {
+    steps(model) as f64 * f32::EPSILON as f64
+}
+
+/// The smallest subnormal f32, 2⁻¹⁴⁹: below the normal range rounding errors are absolute.
+const TINY: f64 = 1.401_298_464_324_817e-45;
+
 /// Largest intermediate of the f32 evaluation (pose projection, pose weights, transfer,
-/// shading), bounded from the largest values of each section, and how much an error of one
-/// subnormal step at the start can grow on the way. Above about 10³⁰ the f32 evaluation may
-/// overflow and nothing is compared; the growth is added to the bound as an absolute term.
-fn headroom(model: &LinearModel, angles: &[f32], lighting: &[f32]) -> (f64, f64) {
+/// shading), bounded from the largest values of each section: the product of the factors of
+/// each stage, each at least 1. Above about 10³⁰ the f32 evaluation may overflow and nothing is
+/// compared. The same product bounds how much an absolute (subnormal) rounding error anywhere
+/// can grow on the way to the output.
+fn largest(model: &LinearModel, angles: &[f32], lighting: &[f32]) -> f64 {
     let n2 = model.order * model.order;
     let (kv, u) = match &model.basis {
         VertexBasis::Stored { coef_dims, data } => (*coef_dims as f64, max_abs(data)),
@@ -78,11 +85,7 @@ fn headroom(model: &LinearModel, angles: &[f32], lighting: &[f32]) -> (f64, f64)
     let p = model.joints as f64 * max_abs(&model.pose_projection);
     let w = (model.pose_dims() + 1) as f64 * max_abs(&model.weights);
     let l = n2 as f64 * light;
-    // z, then w^c, then transfer or lit weights, then shading: each intermediate is at most
-    // the product of the factors so far, and so at most the product of all, each at least 1.
-    let largest: f64 = [p * a, w, kv * u, l].iter().map(|f| f.max(1.0)).product();
-    let growth = (p + 1.0) * (w + 1.0) * (kv * u + 1.0) * (l + 1.0);
-    (largest, growth * f64::from(f32::from_bits(1)) * 64.0)
+    [p * a, w, kv * u, l].iter().map(|f| f.max(1.0)).product()
 }
 
 /// Asserts that `eval` equals `reference` evaluated exactly at the same inputs, up to the f32
@@ -90,12 +93,14 @@ fn headroom(model: &LinearModel, angles: &[f32], lighting: &[f32]) -> (f64, f64)
 /// per-vertex value (0 when `reference` is exactly what the blob stores; half precision
 /// rounding when it is the model before quantisation). Bone-frame shading is compared against
 /// the lighting rotated by the exact-quadrature rotation, which agrees with the evaluator's
-/// recurrences to about 10⁻⁵ of the lighting's 1-norm.
+/// recurrences to about 10⁻⁵ of the lighting's 1-norm (plus subnormal rounding).
 pub fn assert_matches(reference: &LinearModel, eval: &Evaluation, stored: impl Fn(f64) -> f64) {
-    let (largest, slack) = headroom(reference, &eval.angles, &eval.lighting);
-    if !(largest < 1e30) {
-        return; // the f32 evaluation may overflow: only "no panic" is asked of it
+    let largest = largest(reference, &eval.angles, &eval.lighting);
+    // Past this the f32 evaluation may overflow (NaN included): only "no panic" is asked.
+    if largest.is_nan() || largest >= 1e30 {
+        return;
     }
+    let slack = steps(reference) as f64 * TINY * largest;
     let n2 = reference.order * reference.order;
     let angles: Vec<f64> = eval.angles.iter().map(|&x| x as f64).collect();
     let want = reference.predict(&angles);
@@ -132,18 +137,20 @@ pub fn assert_matches(reference: &LinearModel, eval: &Evaluation, stored: impl F
                 .collect()
         }
     };
-    let turn_error = if reference.bones.is_some() {
-        2e-4 * norm1
-    } else {
-        0.0
+    // Both rotations round relatively, and absolutely for subnormal lighting (a quadrature
+    // node per direction and coefficient).
+    let order = reference.order;
+    let turn_error = match reference.bones {
+        Some(_) => 2e-4 * norm1 + (order * (2 * order - 1) * (n2 + 2) + 4 * order) as f64 * TINY,
+        None => 0.0,
     };
     for (j, got) in eval.shading.iter().enumerate() {
         let l = &local[eval.bones[j] as usize];
         let (mut want_j, mut bound_j) = (0.0f64, slack);
-        for c in 0..n2 {
+        for (c, &lc) in l.iter().enumerate().take(n2) {
             let i = j * n2 + c;
-            want_j += l[c] as f64 * want[i];
-            bound_j += (l[c] as f64).abs() * (bound[i] + gamma * terms[i]) + turn_error * terms[i];
+            want_j += lc as f64 * want[i];
+            bound_j += (lc as f64).abs() * (bound[i] + gamma * terms[i]) + turn_error * terms[i];
         }
         assert!(
             (*got as f64 - want_j).abs() <= bound_j,

@@ -277,3 +277,46 @@ fn bone_frame_model_opens_with_the_smallest_scratch() {
         );
     }
 }
+
+mod random_shapes {
+    use aprt_tests::harness::{self, PROBE_BYTES, Probe};
+    use aprt_tests::spec::{ModelSpec, round_trip};
+    use aprt_trainer::encode_model;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 400, ..ProptestConfig::default() })]
+
+        /// The fuzz target `round_trip` under proptest: random shapes (order, vertices,
+        /// joints, pose and basis dimensions, basis kind, bone frames, precision, values)
+        /// written, read back exactly or within half precision, and evaluated like the f64
+        /// reference.
+        #[test]
+        fn writer_reader_round_trip(
+            probe in proptest::collection::vec(any::<u8>(), PROBE_BYTES),
+            spec in proptest::collection::vec(any::<u8>(), 0..512),
+        ) {
+            round_trip(&ModelSpec::from_bytes(&spec), &Probe::from_bytes(&probe));
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+        /// Streaming through a `BlobSource` equals whole-slice evaluation bit for bit for
+        /// every scratch size from nothing to one block beyond the least, and sizes below the
+        /// least are refused with `BufferTooSmall`, never a panic.
+        #[test]
+        fn streaming_equals_resident_for_every_buffer_size(
+            spec in proptest::collection::vec(any::<u8>(), 0..256),
+        ) {
+            let spec = ModelSpec::from_bytes(&spec);
+            let Ok(blob) = encode_model(&spec.model, spec.precision) else {
+                return Ok(()); // values f16 cannot hold: the round trip test covers refusals
+            };
+            let Ok(model) = aprt_core::Model::parse(&blob) else { return Ok(()) };
+            let sizes = 0..=model.scratch_bytes() + model.block_bytes();
+            harness::check_streaming(&blob, &Probe::GENTLE, sizes);
+        }
+    }
+}
