@@ -1,5 +1,13 @@
-//! Shared support for the integration tests and benchmarks: deterministic random models and
-//! a non-resident blob source.
+//! Shared support for the integration tests, the benchmarks and the cargo-fuzz targets in
+//! `fuzz/`: deterministic random models, a non-resident blob source, and the fuzz harnesses
+//! themselves, so `cargo test` runs the same checks as the fuzzer, only for less time.
+
+pub mod decode;
+pub mod edit;
+pub mod harness;
+pub mod reference;
+pub mod samples;
+pub mod spec;
 
 use aprt_core::{BlobSource, SourceError};
 use aprt_trainer::{LinearModel, VertexBasis};

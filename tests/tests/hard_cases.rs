@@ -16,6 +16,7 @@ fn constant_model(values: &[f64]) -> LinearModel {
         basis: VertexBasis::Identity,
         alpha: 0.0,
         bones: None,
+        angle_names: Vec::new(),
     }
 }
 

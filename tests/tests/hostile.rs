@@ -2,9 +2,14 @@
 //! its checksums catch every single-bit flip inside the header and the sections. The same
 //! properties are fuzzed for longer by the cargo-fuzz targets.
 
+use aprt_core::Model;
 use aprt_core::blob::{Error, Header, MAGIC, PREAMBLE_LEN, SectionEntry, read_header};
-use aprt_core::{LitWeights, Model, PoseWeights, SliceSource};
-use aprt_tests::{Streamed, random_model};
+use std::sync::LazyLock;
+
+use aprt_tests::edit::{self, Mutation, reseal};
+use aprt_tests::harness::{self, Evaluation, Probe};
+use aprt_tests::random_model;
+use aprt_tests::samples::sample_blobs;
 use aprt_trainer::{Precision, encode_model};
 use proptest::prelude::*;
 
@@ -12,52 +17,13 @@ fn valid_blob() -> Vec<u8> {
     encode_model(&random_model(2, 9, 3, 2, Some(3)), Precision::F32).unwrap()
 }
 
-/// Parses, then (when valid) evaluates through both source kinds; must never panic. Returns
-/// the shading of every vertex.
-fn exercise(blob: &[u8]) -> Result<Vec<f32>, Error> {
-    let model = Model::parse(blob)?;
-    let streamed = Model::open(&mut Streamed::new(blob), &mut [0u8; 7])?;
-    assert_eq!(model, streamed);
-    let n2 = model.order() * model.order();
-    let angles = vec![0.25f32; model.joints()];
-    let mut pose = PoseWeights::default();
-    model.set_pose(&mut SliceSource(blob), &angles, &mut [], &mut pose)?;
-    let mut lit = LitWeights::default();
-    model.light(&pose, &vec![1.0; n2], &mut lit)?;
-    let mut out = vec![0.0; model.vertices()];
-    model.shade(&mut SliceSource(blob), &lit, 0, &mut out, &mut [])?;
-    assert!(out.iter().all(|x| x.is_finite()));
-    Ok(out)
+/// The shared fuzz harness with gentle inputs.
+fn exercise(blob: &[u8]) -> Result<Evaluation, Error> {
+    harness::exercise(blob, &Probe::GENTLE)
 }
 
-/// Rebuilds the blob with an edited header. The section bytes keep their places relative to
-/// each other; if the header grew past them, everything after it moves by whole alignment
-/// units and the offsets with it.
 fn with_header(blob: &[u8], edit: impl FnOnce(&mut Header)) -> Vec<u8> {
-    let original = read_header(blob).unwrap();
-    let first = original.sections.iter().map(|s| s.offset).min().unwrap() as usize;
-    let mut edited = original;
-    edit(&mut edited);
-    let mut shift = 0u64;
-    let bytes = loop {
-        let mut h = edited.clone();
-        h.sections
-            .iter_mut()
-            .for_each(|s| s.offset = s.offset.saturating_add(shift));
-        let bytes = postcard::to_allocvec(&h).unwrap();
-        if PREAMBLE_LEN + bytes.len() <= first + shift as usize {
-            break bytes;
-        }
-        shift += 16;
-    };
-    let mut out = Vec::new();
-    out.extend_from_slice(&blob[..12]);
-    out.extend_from_slice(&(bytes.len() as u32).to_le_bytes());
-    out.extend_from_slice(&aprt_core::blob::crc32(&bytes).to_le_bytes());
-    out.extend_from_slice(&bytes);
-    out.resize(first + shift as usize, 0);
-    out.extend_from_slice(&blob[first..]);
-    out
+    edit::with_header(blob, edit).expect("a valid blob's header")
 }
 
 #[test]
@@ -76,38 +42,54 @@ fn every_proper_prefix_is_rejected() {
     }
 }
 
+/// Checksums catch every single-bit flip: in a section's bytes as that section's
+/// `ChecksumMismatch`, in the header as `HeaderChecksum`, in the preamble as some error; a flip
+/// in the alignment padding between sections (no checksum) leaves the result unchanged.
 #[test]
 fn every_single_bit_flip_is_caught_or_harmless() {
-    let blob = valid_blob();
-    let header = read_header(&blob).unwrap();
-    let covered = |i: usize| {
-        i < PREAMBLE_LEN + u32::from_le_bytes(blob[12..16].try_into().unwrap()) as usize
-            || header
+    for (name, blob) in sample_blobs() {
+        let header = read_header(&blob).unwrap();
+        let header_end =
+            PREAMBLE_LEN + u32::from_le_bytes(blob[12..16].try_into().unwrap()) as usize;
+        let section = |i: usize| {
+            header
                 .sections
                 .iter()
-                .any(|s| (s.offset as usize..(s.offset + s.len) as usize).contains(&i))
-    };
-    let mut caught = 0;
-    let clean = exercise(&blob).unwrap();
-    for i in 0..blob.len() {
-        for bit in 0..8 {
-            let mut bad = blob.clone();
-            bad[i] ^= 1 << bit;
-            let result = exercise(&bad);
-            if covered(i) {
-                assert!(result.is_err(), "flip of bit {bit} in byte {i} not caught");
-                caught += 1;
-            } else {
-                // Alignment padding between sections: no checksum, and no effect either.
-                assert_eq!(
-                    result.as_ref(),
-                    Ok(&clean),
-                    "padding flip in byte {i} changed the result"
+                .find(|s| (s.offset as usize..(s.offset + s.len) as usize).contains(&i))
+        };
+        let clean = exercise(&blob).unwrap();
+        let mut caught = 0;
+        for i in 0..blob.len() {
+            for bit in 0..8 {
+                let mut bad = blob.clone();
+                bad[i] ^= 1 << bit;
+                let result = exercise(&bad);
+                let expected = match (i, section(i)) {
+                    (..PREAMBLE_LEN, _) => None,
+                    (i, _) if i < header_end => Some(Error::HeaderChecksum),
+                    (_, Some(s)) => Some(Error::ChecksumMismatch { kind: s.kind }),
+                    (_, None) => {
+                        assert_eq!(
+                            result.as_ref(),
+                            Ok(&clean),
+                            "{name}: padding flip in byte {i}"
+                        );
+                        continue;
+                    }
+                };
+                let err = result.expect_err("flip not caught");
+                assert!(
+                    expected.is_none_or(|e| e == err),
+                    "{name}: flip of bit {bit} in byte {i}: {err:?}, expected {expected:?}"
                 );
+                caught += 1;
             }
         }
+        assert!(
+            caught >= 8 * (blob.len() - 15 * header.sections.len()),
+            "{name}: {caught} flips"
+        );
     }
-    assert!(caught > 8 * 300, "only {caught} flips in checked bytes");
 }
 
 #[test]
@@ -128,6 +110,13 @@ fn crafted_headers_get_the_right_error() {
         Model::parse(&trailing),
         Err(Error::TrailingBytes { extra: 1 })
     );
+
+    // Regression (found by the mutation test): a NaN α was accepted, and the model was then
+    // unequal to itself.
+    for alpha in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+        let bad = with_header(&blob, |h| h.alpha = alpha);
+        assert_eq!(Model::parse(&bad), Err(Error::HeaderMalformed));
+    }
 
     let huge = with_header(&blob, |h| h.vertices = u32::MAX);
     assert!(matches!(
@@ -259,5 +248,214 @@ proptest! {
         blob.extend_from_slice(&bytes);
         blob.extend_from_slice(&body);
         let _ = exercise(&blob);
+    }
+}
+
+/// The sample blobs, encoded once.
+fn samples() -> &'static [(&'static str, Vec<u8>)] {
+    static SAMPLES: LazyLock<Vec<(&'static str, Vec<u8>)>> = LazyLock::new(sample_blobs);
+    &SAMPLES
+}
+
+fn arb_mutation() -> impl Strategy<Value = Mutation> {
+    let bytes = || proptest::collection::vec(any::<u8>(), 1..24);
+    prop_oneof![
+        (any::<usize>(), 0u8..8).prop_map(|(at, bit)| Mutation::Flip { at, bit }),
+        (any::<usize>(), bytes()).prop_map(|(at, bytes)| Mutation::Overwrite { at, bytes }),
+        (any::<usize>(), any::<usize>()).prop_map(|(at, which)| Mutation::Word { at, which }),
+        (any::<usize>(), bytes()).prop_map(|(at, bytes)| Mutation::Insert { at, bytes }),
+        (any::<usize>(), 1usize..40).prop_map(|(at, len)| Mutation::Remove { at, len }),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 3000, ..ProptestConfig::default() })]
+
+    /// Random multi-byte mutations of every kind of valid blob, half of them with every
+    /// checksum recomputed so they reach the validation behind the CRCs, under random probe
+    /// inputs: the full harness holds (verdicts, refusals, streaming, reference).
+    #[test]
+    fn mutated_blobs_hold_the_harness(
+        sample in 0usize..4,
+        mutations in proptest::collection::vec(arb_mutation(), 1..6),
+        sealed in any::<bool>(),
+        probe in proptest::collection::vec(any::<u8>(), harness::PROBE_BYTES),
+    ) {
+        let mut blob = samples()[sample].1.clone();
+        mutations.iter().for_each(|m| m.apply(&mut blob));
+        if sealed {
+            blob = reseal(&blob);
+        }
+        let _ = harness::exercise(&blob, &Probe::from_bytes(&probe));
+    }
+}
+
+/// Resealed mutations get past the checksums: over a few thousand of them the reader reports
+/// most of its kinds of error, and some mutated blobs are valid and evaluate.
+#[test]
+fn resealed_mutations_reach_the_deep_checks() {
+    use std::collections::BTreeMap;
+    let mut seen: BTreeMap<String, usize> = BTreeMap::new();
+    let r = aprt_tests::noise(77, 4 * 3000);
+    let pick = |x: f64, n: usize| ((x + 1.0) * 0.5 * n as f64) as usize % n;
+    for i in 0..3000 {
+        let x = &r[4 * i..4 * i + 4];
+        let mut blob = samples()[i % 4].1.clone();
+        let at = pick(x[0], blob.len());
+        let m = match i % 3 {
+            0 => Mutation::Word {
+                at,
+                which: pick(x[1], Mutation::WORDS.len()),
+            },
+            1 => Mutation::Flip {
+                at,
+                bit: pick(x[1], 8) as u8,
+            },
+            _ => Mutation::Overwrite {
+                at,
+                bytes: vec![pick(x[1], 256) as u8, pick(x[2], 256) as u8],
+            },
+        };
+        m.apply(&mut blob);
+        let verdict = match exercise(&reseal(&blob)) {
+            Ok(_) => "Ok".to_string(),
+            Err(e) => format!("{e:?}")
+                .split([' ', '{', '('])
+                .next()
+                .unwrap()
+                .to_string(),
+        };
+        *seen.entry(verdict).or_default() += 1;
+    }
+    for kind in [
+        "Ok",
+        "NonFinite",
+        "SectionLength",
+        "BadDimension",
+        "HeaderMalformed",
+        "SectionOutOfRange",
+        "BadBoneIndex",
+    ] {
+        assert!(seen.contains_key(kind), "{kind} never reached: {seen:?}");
+    }
+}
+
+/// Dimensions at, just past and far past every limit, with section lengths set to the
+/// wrapped (overflowed) products a careless reader would compute: never a panic, and never
+/// accepted with a dimension out of range.
+#[test]
+fn overflowing_dimensions_are_refused() {
+    let blob = valid_blob();
+    let orders = [0u8, 1, 6, 7, u8::MAX];
+    let vertices = [0u32, 1, 1 << 22, (1 << 22) + 1, u32::MAX];
+    let joints = [0u16, 1, 512, 513, u16::MAX];
+    let coef = [0u32, 1, 96, 97, u32::MAX];
+    for (i, (&order, &v)) in orders.iter().zip(&vertices).enumerate() {
+        for (&a, &kv) in joints.iter().zip(&coef) {
+            for (pose_dims, bones) in [(0u16, 0u16), (64, 256), (65, 257), (u16::MAX, u16::MAX)] {
+                let edited = with_header(&blob, |h| {
+                    (h.order, h.vertices, h.joints, h.pose_dims, h.coef_dims) =
+                        (order, v, a, pose_dims, kv);
+                    if i % 2 == 1 {
+                        h.frame = aprt_core::blob::Frame::Bones { count: bones };
+                    }
+                    let n2 = (order as u64).pow(2);
+                    let wrapped = n2
+                        .wrapping_mul(1 + pose_dims as u64)
+                        .wrapping_mul(kv as u64)
+                        .wrapping_mul(v as u64)
+                        .wrapping_mul(4);
+                    h.sections.iter_mut().for_each(|s| s.len = wrapped);
+                });
+                let within = (1..=6).contains(&order)
+                    && (1..=1 << 22).contains(&v)
+                    && (1..=512).contains(&a)
+                    && pose_dims <= 64.min(a);
+                let result = exercise(&edited);
+                assert!(
+                    within || result.is_err(),
+                    "{order} {v} {a} {pose_dims} {kv}: {result:?}"
+                );
+            }
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+    /// Each kind of damage gets its own error, in every kind of blob: any other version, a
+    /// header longer than allowed, a wrong header or section checksum, trailing bytes.
+    #[test]
+    fn each_damage_gets_its_error(
+        sample in 0usize..4,
+        version in any::<u32>().prop_filter("another version", |v| *v != 1),
+        header_len in 1025u32..,
+        crc in any::<u32>(),
+        section in any::<usize>(),
+        trailing in proptest::collection::vec(any::<u8>(), 1..64),
+    ) {
+        let blob = &samples()[sample].1;
+        let patched = |at: usize, word: u32| {
+            let mut b = blob.clone();
+            b[at..at + 4].copy_from_slice(&word.to_le_bytes());
+            b
+        };
+        prop_assert_eq!(
+            Model::parse(&patched(8, version)),
+            Err(Error::UnsupportedVersion { found: version })
+        );
+        prop_assert_eq!(
+            Model::parse(&patched(12, header_len)),
+            Err(Error::HeaderTooLarge { len: header_len })
+        );
+        let header_crc = u32::from_le_bytes(blob[16..20].try_into().unwrap());
+        if crc != header_crc {
+            prop_assert_eq!(Model::parse(&patched(16, crc)), Err(Error::HeaderChecksum));
+        }
+        let entries = read_header(blob).unwrap().sections;
+        let e = entries[section % entries.len()];
+        if crc != e.crc32 {
+            let wrong = with_header(blob, |h| h.sections[section % entries.len()].crc32 = crc);
+            prop_assert_eq!(Model::parse(&wrong), Err(Error::ChecksumMismatch { kind: e.kind }));
+        }
+        let long = [&blob[..], &trailing].concat();
+        prop_assert_eq!(
+            Model::parse(&long),
+            Err(Error::TrailingBytes { extra: trailing.len() as u64 })
+        );
+    }
+
+    /// Moving or resizing any section, with every checksum recomputed to match, is refused:
+    /// sections are packed, so it now overlaps another, the header or the end, or its length
+    /// no longer matches the dimensions.
+    #[test]
+    fn moved_or_resized_sections_are_refused(
+        sample in 0usize..4,
+        section in any::<usize>(),
+        offset_delta in -64i64..64,
+        len_delta in -64i64..64,
+    ) {
+        prop_assume!(offset_delta != 0 || len_delta != 0);
+        let blob = &samples()[sample].1;
+        let n = read_header(blob).unwrap().sections.len();
+        let edited = with_header(blob, |h| {
+            let s = &mut h.sections[section % n];
+            s.offset = s.offset.saturating_add_signed(offset_delta * 16);
+            s.len = s.len.saturating_add_signed(len_delta * 4);
+        });
+        let result = exercise(&reseal(&edited));
+        prop_assert!(
+            matches!(
+                result,
+                Err(Error::SectionOverlap { .. }
+                    | Error::SectionOutOfRange { .. }
+                    | Error::SectionLength { .. }
+                    | Error::SectionMisaligned { .. }
+                    | Error::TrailingBytes { .. })
+            ),
+            "{:?}",
+            result
+        );
     }
 }

@@ -15,7 +15,7 @@ use nalgebra::DMatrix;
 use crate::bake::{BakeSettings, bake_poses};
 use crate::bone_frames::{bone_rotations, change_frame, dominant_bones};
 use crate::evaluate::{mean_transfer, nearest_pose, relative_error, skinned_transfer};
-use crate::export::{Precision, encode_model};
+use crate::export::{ExportError, Precision, encode_model};
 use crate::fit::{Alpha, CoefDims, Dims, Fit, FitOptions, fit};
 use crate::mesh::Mesh;
 use crate::model::BoneFrames;
@@ -261,11 +261,14 @@ pub struct Experiment {
     pub models: Vec<Fitted>,
     /// The table: the models, then the baselines.
     pub rows: Vec<Row>,
+    /// Configurations whose model the runtime cannot hold, and why.
+    pub skipped: Vec<(String, String)>,
     /// Bytes of one frame of f32 PRT.
     pub frame_bytes: usize,
 }
 
-/// Fits every configuration on `train`, then measures each model and the baselines on
+/// Fits every configuration on `train` (skipping, with the reason, any whose model exceeds the
+/// runtime's limits), then measures each model and the baselines on
 /// `train` and `tests` (at least one). `lighting` is the SH lighting the timings shade with.
 pub fn run(
     rig: &dyn Rig,
@@ -282,6 +285,7 @@ pub fn run(
     let timing_clip = tests.first().unwrap_or(train);
     let mut models = Vec::new();
     let mut rows = Vec::new();
+    let mut skipped = Vec::new();
     for config in configs {
         eprintln!("fitting {}", config.name);
         let fitted = fit_clip(
@@ -296,8 +300,15 @@ pub fn run(
         let s = &fitted.report.seconds;
         let fit_s =
             s.validate + s.pose_pca + s.vertex_basis + s.projection + s.cross_validation + s.solve;
-        let blob = encode_model(&fitted.model, Precision::F32)
-            .with_context(|| format!("writing {}", config.name))?;
+        let blob = match encode_model(&fitted.model, Precision::F32) {
+            Ok(blob) => blob,
+            Err(err @ ExportError::TooLarge { .. }) => {
+                eprintln!("skipping {}: {err}", config.name);
+                skipped.push((config.name.clone(), err.to_string()));
+                continue;
+            }
+            Err(err) => return Err(err).with_context(|| format!("writing {}", config.name)),
+        };
         let model = Model::parse(&blob)?;
         let error = |clip: &BakedClip| -> Result<f64> {
             let predicted = predict_world(&blob, &clip.angles, &clip.rotations)?;
@@ -334,6 +345,7 @@ pub fn run(
     Ok(Experiment {
         models,
         rows,
+        skipped,
         frame_bytes,
     })
 }

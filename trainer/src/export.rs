@@ -2,7 +2,7 @@
 
 use aprt_core::blob::{
     ANGLE_NAMES_TAG, Basis, Encoding, Frame, Header, MAGIC, MAX_BONES, MAX_COEF_DIMS,
-    MAX_HEADER_LEN, MAX_JOINTS, MAX_POSE_DIMS, MAX_SECTIONS, MAX_VERTICES, PREAMBLE_LEN,
+    MAX_HEADER_LEN, MAX_JOINTS, MAX_LIT, MAX_POSE_DIMS, MAX_SECTIONS, MAX_VERTICES, PREAMBLE_LEN,
     SectionEntry, SectionKind, VERSION, VERTEX_BLOCK, align_up, crc32, padded_vertices,
 };
 use aprt_core::sh::MAX_ORDER;
@@ -171,6 +171,12 @@ pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>
                     max: b.count - 1,
                 });
             }
+            // The runtime lights every bone's row width of weights per frame.
+            let width = match model.basis {
+                VertexBasis::Stored { coef_dims, .. } => coef_dims,
+                VertexBasis::Identity => n2 * (1 + ka),
+            };
+            limit("bones × lit row width", b.count * width, 1, MAX_LIT)?;
             Frame::Bones {
                 count: b.count as u16,
             }

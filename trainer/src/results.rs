@@ -11,10 +11,8 @@ use anyhow::{Context, Result};
 use glam::{Quat, Vec3};
 
 use crate::atomic::write_atomic;
-use crate::bvh::Bvh;
-use crate::gltf_rig::GltfRig;
-use crate::mannequin::{BvhOptions, BvhRig};
 use crate::bake::BakeSettings;
+use crate::bvh::Bvh;
 use crate::evaluate::relative_error;
 use crate::experiment::{
     self, BakedClip, ModelConfig, TABLE_LEGEND, bake_clip, fit_clip, predict_world,
@@ -23,6 +21,8 @@ use crate::experiment::{
 use crate::export::{Precision, encode_model};
 use crate::figures::{picture_lighting, save_panels, shade_with};
 use crate::fit::{Alpha, CoefDims, FitOptions};
+use crate::gltf_rig::GltfRig;
+use crate::mannequin::{BvhOptions, BvhRig};
 use crate::mesh::Mesh;
 use crate::plots::{Axes, Series, line_plot};
 use crate::pose_layout::PoseLayout;
@@ -197,6 +197,9 @@ pub fn run_study(study: &Study, settings: &ResultsSettings, out: &Path) -> Resul
     );
     let test_names: Vec<String> = tests.iter().map(|t| t.name.clone()).collect();
     s.push_str(&table_markdown(&result.rows, &test_names));
+    for (name, reason) in &result.skipped {
+        let _ = writeln!(s, "\n*Not in the table: {name}, because {reason}.*");
+    }
     let file = |what: &str| format!("{id}_{what}.png");
     let _ = writeln!(
         s,

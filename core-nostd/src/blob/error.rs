@@ -41,7 +41,7 @@ pub enum Error {
     },
     /// The header bytes do not match their checksum.
     HeaderChecksum,
-    /// The header bytes do not decode.
+    /// The header bytes do not decode, or hold a non-finite α.
     HeaderMalformed,
     /// Bytes follow the header encoding or the last section.
     TrailingBytes {
@@ -161,7 +161,9 @@ impl core::fmt::Display for Error {
             }
             Error::HeaderTooLarge { len } => write!(f, "header length {len} exceeds the maximum"),
             Error::HeaderChecksum => write!(f, "header checksum mismatch"),
-            Error::HeaderMalformed => write!(f, "header does not decode"),
+            Error::HeaderMalformed => {
+                write!(f, "header does not decode or holds a non-finite alpha")
+            }
             Error::TrailingBytes { extra } => write!(f, "{extra} unexpected trailing bytes"),
             Error::BadDimension { what, value } => {
                 write!(f, "dimension {what:?} = {value} is out of range")

@@ -86,6 +86,10 @@ fn header_from<S: BlobSource + ?Sized>(
             extra: rest.len() as u64,
         });
     }
+    // NaN never leaves the trainer, and a NaN α would make the model unequal to itself.
+    if !header.alpha.is_finite() {
+        return Err(Error::HeaderMalformed);
+    }
     Ok((header, end))
 }
 
@@ -249,24 +253,23 @@ impl Model {
         };
         let size = self.rows.encoding.size();
         let blocks = padded_vertices(self.vertices) / VERTEX_BLOCK;
-        let lead_bytes = VERTEX_BLOCK * size;
         let mut ok = true;
+        let mut check = |v: f32| ok &= v >= 0.0 && v < count as f32 && v == (v as u32) as f32;
         for b in 0..blocks {
             let offset = self.rows.offset + (b * self.block_bytes()) as u64;
-            for_each_chunk(src, offset, lead_bytes, 1, scratch, |_, bytes| {
-                for i in 0..VERTEX_BLOCK {
-                    let v = match self.rows.encoding {
-                        Encoding::F32 => f32::from_le_bytes([
-                            bytes[4 * i],
-                            bytes[4 * i + 1],
-                            bytes[4 * i + 2],
-                            bytes[4 * i + 3],
-                        ]),
-                        Encoding::F16 => {
-                            half::f16::from_le_bytes([bytes[2 * i], bytes[2 * i + 1]]).to_f32()
-                        }
-                    };
-                    ok &= v >= 0.0 && v < count as f32 && v == (v as u32) as f32;
+            // Item by item, so any scratch that holds one value will do, as `open` promises.
+            for_each_chunk(src, offset, size, VERTEX_BLOCK, scratch, |_, bytes| {
+                match self.rows.encoding {
+                    Encoding::F32 => bytes
+                        .as_chunks::<4>()
+                        .0
+                        .iter()
+                        .for_each(|x| check(f32::from_le_bytes(*x))),
+                    Encoding::F16 => bytes
+                        .as_chunks::<2>()
+                        .0
+                        .iter()
+                        .for_each(|x| check(half::f16::from_le_bytes(*x).to_f32())),
                 }
                 Ok(())
             })?;

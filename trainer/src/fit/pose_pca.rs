@@ -5,6 +5,7 @@
 //! the raw angles. The projection is cut at the numerical rank, which removes constant joints
 //! and exactly collinear angle combinations before the regression ever sees them.
 
+use aprt_core::blob::MAX_POSE_DIMS;
 use nalgebra::DMatrix;
 
 use super::dims::{self, Dims};
@@ -23,7 +24,8 @@ pub struct PosePca {
 
 impl PosePca {
     /// Centres the `p × a` angle matrix, takes its SVD and keeps the leading directions
-    /// selected by `dims`, never more than the numerical rank.
+    /// selected by `dims`, never more than the numerical rank nor, unless counted explicitly,
+    /// than the runtime's [`MAX_POSE_DIMS`].
     pub fn fit(angles: &DMatrix<f64>, dims: Dims) -> Self {
         let (p, a) = angles.shape();
         let mean: Vec<f64> = (0..a).map(|j| angles.column(j).mean()).collect();
@@ -43,7 +45,15 @@ impl PosePca {
         let energies: Vec<f64> = sigma.iter().map(|s| s * s).collect();
         let total: f64 = energies.iter().sum();
         let rank = dims::numerical_rank(sigma, p, a, f64::EPSILON);
-        let keep = dims::choose(dims, &energies, total, rank).unwrap_or(rank);
+        // All or a variance fraction keep at most what the runtime holds; an explicit count is
+        // kept as asked (the writer then says it is too many).
+        let cap = match dims {
+            Dims::Count(_) => usize::MAX,
+            _ => MAX_POSE_DIMS,
+        };
+        let keep = dims::choose(dims, &energies, total, rank)
+            .unwrap_or(rank)
+            .min(cap);
         let v_t = svd.v_t.expect("SVD computed with V");
         let scale = 1.0 / (p.max(2) - 1) as f64;
         Self {

@@ -1,0 +1,84 @@
+//! Reads a blob back into a trainer [`LinearModel`], following `FORMAT.md` with none of the
+//! evaluator's code, so the f64 reference `LinearModel::predict` of what the blob *stores* can
+//! judge the core's f32 evaluation, and the writer's quantisation can be checked value by value.
+
+use aprt_core::blob::{
+    Basis, Encoding, Frame, SectionEntry, SectionKind, VERTEX_BLOCK, padded_vertices, read_header,
+};
+use aprt_trainer::{BoneFrames, LinearModel, VertexBasis};
+
+/// The values of one section, exactly widened to f64.
+fn values(blob: &[u8], e: &SectionEntry) -> Option<Vec<f64>> {
+    let bytes =
+        blob.get(usize::try_from(e.offset).ok()?..usize::try_from(e.offset + e.len).ok()?)?;
+    Some(match Encoding::from_tag(e.encoding)? {
+        Encoding::F32 => bytes
+            .chunks_exact(4)
+            .map(|w| f32::from_le_bytes(w.try_into().unwrap()) as f64)
+            .collect(),
+        Encoding::F16 => bytes
+            .chunks_exact(2)
+            .map(|w| half::f16::from_le_bytes([w[0], w[1]]).to_f64())
+            .collect(),
+    })
+}
+
+/// The model a blob stores. Meant for blobs `Model::parse` accepted; `None` when a section it
+/// needs is missing or does not fit (the first entry of each kind is used).
+pub fn decode(blob: &[u8]) -> Option<LinearModel> {
+    let h = read_header(blob).ok()?;
+    let section = |kind: SectionKind| {
+        let e = h.sections.iter().find(|e| e.kind == kind as u16)?;
+        values(blob, e)
+    };
+    let (n2, v, ka) = (
+        (h.order as usize).pow(2),
+        h.vertices as usize,
+        h.pose_dims as usize,
+    );
+    let kv = h.coef_dims as usize;
+    let (width, rows) = match h.basis {
+        Basis::Stored => (kv, section(SectionKind::VertexBasis)?),
+        Basis::Identity => (n2 * (1 + ka), section(SectionKind::VertexWeights)?),
+    };
+    // Bone-frame models start every block with a row of bone indices.
+    let lead = usize::from(matches!(h.frame, Frame::Bones { .. }));
+    if rows.len() != padded_vertices(v) * (lead + width) {
+        return None;
+    }
+    // Row `r` of vertex `j` (bone row included): block j / 8, row r, lane j % 8.
+    let at = |j: usize, r: usize| {
+        rows[(j / VERTEX_BLOCK * (lead + width) + r) * VERTEX_BLOCK + j % VERTEX_BLOCK]
+    };
+    let (weights, basis) = match h.basis {
+        Basis::Stored => (
+            section(SectionKind::Weights)?,
+            VertexBasis::Stored {
+                coef_dims: kv,
+                data: (0..v * kv).map(|i| at(i / kv, lead + i % kv)).collect(),
+            },
+        ),
+        Basis::Identity => (
+            (0..width * v).map(|i| at(i % v, lead + i / v)).collect(),
+            VertexBasis::Identity,
+        ),
+    };
+    Some(LinearModel {
+        order: h.order as usize,
+        vertices: v,
+        joints: h.joints as usize,
+        pose_mean: section(SectionKind::PoseMean)?,
+        pose_projection: section(SectionKind::PoseProjection)?,
+        weights,
+        basis,
+        alpha: h.alpha as f64,
+        angle_names: aprt_trainer::export::read_angle_names(blob).unwrap_or_default(),
+        bones: match h.frame {
+            Frame::World => None,
+            Frame::Bones { count } => Some(BoneFrames {
+                count: count as usize,
+                vertex_bone: (0..v).map(|j| at(j, 0) as u16).collect(),
+            }),
+        },
+    })
+}

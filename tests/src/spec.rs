@@ -1,0 +1,230 @@
+//! Arbitrary model shapes and contents for the writer → reader round trip. One generator, an
+//! `arbitrary` implementation, serves both the cargo-fuzz target `round_trip` (fuzzer bytes)
+//! and the proptest in `tests/tests/roundtrip.rs` (random bytes), so what the fuzzer explores
+//! for hours is what `cargo test` checks in seconds.
+
+use aprt_core::blob::{MAX_BONES, MAX_COEF_DIMS, MAX_JOINTS, MAX_LIT, MAX_POSE_DIMS};
+use aprt_core::sh::MAX_ORDER;
+use aprt_trainer::{BoneFrames, ExportError, LinearModel, Precision, VertexBasis, encode_model};
+use arbitrary::{Arbitrary, Unstructured};
+
+use crate::decode::decode;
+use crate::harness::{Probe, exercise};
+use crate::noise;
+use crate::reference::{self, f16_rounding};
+
+/// A model for the writer and the precision to write it in. Every value is exactly an f32, so
+/// an f32 blob must give it back bit for bit.
+#[derive(Clone, Debug)]
+pub struct ModelSpec {
+    /// The model, inside every limit of the format.
+    pub model: LinearModel,
+    /// Storage precision of the weights and per-vertex rows.
+    pub precision: Precision,
+}
+
+/// Values for one section: mostly smooth noise at a random scale, sometimes the fuzzer's own
+/// bits (any f32 within 2^±30, so products of four stay finite), zeros, or boundary values
+/// (subnormals, f16's largest and first overflowing value, f32's largest).
+fn values(u: &mut Unstructured, n: usize) -> arbitrary::Result<Vec<f64>> {
+    const EDGES: [f32; 10] = [
+        0.0,
+        -0.0,
+        1.0e-45,
+        f32::MIN_POSITIVE,
+        5.960_464_5e-8,
+        1.000_488_3,
+        65504.0,
+        65520.0,
+        -f32::MAX,
+        1.0 / 3.0,
+    ];
+    Ok(match u.int_in_range(0..=11u8)? {
+        0..=7 => {
+            let seed = u.arbitrary::<u64>()?;
+            let scale = f64::powi(2.0, u.int_in_range(-20..=8)?);
+            noise(seed, n)
+                .into_iter()
+                .map(|x| (x * scale) as f32 as f64)
+                .collect()
+        }
+        8 => (0..n)
+            .map(|_| {
+                let bits = u.arbitrary::<u32>()?;
+                let exponent = ((bits >> 23) & 0xff) % 61 + 97; // 2^-30 ..= 2^30
+                Ok(f32::from_bits(bits & 0x807f_ffff | exponent << 23) as f64)
+            })
+            .collect::<arbitrary::Result<_>>()?,
+        9 => vec![0.0; n],
+        _ => {
+            let start = u.choose_index(EDGES.len())?;
+            (0..n)
+                .map(|i| EDGES[(start + i) % EDGES.len()] as f64)
+                .collect()
+        }
+    })
+}
+
+impl<'a> Arbitrary<'a> for ModelSpec {
+    fn arbitrary(u: &mut Unstructured<'a>) -> arbitrary::Result<Self> {
+        // Now and then a dimension at the format's limit; otherwise small, fast shapes.
+        let edge = u.ratio(1, 16)?;
+        let order = u.int_in_range(1..=MAX_ORDER)?;
+        let joints = match edge {
+            true => *u.choose(&[MAX_JOINTS, MAX_POSE_DIMS, MAX_POSE_DIMS + 1])?,
+            false => u.int_in_range(1..=12)?,
+        };
+        let pose_dims = u.int_in_range(0..=joints.min(if edge { MAX_POSE_DIMS } else { 6 }))?;
+        let vertices = u.int_in_range(1..=if edge { 300 } else { 40 })?;
+        let coef_dims = match u.arbitrary::<bool>()? {
+            true => None,
+            false if edge => Some(MAX_COEF_DIMS),
+            false => Some(u.int_in_range(1..=24)?),
+        };
+        let n2 = order * order;
+        let kv = coef_dims.unwrap_or(vertices);
+        let basis = match coef_dims {
+            None => VertexBasis::Identity,
+            Some(k) => VertexBasis::Stored {
+                coef_dims: k,
+                data: values(u, vertices * k)?,
+            },
+        };
+        let bones = match u.ratio(1, 3)? {
+            false => None,
+            true => {
+                let count = if edge {
+                    MAX_BONES
+                } else {
+                    u.int_in_range(1..=6)?
+                };
+                let seed = u.arbitrary::<u64>()?;
+                let vertex_bone = noise(seed, vertices)
+                    .iter()
+                    .map(|x| ((x + 1.0) * 0.5 * count as f64) as u16 % count as u16)
+                    .collect();
+                Some(BoneFrames { count, vertex_bone })
+            }
+        };
+        Ok(ModelSpec {
+            model: LinearModel {
+                order,
+                vertices,
+                joints,
+                pose_mean: values(u, joints)?,
+                pose_projection: values(u, pose_dims * joints)?,
+                weights: values(u, n2 * (pose_dims + 1) * kv)?,
+                basis,
+                alpha: u.int_in_range(0..=1000u16)? as f64 / 64.0,
+                bones,
+                angle_names: if u.arbitrary()? {
+                    (0..joints).map(|i| format!("joint{i}.x")).collect()
+                } else {
+                    Vec::new()
+                },
+            },
+            precision: if u.arbitrary()? {
+                Precision::F16
+            } else {
+                Precision::F32
+            },
+        })
+    }
+}
+
+impl ModelSpec {
+    /// Draws a spec from raw bytes (zeros once they run out).
+    pub fn from_bytes(bytes: &[u8]) -> ModelSpec {
+        ModelSpec::arbitrary(&mut Unstructured::new(bytes)).expect("bytes running out read as 0")
+    }
+
+    /// The model as the blob should store it: the weights and per-vertex rows rounded to the
+    /// storage precision, everything else exact.
+    pub fn stored(&self) -> LinearModel {
+        let round = |xs: &[f64]| -> Vec<f64> {
+            match self.precision {
+                Precision::F32 => xs.to_vec(),
+                Precision::F16 => xs
+                    .iter()
+                    .map(|&x| half::f16::from_f64(x).to_f64())
+                    .collect(),
+            }
+        };
+        let m = &self.model;
+        LinearModel {
+            weights: round(&m.weights),
+            basis: match &m.basis {
+                VertexBasis::Identity => VertexBasis::Identity,
+                VertexBasis::Stored { coef_dims, data } => VertexBasis::Stored {
+                    coef_dims: *coef_dims,
+                    data: round(data),
+                },
+            },
+            alpha: m.alpha as f32 as f64,
+            ..m.clone()
+        }
+    }
+
+    /// Lighting weights one frame needs: bones × row width for bone-frame models.
+    fn lit_len(&self) -> usize {
+        let m = &self.model;
+        let width = match &m.basis {
+            VertexBasis::Stored { coef_dims, .. } => *coef_dims,
+            VertexBasis::Identity => m.order * m.order * (1 + m.pose_dims()),
+        };
+        m.bones.as_ref().map_or(0, |b| b.count * width)
+    }
+}
+
+/// Writes `spec`, reads it back and evaluates it with `probe`'s inputs ([`exercise`], which
+/// also compares with the f64 reference of what the blob stores). Panics unless: the writer
+/// refuses only values the precision cannot represent; the reader accepts what the writer
+/// writes; every value comes back exactly (f32) or rounded to nearest (f16, within
+/// [`f16_rounding`]); and the evaluation equals `predict` of the unrounded model within f32
+/// rounding plus the effect of the storage rounding.
+pub fn round_trip(spec: &ModelSpec, probe: &Probe) {
+    let blob = match encode_model(&spec.model, spec.precision) {
+        Ok(blob) => blob,
+        Err(ExportError::NotRepresentable { value, .. }) => {
+            assert!(
+                spec.precision == Precision::F16 && half::f16::from_f64(value).is_infinite(),
+                "the writer refused {value} in {:?}",
+                spec.precision
+            );
+            return;
+        }
+        Err(ExportError::TooLarge { what, .. }) if spec.lit_len() > MAX_LIT => {
+            // The runtime lights every bone's row per frame in a fixed buffer; the writer
+            // refuses what the reader would.
+            assert_eq!(what, "bones × lit row width");
+            return;
+        }
+        Err(e) => panic!("the writer refused a model inside the limits: {e}"),
+    };
+    assert!(
+        spec.lit_len() <= MAX_LIT,
+        "the writer wrote a model the runtime cannot light"
+    );
+    let eval = exercise(&blob, probe).expect("the reader accepts every blob the writer writes");
+    let stored = decode(&blob).expect("a valid blob decodes");
+    let expect = spec.stored();
+    assert!(stored == expect, "stored values differ from the model's");
+    if spec.precision == Precision::F16 {
+        let near = |q: &[f64], x: &[f64]| {
+            q.iter()
+                .zip(x)
+                .all(|(q, x)| (q - x).abs() <= f16_rounding(*x))
+        };
+        assert!(near(&stored.weights, &spec.model.weights));
+        if let (VertexBasis::Stored { data: q, .. }, VertexBasis::Stored { data: x, .. }) =
+            (&stored.basis, &spec.model.basis)
+        {
+            assert!(near(q, x));
+        }
+    }
+    let stored_error = |x: f64| match spec.precision {
+        Precision::F32 => 0.0,
+        Precision::F16 => f16_rounding(x),
+    };
+    reference::assert_matches(&spec.model, &eval, stored_error);
+}
