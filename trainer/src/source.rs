@@ -40,7 +40,7 @@ pub struct SourceArgs {
     pub clip: Option<String>,
     /// Sampling rate of the clip in frames per second (glTF default 30; BVH default: the
     /// file's own rate).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub fps: Option<f64>,
     /// BVH frames A..B (half-open, at the file's rate, before resampling); default all.
     #[arg(long, value_parser = parse_range)]

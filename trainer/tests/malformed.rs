@@ -233,6 +233,79 @@ const CASES: &[Case] = &[
         ],
         &["ragged.csv: row 3 has 1 angles"],
     ),
+    // glTF characters.
+    case(
+        &["--gltf", "{fx}/gltf/no-skin.gltf", "--clip", "animation0"],
+        &[
+            "gltf/no-skin.gltf",
+            "without a skin",
+            "no node has both a mesh and a skin",
+        ],
+    ),
+    // BVH motion.
+    case(
+        &["--bvh", "{fx}/bvh/channel-names.bvh"],
+        &["bvh/channel-names.bvh:9", "\"Xposition\""],
+    ),
+    case(
+        &["--bvh", "{fx}/bvh/frame-values.bvh"],
+        &[
+            "bvh/frame-values.bvh:20",
+            "frame 1 has 8 values, expected 9",
+        ],
+    ),
+    case(
+        &["--bvh", "{fx}/bvh/non-numeric.bvh"],
+        &["bvh/non-numeric.bvh:21", "\"abc\" is not a number"],
+    ),
+    case(
+        &["--bvh", "{fx}/bvh/frame-count.bvh"],
+        &[
+            "bvh/frame-count.bvh:21",
+            "Frames: says 5 but the file has 3 frame lines",
+        ],
+    ),
+    case(
+        &["--bvh", "{fx}/bvh/frame-count-extra.bvh"],
+        &[
+            "bvh/frame-count-extra.bvh:21",
+            "Frames: says 2 but the file has 3 frame lines",
+        ],
+    ),
+    case(
+        &[
+            "simulate",
+            "--bvh",
+            "{fx}/bvh/non-numeric.bvh",
+            "--npy",
+            "{out}/t.npy",
+        ],
+        &["bvh/non-numeric.bvh:21", "\"abc\" is not a number"],
+    ),
+    case(
+        &[
+            "simulate",
+            "--bvh",
+            "{fx}/bvh/ok.bvh",
+            "--mannequin",
+            "{fx}/bvh/frame-values.bvh",
+            "--npy",
+            "{out}/t.npy",
+        ],
+        &["bvh/frame-values.bvh:20", "frame 1 has 8 values"],
+    ),
+    case(
+        &[
+            "simulate",
+            "--bvh",
+            "{fx}/bvh/frame-count.bvh",
+            "--mannequin",
+            "{fx}/bvh/ok.bvh",
+            "--npy",
+            "{out}/t.npy",
+        ],
+        &["bvh/frame-count.bvh", "Frames: says 5"],
+    ),
     // Models.
     case(
         &["inspect", "{fx}/not-a-model.aprt"],
@@ -332,4 +405,28 @@ fn every_malformed_input_is_refused_clearly_and_leaves_nothing() {
         }
     }
     assert!(failures.is_empty(), "\n{}", failures.join("\n"));
+}
+
+/// The BVH fixtures are `bvh/ok.bvh` with one thing broken: the baseline itself is accepted
+/// (as its own mannequin and as the one another motion is retargeted onto).
+#[test]
+fn the_bvh_baseline_is_accepted() {
+    let work = tempfile::tempdir().unwrap();
+    let ok = fixtures().join("bvh/ok.bvh");
+    let npy = work.path().join("t.npy");
+    for mannequin in [&[][..], &["--mannequin", ok.to_str().unwrap()][..]] {
+        let mut args: Vec<String> = ["simulate", "--order", "1", "--rays", "4", "--bvh"]
+            .iter()
+            .map(|s| (*s).to_owned())
+            .collect();
+        args.push(ok.to_str().unwrap().to_owned());
+        args.extend(mannequin.iter().map(|s| (*s).to_owned()));
+        args.extend(["--npy".to_owned(), npy.to_str().unwrap().to_owned()]);
+        let out = aprt(&args);
+        assert!(
+            out.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
 }
