@@ -127,7 +127,7 @@ pub struct FitArgs {
     #[arg(long)]
     pub full: bool,
     /// Tikhonov parameter: `auto` (cross-validated, the default), `loo`, `loso`, or a number.
-    #[arg(long, default_value = "auto")]
+    #[arg(long, default_value = "auto", allow_negative_numbers = true)]
     pub alpha: String,
     /// Precision of the large sections.
     #[arg(long, value_enum, default_value_t = Precision::F32)]

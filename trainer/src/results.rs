@@ -28,6 +28,9 @@ use crate::plots::{Axes, Series, line_plot};
 use crate::pose_layout::PoseLayout;
 use crate::rig::Rig;
 
+/// A clip's name and frames (the rig's pose vectors).
+pub type NamedFrames = (String, Vec<Vec<f64>>);
+
 /// One experiment: a character, the frames it trains on and the clips it is tested on.
 pub struct Study {
     /// File-name-safe identifier, used for the figures' names.
@@ -42,18 +45,14 @@ pub struct Study {
     /// turn it to the screen's up.
     pub up: Vec3,
     /// Name and frames of the training clip.
-    pub train: (String, Vec<Vec<f64>>),
+    pub train: NamedFrames,
     /// Names and frames of the novel clips.
-    pub tests: Vec<(String, Vec<Vec<f64>>)>,
+    pub tests: Vec<NamedFrames>,
 }
 
 /// Splits one clip into a training part (the first `fraction` of the frames) and a test part
 /// (the rest), for characters with a single animation.
-pub fn split_clip(
-    name: &str,
-    frames: Vec<Vec<f64>>,
-    fraction: f64,
-) -> ((String, Vec<Vec<f64>>), (String, Vec<Vec<f64>>)) {
+pub fn split_clip(name: &str, frames: Vec<Vec<f64>>, fraction: f64) -> (NamedFrames, NamedFrames) {
     let cut = ((frames.len() as f64 * fraction).round() as usize).clamp(1, frames.len() - 1);
     let mut train = frames;
     let test = train.split_off(cut);
@@ -455,7 +454,7 @@ pub fn asset_studies(assets: &Path) -> Result<Vec<Study>> {
         });
     }
     let fox = GltfRig::load(&gltf.join("Fox.gltf"), STUDY_FPS)?;
-    let clip = |name: &str| -> Result<(String, Vec<Vec<f64>>)> {
+    let clip = |name: &str| -> Result<NamedFrames> {
         Ok((name.to_owned(), GltfRig::clip(&fox, name)?.frames))
     };
     let (train, tests) = (clip("Survey")?, vec![clip("Walk")?, clip("Run")?]);
