@@ -12,7 +12,7 @@ use crate::character::Character;
 use crate::cli::DemoArgs;
 use crate::evaluate::{mean_transfer, nearest_pose};
 use crate::experiment::{self, BakedClip, Row, bake_clip, standard_configs, table_markdown};
-use crate::figures::{picture_lighting, save_panels, shade_with};
+use crate::figures::{picture_lighting, save_model_frame, save_panels, shade_with};
 use crate::pose_layout::PoseLayout;
 use crate::rig::{Clip, Rig};
 
@@ -95,15 +95,15 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     // Pictures of one novel pose: ground truth | model | 4× error, and the baselines.
     let test = &tests[0];
     let frame = test.angles.len() / 2;
-    let truth = shade_with(&test.transfer[frame], &lighting);
-    let model = crate::runtime::predict_shading(
+    let truth = save_model_frame(
+        &out.join("novel_pose.png"),
         &default.blob,
-        &test.angles[frame],
-        &test.core_rotations(frame),
+        test,
+        frame,
         &lighting,
+        Vec3::Z,
     )?;
     let mesh = &test.meshes[frame];
-    save_panels(&out.join("novel_pose.png"), mesh, &[&truth, &model], true)?;
     let mean = shade_with(&mean_transfer(&train.transfer), &lighting);
     let nearest = shade_with(
         &train.transfer[nearest_pose(&train.angles, &test.angles[frame])],

@@ -4,8 +4,9 @@
 use std::path::Path;
 
 use anyhow::Result;
-use glam::Vec3;
+use glam::{Quat, Vec3};
 
+use crate::experiment::BakedClip;
 use crate::mesh::Mesh;
 use crate::render::{Colormap, View, render_scalar, save_png_atomic, side_by_side};
 
@@ -62,4 +63,38 @@ pub fn save_panels(path: &Path, mesh: &Mesh, shadings: &[&[f32]], with_error: bo
     }
     save_png_atomic(path, &side_by_side(&panels))?;
     Ok(())
+}
+
+/// The mesh turned so `up` points along +z, the renderer's up.
+pub fn upright(mesh: &Mesh, up: Vec3) -> Mesh {
+    let q = Quat::from_rotation_arc(up.normalize(), Vec3::Z);
+    let turn = |v: &[f32; 3]| (q * Vec3::from(*v)).to_array();
+    Mesh {
+        positions: mesh.positions.iter().map(turn).collect(),
+        normals: mesh.normals.iter().map(turn).collect(),
+        triangles: mesh.triangles.clone(),
+    }
+}
+
+/// Writes ground truth | `blob`'s prediction through aprt-core | 4× error for frame `frame`
+/// of `clip` under `lighting`, with the character's `up` turned to the screen's up. Returns
+/// the ground-truth shading, for further panels.
+pub fn save_model_frame(
+    path: &Path,
+    blob: &[u8],
+    clip: &BakedClip,
+    frame: usize,
+    lighting: &[f32],
+    up: Vec3,
+) -> Result<Vec<f32>> {
+    let truth = shade_with(&clip.transfer[frame], lighting);
+    let model = crate::runtime::predict_shading(
+        blob,
+        &clip.angles[frame],
+        &clip.core_rotations(frame),
+        lighting,
+    )?;
+    let mesh = upright(&clip.meshes[frame], up);
+    save_panels(path, &mesh, &[&truth, &model], true)?;
+    Ok(truth)
 }

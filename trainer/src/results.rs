@@ -19,11 +19,10 @@ use crate::experiment::{
     standard_configs, table_markdown,
 };
 use crate::export::{Precision, encode_model};
-use crate::figures::{picture_lighting, save_panels, shade_with};
+use crate::figures::{picture_lighting, save_model_frame};
 use crate::fit::{Alpha, CoefDims, FitOptions};
 use crate::gltf_rig::GltfRig;
 use crate::mannequin::{BvhOptions, BvhRig};
-use crate::mesh::Mesh;
 use crate::plots::{Axes, Series, line_plot};
 use crate::pose_layout::PoseLayout;
 use crate::rig::Rig;
@@ -60,17 +59,6 @@ pub fn split_clip(name: &str, frames: Vec<Vec<f64>>, fraction: f64) -> (NamedFra
         (format!("{name} [0, {cut})"), train),
         (format!("{name} [{cut}, {})", cut + test.len()), test),
     )
-}
-
-/// The mesh turned so `up` points along +z, the renderer's up.
-pub fn upright(mesh: &Mesh, up: Vec3) -> Mesh {
-    let q = Quat::from_rotation_arc(up.normalize(), Vec3::Z);
-    let turn = |v: &[f32; 3]| (q * Vec3::from(*v)).to_array();
-    Mesh {
-        positions: mesh.positions.iter().map(turn).collect(),
-        normals: mesh.normals.iter().map(turn).collect(),
-        triangles: mesh.triangles.clone(),
-    }
 }
 
 /// Settings of a results run.
@@ -159,15 +147,14 @@ pub fn run_study(study: &Study, settings: &ResultsSettings, out: &Path) -> Resul
     // A novel frame: ground truth | model | 4× error.
     let test = &tests[0];
     let frame = test.angles.len() / 2;
-    let truth = shade_with(&test.transfer[frame], &lighting);
-    let model = crate::runtime::predict_shading(
+    save_model_frame(
+        &figure("frame"),
         &default.blob,
-        &test.angles[frame],
-        &test.core_rotations(frame),
+        test,
+        frame,
         &lighting,
+        study.up,
     )?;
-    let mesh = upright(&test.meshes[frame], study.up);
-    save_panels(&figure("frame"), &mesh, &[&truth, &model], true)?;
 
     let mut s = String::new();
     let _ = writeln!(s, "## {}\n\n{}\n", study.title, study.about);
