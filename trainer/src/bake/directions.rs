@@ -60,13 +60,19 @@ pub(crate) fn vertex_rotation(j: usize) -> f64 {
     std::f64::consts::TAU * ((z >> 11) as f64 / (1u64 << 53) as f64)
 }
 
-/// Places the local pattern on a vertex with unit normal `n`, rotated by `angle` about it.
-/// Writes world-space unit directions into `out` (cleared first).
-pub(crate) fn place_pattern(pattern: &[DVec3], n: DVec3, angle: f64, out: &mut Vec<DVec3>) {
+/// The frame `[t, b, n]` of a vertex with unit normal `n`: the [`tangent_frame`] rotated by
+/// `angle` about `n`. Its columns map the local pattern (z = normal) to world space, so it is
+/// also the rotation that carries an SH vector accumulated in the local frame to world space.
+pub(crate) fn vertex_frame(n: DVec3, angle: f64) -> [DVec3; 3] {
     let (t0, b0) = tangent_frame(n);
     let (s, c) = angle.sin_cos();
-    let t = t0 * c + b0 * s;
-    let b = b0 * c - t0 * s;
+    [t0 * c + b0 * s, b0 * c - t0 * s, n]
+}
+
+/// Places the local pattern in `frame` (from [`vertex_frame`]). Writes world-space unit
+/// directions into `out` (cleared first).
+pub(crate) fn place_pattern(pattern: &[DVec3], frame: &[DVec3; 3], out: &mut Vec<DVec3>) {
+    let [t, b, n] = *frame;
     out.clear();
     out.extend(
         pattern
@@ -124,7 +130,7 @@ mod tests {
         let p = cosine_hammersley(64);
         let n = DVec3::new(-0.2, 0.9, -0.1).normalize();
         let mut out = Vec::new();
-        place_pattern(&p, n, vertex_rotation(17), &mut out);
+        place_pattern(&p, &vertex_frame(n, vertex_rotation(17)), &mut out);
         for (local, world) in p.iter().zip(&out) {
             assert!((world.dot(n) - local.z).abs() < 1e-12);
         }

@@ -134,6 +134,52 @@ fn unoccluded_transfer_is_the_clamped_cosine_lobe() {
     eprintln!("worst unoccluded coefficient error at 4096 rays: {worst:.2e}");
 }
 
+/// The rotation convention of the bake: summing the local table over a subset of the pattern
+/// and rotating by the vertex frame equals summing the basis at the placed world directions.
+/// Expected: agreement to f32 rounding of the order-6 rotation, 1e-5 of the vector's size.
+#[test]
+fn rotated_local_sum_equals_the_world_sum() {
+    let order = sh::MAX_ORDER;
+    let n2 = order * order;
+    let pattern = directions::cosine_hammersley(500);
+    let table = local_basis(order, &pattern).unwrap();
+    let mut worst = 0.0f64;
+    for k in 0..50u64 {
+        // Deterministic pseudo-random normals, angles and visibility masks.
+        let h = |i: u64| directions::vertex_rotation((k * 7 + i) as usize) / std::f64::consts::TAU;
+        let n = DVec3::new(2.0 * h(0) - 1.0, 2.0 * h(1) - 1.0, 2.0 * h(2) - 1.0).normalize();
+        let frame = directions::vertex_frame(n, directions::vertex_rotation(k as usize));
+        let mut dirs = Vec::new();
+        directions::place_pattern(&pattern, &frame, &mut dirs);
+        let (mut local, mut world) = ([0.0f64; 36], [0.0f64; 36]);
+        let mut y = [0.0f32; 36];
+        for (i, d) in dirs.iter().enumerate() {
+            if directions::vertex_rotation(i + 1000 * k as usize) < 4.0 {
+                continue;
+            }
+            for (acc, &b) in local.iter_mut().zip(&table[i * n2..][..n2]) {
+                *acc += b;
+            }
+            sh::eval_basis(order, d.as_vec3().to_array(), &mut y).unwrap();
+            for (acc, &b) in world.iter_mut().zip(&y) {
+                *acc += f64::from(b);
+            }
+        }
+        let r = std::array::from_fn(|row| frame.map(|axis| axis[row] as f32));
+        let (mut rotated, local) = ([0.0f32; 36], local.map(|x| x as f32));
+        ShRotationMatrix::new(order, &r)
+            .unwrap()
+            .apply(&local, &mut rotated)
+            .unwrap();
+        let size = world.iter().map(|x| x * x).sum::<f64>().sqrt();
+        for c in 0..n2 {
+            worst = worst.max((f64::from(rotated[c]) - world[c]).abs() / size);
+        }
+    }
+    eprintln!("worst rotated-vs-world coefficient error: {worst:.2e} of the vector's size");
+    assert!(worst < 1e-5, "{worst}");
+}
+
 /// A floor of small triangles around each receiver point (normal +z) under a square
 /// occluder of half-width `half` at height `h`, centred above the origin.
 fn floor_under_square(receivers: &[DVec3], half: f64, h: f64) -> (Mesh, Vec<DVec3>) {
