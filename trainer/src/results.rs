@@ -128,10 +128,12 @@ pub fn run_study(study: &Study, settings: &ResultsSettings, out: &Path) -> Resul
 
     // Figure 3: train and test error against α, default shape.
     let sweep = alpha_sweep(rig, &layout, &train, &tests, order, &settings.alphas)?;
+    let test_names: Vec<String> = tests.iter().map(|t| t.name.clone()).collect();
     alpha_plot(
         &figure("alpha"),
         &study.title,
         &sweep,
+        &test_names,
         default.fit.report.alpha,
     )?;
 
@@ -181,7 +183,6 @@ pub fn run_study(study: &Study, settings: &ResultsSettings, out: &Path) -> Resul
         bake_s,
         start.elapsed().as_secs_f64(),
     );
-    let test_names: Vec<String> = tests.iter().map(|t| t.name.clone()).collect();
     s.push_str(&table_markdown(&result.rows, &test_names));
     for (name, reason) in &result.skipped {
         let _ = writeln!(s, "\n*Not in the table: {name}, because {reason}.*");
@@ -297,7 +298,13 @@ fn spectra_plot(path: &Path, title: &str, fitted: &experiment::Fitted) -> Result
     )
 }
 
-fn alpha_plot(path: &Path, title: &str, sweep: &[(f64, f64, Vec<f64>)], chosen: f64) -> Result<()> {
+fn alpha_plot(
+    path: &Path,
+    title: &str,
+    sweep: &[(f64, f64, Vec<f64>)],
+    test_names: &[String],
+    chosen: f64,
+) -> Result<()> {
     // α = 0 cannot sit on a log axis: draw it a decade left of the smallest α swept.
     let smallest = sweep
         .iter()
@@ -310,10 +317,9 @@ fn alpha_plot(path: &Path, title: &str, sweep: &[(f64, f64, Vec<f64>)], chosen: 
         points: sweep.iter().map(|s| (x(s.0), 100.0 * s.1)).collect(),
         markers: true,
     }];
-    let clips = sweep.first().map_or(0, |s| s.2.len());
-    for c in 0..clips {
+    for (c, clip) in test_names.iter().enumerate() {
         series.push(Series {
-            name: format!("test clip {}", c + 1),
+            name: format!("test {clip}"),
             points: sweep.iter().map(|s| (x(s.0), 100.0 * s.2[c])).collect(),
             markers: true,
         });
@@ -327,6 +333,9 @@ fn alpha_plot(path: &Path, title: &str, sweep: &[(f64, f64, Vec<f64>)], chosen: 
         points: vec![(x(chosen), lo), (x(chosen), hi)],
         markers: false,
     });
+    // Unregularised fits can extrapolate by orders of magnitude: then only a log axis shows
+    // the curves near the chosen α.
+    let log_y = lo > 0.0 && hi / lo > 50.0;
     line_plot(
         path,
         &Axes {
@@ -334,7 +343,7 @@ fn alpha_plot(path: &Path, title: &str, sweep: &[(f64, f64, Vec<f64>)], chosen: 
             x: "α (leftmost point: α = 0)",
             y: "relative transfer error, %",
             log_x: true,
-            log_y: false,
+            log_y,
         },
         &series,
     )
