@@ -9,11 +9,12 @@
 //! Every vertex uses the same local pattern, only placed in its own frame `R = [t, b, n]`, so
 //! the basis is evaluated once per bake at the local directions: each vertex sums the rows of
 //! that table for its unoccluded rays (its transfer in the local frame) and rotates the sum to
-//! world space once, `Σ y(R ω_i) = D(R) Σ y(ω_i)` with the Ivanic–Ruedenberg matrix `D(R)`
-//! ([`ShRotationMatrix`]). On the benchmark scene (`benches/bake.rs`) this replaced one basis
-//! evaluation per unoccluded ray (23% of the bake's instructions) by one rotation per vertex
-//! (8%): one pose went from 11.75 to 9.01 G instructions (callgrind). The f32 rotation moves
-//! each vertex's transfer by at most 4.4·10⁻⁷ of its size there.
+//! world space once, `Σ y(R ω_i) = D(R) Σ y(ω_i)`, by ZYZ Euler angles (`euler.rs`). On the
+//! benchmark scene (`benches/bake.rs`) this replaced one basis evaluation per unoccluded ray
+//! (23% of the bake's instructions): one pose went from 11.75 to 9.01 G instructions
+//! (callgrind) with a full Ivanic–Ruedenberg matrix per vertex (8% of the rest), and the Euler
+//! form removes most of that. The f32 rotation moves each vertex's transfer by at most
+//! 4.4·10⁻⁷ of its size there.
 //!
 //! Optional inter-reflections (the paper's Figure 7): with albedo ρ,
 //! `t^{b+1}(x) = (ρ/N) Σ_{occluded i, front-facing hit} t^b(y_i)`, where `t^b(y_i)` is
@@ -35,6 +36,7 @@
 //! thread count (no float reduction crosses threads).
 
 mod directions;
+mod euler;
 #[cfg(test)]
 mod tests;
 mod tracer;
@@ -42,8 +44,8 @@ mod wide;
 
 pub use tracer::Accel;
 
-use aprt_core::rotate::ShRotationMatrix;
 use aprt_core::sh::{self, ShError};
+use euler::EulerRotation;
 use glam::DVec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
@@ -290,6 +292,8 @@ struct Prepared<'a> {
     pattern: Vec<DVec3>,
     /// `y_c` of every pattern direction in the local frame, `n2` values per direction.
     local_basis: Vec<f64>,
+    /// Takes each vertex's local-frame sum to world space.
+    to_world: EulerRotation,
     offset: f64,
     t_min: f32,
 }
@@ -340,6 +344,7 @@ impl<'a> Prepared<'a> {
             n2: sh::coeff_count(settings.order),
             normals: usable_normals(mesh),
             local_basis: local_basis(settings.order, &pattern)?,
+            to_world: EulerRotation::new(settings.order).map_err(BakeError::Basis)?,
             pattern,
             offset: ORIGIN_OFFSET * diagonal,
             t_min: (T_MIN * diagonal) as f32,
@@ -392,14 +397,10 @@ impl<'a> Prepared<'a> {
                     }
                 }
                 // Local frame to world: the rotation whose columns are t, b, n.
-                let r = std::array::from_fn(|row| frame.map(|axis| axis[row] as f32));
-                let rotation =
-                    ShRotationMatrix::new(self.settings.order, &r).map_err(BakeError::Basis)?;
-                let local: [f32; sh::MAX_COEFFS] =
+                let mut world: [f32; sh::MAX_COEFFS] =
                     std::array::from_fn(|c| t.get(c).map_or(0.0, |&acc| (acc * scale) as f32));
-                let mut world = [0.0f32; sh::MAX_COEFFS];
-                rotation
-                    .apply(&local, &mut world)
+                self.to_world
+                    .apply(&frame, &mut world)
                     .map_err(BakeError::Basis)?;
                 for (acc, &w) in t.iter_mut().zip(&world) {
                     *acc = f64::from(w);

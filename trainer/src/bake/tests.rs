@@ -165,11 +165,10 @@ fn rotated_local_sum_equals_the_world_sum() {
                 *acc += f64::from(b);
             }
         }
-        let r = std::array::from_fn(|row| frame.map(|axis| axis[row] as f32));
-        let (mut rotated, local) = ([0.0f32; 36], local.map(|x| x as f32));
-        ShRotationMatrix::new(order, &r)
+        let mut rotated = local.map(|x| x as f32);
+        EulerRotation::new(order)
             .unwrap()
-            .apply(&local, &mut rotated)
+            .apply(&frame, &mut rotated)
             .unwrap();
         let size = world.iter().map(|x| x * x).sum::<f64>().sqrt();
         for c in 0..n2 {
