@@ -267,10 +267,13 @@ fn vertex_residuals(blob: &[u8], tests: &[BakedClip]) -> Result<Vec<f64>> {
 fn spectra_plot(path: &Path, title: &str, fitted: &experiment::Fitted) -> Result<()> {
     let normalised = |values: &[f64]| -> Vec<(f64, f64)> {
         let top = values.first().copied().unwrap_or(1.0).max(1e-300);
+        // Below 1e-12 of the largest, an eigenvalue is rounding noise of a null direction
+        // (joints that move together): leave it out rather than stretch the axis to 1e-30.
         values
             .iter()
             .enumerate()
             .map(|(k, v)| ((k + 1) as f64, v / top))
+            .filter(|&(_, v)| v > 1e-12)
             .collect()
     };
     let report = &fitted.fit.report;
