@@ -111,11 +111,16 @@ impl SourceArgs {
             return Ok((Box::new(character), clip));
         }
         if let Some(path) = &self.gltf {
+            must_exist(path, &["gltf", "glb"])?;
             let rig = GltfRig::load(path, self.fps.unwrap_or(GLTF_FPS))?;
             let clip = GltfRig::clip(&rig, self.clip_name(&rig)?)?;
             return Ok((Box::new(rig), clip));
         }
         if let Some(path) = &self.bvh {
+            must_exist(path, &["bvh"])?;
+            if let Some(skeleton) = &self.mannequin {
+                must_exist(skeleton, &["bvh"])?;
+            }
             return self.bvh_rig(path);
         }
         bail!("no character given: use --builtin, --gltf or --bvh (or --obj-seq with --angles)")
@@ -188,6 +193,42 @@ impl SourceArgs {
             angles,
         })
     }
+}
+
+/// Errors when `path` does not exist, listing the files with one of `extensions` that its
+/// directory does hold.
+fn must_exist(path: &Path, extensions: &[&str]) -> Result<()> {
+    if path.exists() {
+        return Ok(());
+    }
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let mut found: Vec<String> = std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| {
+            p.extension()
+                .and_then(|e| e.to_str())
+                .is_some_and(|e| extensions.iter().any(|x| e.eq_ignore_ascii_case(x)))
+        })
+        .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+        .collect();
+    found.sort();
+    let available = if found.is_empty() {
+        "none".to_owned()
+    } else {
+        found.join(", ")
+    };
+    bail!(
+        "{}: no such file; .{} files in {}: {available}",
+        path.display(),
+        extensions.join("/."),
+        dir.display()
+    )
 }
 
 /// The OBJ files of a sequence directory, sorted by file name.

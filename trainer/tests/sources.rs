@@ -312,6 +312,12 @@ fn gltf_source_mistakes_are_refused_clearly() {
         &["--gltf", s(&missing), "--clip", "Survey"],
         &["no-such-character.gltf"],
     );
+    // A file next to the real ones: the message lists what the directory holds.
+    let typo = fox.with_file_name("Foxy.gltf");
+    train(
+        &["--gltf", s(&typo), "--clip", "Survey"],
+        &["Foxy.gltf: no such file", "CesiumMan.gltf", "Fox.gltf"],
+    );
 
     // `--fps -5` with a space too: a negative rate reaches the check rather than being taken
     // for an unknown flag `-5`.
