@@ -51,7 +51,7 @@ use glam::DVec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use std::ops::Range;
-use tracer::{Hit, Tracer};
+use tracer::{Hit, Tracer, TraversalStack};
 
 use crate::mesh::{Mesh, area_weighted_normals};
 
@@ -370,7 +370,8 @@ impl<'a> Prepared<'a> {
         };
         let scale = std::f64::consts::PI / self.settings.rays as f64;
         let work =
-            |dirs: &mut Vec<DVec3>, j: usize, t: &mut [f64], vertex_hits: Option<&mut Vec<Hit>>| {
+            |scratch: &mut Scratch, j: usize, t: &mut [f64], vertex_hits: Option<&mut Vec<Hit>>| {
+                let Scratch { dirs, stack } = scratch;
                 let p = DVec3::from(self.mesh.positions[j].map(f64::from));
                 let n = self.normals[j];
                 let origin = (p + n * self.offset).as_vec3a();
@@ -380,7 +381,7 @@ impl<'a> Prepared<'a> {
                 for (d, basis) in dirs.iter().zip(self.local_basis.chunks_exact(n2)) {
                     let ray = tracer::ray(origin, d.as_vec3a(), self.t_min, f32::INFINITY);
                     let blocked = match vertex_hits.as_deref_mut() {
-                        Some(list) => match tracer.closest(ray) {
+                        Some(list) => match tracer.closest(ray, stack) {
                             Some(hit) => {
                                 if hit.front_facing {
                                     list.push(hit);
@@ -389,7 +390,7 @@ impl<'a> Prepared<'a> {
                             }
                             None => false,
                         },
-                        None => tracer.occluded(ray),
+                        None => tracer.occluded(ray, stack),
                     };
                     if !blocked {
                         for (acc, &y) in t.iter_mut().zip(basis) {
@@ -409,7 +410,10 @@ impl<'a> Prepared<'a> {
                 bar.inc(1);
                 Ok(())
             };
-        let init = || Vec::with_capacity(self.settings.rays);
+        let init = || Scratch {
+            dirs: Vec::with_capacity(self.settings.rays),
+            stack: TraversalStack::default(),
+        };
         let start = vertices.start;
         if record_hits {
             out.par_chunks_mut(n2)
@@ -456,6 +460,13 @@ impl<'a> Prepared<'a> {
         }
         total
     }
+}
+
+/// One worker thread's buffers, reused for all the vertices it bakes.
+struct Scratch {
+    /// The vertex's ray directions in world space.
+    dirs: Vec<DVec3>,
+    stack: TraversalStack,
 }
 
 /// The SH basis of every direction of `pattern`, `order²` values per direction, widened to

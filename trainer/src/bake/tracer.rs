@@ -18,6 +18,7 @@ use obvhs::{
 use std::time::Duration;
 
 use super::wide::Bvh4;
+pub(crate) use super::wide::TraversalStack;
 
 /// Which acceleration structure answers the bake's ray queries.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -128,11 +129,11 @@ impl Tracer {
     }
 
     /// Whether anything lies on the ray within `[tmin, tmax]`; stops at the first hit.
-    pub fn occluded(&self, ray: Ray) -> bool {
+    pub fn occluded(&self, ray: Ray, stack: &mut TraversalStack) -> bool {
         let tris = &self.tris;
         let test = |r: &Ray, id: usize| tris[id].intersect(r);
         match &self.structure {
-            Structure::Wide(bvh) => bvh.occluded(tris, &ray),
+            Structure::Wide(bvh) => bvh.occluded(tris, &ray, stack),
             Structure::Cw(bvh) => !bvh.ray_traverse_miss(ray, test),
             Structure::Bvh2(bvh) => !bvh.ray_traverse_miss(ray, test),
             Structure::BruteForce => tris.iter().any(|t| t.intersect(&ray) < f32::INFINITY),
@@ -140,12 +141,12 @@ impl Tracer {
     }
 
     /// The closest surface on the ray, with barycentrics for interpolating vertex data.
-    pub fn closest(&self, ray: Ray) -> Option<Hit> {
+    pub fn closest(&self, ray: Ray, stack: &mut TraversalStack) -> Option<Hit> {
         let tris = &self.tris;
         let test = |r: &Ray, id: usize| tris[id].intersect(r);
         let mut hit = RayHit::none();
         let found = match &self.structure {
-            Structure::Wide(bvh) => bvh.closest(tris, ray, &mut hit),
+            Structure::Wide(bvh) => bvh.closest(tris, ray, &mut hit, stack),
             Structure::Cw(bvh) => bvh.ray_traverse(ray, &mut hit, test),
             Structure::Bvh2(bvh) => bvh.ray_traverse(ray, &mut hit, test),
             Structure::BruteForce => {
@@ -224,8 +225,9 @@ mod tests {
         let (p, t) = quad_scene();
         for accel in [Accel::Bvh4, Accel::CwBvh, Accel::Bvh2, Accel::BruteForce] {
             let tracer = Tracer::new(&p, &t, accel);
+            let mut stack = TraversalStack::default();
             let up = ray(Vec3A::new(0.75, 0.25, 0.0), Vec3A::Z, 0.0, f32::INFINITY);
-            let hit = tracer.closest(up).expect("hits the square");
+            let hit = tracer.closest(up, &mut stack).expect("hits the square");
             assert_eq!(hit.triangle, 0);
             // p = 0.25·v0 + 0.5·v1 + 0.25·v2 for (0.75, 0.25).
             for (got, want) in hit.bary.iter().zip([0.25, 0.5, 0.25]) {
@@ -236,14 +238,16 @@ mod tests {
                 "arrives from below, against the +z winding"
             );
             let down = ray(Vec3A::new(0.2, 0.7, 2.0), -Vec3A::Z, 0.0, f32::INFINITY);
-            let hit = tracer.closest(down).expect("hits the square");
+            let hit = tracer.closest(down, &mut stack).expect("hits the square");
             assert_eq!(hit.triangle, 1);
             assert!(hit.front_facing);
-            assert!(tracer.occluded(up) && tracer.occluded(down));
+            assert!(tracer.occluded(up, &mut stack) && tracer.occluded(down, &mut stack));
             let short = ray(Vec3A::new(0.5, 0.5, 0.0), Vec3A::Z, 0.0, 0.9);
-            assert!(!tracer.occluded(short) && tracer.closest(short).is_none());
+            assert!(
+                !tracer.occluded(short, &mut stack) && tracer.closest(short, &mut stack).is_none()
+            );
             let away = ray(Vec3A::new(0.5, 0.5, 0.0), -Vec3A::Z, 0.0, f32::INFINITY);
-            assert!(!tracer.occluded(away));
+            assert!(!tracer.occluded(away, &mut stack));
         }
     }
 
@@ -251,12 +255,13 @@ mod tests {
     fn only_degenerate_triangles_mean_nothing_occludes() {
         let p = vec![[0.0; 3], [1.0, 1.0, 1.0], [2.0, 2.0, 2.0]];
         let tracer = Tracer::new(&p, &[[0, 1, 2]], Accel::CwBvh);
+        let mut stack = TraversalStack::default();
         let ray = ray(
             Vec3A::new(1.0, 0.0, 1.0),
             Vec3A::new(-1.0, 1.0, 0.0).normalize(),
             0.0,
             10.0,
         );
-        assert!(!tracer.occluded(ray) && tracer.closest(ray).is_none());
+        assert!(!tracer.occluded(ray, &mut stack) && tracer.closest(ray, &mut stack).is_none());
     }
 }
