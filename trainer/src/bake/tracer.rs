@@ -25,9 +25,9 @@ pub(crate) use super::wide::TraversalStack;
 pub enum Accel {
     /// A four-wide BVH with exact `f32` boxes collapsed from obvhs' binary BVH and traversed by
     /// this crate (see the `wide` module). The default: on the 11.5k-vertex benchmark scene
-    /// (`benches/bake.rs`, 500 rays, order 6) it took 2.09 CPU seconds per pose against 2.99
-    /// for [`Accel::CwBvh`] and 3.57 for [`Accel::Bvh2`], build included, with bit-identical
-    /// transfer.
+    /// (`benches/bake.rs`, 500 rays, order 6) it took 1.60 CPU seconds per pose against 2.73
+    /// for [`Accel::CwBvh`] and 2.57 for [`Accel::Bvh2`] in the same run, build included, with
+    /// bit-identical transfer.
     #[default]
     Bvh4,
     /// obvhs' compressed 8-wide BVH (the previous default), kept selectable so the choice stays
