@@ -160,12 +160,13 @@ enum RowRef<'a> {
 }
 
 impl RowRef<'_> {
-    fn values(self) -> impl Iterator<Item = f32> {
-        let (a, b) = match self {
-            RowRef::F32(r) => (Some(r.iter().map(|x| x.value())), None),
-            RowRef::F16(r) => (None, Some(r.iter().map(|x| x.value()))),
-        };
-        a.into_iter().flatten().chain(b.into_iter().flatten())
+    /// `out_k += s · row_k` over the shorter of the two; the encoding is matched once per row,
+    /// not per value.
+    fn add_scaled<'o>(self, s: f32, out: impl Iterator<Item = &'o mut f32>) {
+        match self {
+            RowRef::F32(r) => out.zip(r).for_each(|(o, x)| *o += s * x.value()),
+            RowRef::F16(r) => out.zip(r).for_each(|(o, x)| *o += s * x.value()),
+        }
     }
 
     fn dot(self, q: &[f32]) -> f32 {
@@ -253,9 +254,7 @@ impl Model {
         let delta = &mut delta[..a];
         delta.copy_from_slice(angles);
         self.each_row(src, self.pose_mean, a, scratch, |_, mu| {
-            for (d, m) in delta.iter_mut().zip(mu.values()) {
-                *d -= m;
-            }
+            mu.add_scaled(-1.0, delta.iter_mut())
         })?;
         let z = &mut pose.z[..=ka];
         z[0] = 1.0;
@@ -270,9 +269,7 @@ impl Model {
             // Row (c, i) of W holds W[c][i][0..k_v]; it adds z'_i W[c][i][k] to w[k][c].
             self.each_row(src, weights, kv, scratch, |ci, row| {
                 let (c, zi) = (ci / (ka + 1), z[ci % (ka + 1)]);
-                for (wk, x) in w[c..].iter_mut().step_by(n2).zip(row.values()) {
-                    *wk += zi * x;
-                }
+                row.add_scaled(zi, w[c..].iter_mut().step_by(n2))
             })?;
         }
         pose.shape = Some(Shape::of(self));
@@ -472,7 +469,12 @@ impl Model {
                 Encoding::F16 => shade_block(bytes.as_chunks::<2>().0, q, width, bones),
             };
             let (lo, hi) = (v0.max(first), (v0 + VERTEX_BLOCK).min(end));
-            out[lo - first..hi - first].copy_from_slice(&lanes[lo - v0..hi - v0]);
+            let dst = &mut out[lo - first..hi - first];
+            if let Ok(whole) = <&mut [f32; VERTEX_BLOCK]>::try_from(&mut *dst) {
+                *whole = lanes;
+            } else {
+                dst.copy_from_slice(&lanes[lo - v0..hi - v0]);
+            }
         })
     }
 
