@@ -12,11 +12,11 @@
 //! world space once, `Σ y(R ω_i) = D(R) Σ y(ω_i)`, by ZYZ Euler angles (`euler.rs`). On the
 //! benchmark scene (`benches/bake.rs`) this replaced one basis evaluation per unoccluded ray
 //! (23% of the bake's instructions): one pose went from 11.75 to 9.01 G instructions
-//! (callgrind) with a full Ivanic–Ruedenberg matrix per vertex, and the Euler form, which
-//! does not build that matrix, took it to 8.25 G (9.07 G with the matrix in the same
-//! harness, scene and hierarchy build included). With the matrix, the f32 rotation moved each
-//! vertex's transfer by at most 4.4·10⁻⁷ of its size; the Euler form agrees with the matrix
-//! within 2·10⁻⁵ absolute (`euler.rs` tests).
+//! (callgrind) with a full Ivanic–Ruedenberg matrix per vertex. The Euler form does not build
+//! that matrix: 8.25 G against 9.07 G with the matrix, measured in one harness that includes
+//! the scene and hierarchy build. With the matrix, the f32 rotation moved each vertex's
+//! transfer by at most 4.4·10⁻⁷ of its size; the Euler form agrees with the matrix within
+//! 2·10⁻⁵ absolute (`euler.rs` tests).
 //!
 //! Optional inter-reflections (the paper's Figure 7): with albedo ρ,
 //! `t^{b+1}(x) = (ρ/N) Σ_{occluded i, front-facing hit} t^b(y_i)`, where `t^b(y_i)` is

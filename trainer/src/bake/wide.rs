@@ -4,6 +4,11 @@
 //! obvhs' CWBVH spends most of a node visit decompressing its 8-bit child boxes; with exact
 //! boxes a visit is a dozen vector instructions. Culling is conservative by construction (see
 //! [`Bvh4::new`]), so [`Bvh4::occluded`] answers exactly what a test of every triangle would.
+//!
+//! The walk is compiled once per octant of the ray direction (no per-node choice of the box
+//! plane a ray enters through), visits the last child it enters without a stack push, and
+//! keeps its stack in the caller's [`TraversalStack`] (no array to zero per ray): together
+//! 8.25 → 6.74 G instructions per pose of the bake benchmark (callgrind).
 
 use glam::Vec3A;
 use obvhs::{
