@@ -350,7 +350,7 @@ fn check_streamed(model: &Model, blob: &[u8], inputs: &Probe, resident: &Evaluat
     }
 }
 
-/// [`check_streamed`] for every scratch length in `lens`, against one resident evaluation of
+/// `check_streamed` for every scratch length in `lens`, against one resident evaluation of
 /// the valid blob `blob` at the probe's inputs made finite.
 pub fn check_streaming(blob: &[u8], probe: &Probe, lens: impl IntoIterator<Item = usize>) {
     let model = Model::parse(blob).expect("a valid blob");

@@ -19,10 +19,10 @@
 //!   primitive would need split vertices, breaking the one-vertex-per-accessor-element order.
 //! - **Skinning.** Every `JOINTS_n`/`WEIGHTS_n` set is used, weights normalised by
 //!   [`Skin::from_influences`]. Joint matrix = `F · world(joint) · inverseBind(joint)`, with
-//!   `F` the inverse of the skinned mesh node's rest world matrix (see the `skeleton` module): glTF
-//!   ignores the mesh node's transform when skinning, and `F` merely expresses the world-space
-//!   result in the frame of the file's vertex data, so the rest pose gives back the stored
-//!   mesh. [`GltfRig::up`] says where glTF's world +Y points in that frame.
+//!   `F` the inverse of the skinned mesh node's rest world matrix (see the `skeleton`
+//!   module): glTF ignores the mesh node's transform when skinning, and `F` merely expresses
+//!   the world-space result in the frame of the file's vertex data, so the rest pose gives
+//!   back the stored mesh. [`GltfRig::up`] says where glTF's world +Y points in that frame.
 //! - **Pose vector.** Three numbers per skin joint, in skin order, named `<joint>.x/.y/.z`:
 //!   the rotation vector (log map) of `q_rest⁻¹ · q_local`, the joint's local rotation
 //!   relative to its rest rotation *in the joint's own rest frame* (`q_local = q_rest · δ`).
