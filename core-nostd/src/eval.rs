@@ -169,10 +169,19 @@ impl RowRef<'_> {
         }
     }
 
-    fn dot(self, q: &[f32]) -> f32 {
+    /// `Σ_k row_k (x_k − c_k)` in f64: the difference of two finite f32 values cannot
+    /// overflow there (in f32, `f32::MAX − (−f32::MAX)` is infinite and a zero projection row
+    /// then gives NaN), and the few multiply–adds of a pose projection cost nothing.
+    fn dot_centred(self, x: &[f32], c: &[f32]) -> f64 {
+        fn sum<E: Decode>(row: &[E], x: &[f32], c: &[f32]) -> f64 {
+            row.iter()
+                .zip(x.iter().zip(c))
+                .map(|(r, (&x, &c))| f64::from(r.value()) * (f64::from(x) - f64::from(c)))
+                .sum()
+        }
         match self {
-            RowRef::F32(r) => dot(r, q),
-            RowRef::F16(r) => dot(r, q),
+            RowRef::F32(r) => sum(r, x, c),
+            RowRef::F16(r) => sum(r, x, c),
         }
     }
 }
@@ -250,16 +259,15 @@ impl Model {
         }
         pose.shape = None;
         let (a, ka, kv) = (self.joints, self.pose_dims, self.coef_dims);
-        let mut delta = [0.0f32; MAX_JOINTS];
-        let delta = &mut delta[..a];
-        delta.copy_from_slice(angles);
+        let mut mean = [0.0f32; MAX_JOINTS];
+        let mean = &mut mean[..a];
         self.each_row(src, self.pose_mean, a, scratch, |_, mu| {
-            mu.add_scaled(-1.0, delta.iter_mut())
+            mu.add_scaled(1.0, mean.iter_mut())
         })?;
         let z = &mut pose.z[..=ka];
         z[0] = 1.0;
         self.each_row(src, self.pose_projection, a, scratch, |i, p| {
-            z[1 + i] = p.dot(delta)
+            z[1 + i] = p.dot_centred(angles, mean) as f32
         })?;
         if let (Basis::Stored, Some(weights)) = (self.basis, self.weights) {
             let n2 = coeff_count(self.order);

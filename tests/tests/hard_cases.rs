@@ -77,3 +77,38 @@ fn f16_sections_keep_the_documented_bound_and_refuse_overflow() {
     v[3] = 1e6;
     assert!(encode_model(&constant_model(&v), Precision::F32).is_ok());
 }
+
+/// Angles and pose means at opposite ends of the f32 range. `2¹⁰³ − (−f32::MAX)` rounds up
+/// to infinity in f32 (it is half an ulp above `f32::MAX`, with an odd mantissa), and a zero
+/// projection weight times infinity is NaN, although the exact pose projection ignores that
+/// joint. Expected: the core forms the centred angles in f64, so the transfer is the exact
+/// `c₀ + c₁·z` with `z = 0.5` from the other joint. (Found by the `round_trip` proptest.)
+#[test]
+fn a_joint_the_projection_ignores_cannot_overflow_the_pose() {
+    let model = LinearModel {
+        order: 1,
+        vertices: 1,
+        joints: 2,
+        pose_mean: vec![-f64::from(f32::MAX), 0.0],
+        pose_projection: vec![0.0, 1.0],
+        weights: vec![0.25, 2.0],
+        basis: VertexBasis::Identity,
+        alpha: 0.0,
+        bones: None,
+        angle_names: Vec::new(),
+    };
+    let blob = encode_model(&model, Precision::F32).unwrap();
+    let core = Model::parse(&blob).unwrap();
+    let mut pose = PoseWeights::default();
+    core.set_pose(
+        &mut SliceSource(&blob),
+        &[2f32.powi(103), 0.5],
+        &mut [],
+        &mut pose,
+    )
+    .unwrap();
+    let mut got = [0.0f32; 1];
+    core.transfer(&mut SliceSource(&blob), &pose, 0, &mut got, &mut [])
+        .unwrap();
+    assert_eq!(got[0], 0.25 + 2.0 * 0.5);
+}
