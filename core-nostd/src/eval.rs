@@ -17,7 +17,8 @@ use crate::blob::{
     Basis, BlobSource, Encoding, Error, Frame, MAX_COEF_DIMS, MAX_JOINTS, MAX_LIT, MAX_POSE_DIMS,
     Model, Section, VERTEX_BLOCK,
 };
-use crate::rotate::{ShRotationMatrix, is_rotation};
+use crate::euler::EulerRotation;
+use crate::rotate::is_rotation;
 use crate::sh::{MAX_COEFFS, coeff_count};
 
 /// Longest per-vertex row: k_v (stored basis) or n²(1 + k_a) (identity basis).
@@ -303,8 +304,9 @@ impl Model {
     }
 
     /// For bone-frame models: rotates the world lighting into each bone's frame
-    /// (`rotations[b]`, the bone's world rotation, row-major) with the Ivanic–Ruedenberg
-    /// recurrences and pushes each through the pose weights.
+    /// (`rotations[b]`, the bone's world rotation, row-major) by ZYZ Euler angles
+    /// ([`EulerRotation`]: two fixed Ivanic–Ruedenberg quarter turns built once per call) and
+    /// pushes each through the pose weights.
     pub fn light_skinned(
         &self,
         pose: &PoseWeights,
@@ -325,14 +327,16 @@ impl Model {
         lit.shape = None;
         let width = self.row_width();
         let mut local = [0.0f32; MAX_COEFFS];
+        let euler = EulerRotation::new(self.order).map_err(|_| Error::ShapeMismatch)?;
         for (r, q) in rotations.iter().zip(lit.q.chunks_exact_mut(width)) {
             if !r.iter().flatten().all(|x| x.is_finite()) || !is_rotation(r, 1e-3) {
                 return Err(Error::BadRotation);
             }
             // Bone-frame lighting is the world lighting rotated by Rᵀ.
-            let rt = core::array::from_fn(|i| core::array::from_fn(|j| r[j][i]));
-            ShRotationMatrix::new(self.order, &rt)
-                .and_then(|m| m.apply(lighting, &mut local))
+            let rt = core::array::from_fn(|i| core::array::from_fn(|j| f64::from(r[j][i])));
+            local[..lighting.len()].copy_from_slice(lighting);
+            euler
+                .apply(&rt, &mut local)
                 .map_err(|_| Error::ShapeMismatch)?;
             self.push(pose, &local[..lighting.len()], q);
         }

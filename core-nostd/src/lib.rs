@@ -16,6 +16,7 @@
 #![forbid(unsafe_code)]
 
 pub mod blob;
+pub mod euler;
 pub mod eval;
 pub mod math;
 pub mod rotate;

@@ -36,3 +36,21 @@ pub fn atan2(y: f32, x: f32) -> f32 {
 pub fn abs(x: f32) -> f32 {
     libm::fabsf(x)
 }
+
+/// Four-quadrant arc tangent of `y / x`, in f64 (rotation angles extracted from a matrix).
+#[inline]
+pub fn atan2_f64(y: f64, x: f64) -> f64 {
+    libm::atan2(y, x)
+}
+
+/// `√(x² + y²)` without intermediate overflow, in f64.
+#[inline]
+pub fn hypot_f64(x: f64, y: f64) -> f64 {
+    libm::hypot(x, y)
+}
+
+/// Sine and cosine of `x`, in f64.
+#[inline]
+pub fn sin_cos_f64(x: f64) -> (f64, f64) {
+    libm::sincos(x)
+}

@@ -69,6 +69,12 @@ pub(crate) fn vertex_frame(n: DVec3, angle: f64) -> [DVec3; 3] {
     [t0 * c + b0 * s, b0 * c - t0 * s, n]
 }
 
+/// `frame` as the row-major matrix whose columns are its axes: the rotation from the local
+/// pattern's frame to world space, in the form SH rotations take.
+pub(crate) fn frame_matrix(frame: &[DVec3; 3]) -> [[f64; 3]; 3] {
+    std::array::from_fn(|row| frame.map(|axis| axis[row]))
+}
+
 /// Places the local pattern in `frame` (from [`vertex_frame`]). Writes world-space unit
 /// directions into `out` (cleared first).
 pub(crate) fn place_pattern(pattern: &[DVec3], frame: &[DVec3; 3], out: &mut Vec<DVec3>) {

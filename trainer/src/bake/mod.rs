@@ -9,14 +9,14 @@
 //! Every vertex uses the same local pattern, only placed in its own frame `R = [t, b, n]`, so
 //! the basis is evaluated once per bake at the local directions: each vertex sums the rows of
 //! that table for its unoccluded rays (its transfer in the local frame) and rotates the sum to
-//! world space once, `Σ y(R ω_i) = D(R) Σ y(ω_i)`, by ZYZ Euler angles (`euler.rs`). On the
+//! world space once, `Σ y(R ω_i) = D(R) Σ y(ω_i)`, by ZYZ Euler angles (`aprt_core::euler`). On the
 //! benchmark scene (`benches/bake.rs`) this replaced one basis evaluation per unoccluded ray
 //! (23% of the bake's instructions): one pose went from 11.75 to 9.01 G instructions
 //! (callgrind) with a full Ivanic–Ruedenberg matrix per vertex. The Euler form does not build
 //! that matrix: 8.25 G against 9.07 G with the matrix, measured in one harness that includes
 //! the scene and hierarchy build. With the matrix, the f32 rotation moved each vertex's
 //! transfer by at most 4.4·10⁻⁷ of its size; the Euler form agrees with the matrix within
-//! 2·10⁻⁵ absolute (`euler.rs` tests).
+//! 2·10⁻⁵ absolute (`aprt_core::euler` tests).
 //!
 //! Optional inter-reflections (the paper's Figure 7): with albedo ρ,
 //! `t^{b+1}(x) = (ρ/N) Σ_{occluded i, front-facing hit} t^b(y_i)`, where `t^b(y_i)` is
@@ -38,7 +38,6 @@
 //! thread count (no float reduction crosses threads).
 
 mod directions;
-mod euler;
 #[cfg(test)]
 mod tests;
 mod tracer;
@@ -46,8 +45,8 @@ mod wide;
 
 pub use tracer::Accel;
 
+use aprt_core::euler::EulerRotation;
 use aprt_core::sh::{self, ShError};
-use euler::EulerRotation;
 use glam::DVec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
@@ -403,7 +402,7 @@ impl<'a> Prepared<'a> {
                 let mut world: [f32; sh::MAX_COEFFS] =
                     std::array::from_fn(|c| t.get(c).map_or(0.0, |&acc| (acc * scale) as f32));
                 self.to_world
-                    .apply(&frame, &mut world)
+                    .apply(&directions::frame_matrix(&frame), &mut world)
                     .map_err(BakeError::Basis)?;
                 for (acc, &w) in t.iter_mut().zip(&world) {
                     *acc = f64::from(w);

@@ -168,7 +168,7 @@ fn rotated_local_sum_equals_the_world_sum() {
         let mut rotated = local.map(|x| x as f32);
         EulerRotation::new(order)
             .unwrap()
-            .apply(&frame, &mut rotated)
+            .apply(&directions::frame_matrix(&frame), &mut rotated)
             .unwrap();
         let size = world.iter().map(|x| x * x).sum::<f64>().sqrt();
         for c in 0..n2 {
