@@ -3,8 +3,10 @@
 //! Rotating `f` by `R` gives `f'(ω) = f(Rᵀω)`, so `f'_c = ∫ y_c(ω) f(Rᵀω) dω`. For order n the
 //! integrand is a polynomial of degree ≤ 2n − 2 on the sphere, which a product rule of n
 //! Gauss–Legendre nodes in cos θ and 2n − 1 uniform nodes in φ integrates exactly: no rotation
-//! recurrences and no sign conventions beyond the basis itself. Used to turn world lighting
-//! into each bone's frame once per bone per frame.
+//! recurrences and no sign conventions beyond the basis itself: the reference the faster
+//! rotations are checked against. [`ShRotationMatrix`] builds the matrix of one rotation by
+//! recurrences; the per-bone and per-vertex rotations use [`crate::euler`], which needs only
+//! two such matrices.
 
 use crate::math;
 use crate::sh::{MAX_COEFFS, MAX_ORDER, ShError, coeff_count, eval_basis};
@@ -216,8 +218,8 @@ mod tests {
 
 /// Block-diagonal SH rotation matrix for one rotation, built by the Ivanic–Ruedenberg
 /// recurrences (J. Phys. Chem. 1996, with the 1998 errata) from the 3×3 matrix: O(n³) work
-/// instead of O(n³)·quadrature nodes, so rotating lighting into many bones per frame is
-/// cheap. Checked against the exact quadrature [`ShRotation`] in the tests.
+/// instead of O(n³)·quadrature nodes. Checked against the exact quadrature [`ShRotation`] in
+/// the tests.
 #[derive(Clone, Debug)]
 pub struct ShRotationMatrix {
     order: usize,
