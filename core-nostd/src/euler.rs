@@ -1,23 +1,35 @@
 //! Rotating SH vectors cheaply: `R = Rz(α) Ry(β) Rz(γ)` (ZYZ Euler angles) with
 //! `Ry(β) = Rx(−90°) Rz(β) Rx(90°)`. A rotation about z turns each `(cos mφ, sin mφ)`
 //! coefficient pair by `mθ` (O(n²)), and the two quarter turns about x are fixed
-//! [`ShRotationMatrix`]es built once, so each further rotation costs two block products and
+//! [`ShRotationMatrix`]es computed at compile time, so a rotation costs two block products and
 //! three plane rotations instead of building its own Ivanic–Ruedenberg matrix (about 65k
-//! instructions at order 6). Used for the bake's per-vertex frames and the runtime's per-bone
-//! lighting.
+//! instructions at order 6), and no set-up. Used for the bake's per-vertex frames and the
+//! runtime's per-bone lighting.
 
 use crate::math;
 use crate::rotate::ShRotationMatrix;
-use crate::sh::{MAX_COEFFS, ShError, coeff_count, index};
+use crate::sh::{MAX_COEFFS, MAX_ORDER, ShError, coeff_count, index};
+
+/// `D(Rx(90°))` for every band, built at compile time.
+static QUARTER: ShRotationMatrix = quarter_turn(1.0);
+/// `D(Rx(−90°))`.
+static QUARTER_BACK: ShRotationMatrix = quarter_turn(-1.0);
+
+/// The SH rotation of a quarter turn about x, `sign` giving its direction.
+const fn quarter_turn(sign: f32) -> ShRotationMatrix {
+    match ShRotationMatrix::new(
+        MAX_ORDER,
+        &[[1.0, 0.0, 0.0], [0.0, 0.0, -sign], [0.0, sign, 0.0]],
+    ) {
+        Ok(m) => m,
+        Err(_) => panic!("MAX_ORDER is a valid order"),
+    }
+}
 
 /// Rotations of SH vectors of one order by any rotation.
-#[derive(Clone, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct EulerRotation {
     order: usize,
-    /// `D(Rx(90°))`.
-    quarter: ShRotationMatrix,
-    /// `D(Rx(−90°))`.
-    quarter_back: ShRotationMatrix,
 }
 
 /// The ZYZ Euler angles `(α, β, γ)` of the row-major rotation `r`. `β` comes from
@@ -39,15 +51,12 @@ fn zyz(r: &[[f64; 3]; 3]) -> (f64, f64, f64) {
 }
 
 impl EulerRotation {
-    /// The fixed quarter turns for `order` ≤ 6.
+    /// Rotations of order-`order` vectors (1..=6).
     pub fn new(order: usize) -> Result<EulerRotation, ShError> {
-        let quarter = [[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]];
-        let quarter_back = [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]];
-        Ok(EulerRotation {
-            order,
-            quarter: ShRotationMatrix::new(order, &quarter)?,
-            quarter_back: ShRotationMatrix::new(order, &quarter_back)?,
-        })
+        if order == 0 || order > MAX_ORDER {
+            return Err(ShError::BadOrder);
+        }
+        Ok(EulerRotation { order })
     }
 
     /// `v` rotated by the row-major rotation `r` (taking `f(ω)` to `f(rᵀω)`, as
@@ -59,9 +68,9 @@ impl EulerRotation {
         let (alpha, beta, gamma) = zyz(r);
         let mut tmp = [0.0f32; MAX_COEFFS];
         self.turn_z(gamma, v);
-        self.quarter.apply(v, &mut tmp)?;
+        QUARTER.apply_bands(self.order, v, &mut tmp)?;
         self.turn_z(beta, &mut tmp);
-        self.quarter_back.apply(&tmp, v)?;
+        QUARTER_BACK.apply_bands(self.order, &tmp, v)?;
         self.turn_z(alpha, v);
         Ok(())
     }

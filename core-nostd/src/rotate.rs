@@ -290,8 +290,9 @@ const fn block_offset(l: usize) -> usize {
 
 impl ShRotationMatrix {
     /// The rotation taking `f(ω)` to `f(rᵀω)` (as [`ShRotation::rotate`]) for `order` ≤ 6;
-    /// `r` is row-major.
-    pub fn new(order: usize, r: &[[f32; 3]; 3]) -> Result<ShRotationMatrix, ShError> {
+    /// `r` is row-major. A `const fn` (plain `while` loops), so fixed rotations can be
+    /// tables built at compile time.
+    pub const fn new(order: usize, r: &[[f32; 3]; 3]) -> Result<ShRotationMatrix, ShError> {
         if order == 0 || order > MAX_ORDER {
             return Err(ShError::BadOrder);
         }
@@ -300,48 +301,46 @@ impl ShRotationMatrix {
             blocks: [0.0; BLOCK_LEN],
         };
         m.blocks[0] = 1.0;
-        if order == 1 {
-            return Ok(m);
-        }
         // Band 1 in the basis order (y, z, x) of m = −1, 0, 1.
         let axis = [1usize, 2, 0];
-        for (i, &a) in axis.iter().enumerate() {
-            for (j, &b) in axis.iter().enumerate() {
-                m.blocks[block_offset(1) + i * 3 + j] = r[a][b];
-            }
+        let mut i = 0;
+        while order > 1 && i < 9 {
+            m.blocks[block_offset(1) + i] = r[axis[i / 3]][axis[i % 3]];
+            i += 1;
         }
-        for l in 2..order {
-            for mm in -(l as i32)..=(l as i32) {
-                for n in -(l as i32)..=(l as i32) {
-                    let value = m.recurrence(l as i32, mm, n);
-                    let w = 2 * l + 1;
-                    m.blocks[block_offset(l)
-                        + (mm + l as i32) as usize * w
-                        + (n + l as i32) as usize] = value;
-                }
+        let mut l = 2;
+        while l < order {
+            let (li, w) = (l as i32, 2 * l + 1);
+            let mut k = 0;
+            while k < w * w {
+                let (mm, n) = ((k / w) as i32 - li, (k % w) as i32 - li);
+                m.blocks[block_offset(l) + k] = m.recurrence(li, mm, n);
+                k += 1;
             }
+            l += 1;
         }
         Ok(m)
     }
 
-    fn get(&self, l: i32, a: i32, b: i32) -> f32 {
+    const fn get(&self, l: i32, a: i32, b: i32) -> f32 {
         let w = (2 * l + 1) as usize;
         self.blocks[block_offset(l as usize) + (a + l) as usize * w + (b + l) as usize]
     }
 
     /// The `P` term of the recurrence: band-1 row `i` times band `l − 1`.
-    fn p(&self, i: i32, a: i32, b: i32, l: i32) -> f32 {
-        let r = |x: i32, y: i32| self.get(1, x, y);
+    const fn p(&self, i: i32, a: i32, b: i32, l: i32) -> f32 {
         if b == l {
-            r(i, 1) * self.get(l - 1, a, l - 1) - r(i, -1) * self.get(l - 1, a, -l + 1)
+            self.get(1, i, 1) * self.get(l - 1, a, l - 1)
+                - self.get(1, i, -1) * self.get(l - 1, a, -l + 1)
         } else if b == -l {
-            r(i, 1) * self.get(l - 1, a, -l + 1) + r(i, -1) * self.get(l - 1, a, l - 1)
+            self.get(1, i, 1) * self.get(l - 1, a, -l + 1)
+                + self.get(1, i, -1) * self.get(l - 1, a, l - 1)
         } else {
-            r(i, 0) * self.get(l - 1, a, b)
+            self.get(1, i, 0) * self.get(l - 1, a, b)
         }
     }
 
-    fn recurrence(&self, l: i32, m: i32, n: i32) -> f32 {
+    const fn recurrence(&self, l: i32, m: i32, n: i32) -> f32 {
         let [u, v, w] = UVW[block_offset(l as usize) + ((m + l) * (2 * l + 1) + (n + l)) as usize];
         let big_u = if u != 0.0 { self.p(0, m, n, l) } else { 0.0 };
         let big_v = if v == 0.0 {
@@ -375,11 +374,25 @@ impl ShRotationMatrix {
 
     /// Writes `input` rotated to `output` (both at least `order²` values).
     pub fn apply(&self, input: &[f32], output: &mut [f32]) -> Result<(), ShError> {
-        let n2 = coeff_count(self.order);
+        self.apply_bands(self.order, input, output)
+    }
+
+    /// [`ShRotationMatrix::apply`] to the first `order` bands only (`order` ≤ the matrix's):
+    /// the blocks of a band do not depend on how many bands were built.
+    pub(crate) fn apply_bands(
+        &self,
+        order: usize,
+        input: &[f32],
+        output: &mut [f32],
+    ) -> Result<(), ShError> {
+        let n2 = coeff_count(order);
+        if order > self.order {
+            return Err(ShError::BadOrder);
+        }
         if input.len() < n2 || output.len() < n2 {
             return Err(ShError::OutputTooSmall);
         }
-        for l in 0..self.order {
+        for l in 0..order {
             let (w, base) = (2 * l + 1, l * l);
             let block = &self.blocks[block_offset(l)..][..w * w];
             for (i, row) in block.chunks_exact(w).enumerate() {
