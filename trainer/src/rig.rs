@@ -8,6 +8,10 @@ use glam::Mat4;
 use crate::mesh::Mesh;
 use crate::skin::{Skin, skin};
 
+/// Most frames one sampled clip may have (an hour at 240 fps): a guard against a malformed
+/// end time or frame rate turning into an unbounded allocation.
+pub const MAX_FRAMES: usize = 240 * 3600;
+
 /// A sequence of poses sampled at a fixed rate. Each frame has one value per pose-vector
 /// entry, in the rig's [`Rig::angle_names`] order.
 #[derive(Clone, Debug, PartialEq)]

@@ -55,14 +55,10 @@ use std::path::{Path, PathBuf};
 use glam::{DVec3, Mat4, Vec3};
 
 use crate::mesh::Mesh;
-use crate::rig::{Clip, Rig};
+use crate::rig::{Clip, MAX_FRAMES, Rig};
 use crate::skin::{Skin, SkinError};
 use animation::Animation;
 use skeleton::{Skeleton, Trs};
-
-/// Most frames one clip may have (an hour at 240 fps): a guard against a malformed end time or
-/// frame rate turning into an unbounded allocation.
-const MAX_FRAMES: usize = 240 * 3600;
 
 /// Why a glTF rig could not be loaded, posed or sampled. Load errors name the file and the
 /// item (mesh, primitive, accessor, node, skin, animation channel) and what is wrong with it.

@@ -37,7 +37,7 @@ use glam::{DAffine3, DQuat, DVec3, Mat4};
 
 use crate::bvh::{Bvh, BvhError};
 use crate::mesh::Mesh;
-use crate::rig::{Clip, Rig};
+use crate::rig::{Clip, MAX_FRAMES, Rig};
 use crate::skin::Skin;
 
 /// How to build a [`BvhRig`].
@@ -85,6 +85,14 @@ pub enum BvhRigError {
         end: usize,
         /// Frames available.
         count: usize,
+    },
+    /// A resampling rate so high that the clip would exceed [`MAX_FRAMES`].
+    #[error("{clip:?} resampled at {fps} fps would have more than {MAX_FRAMES} frames")]
+    TooManyFrames {
+        /// The clip.
+        clip: String,
+        /// The requested frame rate.
+        fps: f64,
     },
     /// A resampling rate that is not a positive finite number.
     #[error("frame rate {fps} is not a positive finite number")]
@@ -352,7 +360,14 @@ impl BvhRig {
         // last frame to rounding.
         let step = frame_step(source.fps() / fps);
         let last = (frames.end - 1 - frames.start) as f64;
-        let n = (last / step + 1e-9).floor() as usize + 1;
+        let n = (last / step + 1e-9).floor() + 1.0;
+        if n > MAX_FRAMES as f64 {
+            return Err(BvhRigError::TooManyFrames {
+                clip: name.into(),
+                fps,
+            });
+        }
+        let n = n as usize;
         let mut out: Vec<Vec<f64>> = Vec::with_capacity(n);
         for k in 0..n {
             let at = frames.start as f64 + (k as f64 * step).min(last);

@@ -141,6 +141,18 @@ fn pose_errors_name_the_entry() {
         err.to_string(),
         "frame rate 0 is not a positive finite number"
     );
+    // A finite but absurd rate is refused before anything is allocated.
+    let fast = rig(&BvhOptions {
+        fps: Some(1e12),
+        ..BvhOptions::default()
+    });
+    assert!(
+        matches!(
+            Rig::clip(&fast, "figure"),
+            Err(e) if e.to_string().contains("would have more than 864000 frames")
+        ),
+        "an unbounded resampling must be refused"
+    );
 }
 
 #[test]
