@@ -356,15 +356,7 @@ fn results(args: &ResultsArgs) -> Result<()> {
 
 fn simulate(args: &SimulateArgs) -> Result<()> {
     let settings = bake_settings(&args.bake);
-    let meshes = match args.source.poses()? {
-        Poses::Meshes { meshes, .. } => meshes,
-        Poses::Rig { rig, clip } => clip
-            .frames
-            .iter()
-            .map(|p| rig.pose(p))
-            .collect::<Result<Vec<_>>>()
-            .with_context(|| format!("posing clip {}", clip.name))?,
-    };
+    let meshes = args.source.meshes()?;
     let transfer = crate::bake::bake_poses(&meshes, &settings, true)?;
     let n2 = settings.order * settings.order;
     write_npy(

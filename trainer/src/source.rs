@@ -8,6 +8,7 @@ use anyhow::{Context, Result, bail};
 
 use crate::bvh::Bvh;
 use crate::character::Character;
+use crate::experiment::pose_all;
 use crate::gltf_rig::GltfRig;
 use crate::mannequin::{BvhOptions, BvhRig};
 use crate::mesh::Mesh;
@@ -17,7 +18,7 @@ use crate::rig::{Clip, Rig};
 #[derive(Debug, Clone, Default, clap::Args)]
 pub struct SourceArgs {
     /// Directory of OBJ files, one per pose, sorted by file name, all with the same mesh
-    /// (with --angles).
+    /// (with --angles for `train`).
     #[arg(long, conflicts_with_all = ["builtin"])]
     pub obj_seq: Option<PathBuf>,
     /// CSV with one row of joint angles per pose (a header row is allowed).
@@ -163,6 +164,19 @@ impl SourceArgs {
                 rig.clip_names().join(", ")
             )
         })
+    }
+
+    /// The meshes to bake, without angles: every OBJ of --obj-seq (--angles is not needed), or
+    /// the rig posed at every frame of its clip.
+    pub fn meshes(&self) -> Result<Vec<Mesh>> {
+        if self.names_rig() {
+            let (rig, clip) = self.rig()?;
+            return pose_all(rig.as_ref(), &clip.name, &clip.frames);
+        }
+        let Some(dir) = &self.obj_seq else {
+            bail!("give a character (--builtin, --gltf or --bvh) or --obj-seq DIR");
+        };
+        read_same_meshes(&obj_sequence(dir)?)
     }
 
     /// The poses the options name: a rig's clip, or an OBJ sequence with its angles.

@@ -430,3 +430,23 @@ fn the_bvh_baseline_is_accepted() {
         );
     }
 }
+
+/// `simulate` bakes an OBJ sequence without angles: it has no use for them.
+#[test]
+fn simulate_needs_no_angles() {
+    let work = tempfile::tempdir().unwrap();
+    let npy = work.path().join("t.npy");
+    let seq = fixtures().join("ok/seq");
+    let args: Vec<String> = ["simulate", "--order", "1", "--rays", "4", "--obj-seq"]
+        .iter()
+        .map(|s| (*s).to_owned())
+        .chain([seq.to_str().unwrap().to_owned(), "--npy".to_owned()])
+        .chain([npy.to_str().unwrap().to_owned()])
+        .collect();
+    let out = aprt(&args);
+    assert!(
+        out.status.success() && npy.exists(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
