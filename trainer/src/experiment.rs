@@ -6,7 +6,7 @@ use std::borrow::Cow;
 use std::fmt::Write as _;
 use std::time::Instant;
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use aprt_core::rotate::ShRotation;
 use aprt_core::{LitWeights, Model, PoseWeights, SliceSource};
 use glam::DMat3;
@@ -106,6 +106,15 @@ fn change_frames(
     bones: &BoneFrames,
     into_bone: bool,
 ) -> Result<Vec<Vec<f32>>> {
+    if rotations.len() != transfer.len() {
+        bail!(
+            "the model learns transfer in bone frames, so world-frame transfer needs each frame's \
+             bone rotations, which a character's clip gives and bare angles do not ({} frames, \
+             rotations for {})",
+            transfer.len(),
+            rotations.len()
+        );
+    }
     let vertices = bones.vertex_bone.len();
     let order = (transfer.first().map_or(0, |t| t.len() / vertices.max(1)) as f64).sqrt() as usize;
     let rotation = ShRotation::new(order)?;
@@ -518,4 +527,31 @@ pub fn table_markdown(rows: &[Row], test_clips: &[String]) -> String {
         );
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bone_frame_transfer_without_every_frames_rotations_is_refused() {
+        let bones = BoneFrames {
+            count: 1,
+            vertex_bone: vec![0],
+        };
+        let transfer = vec![vec![1.0f32; 4]; 2];
+        let err = change_frames(&transfer, &[vec![DMat3::IDENTITY]], &bones, false).unwrap_err();
+        assert!(
+            err.to_string().contains("(2 frames, rotations for 1)"),
+            "{err}"
+        );
+        let moved =
+            change_frames(&transfer, &vec![vec![DMat3::IDENTITY]; 2], &bones, false).unwrap();
+        for (m, t) in moved.iter().flatten().zip(transfer.iter().flatten()) {
+            assert!(
+                (m - t).abs() < 1e-6,
+                "the identity moved transfer: {moved:?}"
+            );
+        }
+    }
 }
