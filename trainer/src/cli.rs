@@ -264,6 +264,9 @@ fn eval(args: &EvalArgs) -> Result<()> {
             bail!("give the poses: --angles FILE, or a clip of the model's character");
         };
         let poses = crate::angles::read_angles_for(csv, info.joints)?;
+        if crate::runtime::bone_frames(&blob)?.is_some() {
+            bail!("{model_name} learns transfer in bone frames: give its character's clip (not --angles) so the bones' rotations are known");
+        }
         predict_world(&blob, &poses, &[])
     }
     .with_context(|| format!("evaluating {model_name}"))?;
