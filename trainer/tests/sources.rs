@@ -193,8 +193,9 @@ fn gltf_clip_trains_evaluates_and_matches_simulate() {
         full_error < 1e-3,
         "the full unregularised model reproduces its training frames: {full_error}"
     );
+    // A model predicting zeros scores 1.0; the regularised default measured 2.0e-2.
     assert!(
-        default_error.is_finite() && default_error < 1.0,
+        default_error.is_finite() && default_error < 0.1,
         "{default_error}"
     );
 
@@ -266,7 +267,8 @@ fn small_gltf_rig_trains_and_evaluates() {
     assert_eq!(shape, truth_shape);
     assert_eq!(shape[1..], [96, 4]);
     let error = relative_error(&predicted, &truth);
-    assert!(error < 1.0, "{error}");
+    // On its own training frames (zeros would score 1.0; measured 6.8e-3).
+    assert!(error < 0.1, "{error}");
 }
 
 /// Mistakes with a glTF source: each refused with one line that says what is wrong.
@@ -383,7 +385,8 @@ fn bvh_trains_retargets_and_refuses_mismatches() {
     let (shape, predicted) = finite_npy(&own);
     assert_eq!(shape, truth_shape);
     let error = relative_error(&predicted, &truth);
-    assert!(error < 1.0, "{error}");
+    // On its own training frames (zeros would score 1.0; measured 2.3e-2).
+    assert!(error < 0.1, "{error}");
 
     // Another subject's motion on the training mannequin: retargeted by joint name.
     let retargeted = work.path().join("retargeted.npy");
