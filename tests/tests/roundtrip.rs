@@ -294,13 +294,21 @@ mod random_shapes {
         /// The fuzz target `round_trip` under proptest: random shapes (order, vertices,
         /// joints, pose and basis dimensions, basis kind, bone frames, precision, values)
         /// written, read back exactly or within half precision, and evaluated like the f64
-        /// reference.
+        /// reference. Raw probe bytes make angles and lighting of any magnitude (NaN and
+        /// overflow included, where only "no panic" is asked); the same probe with moderate
+        /// angles and lighting is then compared with the reference whenever the model's own
+        /// values allow.
         #[test]
         fn writer_reader_round_trip(
             probe in proptest::collection::vec(any::<u8>(), PROBE_BYTES),
             spec in proptest::collection::vec(any::<u8>(), 0..512),
+            angles in proptest::array::uniform4(-4.0f32..4.0),
+            lighting in proptest::array::uniform4(-4.0f32..4.0),
         ) {
-            round_trip(&ModelSpec::from_bytes(&spec), &Probe::from_bytes(&probe));
+            let spec = ModelSpec::from_bytes(&spec);
+            let raw = Probe::from_bytes(&probe);
+            round_trip(&spec, &raw);
+            round_trip(&spec, &Probe { angles, lighting, ..raw });
         }
     }
 
