@@ -27,6 +27,7 @@ pub mod pose_layout;
 pub mod render;
 pub mod results;
 pub mod rig;
+pub mod rotation;
 pub mod runtime;
 pub mod sh_rotate;
 pub mod skin;

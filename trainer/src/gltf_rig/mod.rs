@@ -47,7 +47,6 @@
 mod animation;
 pub mod curve;
 mod load;
-pub mod rotation;
 mod skeleton;
 
 use std::path::{Path, PathBuf};
@@ -267,7 +266,7 @@ impl GltfRig {
         }
         let mut locals = self.skeleton.rest.clone();
         for (&node, r) in self.skeleton.joints.iter().zip(pose.chunks_exact(3)) {
-            let delta = rotation::exp(DVec3::new(r[0], r[1], r[2]));
+            let delta = crate::rotation::exp(DVec3::new(r[0], r[1], r[2]));
             locals[node].rotation = self.skeleton.rest[node].rotation * delta;
         }
         Ok(self.skeleton.joint_matrices(&locals))
@@ -349,7 +348,7 @@ impl GltfRig {
             .iter()
             .flat_map(|&node| {
                 let delta = self.skeleton.rest[node].rotation.inverse() * locals[node].rotation;
-                rotation::log(delta).to_array()
+                crate::rotation::log(delta).to_array()
             })
             .collect()
     }

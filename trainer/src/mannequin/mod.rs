@@ -38,6 +38,7 @@ use glam::{DAffine3, DQuat, DVec3, Mat4};
 use crate::bvh::{Bvh, BvhError};
 use crate::mesh::Mesh;
 use crate::rig::{Clip, MAX_FRAMES, Rig};
+use crate::rotation;
 use crate::skin::Skin;
 
 /// How to build a [`BvhRig`].
@@ -171,17 +172,6 @@ pub struct BvhRig {
 /// The file-to-mesh change of axes: y-up to z-up (see the module docs).
 fn to_mesh_frame() -> DQuat {
     DQuat::from_rotation_x(std::f64::consts::FRAC_PI_2)
-}
-
-/// The rotation vector (log map) of `q`, with angle in `[0, π]`.
-fn log(q: DQuat) -> DVec3 {
-    let q = if q.w < 0.0 { -q } else { q };
-    let v = DVec3::new(q.x, q.y, q.z);
-    let s = v.length();
-    if s == 0.0 {
-        return DVec3::ZERO;
-    }
-    v * (2.0 * s.atan2(q.w) / s)
 }
 
 /// Of the rotation vectors equal to `v` as rotations (`v̂ (|v| + 2πk)`), the one nearest
@@ -409,7 +399,7 @@ impl BvhRig {
         for e in &self.entries {
             let v = match *e {
                 Entry::Translation(j) => map[j].map_or(DVec3::ZERO, |k| local(k).1),
-                Entry::Rotation(j) => map[j].map_or(DVec3::ZERO, |k| log(local(k).0)),
+                Entry::Rotation(j) => map[j].map_or(DVec3::ZERO, |k| rotation::log(local(k).0)),
             };
             pose.extend(v.to_array());
         }

@@ -71,12 +71,12 @@ fn log_map_inverts_the_exponential_and_clips_unwrap_whole_turns() {
         DVec3::new(0.0, 3.0, 0.0),
         DVec3::new(1e-9, 0.0, 0.0),
     ] {
-        let back = log(DQuat::from_scaled_axis(v));
+        let back = rotation::log(DQuat::from_scaled_axis(v));
         assert!(back.abs_diff_eq(v, 1e-12), "{v} -> {back}");
     }
     // A turn past π about y: the log flips to the other side, the unwrapped vector continues.
     let previous = DVec3::new(0.0, 3.1, 0.0);
-    let raw = log(DQuat::from_rotation_y(3.2));
+    let raw = rotation::log(DQuat::from_rotation_y(3.2));
     assert!(raw.y < 0.0);
     let continued = nearest_turn(raw, previous);
     assert!((continued.y - 3.2).abs() < 1e-12, "{continued}");
