@@ -60,23 +60,14 @@ pub enum AnglesError {
 }
 
 /// Reads an angles CSV: comma-separated numbers, one row per pose. A first row that is not
-/// numeric is taken as a header; blank lines and lines starting with `#` are skipped.
-pub fn read_angles(path: &Path) -> Result<Vec<Vec<f64>>, AnglesError> {
+/// numeric is taken as a header; blank lines and lines starting with `#` are skipped. With
+/// `joints` (a model's joint count), a row of another width is an error naming that row.
+pub fn read_angles(path: &Path, joints: Option<usize>) -> Result<Vec<Vec<f64>>, AnglesError> {
     let text = std::fs::read_to_string(path).map_err(|source| AnglesError::Read {
         path: path.into(),
         source,
     })?;
-    parse_angles(path, &text, None)
-}
-
-/// [`read_angles`] for a model of `joints` joints: a row of another width is an error naming
-/// that row.
-pub fn read_angles_for(path: &Path, joints: usize) -> Result<Vec<Vec<f64>>, AnglesError> {
-    let text = std::fs::read_to_string(path).map_err(|source| AnglesError::Read {
-        path: path.into(),
-        source,
-    })?;
-    parse_angles(path, &text, Some(joints))
+    parse_angles(path, &text, joints)
 }
 
 /// Parses angles CSV text; `path` only names the source in errors. With `joints`, every row

@@ -191,7 +191,7 @@ impl SourceArgs {
             );
         };
         let files = obj_sequence(dir)?;
-        let angles = crate::angles::read_angles(csv)?;
+        let angles = crate::angles::read_angles(csv, None)?;
         if angles.len() != files.len() {
             bail!(
                 "{} has {} rows of angles but {} holds {} OBJ files: one row per pose is needed",
