@@ -262,6 +262,7 @@ impl Model {
         let (a, ka, kv) = (self.joints, self.pose_dims, self.coef_dims);
         let mut mean = [0.0f32; MAX_JOINTS];
         let mean = &mut mean[..a];
+        // The mean row decoded (added to zeros), then centred in f64 by `dot_centred`.
         self.each_row(src, self.pose_mean, a, scratch, |_, mu| {
             mu.add_scaled(1.0, mean.iter_mut())
         })?;
