@@ -180,6 +180,12 @@ fn killed_bake_resumes_to_the_same_bytes() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    // The stored poses were loaded, not baked again (equal bytes alone would not show it).
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(&format!("resumed {stored} of {POSES} poses")),
+        "{err}"
+    );
     assert!(
         std::fs::read(&model).unwrap() == reference,
         "resumed model differs from the uninterrupted one"
