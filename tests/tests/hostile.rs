@@ -210,13 +210,32 @@ fn arb_entry() -> impl Strategy<Value = SectionEntry> {
 proptest! {
     #![proptest_config(ProptestConfig { cases: 3000, ..ProptestConfig::default() })]
 
-    /// Arbitrary bytes never panic the reader.
+    /// Arbitrary bytes never panic the reader: as a whole blob, after the magic, and as a
+    /// header behind a valid preamble and checksum, so they reach the header's decoding.
     #[test]
-    fn random_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..400)) {
+    fn random_bytes_never_panic(
+        bytes in proptest::collection::vec(any::<u8>(), 0..400),
+        header_len in 0usize..400,
+    ) {
         let _ = exercise(&bytes);
         let mut with_magic = MAGIC.to_vec();
         with_magic.extend_from_slice(&bytes);
         let _ = exercise(&with_magic);
+        let header = &bytes[..header_len.min(bytes.len())];
+        let mut sealed = MAGIC.to_vec();
+        sealed.extend_from_slice(&1u32.to_le_bytes());
+        sealed.extend_from_slice(&(header.len() as u32).to_le_bytes());
+        sealed.extend_from_slice(&aprt_core::blob::crc32(header).to_le_bytes());
+        sealed.extend_from_slice(&bytes);
+        let result = exercise(&sealed);
+        prop_assert!(
+            !matches!(
+                result,
+                Err(Error::BadMagic | Error::UnsupportedVersion { .. } | Error::HeaderChecksum)
+            ),
+            "{:?}",
+            result
+        );
     }
 
     /// Well-formed headers with arbitrary dimensions and section tables never panic the
