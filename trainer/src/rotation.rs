@@ -46,6 +46,33 @@ pub fn exp(r: DVec3) -> DQuat {
     DQuat::from_xyzw(v.x, v.y, v.z, cos_half)
 }
 
+/// Of the rotation vectors equal to `v` as rotations (`v̂ (|v| + 2πk)`), the one nearest
+/// `previous`: applied frame by frame, it keeps a clip's pose vectors continuous where a joint
+/// turns through a half turn and [`log`] jumps to the other side.
+pub fn nearest_turn(v: DVec3, previous: DVec3) -> DVec3 {
+    let angle = v.length();
+    if angle == 0.0 {
+        return v;
+    }
+    let axis = v / angle;
+    let k = ((axis.dot(previous) - angle) / std::f64::consts::TAU).round();
+    if k == 0.0 {
+        v
+    } else {
+        axis * (angle + std::f64::consts::TAU * k)
+    }
+}
+
+/// Unwraps each 3-number rotation vector of `pose` at `joints` (indices of triples) to the
+/// turn nearest the same joint in `previous`; see [`nearest_turn`].
+pub fn continue_turns(pose: &mut [f64], previous: &[f64], joints: impl IntoIterator<Item = usize>) {
+    for i in joints {
+        let v = DVec3::from_slice(&pose[3 * i..]);
+        let u = DVec3::from_slice(&previous[3 * i..]);
+        nearest_turn(v, u).write_to_slice(&mut pose[3 * i..]);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

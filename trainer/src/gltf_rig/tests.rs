@@ -468,3 +468,40 @@ fn errors_name_the_file_and_the_item() {
         Err(GltfError::Fps { .. })
     ));
 }
+
+/// A joint turning on past a half turn: the log map alone would jump from +π to −π, so the
+/// clip unwraps each rotation vector to the turn nearest the previous frame's, and the pose
+/// vector still reproduces the animation.
+#[test]
+fn clips_unwrap_rotations_through_half_turns() {
+    let mut doc = two_joint_doc();
+    let times = doc.accessor(
+        "SCALAR",
+        5126,
+        &[0.0, 0.5, 1.0],
+        json!({"min": [0.0], "max": [1.0]}),
+    );
+    let keys: Vec<f64> = [0.0, 2.0, 4.0]
+        .iter()
+        .flat_map(|&a| (tip_rest() * DQuat::from_rotation_x(a)).to_array())
+        .collect();
+    let keys = doc.f32s("VEC4", &keys);
+    doc.json["animations"].as_array_mut().unwrap().push(json!({
+        "name": "spin",
+        "channels": [{"sampler": 0, "target": {"node": 3, "path": "rotation"}}],
+        "samplers": [{"input": times, "output": keys}]
+    }));
+    let (_dir, rig) = load(&doc, Form::Embedded);
+    let rig = rig.unwrap();
+    let clip = rig.clip("spin").unwrap();
+    let tip_x: Vec<f64> = clip.frames.iter().map(|f| f[3]).collect();
+    for (got, expect) in tip_x.iter().zip([0.0, 1.0, 2.0, 3.0, 4.0]) {
+        assert!((got - expect).abs() < 1e-5, "{tip_x:?}");
+    }
+    for (i, pose) in clip.frames.iter().enumerate() {
+        let animated = rig.animated_joint_matrices("spin", i).unwrap();
+        for (a, b) in rig.joint_matrices(pose).unwrap().iter().zip(&animated) {
+            assert!(a.abs_diff_eq(*b, 1e-5), "frame {i}: {a:?} vs {b:?}");
+        }
+    }
+}

@@ -174,22 +174,6 @@ fn to_mesh_frame() -> DQuat {
     DQuat::from_rotation_x(std::f64::consts::FRAC_PI_2)
 }
 
-/// Of the rotation vectors equal to `v` as rotations (`v̂ (|v| + 2πk)`), the one nearest
-/// `previous`.
-fn nearest_turn(v: DVec3, previous: DVec3) -> DVec3 {
-    let angle = v.length();
-    if angle == 0.0 {
-        return v;
-    }
-    let axis = v / angle;
-    let k = ((axis.dot(previous) - angle) / std::f64::consts::TAU).round();
-    if k == 0.0 {
-        v
-    } else {
-        axis * (angle + std::f64::consts::TAU * k)
-    }
-}
-
 impl BvhRig {
     /// Reads a BVH file and builds its mannequin; the clip is named after the file stem.
     pub fn from_file(path: &Path, options: &BvhOptions) -> Result<BvhRig, BvhRigError> {
@@ -363,13 +347,9 @@ impl BvhRig {
             let at = frames.start as f64 + (k as f64 * step).min(last);
             let mut pose = self.pose_of(source, map, at);
             if let Some(previous) = out.last() {
-                for (i, e) in self.entries.iter().enumerate() {
-                    if let Entry::Rotation(_) = e {
-                        let v = DVec3::from_slice(&pose[3 * i..]);
-                        let u = DVec3::from_slice(&previous[3 * i..]);
-                        nearest_turn(v, u).write_to_slice(&mut pose[3 * i..]);
-                    }
-                }
+                let rotations = (self.entries.iter().enumerate())
+                    .filter_map(|(i, e)| matches!(e, Entry::Rotation(_)).then_some(i));
+                crate::rotation::continue_turns(&mut pose, previous, rotations);
             }
             out.push(pose);
         }

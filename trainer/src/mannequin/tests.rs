@@ -78,9 +78,9 @@ fn log_map_inverts_the_exponential_and_clips_unwrap_whole_turns() {
     let previous = DVec3::new(0.0, 3.1, 0.0);
     let raw = rotation::log(DQuat::from_rotation_y(3.2));
     assert!(raw.y < 0.0);
-    let continued = nearest_turn(raw, previous);
+    let continued = rotation::nearest_turn(raw, previous);
     assert!((continued.y - 3.2).abs() < 1e-12, "{continued}");
-    assert_eq!(nearest_turn(raw, raw), raw);
+    assert_eq!(rotation::nearest_turn(raw, raw), raw);
 }
 
 #[test]
