@@ -14,8 +14,6 @@
 //! [`crate::bake::bake_pose_progress`], the same code path as [`crate::bake::bake_poses`], and
 //! stored poses are read back as the exact f32 bits that were written.
 
-use std::borrow::Cow;
-use std::convert::Infallible;
 use std::path::{Path, PathBuf};
 
 use crate::atomic::write_atomic;
@@ -28,56 +26,6 @@ const MANIFEST: &str = "manifest.json";
 const POSE_MAGIC: &[u8; 8] = b"APRTPOSE";
 /// Magic, payload CRC-32, value count.
 const POSE_HEADER: usize = 8 + 4 + 8;
-
-/// Where the posed meshes of a bake come from: a slice of meshes, or anything producing pose
-/// `i`'s mesh on demand (skinning a glTF or BVH frame). The checkpoint asks for each mesh twice,
-/// once to fingerprint the inputs before any work and once to bake it; posing a mesh costs far
-/// less than baking it.
-pub trait PoseSource {
-    /// Why a mesh could not be produced.
-    type Error: std::error::Error + Send + Sync + 'static;
-    /// Number of poses.
-    fn count(&self) -> usize;
-    /// Pose `pose`'s mesh, `pose < count()`.
-    fn mesh(&mut self, pose: usize) -> Result<Cow<'_, Mesh>, Self::Error>;
-    /// How errors name pose `pose` (a file name, a frame number).
-    fn name(&self, pose: usize) -> String {
-        format!("pose {pose}")
-    }
-}
-
-impl PoseSource for [Mesh] {
-    type Error = Infallible;
-    fn count(&self) -> usize {
-        self.len()
-    }
-    fn mesh(&mut self, pose: usize) -> Result<Cow<'_, Mesh>, Infallible> {
-        Ok(Cow::Borrowed(&self[pose]))
-    }
-}
-
-/// Meshes already in memory, each named by the file it came from.
-pub struct NamedMeshes<'a> {
-    /// The meshes.
-    pub meshes: &'a [Mesh],
-    /// One name per mesh.
-    pub names: &'a [PathBuf],
-}
-
-impl PoseSource for NamedMeshes<'_> {
-    type Error = Infallible;
-    fn count(&self) -> usize {
-        self.meshes.len()
-    }
-    fn mesh(&mut self, pose: usize) -> Result<Cow<'_, Mesh>, Infallible> {
-        Ok(Cow::Borrowed(&self.meshes[pose]))
-    }
-    fn name(&self, pose: usize) -> String {
-        self.names
-            .get(pose)
-            .map_or_else(|| format!("pose {pose}"), |p| p.display().to_string())
-    }
-}
 
 /// Why a checkpointed bake stopped.
 #[derive(Debug, thiserror::Error)]
@@ -132,15 +80,6 @@ pub enum CheckpointError {
         /// Its value now.
         now: String,
     },
-    /// A pose's mesh could not be produced.
-    #[error("{name}")]
-    Source {
-        /// The pose's name.
-        name: String,
-        /// The source's error.
-        #[source]
-        source: Box<dyn std::error::Error + Send + Sync>,
-    },
     /// A pose could not be baked.
     #[error("{name}: baking")]
     Bake {
@@ -167,6 +106,20 @@ struct Manifest {
 }
 
 impl Manifest {
+    fn new(settings: &BakeSettings, meshes: &[Mesh]) -> Manifest {
+        let first = meshes.first();
+        Manifest {
+            format: FORMAT,
+            order: settings.order,
+            rays: settings.rays,
+            bounces: settings.bounces,
+            albedo: settings.albedo,
+            vertices: first.map_or(0, Mesh::vertex_count),
+            triangles: first.map_or(0, |m| m.triangles.len()),
+            poses: meshes.iter().map(fingerprint).collect(),
+        }
+    }
+
     /// The first field that differs, as (what, was, now).
     fn difference(&self, now: &Manifest) -> Option<(String, String, String)> {
         let fields: [(&str, String, String); 7] = [
@@ -235,17 +188,17 @@ impl Checkpoint {
         PathBuf::from(name)
     }
 
-    /// Opens the checkpoint in `dir` for baking `source` with `settings`.
+    /// Opens the checkpoint in `dir` for baking `meshes` with `settings`.
     ///
     /// A missing (or empty) directory starts a new checkpoint, with or without `resume`, so
     /// scripts may always pass `--resume`. An existing checkpoint is continued only with
     /// `resume`, and only if it was made from the same meshes and settings; without `resume` it
     /// is an error rather than overwritten, because it may hold hours of work.
-    pub fn open<S: PoseSource + ?Sized>(
+    pub fn open(
         dir: &Path,
         resume: bool,
         settings: &BakeSettings,
-        source: &mut S,
+        meshes: &[Mesh],
     ) -> Result<Self, CheckpointError> {
         settings
             .validate()
@@ -253,7 +206,7 @@ impl Checkpoint {
                 name: "settings".to_owned(),
                 source,
             })?;
-        let manifest = Self::manifest(settings, source)?;
+        let manifest = Manifest::new(settings, meshes);
         let io = |path: &Path| {
             let path = path.to_owned();
             move |source| CheckpointError::Io { path, source }
@@ -302,40 +255,6 @@ impl Checkpoint {
         })
     }
 
-    fn manifest<S: PoseSource + ?Sized>(
-        settings: &BakeSettings,
-        source: &mut S,
-    ) -> Result<Manifest, CheckpointError> {
-        let mut poses = Vec::with_capacity(source.count());
-        let (mut vertices, mut triangles) = (0, 0);
-        for i in 0..source.count() {
-            let name = source.name(i);
-            let mesh = source.mesh(i).map_err(|e| CheckpointError::Source {
-                name,
-                source: Box::new(e),
-            })?;
-            if i == 0 {
-                (vertices, triangles) = (mesh.vertex_count(), mesh.triangles.len());
-            }
-            poses.push(fingerprint(&mesh));
-        }
-        Ok(Manifest {
-            format: FORMAT,
-            order: settings.order,
-            rays: settings.rays,
-            bounces: settings.bounces,
-            albedo: settings.albedo,
-            vertices,
-            triangles,
-            poses,
-        })
-    }
-
-    /// The checkpoint directory.
-    pub fn dir(&self) -> &Path {
-        &self.dir
-    }
-
     fn pose_path(&self, pose: usize) -> PathBuf {
         self.dir.join(format!("pose-{pose:06}.bin"))
     }
@@ -378,18 +297,20 @@ impl Checkpoint {
         write_atomic(&path, &bytes).map_err(|source| CheckpointError::Io { path, source })
     }
 
-    /// The transfer of every pose of `source`: stored poses are read back, missing ones baked
-    /// one after the other and stored as soon as each is done. Equal, bit for bit, to
-    /// [`crate::bake::bake_poses`] on the same meshes.
+    /// The transfer of every pose of `meshes` (the meshes the checkpoint was opened for,
+    /// checked again by fingerprint): stored poses are read back, missing ones baked one after
+    /// the other and stored as soon as each is done. Equal, bit for bit, to
+    /// [`crate::bake::bake_poses`] on the same meshes. Errors name pose `i` as `name(i)`.
     ///
     /// If the bake fails before any pose is stored, the checkpoint is removed again: it holds
     /// nothing worth resuming, and a failed run should leave no trace.
-    pub fn bake<S: PoseSource + ?Sized>(
+    pub fn bake(
         &mut self,
-        source: &mut S,
+        meshes: &[Mesh],
+        name: impl Fn(usize) -> String,
         progress: bool,
     ) -> Result<Vec<Vec<f32>>, CheckpointError> {
-        let result = self.bake_inner(source, progress);
+        let result = self.bake_inner(meshes, name, progress);
         if result.is_err() && !self.holds_poses {
             // Best effort: the original error is the one worth reporting.
             let _ = self.remove();
@@ -397,22 +318,18 @@ impl Checkpoint {
         result
     }
 
-    fn bake_inner<S: PoseSource + ?Sized>(
+    fn bake_inner(
         &mut self,
-        source: &mut S,
+        meshes: &[Mesh],
+        name: impl Fn(usize) -> String,
         progress: bool,
     ) -> Result<Vec<Vec<f32>>, CheckpointError> {
-        let count = source.count();
+        let count = meshes.len();
         self.check_count(count)?;
         let mut out = Vec::with_capacity(count);
         let (mut bar, mut resumed) = (None, 0);
-        for i in 0..count {
-            let name = source.name(i);
-            let mesh = source.mesh(i).map_err(|e| CheckpointError::Source {
-                name: name.clone(),
-                source: Box::new(e),
-            })?;
-            self.check_mesh(i, &mesh)?;
+        for (i, mesh) in meshes.iter().enumerate() {
+            self.check_mesh(i, mesh)?;
             let len = mesh.vertex_count() * self.settings.order * self.settings.order;
             if let Some(stored) = self.load(i, len)? {
                 resumed += 1;
@@ -422,8 +339,12 @@ impl Checkpoint {
             let bar = bar
                 .get_or_insert_with(|| progress_bar(mesh.vertex_count() * (count - i), progress));
             bar.set_message(format!("pose {}/{count}", i + 1));
-            let transfer = bake_pose_progress(&mesh, &self.settings, bar)
-                .map_err(|source| CheckpointError::Bake { name, source })?;
+            let transfer = bake_pose_progress(mesh, &self.settings, bar).map_err(|source| {
+                CheckpointError::Bake {
+                    name: name(i),
+                    source,
+                }
+            })?;
             self.store(i, &transfer)?;
             self.holds_poses = true;
             out.push(transfer);
@@ -440,7 +361,7 @@ impl Checkpoint {
         Ok(out)
     }
 
-    /// The source given to [`Checkpoint::bake`] must be the one the checkpoint was opened for.
+    /// The meshes given to [`Checkpoint::bake`] must be the ones the checkpoint was opened for.
     fn check_count(&self, count: usize) -> Result<(), CheckpointError> {
         let stored = self.manifest.poses.len();
         if count == stored {
@@ -519,6 +440,10 @@ mod tests {
             .collect()
     }
 
+    fn pose_name(i: usize) -> String {
+        format!("pose {i}")
+    }
+
     const SETTINGS: BakeSettings = BakeSettings {
         order: 3,
         rays: 64,
@@ -530,25 +455,25 @@ mod tests {
     fn resumed_bake_equals_the_uninterrupted_one() {
         let dir = tempfile::tempdir().unwrap();
         let ck = dir.path().join("m.aprt.bake");
-        let mut poses = meshes(4);
+        let poses = meshes(4);
         let reference = bake_poses(&poses, &SETTINGS, false).unwrap();
 
         // As if interrupted: pose 1's file is missing.
-        let mut first = Checkpoint::open(&ck, false, &SETTINGS, &mut poses[..]).unwrap();
-        assert_eq!(first.bake(&mut poses[..], false).unwrap(), reference);
+        let mut first = Checkpoint::open(&ck, false, &SETTINGS, &poses).unwrap();
+        assert_eq!(first.bake(&poses, pose_name, false).unwrap(), reference);
         std::fs::remove_file(ck.join("pose-000001.bin")).unwrap();
         // A damaged pose file is baked again, not trusted.
         std::fs::write(ck.join("pose-000000.bin"), b"APRTPOSE").unwrap();
 
         assert!(matches!(
-            Checkpoint::open(&ck, false, &SETTINGS, &mut poses[..]),
+            Checkpoint::open(&ck, false, &SETTINGS, &poses),
             Err(CheckpointError::Exists { .. })
         ));
-        let mut resumed = Checkpoint::open(&ck, true, &SETTINGS, &mut poses[..]).unwrap();
-        assert_eq!(resumed.bake(&mut poses[..], false).unwrap(), reference);
+        let mut resumed = Checkpoint::open(&ck, true, &SETTINGS, &poses).unwrap();
+        assert_eq!(resumed.bake(&poses, pose_name, false).unwrap(), reference);
         // Every pose is now stored; a second resume bakes nothing and reads the same bits.
-        let mut again = Checkpoint::open(&ck, true, &SETTINGS, &mut poses[..]).unwrap();
-        assert_eq!(again.bake(&mut poses[..], false).unwrap(), reference);
+        let mut again = Checkpoint::open(&ck, true, &SETTINGS, &poses).unwrap();
+        assert_eq!(again.bake(&poses, pose_name, false).unwrap(), reference);
         again.remove().unwrap();
         assert!(!ck.exists());
     }
@@ -557,9 +482,9 @@ mod tests {
     fn other_inputs_or_settings_are_refused() {
         let dir = tempfile::tempdir().unwrap();
         let ck = dir.path().join("ck");
-        let mut poses = meshes(3);
-        Checkpoint::open(&ck, false, &SETTINGS, &mut poses[..]).unwrap();
-        let refused = |settings: BakeSettings, poses: &mut [Mesh], what: &str| {
+        let poses = meshes(3);
+        Checkpoint::open(&ck, false, &SETTINGS, &poses).unwrap();
+        let refused = |settings: BakeSettings, poses: &[Mesh], what: &str| {
             let err = Checkpoint::open(&ck, true, &settings, poses).unwrap_err();
             let message = err.to_string();
             assert!(
@@ -572,7 +497,7 @@ mod tests {
                 rays: 65,
                 ..SETTINGS
             },
-            &mut poses,
+            &poses,
             "rays (checkpoint: 64, now: 65)",
         );
         refused(
@@ -580,7 +505,7 @@ mod tests {
                 order: 2,
                 ..SETTINGS
             },
-            &mut poses,
+            &poses,
             "SH order",
         );
         refused(
@@ -588,36 +513,36 @@ mod tests {
                 albedo: 0.6,
                 ..SETTINGS
             },
-            &mut poses,
+            &poses,
             "albedo",
         );
-        refused(SETTINGS, &mut poses[..2], "pose count");
+        refused(SETTINGS, &poses[..2], "pose count");
         let mut moved = poses.clone();
         moved[2].positions[4][2] += 1e-6;
-        refused(SETTINGS, &mut moved, "the mesh of pose 2 differs");
+        refused(SETTINGS, &moved, "the mesh of pose 2 differs");
         // The matching inputs still resume, and baking other inputs through it is refused.
-        let mut c = Checkpoint::open(&ck, true, &SETTINGS, &mut poses[..]).unwrap();
+        let mut c = Checkpoint::open(&ck, true, &SETTINGS, &poses).unwrap();
         assert!(matches!(
-            c.bake(&mut moved[..], false),
+            c.bake(&moved[..], pose_name, false),
             Err(CheckpointError::Mismatch { .. })
         ));
-        assert!(c.bake(&mut poses[..2], false).is_err());
+        assert!(c.bake(&poses[..2], pose_name, false).is_err());
     }
 
     #[test]
     fn foreign_directories_are_neither_filled_nor_deleted() {
         let dir = tempfile::tempdir().unwrap();
         std::fs::write(dir.path().join("notes.txt"), "mine").unwrap();
-        let mut poses = meshes(1);
+        let poses = meshes(1);
         assert!(matches!(
-            Checkpoint::open(dir.path(), true, &SETTINGS, &mut poses[..]),
+            Checkpoint::open(dir.path(), true, &SETTINGS, &poses),
             Err(CheckpointError::NotACheckpoint { .. })
         ));
         // An empty directory named by the user is used, and on removal only our files go.
         let ck = dir.path().join("empty");
         std::fs::create_dir(&ck).unwrap();
-        let mut c = Checkpoint::open(&ck, false, &SETTINGS, &mut poses[..]).unwrap();
-        c.bake(&mut poses[..], false).unwrap();
+        let mut c = Checkpoint::open(&ck, false, &SETTINGS, &poses).unwrap();
+        c.bake(&poses, pose_name, false).unwrap();
         std::fs::write(ck.join("keep.txt"), "mine").unwrap();
         c.remove().unwrap();
         let left: Vec<_> = std::fs::read_dir(&ck)
@@ -633,8 +558,8 @@ mod tests {
         let ck = dir.path().join("ck");
         let mut poses = meshes(2);
         poses[0].positions[0] = [2e12, 0.0, 0.0];
-        let mut c = Checkpoint::open(&ck, false, &SETTINGS, &mut poses[..]).unwrap();
-        let err = c.bake(&mut poses[..], false).unwrap_err();
+        let mut c = Checkpoint::open(&ck, false, &SETTINGS, &poses).unwrap();
+        let err = c.bake(&poses, pose_name, false).unwrap_err();
         let message = format!("{:#}", anyhow::Error::from(err));
         assert!(
             message.starts_with("pose 0: baking: mesh extent"),

@@ -8,7 +8,7 @@ use clap::{Args, Parser, Subcommand};
 
 use crate::atomic::write_atomic;
 use crate::bone_frames::bone_rotations;
-use crate::checkpoint::{Checkpoint, NamedMeshes};
+use crate::checkpoint::Checkpoint;
 use crate::experiment::{BakedClip, fit_clip, pose_all, predict_world};
 use crate::export::Precision;
 use crate::fit::fit;
@@ -379,13 +379,10 @@ fn train(args: &TrainArgs) -> Result<()> {
             meshes,
             angles,
         } => {
-            let mut source = NamedMeshes {
-                meshes: &meshes,
-                names: &files,
-            };
             let mut checkpoint =
-                Checkpoint::open(&checkpoint_dir, args.resume, &settings, &mut source)?;
-            let transfers = checkpoint.bake(&mut source, true)?;
+                Checkpoint::open(&checkpoint_dir, args.resume, &settings, &meshes)?;
+            let name = |i: usize| files[i].display().to_string();
+            let transfers = checkpoint.bake(&meshes, name, true)?;
             let a = nalgebra::DMatrix::from_fn(angles.len(), angles[0].len(), |i, j| angles[i][j]);
             let fitted = fit(&a, &transfers, settings.order, &options)?;
             (fitted, checkpoint, angles.len())
@@ -400,10 +397,11 @@ fn train(args: &TrainArgs) -> Result<()> {
                     layout.dropped().join(", ")
                 );
             }
-            let mut meshes = pose_all(rig.as_ref(), &clip.name, &clip.frames)?;
+            let meshes = pose_all(rig.as_ref(), &clip.name, &clip.frames)?;
             let mut checkpoint =
-                Checkpoint::open(&checkpoint_dir, args.resume, &settings, &mut meshes[..])?;
-            let transfer = checkpoint.bake(&mut meshes[..], true)?;
+                Checkpoint::open(&checkpoint_dir, args.resume, &settings, &meshes)?;
+            let name = |i: usize| format!("clip {} frame {i}", clip.name);
+            let transfer = checkpoint.bake(&meshes, name, true)?;
             let frames = clip.frames.len();
             let baked = BakedClip::new(
                 rig.as_ref(),
