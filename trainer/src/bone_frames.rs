@@ -2,7 +2,7 @@
 //! so the rigid part of limb motion needs no learning and the model only learns how
 //! shadowing changes with the pose.
 
-use anyhow::Result;
+use anyhow::{Result, bail};
 use aprt_core::rotate::ShRotation;
 use glam::DMat3;
 
@@ -35,6 +35,10 @@ pub fn dominant_bones(rig: &dyn Rig) -> BoneFrames {
     }
 }
 
+fn all_rotations(rig: &dyn Rig, poses: &[Vec<f64>]) -> Result<Vec<Vec<DMat3>>> {
+    poses.iter().map(|a| bone_rotations(rig, a)).collect()
+}
+
 /// World-frame transfer of each pose re-expressed in each vertex's bone frame: the targets a
 /// bone-frame model is fitted to.
 pub fn to_bone_frames(
@@ -42,7 +46,12 @@ pub fn to_bone_frames(
     poses: &[Vec<f64>],
     world: &[Vec<f32>],
 ) -> Result<Vec<Vec<f32>>> {
-    change_frames(rig, poses, world, true)
+    change_frames(
+        world,
+        &all_rotations(rig, poses)?,
+        &dominant_bones(rig),
+        true,
+    )
 }
 
 /// Bone-frame transfer of each pose (as a bone-frame model predicts it) back in world space.
@@ -51,32 +60,39 @@ pub fn to_world_frames(
     poses: &[Vec<f64>],
     local: &[Vec<f32>],
 ) -> Result<Vec<Vec<f32>>> {
-    change_frames(rig, poses, local, false)
+    change_frames(
+        local,
+        &all_rotations(rig, poses)?,
+        &dominant_bones(rig),
+        false,
+    )
 }
 
-fn change_frames(
-    rig: &dyn Rig,
-    poses: &[Vec<f64>],
+/// Transfer of every frame moved into (or out of) each vertex's bone frame; `rotations` are
+/// each frame's bone rotations.
+pub fn change_frames(
     transfer: &[Vec<f32>],
+    rotations: &[Vec<DMat3>],
+    bones: &BoneFrames,
     into_bone: bool,
 ) -> Result<Vec<Vec<f32>>> {
-    let bones = dominant_bones(rig);
-    let vertices = rig.bind_mesh().vertex_count();
-    let order = (transfer.first().map_or(0, |t| t.len() / vertices) as f64).sqrt() as usize;
+    if rotations.len() != transfer.len() {
+        bail!(
+            "the model learns transfer in bone frames, so world-frame transfer needs each frame's \
+             bone rotations, which a character's clip gives and bare angles do not ({} frames, \
+             rotations for {})",
+            transfer.len(),
+            rotations.len()
+        );
+    }
+    let vertices = bones.vertex_bone.len();
+    let order = (transfer.first().map_or(0, |t| t.len() / vertices.max(1)) as f64).sqrt() as usize;
     let rotation = ShRotation::new(order)?;
-    poses
+    Ok(transfer
         .iter()
-        .zip(transfer)
-        .map(|(a, t)| {
-            Ok(change_frame(
-                &rotation,
-                t,
-                &bones,
-                &bone_rotations(rig, a)?,
-                into_bone,
-            ))
-        })
-        .collect()
+        .zip(rotations)
+        .map(|(t, r)| change_frame(&rotation, t, bones, r, into_bone))
+        .collect())
 }
 
 /// Transfer moved between world and bone frames: into the bone frame (`Rᵀ`) or out of it.
@@ -91,4 +107,31 @@ pub fn change_frame(
         let r = rotations[bones.vertex_bone[j] as usize];
         if into_bone { r.transpose() } else { r }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bone_frame_transfer_without_every_frames_rotations_is_refused() {
+        let bones = BoneFrames {
+            count: 1,
+            vertex_bone: vec![0],
+        };
+        let transfer = vec![vec![1.0f32; 4]; 2];
+        let err = change_frames(&transfer, &[vec![DMat3::IDENTITY]], &bones, false).unwrap_err();
+        assert!(
+            err.to_string().contains("(2 frames, rotations for 1)"),
+            "{err}"
+        );
+        let moved =
+            change_frames(&transfer, &vec![vec![DMat3::IDENTITY]; 2], &bones, false).unwrap();
+        for (m, t) in moved.iter().flatten().zip(transfer.iter().flatten()) {
+            assert!(
+                (m - t).abs() < 1e-6,
+                "the identity moved transfer: {moved:?}"
+            );
+        }
+    }
 }

@@ -6,19 +6,18 @@ use std::borrow::Cow;
 use std::fmt::Write as _;
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use aprt_core::rotate::ShRotation;
 use aprt_core::{LitWeights, Model, PoseWeights, SliceSource};
 use glam::DMat3;
 use nalgebra::DMatrix;
 
 use crate::bake::{BakeSettings, bake_poses};
-use crate::bone_frames::{bone_rotations, change_frame, dominant_bones};
+use crate::bone_frames::{bone_rotations, change_frames, dominant_bones};
 use crate::evaluate::{mean_transfer, nearest_pose, relative_error, skinned_transfer};
 use crate::export::{ExportError, Precision, encode_model};
 use crate::fit::{Alpha, CoefDims, Dims, Fit, FitOptions, fit};
 use crate::mesh::Mesh;
-use crate::model::BoneFrames;
 use crate::pose_layout::PoseLayout;
 use crate::rig::Rig;
 use crate::sh_rotate::row_major;
@@ -96,33 +95,6 @@ impl BakedClip {
     pub fn core_rotations(&self, f: usize) -> Vec<[[f32; 3]; 3]> {
         self.rotations[f].iter().map(|r| row_major(*r)).collect()
     }
-}
-
-/// Transfer of every frame moved into (or out of) each vertex's bone frame; `rotations` are
-/// each frame's bone rotations.
-fn change_frames(
-    transfer: &[Vec<f32>],
-    rotations: &[Vec<DMat3>],
-    bones: &BoneFrames,
-    into_bone: bool,
-) -> Result<Vec<Vec<f32>>> {
-    if rotations.len() != transfer.len() {
-        bail!(
-            "the model learns transfer in bone frames, so world-frame transfer needs each frame's \
-             bone rotations, which a character's clip gives and bare angles do not ({} frames, \
-             rotations for {})",
-            transfer.len(),
-            rotations.len()
-        );
-    }
-    let vertices = bones.vertex_bone.len();
-    let order = (transfer.first().map_or(0, |t| t.len() / vertices.max(1)) as f64).sqrt() as usize;
-    let rotation = ShRotation::new(order)?;
-    Ok(transfer
-        .iter()
-        .zip(rotations)
-        .map(|(t, r)| change_frame(&rotation, t, bones, r, into_bone))
-        .collect())
 }
 
 /// Fits a model to `train`: in each vertex's dominant-bone frame when `bone_frame`, else in
@@ -527,31 +499,4 @@ pub fn table_markdown(rows: &[Row], test_clips: &[String]) -> String {
         );
     }
     s
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn bone_frame_transfer_without_every_frames_rotations_is_refused() {
-        let bones = BoneFrames {
-            count: 1,
-            vertex_bone: vec![0],
-        };
-        let transfer = vec![vec![1.0f32; 4]; 2];
-        let err = change_frames(&transfer, &[vec![DMat3::IDENTITY]], &bones, false).unwrap_err();
-        assert!(
-            err.to_string().contains("(2 frames, rotations for 1)"),
-            "{err}"
-        );
-        let moved =
-            change_frames(&transfer, &vec![vec![DMat3::IDENTITY]; 2], &bones, false).unwrap();
-        for (m, t) in moved.iter().flatten().zip(transfer.iter().flatten()) {
-            assert!(
-                (m - t).abs() < 1e-6,
-                "the identity moved transfer: {moved:?}"
-            );
-        }
-    }
 }
