@@ -88,7 +88,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         &settings,
         &lighting,
     )?;
-    let default = &result.models[0];
+    let default = result.model(experiment::DEFAULT_CONFIG)?;
     write_atomic(&out.join("model.aprt"), &default.blob)
         .with_context(|| format!("cannot write {}", out.join("model.aprt").display()))?;
 

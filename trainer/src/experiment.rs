@@ -6,7 +6,7 @@ use std::borrow::Cow;
 use std::fmt::Write as _;
 use std::time::Instant;
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use aprt_core::rotate::ShRotation;
 use aprt_core::{LitWeights, Model, PoseWeights, SliceSource};
 use glam::DMat3;
@@ -145,6 +145,9 @@ pub struct ModelConfig {
     pub bone_frame: bool,
 }
 
+/// The name of the default model's configuration, the first of [`standard_configs`].
+pub const DEFAULT_CONFIG: &str = "default: bone frame, LOSO α";
+
 /// The model shapes of the paper's tables and the choices behind the default: the default
 /// itself first, the same shape with LOO α and in the world frame, the full linear model with
 /// and without regularisation, and two PCA settings.
@@ -161,7 +164,7 @@ pub fn standard_configs() -> Vec<ModelConfig> {
         ..default
     };
     vec![
-        config("default: bone frame, LOSO α", default, true),
+        config(DEFAULT_CONFIG, default, true),
         config(
             "default shape, LOO α",
             FitOptions {
@@ -246,6 +249,20 @@ pub struct Experiment {
     pub skipped: Vec<(String, String)>,
     /// Bytes of one frame of f32 PRT.
     pub frame_bytes: usize,
+}
+
+impl Experiment {
+    /// The model of configuration `name`, or why there is none (skipped as too large for the
+    /// runtime, or no such configuration).
+    pub fn model(&self, name: &str) -> Result<&Fitted> {
+        if let Some(m) = self.models.iter().find(|m| m.config.name == name) {
+            return Ok(m);
+        }
+        match self.skipped.iter().find(|(n, _)| n == name) {
+            Some((_, reason)) => bail!("the model {name} was skipped: {reason}"),
+            None => bail!("no model configuration is called {name}"),
+        }
+    }
 }
 
 /// Fits every configuration on `train` (skipping, with the reason, any whose model exceeds the
@@ -499,4 +516,28 @@ pub fn table_markdown(rows: &[Row], test_clips: &[String]) -> String {
         );
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_skipped_or_unknown_model_is_an_error_that_says_why() {
+        let result = Experiment {
+            models: Vec::new(),
+            rows: Vec::new(),
+            skipped: vec![(DEFAULT_CONFIG.into(), "2 GiB is too large".into())],
+            frame_bytes: 0,
+        };
+        let message = |name: &str| result.model(name).err().unwrap().to_string();
+        assert_eq!(
+            message(DEFAULT_CONFIG),
+            format!("the model {DEFAULT_CONFIG} was skipped: 2 GiB is too large")
+        );
+        assert_eq!(
+            message("PCA(8, 22)"),
+            "no model configuration is called PCA(8, 22)"
+        );
+    }
 }
