@@ -414,12 +414,20 @@ fn invalid_inputs_are_named() {
 }
 
 /// A flat spectrum (white noise) needs nearly every component for 99.99 % of the energy: the
-/// energy-fraction basis stops at the runtime's limit instead of outgrowing it.
+/// energy-fraction basis, and all components, stop at the runtime's limit instead of
+/// outgrowing it, as on the pose side; an explicit count is kept as asked.
 #[test]
-fn variance_fraction_stops_at_the_runtime_limit() {
+fn variance_fraction_and_all_stop_at_the_runtime_limit() {
     let rows = uniform(160, 300, 77);
-    let fit = fit_vertex_basis(&rows, Dims::Variance(0.9999));
-    assert_eq!(fit.basis.ncols(), aprt_core::blob::MAX_COEF_DIMS);
+    let limit = aprt_core::blob::MAX_COEF_DIMS;
+    for dims in [Dims::Variance(0.9999), Dims::All] {
+        assert_eq!(fit_vertex_basis(&rows, dims).basis.ncols(), limit, "{dims:?}");
+    }
+    let counted = fit_vertex_basis(&rows, Dims::Count(limit + 4));
+    assert_eq!(counted.basis.ncols(), limit + 4);
+    // Below the limit, all is the rank.
+    let low_rank = &uniform(160, 3, 78) * &uniform(3, 300, 79);
+    assert_eq!(fit_vertex_basis(&low_rank, Dims::All).basis.ncols(), 3);
 }
 
 /// Extreme angle values. Expected: the pose mean is subtracted in f64 before anything else,

@@ -142,9 +142,11 @@ pub struct VertexBasisFit {
 /// all components up to the numerical rank. The rank is judged at f32 precision, the
 /// precision transfer is baked and stored in.
 ///
-/// An energy fraction keeps at most [`MAX_COEF_DIMS`] vectors, the most the runtime holds:
-/// real transfer spectra decay slowly (the built-in character keeps 94 % at k_v = 22), and
-/// chasing 99.9 % would grow the sketch to thousands of columns for a model no engine can load.
+/// An energy fraction or all keeps at most [`MAX_COEF_DIMS`] vectors, the most the runtime
+/// holds, as on the pose side; an explicit count is kept as asked (the writer then says it is
+/// too many). Real transfer spectra decay slowly (the built-in character keeps 94 % at
+/// k_v = 22), and chasing 99.9 % would grow the sketch to thousands of columns for a model no
+/// engine can load.
 pub fn fit_vertex_basis(rows: &impl RowOperator, dims: Dims) -> VertexBasisFit {
     let max_width = rows.nrows().min(rows.ncols());
     let cap = MAX_COEF_DIMS.min(max_width);
@@ -152,7 +154,7 @@ pub fn fit_vertex_basis(rows: &impl RowOperator, dims: Dims) -> VertexBasisFit {
     let mut width = match dims {
         Dims::Count(k) => k + OVERSAMPLE,
         Dims::Variance(_) => INITIAL_WIDTH + OVERSAMPLE,
-        Dims::All => max_width,
+        Dims::All => cap + OVERSAMPLE,
     }
     .min(max_width);
     loop {
@@ -186,7 +188,7 @@ pub fn fit_vertex_basis(rows: &impl RowOperator, dims: Dims) -> VertexBasisFit {
         } else {
             max_width
         };
-        let capped = matches!(dims, Dims::Variance(_)) && trusted >= cap;
+        let capped = !matches!(dims, Dims::Count(_)) && trusted >= cap;
         let chosen = dims::choose(dims, &energies, total_energy, rank);
         if let Some(keep) = chosen
             .map(|k| if capped { k.min(cap) } else { k })
@@ -199,7 +201,7 @@ pub fn fit_vertex_basis(rows: &impl RowOperator, dims: Dims) -> VertexBasisFit {
             };
         }
         width = (2 * width).min(max_width);
-        if matches!(dims, Dims::Variance(_)) {
+        if !matches!(dims, Dims::Count(_)) {
             width = width.min(cap + OVERSAMPLE);
         }
     }
