@@ -170,6 +170,22 @@ pub struct HeldChannel {
     pub max_deviation: f64,
 }
 
+impl std::fmt::Display for HeldChannel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let unit = match self.property {
+            "rotation" => " rad",
+            "translation" => " units",
+            _ => "",
+        };
+        write!(
+            f,
+            "clip {}: the {} of node {} ({}) is animated, up to {:.3}{unit} from rest, and held \
+             at rest: the pose vector carries joint rotations only",
+            self.animation, self.property, self.node, self.node_name, self.max_deviation
+        )
+    }
+}
+
 /// A glTF skinned character and its animations; see the module docs for the conventions.
 #[derive(Clone, Debug)]
 pub struct GltfRig {
@@ -218,11 +234,6 @@ impl GltfRig {
             animations: parts.animations,
             held,
         })
-    }
-
-    /// The file the rig was loaded from.
-    pub fn path(&self) -> &Path {
-        &self.path
     }
 
     /// Names of the skin's joints, in skin (and pose-vector) order.

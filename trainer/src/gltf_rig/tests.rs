@@ -378,6 +378,11 @@ fn the_pose_vector_reproduces_rotations_and_held_channels_are_reported() {
             max_deviation: 0.5,
         }]
     );
+    assert_eq!(
+        rig.held_channels()[0].to_string(),
+        "clip long: the translation of node 2 (base) is animated, up to 0.500 units from rest, \
+         and held at rest: the pose vector carries joint rotations only"
+    );
     let last = rig.clip("long").unwrap().frames.len() - 1;
     let pose = &rig.clip("long").unwrap().frames[last];
     let animated = rig.animated_joint_matrices("long", last).unwrap();
