@@ -12,6 +12,51 @@ use crate::skin::{Skin, skin};
 /// end time or frame rate turning into an unbounded allocation.
 pub const MAX_FRAMES: usize = 240 * 3600;
 
+/// Why a pose vector cannot pose a rig.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum PoseError {
+    /// Not one value per pose-vector entry.
+    #[error("a pose needs {expected} values, got {got}")]
+    Length {
+        /// Entries the rig has.
+        expected: usize,
+        /// Values given.
+        got: usize,
+    },
+    /// An entry that is NaN or infinite.
+    #[error("pose value {index} ({name}) is {value}, not a finite number")]
+    NonFinite {
+        /// Index of the entry.
+        index: usize,
+        /// Its name.
+        name: String,
+        /// The value given.
+        value: f64,
+    },
+}
+
+/// Checks a pose vector against a rig of `expected` entries; `name(i)` names entry `i`.
+pub fn check_pose(
+    pose: &[f64],
+    expected: usize,
+    name: impl FnOnce(usize) -> String,
+) -> Result<(), PoseError> {
+    if pose.len() != expected {
+        return Err(PoseError::Length {
+            expected,
+            got: pose.len(),
+        });
+    }
+    match pose.iter().position(|v| !v.is_finite()) {
+        Some(index) => Err(PoseError::NonFinite {
+            index,
+            name: name(index),
+            value: pose[index],
+        }),
+        None => Ok(()),
+    }
+}
+
 /// A sequence of poses sampled at a fixed rate. Each frame has one value per pose-vector
 /// entry, in the rig's [`Rig::angle_names`] order.
 #[derive(Clone, Debug, PartialEq)]

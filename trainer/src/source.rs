@@ -115,7 +115,11 @@ impl SourceArgs {
             must_exist(path, &["gltf", "glb"])?;
             let rig = GltfRig::load(path, self.fps.unwrap_or(GLTF_FPS))?;
             let clip = GltfRig::clip(&rig, self.clip_name(&rig)?)?;
-            for held in rig.held_channels().iter().filter(|h| h.animation == clip.name) {
+            for held in rig
+                .held_channels()
+                .iter()
+                .filter(|h| h.animation == clip.name)
+            {
                 eprintln!("note: {}: {held}", path.display());
             }
             return Ok((Box::new(rig), clip));

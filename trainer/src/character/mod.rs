@@ -17,31 +17,16 @@ use std::ops::Range;
 use glam::Mat4;
 
 use crate::mesh::Mesh;
-use crate::rig::{Clip, Rig};
+use crate::rig::{Clip, PoseError, Rig, check_pose};
 use crate::skin::{Skin, SkinError};
 use skeleton::{Dof, Skeleton};
 
 /// Why a pose or clip request failed.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum CharacterError {
-    /// A pose did not have one value per joint angle.
-    #[error("a pose needs {expected} joint angles, got {got}")]
-    AngleCount {
-        /// Angles the character has.
-        expected: usize,
-        /// Angles given.
-        got: usize,
-    },
-    /// A joint angle was NaN or infinite.
-    #[error("joint angle {index} ({name}) is {value}, not a finite number")]
-    NonFiniteAngle {
-        /// Index of the angle.
-        index: usize,
-        /// Its name.
-        name: &'static str,
-        /// The value given.
-        value: f64,
-    },
+    /// A pose that cannot pose the character.
+    #[error(transparent)]
+    Pose(#[from] PoseError),
     /// No clip has the requested name.
     #[error("no clip named {name:?}; available: {available}")]
     UnknownClip {
@@ -134,19 +119,9 @@ impl Character {
 
     /// Skinning matrices (bind space → posed space) for each joint at `angles`.
     pub fn joint_matrices(&self, angles: &[f64]) -> Result<Vec<Mat4>, CharacterError> {
-        if angles.len() != self.angles.len() {
-            return Err(CharacterError::AngleCount {
-                expected: self.angles.len(),
-                got: angles.len(),
-            });
-        }
-        if let Some(index) = angles.iter().position(|a| !a.is_finite()) {
-            return Err(CharacterError::NonFiniteAngle {
-                index,
-                name: self.angles[index].name,
-                value: angles[index],
-            });
-        }
+        check_pose(angles, self.angles.len(), |i| {
+            self.angles[i].name.to_owned()
+        })?;
         Ok(skeleton::joint_matrices(&self.skeleton, &self.dofs, angles))
     }
 

@@ -191,16 +191,16 @@ fn character_pose_rejects_bad_input() {
     let c = character();
     assert_eq!(
         c.joint_matrices(&[0.0; 3]),
-        Err(CharacterError::AngleCount {
+        Err(CharacterError::Pose(PoseError::Length {
             expected: c.joint_angle_count(),
             got: 3
-        })
+        }))
     );
     let mut angles = c.rest_pose();
     angles[4] = f64::NAN;
     assert!(matches!(
         c.joint_matrices(&angles),
-        Err(CharacterError::NonFiniteAngle { index: 4, .. })
+        Err(CharacterError::Pose(PoseError::NonFinite { index: 4, .. }))
     ));
 }
 

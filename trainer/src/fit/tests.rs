@@ -421,7 +421,11 @@ fn variance_fraction_and_all_stop_at_the_runtime_limit() {
     let rows = uniform(160, 300, 77);
     let limit = aprt_core::blob::MAX_COEF_DIMS;
     for dims in [Dims::Variance(0.9999), Dims::All] {
-        assert_eq!(fit_vertex_basis(&rows, dims).basis.ncols(), limit, "{dims:?}");
+        assert_eq!(
+            fit_vertex_basis(&rows, dims).basis.ncols(),
+            limit,
+            "{dims:?}"
+        );
     }
     let counted = fit_vertex_basis(&rows, Dims::Count(limit + 4));
     assert_eq!(counted.basis.ncols(), limit + 4);

@@ -54,7 +54,7 @@ use std::path::{Path, PathBuf};
 use glam::{DVec3, Mat4, Vec3};
 
 use crate::mesh::Mesh;
-use crate::rig::{Clip, MAX_FRAMES, Rig};
+use crate::rig::{Clip, MAX_FRAMES, PoseError, Rig, check_pose};
 use crate::skin::{Skin, SkinError};
 use animation::Animation;
 use skeleton::{Skeleton, Trs};
@@ -109,27 +109,14 @@ pub enum GltfError {
         /// The rate given.
         fps: f64,
     },
-    /// A pose did not have one value per pose-vector entry.
-    #[error("{path}: a pose needs {expected} values (3 per joint), got {got}", path = path.display())]
-    PoseLength {
+    /// A pose that cannot pose the rig.
+    #[error("{}", path.display())]
+    Pose {
         /// The file.
         path: PathBuf,
-        /// Entries the rig has.
-        expected: usize,
-        /// Values given.
-        got: usize,
-    },
-    /// A pose value was NaN or infinite.
-    #[error("{path}: pose value {index} ({name}) is {value}, not a finite number", path = path.display())]
-    NonFinitePose {
-        /// The file.
-        path: PathBuf,
-        /// Index of the value.
-        index: usize,
-        /// Its name.
-        name: String,
-        /// The value.
-        value: f64,
+        /// What is wrong with the pose.
+        #[source]
+        source: PoseError,
     },
     /// No clip has the requested name.
     #[error("{path}: no clip named {name:?}; available: {available}", path = path.display())]
@@ -260,21 +247,13 @@ impl GltfRig {
     /// Skinning matrices for a pose vector: every joint at its rest translation and scale,
     /// rotated by `exp` of its rotation vector from its rest rotation.
     pub fn joint_matrices(&self, pose: &[f64]) -> Result<Vec<Mat4>, GltfError> {
-        if pose.len() != self.angle_names.len() {
-            return Err(GltfError::PoseLength {
-                path: self.path.clone(),
-                expected: self.angle_names.len(),
-                got: pose.len(),
-            });
-        }
-        if let Some(index) = pose.iter().position(|v| !v.is_finite()) {
-            return Err(GltfError::NonFinitePose {
-                path: self.path.clone(),
-                index,
-                name: self.angle_names[index].clone(),
-                value: pose[index],
-            });
-        }
+        check_pose(pose, self.angle_names.len(), |i| {
+            self.angle_names[i].clone()
+        })
+        .map_err(|source| GltfError::Pose {
+            path: self.path.clone(),
+            source,
+        })?;
         let mut locals = self.skeleton.rest.clone();
         for (&node, r) in self.skeleton.joints.iter().zip(pose.chunks_exact(3)) {
             let delta = crate::rotation::exp(DVec3::new(r[0], r[1], r[2]));

@@ -37,7 +37,7 @@ use glam::{DAffine3, DQuat, DVec3, Mat4};
 
 use crate::bvh::{Bvh, BvhError};
 use crate::mesh::Mesh;
-use crate::rig::{Clip, MAX_FRAMES, Rig};
+use crate::rig::{Clip, MAX_FRAMES, PoseError, Rig, check_pose};
 use crate::rotation;
 use crate::skin::Skin;
 
@@ -101,24 +101,9 @@ pub enum BvhRigError {
         /// The rate asked for.
         fps: f64,
     },
-    /// A pose vector of the wrong length.
-    #[error("a pose needs {expected} values, got {got}")]
-    PoseLength {
-        /// Entries the rig has.
-        expected: usize,
-        /// Values given.
-        got: usize,
-    },
-    /// A pose entry that is NaN or infinite.
-    #[error("pose entry {index} ({name}) is {value}, not a finite number")]
-    NonFinite {
-        /// Index of the entry.
-        index: usize,
-        /// Its name.
-        name: String,
-        /// The value given.
-        value: f64,
-    },
+    /// A pose that cannot pose the mannequin.
+    #[error(transparent)]
+    Pose(#[from] PoseError),
     /// Retargeting found no joint name shared by the two skeletons.
     #[error("no joint of {source_clip:?} has the name of a joint of this mannequin")]
     NoCommonJoint {
@@ -388,19 +373,7 @@ impl BvhRig {
 
     /// Skinning matrices for a pose vector; see [`Rig::joint_matrices`].
     pub fn joint_matrices(&self, pose: &[f64]) -> Result<Vec<Mat4>, BvhRigError> {
-        if pose.len() != self.pose_len() {
-            return Err(BvhRigError::PoseLength {
-                expected: self.pose_len(),
-                got: pose.len(),
-            });
-        }
-        if let Some(index) = pose.iter().position(|v| !v.is_finite()) {
-            return Err(BvhRigError::NonFinite {
-                index,
-                name: self.angle_names().swap_remove(index),
-                value: pose[index],
-            });
-        }
+        check_pose(pose, self.pose_len(), |i| self.angle_names().swap_remove(i))?;
         let joints = self.bvh.joints();
         let mut rotation = vec![DQuat::IDENTITY; joints.len()];
         let mut translation: Vec<DVec3> = joints.iter().map(|j| j.offset).collect();

@@ -121,7 +121,7 @@ fn pose_errors_name_the_entry() {
     pose[10] = f64::NAN;
     assert_eq!(
         r.joint_matrices(&pose).unwrap_err().to_string(),
-        "pose entry 10 (LeftLeg.y) is NaN, not a finite number"
+        "pose value 10 (LeftLeg.y) is NaN, not a finite number"
     );
     assert_eq!(
         Rig::clip(&r, "walk").unwrap_err().to_string(),
