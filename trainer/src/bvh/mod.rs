@@ -172,14 +172,17 @@ impl Bvh {
 
     /// Forward kinematics: every joint's world transform for one frame's channel `values`.
     pub fn world_transforms(&self, values: &[f64]) -> Vec<DAffine3> {
+        self.chain(|j| self.joints[j].local(values))
+    }
+
+    /// World transforms of the joints from each joint's local `(rotation, translation)`,
+    /// parents before children.
+    pub fn chain(&self, local: impl Fn(usize) -> (DQuat, DVec3)) -> Vec<DAffine3> {
         let mut world: Vec<DAffine3> = Vec::with_capacity(self.joints.len());
-        for joint in &self.joints {
-            let (rotation, translation) = joint.local(values);
+        for (j, joint) in self.joints.iter().enumerate() {
+            let (rotation, translation) = local(j);
             let local = DAffine3::from_rotation_translation(rotation, translation);
-            world.push(match joint.parent {
-                Some(p) => world[p] * local,
-                None => local,
-            });
+            world.push(joint.parent.map_or(local, |p| world[p] * local));
         }
         world
     }

@@ -385,11 +385,7 @@ impl BvhRig {
             }
         }
         let axes = DAffine3::from_quat(to_mesh_frame());
-        let mut world: Vec<DAffine3> = Vec::with_capacity(joints.len());
-        for (j, joint) in joints.iter().enumerate() {
-            let local = DAffine3::from_rotation_translation(rotation[j], translation[j]);
-            world.push(joint.parent.map_or(local, |p| world[p] * local));
-        }
+        let world = self.bvh.chain(|j| (rotation[j], translation[j]));
         Ok(world
             .iter()
             .zip(&self.rest)
