@@ -18,6 +18,11 @@ pub(crate) const RING_STEP: f64 = 0.02;
 
 /// Centre of the head ellipsoid in the bind pose, metres.
 pub(crate) const HEAD_CENTRE: DVec3 = DVec3::new(0.0, -0.01, 1.70);
+/// Half-height of the head ellipsoid, metres.
+const HEAD_HALF_HEIGHT: f64 = 0.125;
+/// The character's height, sole (z = 0) to crown, without the hat: what a mannequin's head
+/// and hat are scaled against.
+pub(crate) const CROWN: f64 = HEAD_CENTRE.z + HEAD_HALF_HEIGHT;
 /// Base of the nose (it points along −y, the way the character faces).
 pub(crate) const NOSE_ORIGIN: DVec3 = DVec3::new(0.0, -0.115, 1.69);
 /// Centre of the hat's brim underside; the brim sits at about the head's brow.
@@ -36,8 +41,8 @@ pub(crate) fn head(centre: DVec3, scale: f64, joint: usize) -> Part {
             profile: capsule_profile(
                 RING_STEP * scale,
                 0.0,
-                (0.095 * scale, 0.125 * scale),
-                (0.095 * scale, 0.125 * scale),
+                (0.095 * scale, HEAD_HALF_HEIGHT * scale),
+                (0.095 * scale, HEAD_HALF_HEIGHT * scale),
             ),
         },
         base: joint,

@@ -83,6 +83,24 @@ fn character_weights_are_normalised_and_blend_across_joints() {
     assert_eq!(skin.joint_count(), skeleton::joint::COUNT);
 }
 
+/// The height mannequins scale the head and hat by is the built-in character's: soles on
+/// z = 0, the head's top at `CROWN`.
+#[test]
+fn the_crown_is_the_top_of_the_head() {
+    let c = character();
+    let mesh = c.bind_mesh();
+    let z = |part: &str| -> (f32, f32) {
+        let (_, range) = c.parts().find(|(n, _)| *n == part).unwrap();
+        let zs = mesh.triangles[range].iter().flatten();
+        zs.map(|&i| mesh.positions[i as usize][2])
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), z| {
+                (lo.min(z), hi.max(z))
+            })
+    };
+    assert!((z("head").1 as f64 - body::CROWN).abs() < 1e-6);
+    assert_eq!(z("l_foot").0, 0.0);
+}
+
 #[test]
 fn character_parts_are_closed_and_face_outward() {
     let c = character();

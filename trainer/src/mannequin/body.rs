@@ -21,7 +21,7 @@
 //!   character's elbows and knees do, capped at half the shortest bone at that joint so the
 //!   bands of one bone never overlap.
 //! - **Head.** The bone ending highest in the rest pose (the head's End Site) is replaced by
-//!   the built-in character's head and nose, scaled by `H / BUILTIN_HEIGHT` and centred on
+//!   the built-in character's head and nose, scaled by `H / CROWN` (the built-in character's height) and centred on
 //!   the bone's middle, rigid on the bone's joint; the hat sits on it likewise.
 //! - **Sampling.** Rings every `COARSER` × the built-in character's `RING_STEP`, scaled the
 //!   same way, and `AROUND` ring spacings of circumference per segment (about 10k vertices
@@ -30,7 +30,9 @@
 use glam::{DQuat, DVec3};
 
 use crate::bvh::Bvh;
-use crate::character::body::{HAT_ORIGIN, HEAD_CENTRE, NOSE_ORIGIN, RING_STEP, hat, head, nose};
+use crate::character::body::{
+    CROWN, HAT_ORIGIN, HEAD_CENTRE, NOSE_ORIGIN, RING_STEP, hat, head, nose,
+};
 use crate::lathe::{self, Band, Lathe, Part, band, capsule_profile};
 
 /// Pipe-model constant (see the module docs).
@@ -41,8 +43,6 @@ const MIN_RADIUS: f64 = 0.018;
 const TIP: f64 = 0.8;
 /// Blend half-width around a joint, in radii of the thickest bone there.
 const BLEND: f64 = 1.0;
-/// The built-in character's height (sole to crown, metres), which its head and hat fit.
-const BUILTIN_HEIGHT: f64 = 1.825;
 /// Ring spacing along the bones relative to the built-in character's (both as fractions of
 /// the height): coarser, because a capsule has no detail to resolve, yet still four or more
 /// rings across each joint's blend region, which keeps bends smooth.
@@ -157,7 +157,7 @@ pub(super) fn build(bvh: &Bvh, rest: &[DVec3], to_mesh: DQuat, with_hat: bool) -
         });
         (BLEND * r).min(0.5 * len)
     };
-    let scale = height / BUILTIN_HEIGHT;
+    let scale = height / CROWN;
     let step = COARSER * RING_STEP * scale;
     let head_bone = bones
         .iter()
