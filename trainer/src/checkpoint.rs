@@ -31,7 +31,7 @@ const POSE_HEADER: usize = 8 + 4 + 8;
 #[derive(Debug, thiserror::Error)]
 pub enum CheckpointError {
     /// A checkpoint file or directory could not be read, written or removed.
-    #[error("checkpoint {}: {source}", path.display())]
+    #[error("checkpoint {}", path.display())]
     Io {
         /// The file or directory.
         path: PathBuf,
