@@ -3,31 +3,25 @@
 //! fails with a message naming the file and leaves no output behind.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use aprt_core::{BlobSource, Model, PoseWeights, SliceSource, SourceError};
+use run::{aprt, refuse, succeed};
 
-fn aprt(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_aprt"))
-        .args(args)
-        .output()
-        .expect("run aprt")
-}
+mod run;
 
 /// `aprt train` on an OBJ sequence and an angles file, with extra model options.
-fn train(seq: &Path, angles: &Path, model: &Path, options: &[&str]) -> std::process::Output {
-    let paths = [seq, angles, model].map(|p| p.to_str().unwrap().to_owned());
-    let mut args = vec![
+fn train(seq: &Path, angles: &Path, model: &Path, options: &[&str]) -> Vec<String> {
+    let paths = [seq, angles, model].map(|p| p.to_str().unwrap());
+    let args = [
         "train",
         "--obj-seq",
-        &paths[0],
+        paths[0],
         "--angles",
-        &paths[1],
+        paths[1],
         "-o",
-        &paths[2],
+        paths[2],
     ];
-    args.extend_from_slice(options);
-    aprt(&args)
+    args.iter().chain(options).map(|s| s.to_string()).collect()
 }
 
 /// A floor quad and a box "arm" hinged above it, rotated by `angle` about the y axis: the
@@ -105,17 +99,12 @@ fn train_inspect_eval_and_stream_agree() {
     let dir = tempfile::tempdir().unwrap();
     let (seq, angles) = setup(dir.path(), 9);
     let model_path = dir.path().join("m.aprt");
-    let out = train(
+    succeed(&train(
         &seq,
         &angles,
         &model_path,
         &["--order", "3", "--rays", "64", "--coef-dims", "6"],
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    ));
 
     let out = aprt(&["inspect", model_path.to_str().unwrap(), "--json"]);
     assert!(out.status.success());
@@ -216,10 +205,8 @@ fn bad_input_fails_clearly_and_writes_nothing() {
     let (seq, angles) = setup(dir.path(), 4);
     let model_path = dir.path().join("m.aprt");
     let train = |angles: &Path| train(&seq, angles, &model_path, &["--order", "2", "--rays", "16"]);
-    let check = |out: std::process::Output, needle: &str| {
-        assert!(!out.status.success());
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(err.starts_with("aprt: ") && err.contains(needle), "{err}");
+    let check = |args: Vec<String>, needle: &str| {
+        refuse(&args, &[needle]);
         assert!(!model_path.exists(), "partial output left behind");
     };
     let short = dir.path().join("short.csv");
@@ -233,13 +220,11 @@ fn bad_input_fails_clearly_and_writes_nothing() {
     );
     std::fs::write(seq.join("pose_002.obj"), "v 0 0 0\nv 1 0 0\nf 1 2 7\n").unwrap();
     check(train(&angles), "pose_002.obj");
-    check(
-        aprt(&["inspect", dir.path().join("missing.aprt").to_str().unwrap()]),
-        "missing.aprt",
-    );
+    let missing = dir.path().join("missing.aprt");
+    refuse(&["inspect", missing.to_str().unwrap()], &["missing.aprt"]);
     std::fs::write(&model_path, b"APRTMDL\0garbage").unwrap();
-    let out = aprt(&["inspect", model_path.to_str().unwrap()]);
-    assert!(
-        !out.status.success() && String::from_utf8_lossy(&out.stderr).contains("invalid model")
+    refuse(
+        &["inspect", model_path.to_str().unwrap()],
+        &["invalid model"],
     );
 }

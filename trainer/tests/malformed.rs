@@ -6,8 +6,10 @@
 //! the message must contain. `{fx}` is `fixtures/malformed`, `{out}` a fresh empty output
 //! directory, `{model}` a model trained from `{fx}/ok`.
 
+use run::aprt;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+
+mod run;
 
 /// One malformed input, the command that reads it, and what its message must say.
 struct Case {
@@ -323,13 +325,6 @@ const CASES: &[Case] = &[
         &["not-a-model.aprt", "invalid model"],
     ),
 ];
-
-fn aprt(args: &[String]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_aprt"))
-        .args(args)
-        .output()
-        .expect("run aprt")
-}
 
 fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures/malformed")

@@ -7,52 +7,14 @@
 //! Everything is small (order 2, 16 rays, a few frames) so the file runs in seconds.
 
 mod common;
+mod run;
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+
+use run::{aprt, refuse, succeed};
 
 /// Cheap bake settings shared by `train` and `simulate`, so the model and the truth agree.
 const BAKE: &[&str] = &["--order", "2", "--rays", "16"];
-
-fn aprt(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_aprt"))
-        .args(args)
-        .output()
-        .expect("run aprt")
-}
-
-/// Runs `aprt` and asserts success; returns its stdout.
-fn succeed(args: &[&str]) -> Vec<u8> {
-    let out = aprt(args);
-    assert!(
-        out.status.success(),
-        "{args:?} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out.stdout
-}
-
-/// Runs `aprt`, asserts it fails with exactly one `aprt: ` line and no panic, and that the
-/// line contains every fragment; returns the line.
-fn refuse(args: &[&str], fragments: &[&str]) -> String {
-    let out = aprt(args);
-    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(!out.status.success(), "{args:?} succeeded:\n{stderr}");
-    assert!(!stderr.contains("panicked"), "{args:?} panicked:\n{stderr}");
-    let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("aprt: ")).collect();
-    assert_eq!(
-        errors.len(),
-        1,
-        "{args:?}: not one `aprt: ` line:\n{stderr}"
-    );
-    for fragment in fragments {
-        assert!(
-            errors[0].contains(fragment),
-            "{args:?}: {fragment:?} missing from\n{stderr}"
-        );
-    }
-    errors[0].to_owned()
-}
 
 fn s(path: &Path) -> &str {
     path.to_str().unwrap()
