@@ -126,13 +126,15 @@ impl Decode for f32 {
 }
 
 /// Branch-free binary16 → binary32 for finite values (the blob reader rejects the others):
-/// shifting the exponent and mantissa into place and multiplying by 2^112 rebiases the
-/// exponent and turns f16 subnormals into exact f32 normals.
+/// sign-extending and shifting by 13 puts the sign in bit 31 and the exponent and mantissa
+/// in place; the mask clears the copies of the sign between them, and multiplying by 2^112
+/// rebiases the exponent and turns f16 subnormals into exact f32 normals. Four vector
+/// operations per lane, which the shading loop pays per stored value.
 #[inline(always)]
 pub fn f16_to_f32(h: u16) -> f32 {
     const REBIAS: f32 = 5.192_297e33; // 2^112
-    let magnitude = f32::from_bits(((h & 0x7fff) as u32) << 13) * REBIAS;
-    f32::from_bits(magnitude.to_bits() | (((h & 0x8000) as u32) << 16))
+    let bits = ((h as i16 as i32) << 13) as u32 & 0x8FFF_E000;
+    f32::from_bits(bits) * REBIAS
 }
 
 /// Dot product with eight independent accumulators, the tail included, so neither the loop
