@@ -135,4 +135,22 @@ mod tests {
             assert!(same_rotation(exp(r), expect) < 1e-15, "{r:?}");
         }
     }
+
+    /// A turn past π about y: the log flips to the other side, the unwrapped vector continues
+    /// it; whole turns back are unwrapped too, and a vector nearest itself is left alone.
+    #[test]
+    fn nearest_turn_continues_through_half_turns() {
+        let raw = log(DQuat::from_rotation_y(3.2));
+        assert!(raw.y < 0.0);
+        let continued = nearest_turn(raw, DVec3::new(0.0, 3.1, 0.0));
+        assert!((continued.y - 3.2).abs() < 1e-12, "{continued}");
+        let back = nearest_turn(DVec3::new(0.0, 0.5, 0.0), DVec3::new(0.0, -5.9, 0.0));
+        assert!((back.y - (0.5 - 2.0 * PI)).abs() < 1e-12, "{back}");
+        assert_eq!(nearest_turn(raw, raw), raw);
+        assert_eq!(nearest_turn(DVec3::ZERO, DVec3::X), DVec3::ZERO);
+        let mut pose = [0.0, 0.0, 0.0, raw.x, raw.y, raw.z];
+        continue_turns(&mut pose, &[9.0, 9.0, 9.0, 0.0, 3.1, 0.0], [1]);
+        assert_eq!(pose[..3], [0.0; 3], "joint 0 was not asked for");
+        assert!((pose[4] - 3.2).abs() < 1e-12, "{pose:?}");
+    }
 }

@@ -1,6 +1,6 @@
 use std::path::Path;
 
-use glam::{DQuat, DVec3, Vec3};
+use glam::{DVec3, Vec3};
 
 use super::*;
 
@@ -62,25 +62,6 @@ Frame Time: 0.1
 fn rig(options: &BvhOptions) -> BvhRig {
     let bvh = Bvh::parse(&figure(), Path::new("figure.bvh")).unwrap();
     BvhRig::from_bvh(bvh, "figure", options).unwrap()
-}
-
-#[test]
-fn log_map_inverts_the_exponential_and_clips_unwrap_whole_turns() {
-    for v in [
-        DVec3::new(0.3, -0.2, 0.1),
-        DVec3::new(0.0, 3.0, 0.0),
-        DVec3::new(1e-9, 0.0, 0.0),
-    ] {
-        let back = rotation::log(DQuat::from_scaled_axis(v));
-        assert!(back.abs_diff_eq(v, 1e-12), "{v} -> {back}");
-    }
-    // A turn past π about y: the log flips to the other side, the unwrapped vector continues.
-    let previous = DVec3::new(0.0, 3.1, 0.0);
-    let raw = rotation::log(DQuat::from_rotation_y(3.2));
-    assert!(raw.y < 0.0);
-    let continued = rotation::nearest_turn(raw, previous);
-    assert!((continued.y - 3.2).abs() < 1e-12, "{continued}");
-    assert_eq!(rotation::nearest_turn(raw, raw), raw);
 }
 
 #[test]
