@@ -137,6 +137,15 @@ pub fn f16_to_f32(h: u16) -> f32 {
     f32::from_bits(bits) * REBIAS
 }
 
+/// A vertex's bone from its lead-row value, which the reader validated as an exact integer
+/// below the bone count. Adding 2²³ moves such an integer into the low mantissa bits: two
+/// vector operations, where `as usize` costs a dozen scalar ones per lane. The clamp keeps any
+/// other value (bytes a source changed after it was opened) inside the lighting table.
+#[inline(always)]
+fn bone_lane(x: f32, last: usize) -> usize {
+    (((x + 8_388_608.0).to_bits() & 0x7f_ffff) as usize).min(last)
+}
+
 /// Dot product with eight independent accumulators, the tail included, so neither the loop
 /// nor the remainder forms a long dependency chain (rows are short: k_v is often ~20).
 #[inline(always)]
@@ -405,26 +414,26 @@ impl Model {
         let block_bytes = self.block_bytes();
         let encoding = self.rows.encoding;
         let lead_bytes = self.lead_rows() * VERTEX_BLOCK * encoding.size();
+        let last_bone = self.bones() - 1;
         let (b0, b1) = (first / VERTEX_BLOCK, (first + count).div_ceil(VERTEX_BLOCK));
         let offset = self.rows.offset + (b0 as u64) * block_bytes as u64;
         for_each_chunk(src, offset, block_bytes, b1 - b0, scratch, |i0, bytes| {
             for (i, block) in bytes.chunks_exact(block_bytes).enumerate() {
                 let (lead, rows) = block.split_at(lead_bytes);
                 let mut bones = [0usize; VERTEX_BLOCK];
-                // Validated at open: exact integers below the bone count.
                 match encoding {
                     Encoding::F32 => lead
                         .as_chunks::<4>()
                         .0
                         .iter()
                         .zip(&mut bones)
-                        .for_each(|(x, b)| *b = x.value() as usize),
+                        .for_each(|(x, b)| *b = bone_lane(x.value(), last_bone)),
                     Encoding::F16 => lead
                         .as_chunks::<2>()
                         .0
                         .iter()
                         .zip(&mut bones)
-                        .for_each(|(x, b)| *b = x.value() as usize),
+                        .for_each(|(x, b)| *b = bone_lane(x.value(), last_bone)),
                 }
                 visit((b0 + i0 + i) * VERTEX_BLOCK, bones, rows);
             }
@@ -617,6 +626,7 @@ fn transfer_identity<E: Decode>(block: &[E], z: &[f32], t: &mut [f32]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::blob::MAX_BONES;
 
     #[test]
     fn f16_decode_matches_half_for_every_finite_value() {
@@ -629,6 +639,23 @@ mod tests {
                     "bits {h:#06x}"
                 );
             }
+        }
+    }
+
+    #[test]
+    fn bone_lanes_decode_exactly_and_stay_in_range() {
+        for b in 0..=MAX_BONES {
+            assert_eq!(bone_lane(b as f32, MAX_BONES), b);
+            assert_eq!(
+                bone_lane(
+                    f16_to_f32(half::f16::from_f32(b as f32).to_bits()),
+                    MAX_BONES
+                ),
+                b
+            );
+        }
+        for x in [-1.0, -0.0, 0.5, 1e30, f32::INFINITY, f32::NAN, -f32::MAX] {
+            assert!(bone_lane(x, 7) <= 7, "{x}");
         }
     }
 
