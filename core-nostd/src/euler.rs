@@ -11,9 +11,9 @@ use crate::rotate::ShRotationMatrix;
 use crate::sh::{MAX_COEFFS, MAX_ORDER, ShError, coeff_count, index};
 
 /// `D(Rx(90°))` for every band, built at compile time.
-static QUARTER: ShRotationMatrix = quarter_turn(1.0);
+static QUARTER: ParityBlocks = ParityBlocks::of(&quarter_turn(1.0));
 /// `D(Rx(−90°))`.
-static QUARTER_BACK: ShRotationMatrix = quarter_turn(-1.0);
+static QUARTER_BACK: ParityBlocks = ParityBlocks::of(&quarter_turn(-1.0));
 
 /// The SH rotation of a quarter turn about x, `sign` giving its direction.
 const fn quarter_turn(sign: f32) -> ShRotationMatrix {
@@ -24,6 +24,127 @@ const fn quarter_turn(sign: f32) -> ShRotationMatrix {
         Ok(m) => m,
         Err(_) => panic!("MAX_ORDER is a valid order"),
     }
+}
+
+/// Widest band, `2·MAX_ORDER − 1` coefficients.
+const MAX_BAND: usize = 2 * MAX_ORDER - 1;
+
+/// Parity of the real SH `Y_lm` under the reflection `x → −x` (`φ → π − φ`): `cos mφ` gets
+/// `(−1)^m`, `sin |m|φ` gets `−(−1)^|m|`. 0 for even, 1 for odd.
+const fn x_parity(m: i32) -> usize {
+    if m >= 0 {
+        (m % 2) as usize
+    } else {
+        ((-m + 1) % 2) as usize
+    }
+}
+
+/// A rotation about x as two dense blocks per band. It commutes with the reflection
+/// `x → −x`, so it maps each band's even coefficients (`l + 1` of them) among themselves and
+/// its odd ones (`l`) likewise: 146 products at order 6 instead of 286 for the whole bands.
+struct ParityBlocks {
+    /// Band `l`'s coefficients `m + l`, even ones first.
+    members: [[usize; MAX_BAND]; MAX_ORDER],
+    /// Band by band: the even block, then the odd one, row-major in `members` order.
+    values: [f32; PARITY_VALUES],
+}
+
+/// Σ_{l<6} (l + 1)² + l².
+const PARITY_VALUES: usize = 91 + 55;
+
+impl ParityBlocks {
+    /// The blocks of `matrix`, which must commute with `x → −x` (a rotation about x): its
+    /// entries between coefficients of different parity are zero and are left out.
+    const fn of(matrix: &ShRotationMatrix) -> ParityBlocks {
+        let mut blocks = ParityBlocks {
+            members: [[0; MAX_BAND]; MAX_ORDER],
+            values: [0.0; PARITY_VALUES],
+        };
+        let (mut l, mut at) = (0, 0);
+        while l < MAX_ORDER {
+            let mut n = 0;
+            let mut parity = 0;
+            while parity < 2 {
+                let mut i = 0;
+                while i < 2 * l + 1 {
+                    if x_parity(i as i32 - l as i32) == parity {
+                        blocks.members[l][n] = i;
+                        n += 1;
+                    }
+                    i += 1;
+                }
+                parity += 1;
+            }
+            let mut block = 0;
+            while block < 2 {
+                let (start, len) = if block == 0 { (0, l + 1) } else { (l + 1, l) };
+                let mut r = 0;
+                while r < len {
+                    let mut c = 0;
+                    while c < len {
+                        let (i, j) = (blocks.members[l][start + r], blocks.members[l][start + c]);
+                        blocks.values[at] = matrix.entry(l, i, j);
+                        at += 1;
+                        c += 1;
+                    }
+                    r += 1;
+                }
+                block += 1;
+            }
+            l += 1;
+        }
+        blocks
+    }
+
+    /// `output = D · input` on the first `order` bands (both at least `order²` long). Each
+    /// band's blocks have sizes fixed at compile time, so the products unroll completely.
+    fn apply(&self, order: usize, input: &[f32], output: &mut [f32]) {
+        let mut values = &self.values[..];
+        for (l, members) in self.members.iter().enumerate().take(order) {
+            let band = &input[l * l..][..2 * l + 1];
+            let out = &mut output[l * l..][..2 * l + 1];
+            values = match l {
+                0 => band_blocks::<1, 0>(members, values, band, out),
+                1 => band_blocks::<2, 1>(members, values, band, out),
+                2 => band_blocks::<3, 2>(members, values, band, out),
+                3 => band_blocks::<4, 3>(members, values, band, out),
+                4 => band_blocks::<5, 4>(members, values, band, out),
+                _ => band_blocks::<6, 5>(members, values, band, out),
+            };
+        }
+    }
+}
+
+/// One band's even (`E` coefficients) and odd (`O`) blocks; returns the values after them.
+#[inline(always)]
+fn band_blocks<'a, const E: usize, const O: usize>(
+    members: &[usize; MAX_BAND],
+    values: &'a [f32],
+    band: &[f32],
+    out: &mut [f32],
+) -> &'a [f32] {
+    let values = block::<E>(&members[..E], values, band, out);
+    if O == 0 {
+        return values; // band 0 has no odd coefficient
+    }
+    block::<O>(&members[E..E + O], values, band, out)
+}
+
+/// `out[members] = M · band[members]` for the `N × N` block `M` at the start of `values`;
+/// returns the values after it.
+#[inline(always)]
+fn block<'a, const N: usize>(
+    members: &[usize],
+    values: &'a [f32],
+    band: &[f32],
+    out: &mut [f32],
+) -> &'a [f32] {
+    let gathered: [f32; N] = core::array::from_fn(|i| band[members[i]]);
+    let (rows, rest) = values.split_at(N * N);
+    for (&m, row) in members.iter().zip(rows.as_chunks::<N>().0) {
+        out[m] = (0..N).map(|c| row[c] * gathered[c]).sum();
+    }
+    rest
 }
 
 /// Rotations of SH vectors of one order by any rotation.
@@ -68,9 +189,9 @@ impl EulerRotation {
         let (alpha, beta, gamma) = zyz(r);
         let mut tmp = [0.0f32; MAX_COEFFS];
         self.turn_z(gamma, v);
-        QUARTER.apply_bands(self.order, v, &mut tmp)?;
+        QUARTER.apply(self.order, v, &mut tmp);
         self.turn_z(beta, &mut tmp);
-        QUARTER_BACK.apply_bands(self.order, &tmp, v)?;
+        QUARTER_BACK.apply(self.order, &tmp, v);
         self.turn_z(alpha, v);
         Ok(())
     }
@@ -160,6 +281,33 @@ mod tests {
                     "{axis:?} {angle}: {got:?} vs {want:?}"
                 );
             }
+        }
+    }
+
+    /// The entries the parity blocks leave out are zero in the full quarter-turn matrices,
+    /// and the blocks have the sizes `PARITY_VALUES` assumes.
+    #[test]
+    fn quarter_turns_do_not_mix_parities() {
+        for sign in [1.0, -1.0] {
+            let full = quarter_turn(sign);
+            let mut largest = 0.0f32;
+            for l in 0..MAX_ORDER {
+                let w = 2 * l + 1;
+                let evens = (0..w)
+                    .filter(|&i| x_parity(i as i32 - l as i32) == 0)
+                    .count();
+                assert_eq!(evens, l + 1);
+                for i in 0..w {
+                    for j in 0..w {
+                        let (pi, pj) =
+                            (x_parity(i as i32 - l as i32), x_parity(j as i32 - l as i32));
+                        if pi != pj {
+                            largest = largest.max(math::abs(full.entry(l, i, j)));
+                        }
+                    }
+                }
+            }
+            assert!(largest < 1e-6, "{largest}");
         }
     }
 

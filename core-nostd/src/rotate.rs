@@ -377,6 +377,11 @@ impl ShRotationMatrix {
         self.apply_bands(self.order, input, output)
     }
 
+    /// Entry `(i, j)` of band `l`'s block, rows and columns indexed by `m + l`.
+    pub(crate) const fn entry(&self, l: usize, i: usize, j: usize) -> f32 {
+        self.blocks[block_offset(l) + i * (2 * l + 1) + j]
+    }
+
     /// [`ShRotationMatrix::apply`] to the first `order` bands only (`order` ≤ the matrix's):
     /// the blocks of a band do not depend on how many bands were built.
     pub(crate) fn apply_bands(
