@@ -1,10 +1,10 @@
 //! Rotating SH vectors cheaply: `R = Rz(α) Ry(β) Rz(γ)` (ZYZ Euler angles) with
 //! `Ry(β) = Rx(−90°) Rz(β) Rx(90°)`. A rotation about z turns each `(cos mφ, sin mφ)`
 //! coefficient pair by `mθ` (O(n²)), and the two quarter turns about x are fixed
-//! [`ShRotationMatrix`]es computed at compile time, so a rotation costs two block products and
-//! three plane rotations instead of building its own Ivanic–Ruedenberg matrix (about 65k
-//! instructions at order 6), and no set-up. Used for the bake's per-vertex frames and the
-//! runtime's per-bone lighting.
+//! [`ShRotationMatrix`]es computed at compile time and split into parity blocks, so a rotation
+//! costs two sparse block products and three plane rotations instead of building its own
+//! Ivanic–Ruedenberg matrix (about 65k instructions at order 6), and no set-up. Used for the
+//! bake's per-vertex frames and the runtime's per-bone lighting.
 
 use crate::math;
 use crate::rotate::ShRotationMatrix;

@@ -372,32 +372,18 @@ impl ShRotationMatrix {
         u * big_u + v * big_v + w * big_w
     }
 
-    /// Writes `input` rotated to `output` (both at least `order²` values).
-    pub fn apply(&self, input: &[f32], output: &mut [f32]) -> Result<(), ShError> {
-        self.apply_bands(self.order, input, output)
-    }
-
     /// Entry `(i, j)` of band `l`'s block, rows and columns indexed by `m + l`.
     pub(crate) const fn entry(&self, l: usize, i: usize, j: usize) -> f32 {
         self.blocks[block_offset(l) + i * (2 * l + 1) + j]
     }
 
-    /// [`ShRotationMatrix::apply`] to the first `order` bands only (`order` ≤ the matrix's):
-    /// the blocks of a band do not depend on how many bands were built.
-    pub(crate) fn apply_bands(
-        &self,
-        order: usize,
-        input: &[f32],
-        output: &mut [f32],
-    ) -> Result<(), ShError> {
-        let n2 = coeff_count(order);
-        if order > self.order {
-            return Err(ShError::BadOrder);
-        }
+    /// Writes `input` rotated to `output` (both at least `order²` values).
+    pub fn apply(&self, input: &[f32], output: &mut [f32]) -> Result<(), ShError> {
+        let n2 = coeff_count(self.order);
         if input.len() < n2 || output.len() < n2 {
             return Err(ShError::OutputTooSmall);
         }
-        for l in 0..order {
+        for l in 0..self.order {
             let (w, base) = (2 * l + 1, l * l);
             let block = &self.blocks[block_offset(l)..][..w * w];
             for (i, row) in block.chunks_exact(w).enumerate() {

@@ -35,7 +35,8 @@ pub fn dominant_bones(rig: &dyn Rig) -> BoneFrames {
     }
 }
 
-fn all_rotations(rig: &dyn Rig, poses: &[Vec<f64>]) -> Result<Vec<Vec<DMat3>>> {
+/// [`bone_rotations`] of every pose.
+pub fn all_rotations(rig: &dyn Rig, poses: &[Vec<f64>]) -> Result<Vec<Vec<DMat3>>> {
     poses.iter().map(|a| bone_rotations(rig, a)).collect()
 }
 
@@ -78,9 +79,8 @@ pub fn change_frames(
 ) -> Result<Vec<Vec<f32>>> {
     if rotations.len() != transfer.len() {
         bail!(
-            "the model learns transfer in bone frames, so world-frame transfer needs each frame's \
-             bone rotations, which a character's clip gives and bare angles do not ({} frames, \
-             rotations for {})",
+            "moving transfer between world and bone frames needs every frame's bone rotations \
+             ({} frames, rotations for {})",
             transfer.len(),
             rotations.len()
         );

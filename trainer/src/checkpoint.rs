@@ -300,7 +300,8 @@ impl Checkpoint {
     /// The transfer of every pose of `meshes` (the meshes the checkpoint was opened for,
     /// checked again by fingerprint): stored poses are read back, missing ones baked one after
     /// the other and stored as soon as each is done. Equal, bit for bit, to
-    /// [`crate::bake::bake_poses`] on the same meshes. Errors name pose `i` as `name(i)`.
+    /// [`crate::bake::bake_poses`] on the same meshes. A pose that fails to bake is named
+    /// `name(i)` in the error.
     ///
     /// If the bake fails before any pose is stored, the checkpoint is removed again: it holds
     /// nothing worth resuming, and a failed run should leave no trace.

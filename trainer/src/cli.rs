@@ -7,7 +7,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
 
 use crate::atomic::write_atomic;
-use crate::bone_frames::bone_rotations;
+use crate::bone_frames::all_rotations;
 use crate::checkpoint::Checkpoint;
 use crate::experiment::{BakedClip, fit_clip, pose_all, predict_world};
 use crate::export::Precision;
@@ -253,11 +253,7 @@ fn eval(args: &EvalArgs) -> Result<()> {
             );
         }
         let angles: Vec<Vec<f64>> = clip.frames.iter().map(|p| layout.reduce(p)).collect();
-        let rotations = clip
-            .frames
-            .iter()
-            .map(|p| bone_rotations(rig.as_ref(), p))
-            .collect::<Result<Vec<_>>>()?;
+        let rotations = all_rotations(rig.as_ref(), &clip.frames)?;
         predict_world(&blob, &angles, &rotations)
     } else {
         let Some(csv) = &args.source.angles else {

@@ -13,7 +13,7 @@ use glam::DMat3;
 use nalgebra::DMatrix;
 
 use crate::bake::{BakeSettings, bake_poses};
-use crate::bone_frames::{bone_rotations, change_frames, dominant_bones};
+use crate::bone_frames::{all_rotations, change_frames, dominant_bones};
 use crate::evaluate::{mean_transfer, nearest_pose, relative_error, skinned_transfer};
 use crate::export::{ExportError, Precision, encode_model};
 use crate::fit::{Alpha, CoefDims, Dims, Fit, FitOptions, fit};
@@ -77,10 +77,7 @@ impl BakedClip {
         meshes: Vec<Mesh>,
         transfer: Vec<Vec<f32>>,
     ) -> Result<BakedClip> {
-        let rotations = poses
-            .iter()
-            .map(|p| bone_rotations(rig, p))
-            .collect::<Result<Vec<_>>>()?;
+        let rotations = all_rotations(rig, &poses)?;
         Ok(BakedClip {
             name: name.to_owned(),
             angles: poses.iter().map(|p| layout.reduce(p)).collect(),

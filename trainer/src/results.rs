@@ -127,7 +127,11 @@ pub fn run_study(study: &Study, settings: &ResultsSettings, out: &Path) -> Resul
     // Figure 4: the spectra.
     let default = result.model(experiment::DEFAULT_CONFIG)?;
     // A skipped (too large) energy model leaves the default's spectrum to plot.
-    let by_energy = result.model(BY_ENERGY).unwrap_or(default);
+    let by_energy = if result.skipped.iter().any(|(name, _)| name == BY_ENERGY) {
+        default
+    } else {
+        result.model(BY_ENERGY)?
+    };
     spectra_plot(&figure("spectra"), &study.title, by_energy)?;
 
     // Figure 3: train and test error against α, default shape.

@@ -13,7 +13,8 @@ pub enum Dims {
     /// Keep the fewest leading components whose energy reaches this fraction of the total
     /// (a value in `(0, 1]`).
     Variance(f64),
-    /// Keep every component up to the numerical rank.
+    /// Keep every component up to the numerical rank (and, like `Variance`, no more than the
+    /// runtime holds).
     All,
 }
 

@@ -438,8 +438,9 @@ fn variance_fraction_and_all_stop_at_the_runtime_limit() {
 /// so a 1e6 rad offset costs only the representation error of the shifted angles (ulp(1e6)/2
 /// ≈ 6e-11 rad on a spread of 1) and predictions match the unshifted problem within 1e-9;
 /// a spread of only 1e-12 rad around 0.3 keeps about four digits (ulp(0.3)/2 ÷ 1e-12 ≈ 3e-5,
-/// so predictions within 1e-4) and, because the pose-PCA rank tolerance and the α grid are both relative to the singular
-/// values, is fitted as the scaled copy of the unit-spread problem rather than cut as noise.
+/// so predictions within 1e-4) and, because the pose-PCA rank tolerance and the α grid are
+/// both relative to the singular values, is fitted as the scaled copy of the unit-spread
+/// problem rather than cut as noise.
 /// (At runtime the core takes f32 angles, which resolve 1e6 rad only to 0.0625: the offset
 /// case is a trainer guarantee, not a runtime one.)
 #[test]

@@ -32,6 +32,8 @@
 //!   about its local x moves `.x` only, and constant components can be dropped by name.
 //!   Rest = the node's transform in the file, which is the bind pose for the assets tested
 //!   (the all-zero pose reproduces the stored mesh). Every joint is present, moving or not.
+//!   Along a clip each vector is unwrapped to the turn nearest the previous frame's, so a
+//!   joint turning on through a half turn stays continuous instead of jumping from π to −π.
 //! - **Translations and scales.** The pose vector carries rotations only: joint translations
 //!   and scales, and every property of non-joint ancestors, stay at their rest values when
 //!   posing. Animated ones are listed by [`GltfRig::held_channels`] with how far they stray

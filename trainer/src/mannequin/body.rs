@@ -21,8 +21,9 @@
 //!   character's elbows and knees do, capped at half the shortest bone at that joint so the
 //!   bands of one bone never overlap.
 //! - **Head.** The bone ending highest in the rest pose (the head's End Site) is replaced by
-//!   the built-in character's head and nose, scaled by `H / CROWN` (the built-in character's height) and centred on
-//!   the bone's middle, rigid on the bone's joint; the hat sits on it likewise.
+//!   the built-in character's head and nose, scaled by `H / CROWN` (the built-in character's
+//!   height) and centred on the bone's middle, rigid on the bone's joint; the hat sits on it
+//!   likewise.
 //! - **Sampling.** Rings every `COARSER` × the built-in character's `RING_STEP`, scaled the
 //!   same way, and `AROUND` ring spacings of circumference per segment (about 10k vertices
 //!   for a CMU skeleton, with the hat).
