@@ -49,8 +49,15 @@ struct ParityBlocks {
     values: [f32; PARITY_VALUES],
 }
 
-/// Σ_{l<6} (l + 1)² + l².
-const PARITY_VALUES: usize = 91 + 55;
+/// Σ_{l<MAX_ORDER} (l + 1)² + l²: an even and an odd block per band.
+const PARITY_VALUES: usize = {
+    let (mut l, mut total) = (0, 0);
+    while l < MAX_ORDER {
+        total += (l + 1) * (l + 1) + l * l;
+        l += 1;
+    }
+    total
+};
 
 impl ParityBlocks {
     /// The blocks of `matrix`, which must commute with `x → −x` (a rotation about x): its
@@ -62,34 +69,32 @@ impl ParityBlocks {
         };
         let (mut l, mut at) = (0, 0);
         while l < MAX_ORDER {
-            let mut n = 0;
-            let mut parity = 0;
-            while parity < 2 {
-                let mut i = 0;
-                while i < 2 * l + 1 {
-                    if x_parity(i as i32 - l as i32) == parity {
-                        blocks.members[l][n] = i;
-                        n += 1;
-                    }
-                    i += 1;
-                }
-                parity += 1;
+            let li = l as i32;
+            // Even members in 0..=l, odd ones after them.
+            let (mut even, mut odd, mut m) = (0, l + 1, -li);
+            while m <= li {
+                let slot = if x_parity(m) == 0 {
+                    &mut even
+                } else {
+                    &mut odd
+                };
+                blocks.members[l][*slot] = (m + li) as usize;
+                *slot += 1;
+                m += 1;
             }
-            let mut block = 0;
-            while block < 2 {
-                let (start, len) = if block == 0 { (0, l + 1) } else { (l + 1, l) };
-                let mut r = 0;
-                while r < len {
-                    let mut c = 0;
-                    while c < len {
-                        let (i, j) = (blocks.members[l][start + r], blocks.members[l][start + c]);
-                        blocks.values[at] = matrix.entry(l, i, j);
-                        at += 1;
-                        c += 1;
-                    }
-                    r += 1;
-                }
-                block += 1;
+            let mut k = 0;
+            while k < (l + 1) * (l + 1) + l * l {
+                // Row and column of entry k within the even block, then the odd one.
+                let (start, len, k_in) = if k < (l + 1) * (l + 1) {
+                    (0, l + 1, k)
+                } else {
+                    (l + 1, l, k - (l + 1) * (l + 1))
+                };
+                let row = blocks.members[l][start + k_in / len] as i32 - li;
+                let column = blocks.members[l][start + k_in % len] as i32 - li;
+                blocks.values[at] = matrix.get(li, row, column);
+                at += 1;
+                k += 1;
             }
             l += 1;
         }
@@ -302,7 +307,11 @@ mod tests {
                         let (pi, pj) =
                             (x_parity(i as i32 - l as i32), x_parity(j as i32 - l as i32));
                         if pi != pj {
-                            largest = largest.max(math::abs(full.entry(l, i, j)));
+                            largest = largest.max(math::abs(full.get(
+                                l as i32,
+                                i as i32 - l as i32,
+                                j as i32 - l as i32,
+                            )));
                         }
                     }
                 }

@@ -322,7 +322,8 @@ impl ShRotationMatrix {
         Ok(m)
     }
 
-    const fn get(&self, l: i32, a: i32, b: i32) -> f32 {
+    /// Entry `(a, b)` of band `l`, both in `−l..=l`.
+    pub(crate) const fn get(&self, l: i32, a: i32, b: i32) -> f32 {
         let w = (2 * l + 1) as usize;
         self.blocks[block_offset(l as usize) + (a + l) as usize * w + (b + l) as usize]
     }
@@ -370,11 +371,6 @@ impl ShRotationMatrix {
             self.p(1, m - 1, n, l) - self.p(-1, -m + 1, n, l)
         };
         u * big_u + v * big_v + w * big_w
-    }
-
-    /// Entry `(i, j)` of band `l`'s block, rows and columns indexed by `m + l`.
-    pub(crate) const fn entry(&self, l: usize, i: usize, j: usize) -> f32 {
-        self.blocks[block_offset(l) + i * (2 * l + 1) + j]
     }
 
     /// Writes `input` rotated to `output` (both at least `order²` values).
