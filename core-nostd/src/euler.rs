@@ -185,6 +185,11 @@ impl EulerRotation {
         Ok(EulerRotation { order })
     }
 
+    /// The SH order of the vectors it rotates.
+    pub fn order(&self) -> usize {
+        self.order
+    }
+
     /// `v` rotated by the row-major rotation `r` (taking `f(ω)` to `f(rᵀω)`, as
     /// [`ShRotationMatrix::new`]), in place; `v` holds at least `order²` values.
     pub fn apply(&self, r: &[[f64; 3]; 3], v: &mut [f32]) -> Result<(), ShError> {

@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use aprt_core::rotate::ShRotation;
+use aprt_core::euler::EulerRotation;
 use aprt_core::{LitWeights, Model, PoseWeights, SliceSource};
 use glam::DMat3;
 use nalgebra::DMatrix;
@@ -366,7 +366,7 @@ fn baselines(
     };
     let bind_transfer =
         bake_poses(std::slice::from_ref(rig.bind_mesh()), settings, false)?.remove(0);
-    let rotation = ShRotation::new(settings.order)?;
+    let rotation = EulerRotation::new(settings.order)?;
     let skin = rig.skin();
     let skinned_of = |set: &BakedClip| -> Result<Vec<Vec<f32>>> {
         set.poses

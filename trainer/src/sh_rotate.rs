@@ -1,7 +1,8 @@
-//! Rotations for moving transfer between the world and a vertex's bone frame, on top of the
-//! core's exact SH rotation ([`aprt_core::rotate::ShRotation`]).
+//! Rotations for moving transfer between the world and a vertex's bone frame, by the core's
+//! Euler-angle SH rotation ([`aprt_core::euler::EulerRotation`]), as the bake and the runtime
+//! rotate.
 
-use aprt_core::rotate::ShRotation;
+use aprt_core::euler::EulerRotation;
 use glam::DMat3;
 
 /// The rotation nearest to `m` (polar decomposition by Newton iteration `Q ← (Q + Q⁻ᵀ)/2`),
@@ -35,7 +36,7 @@ pub fn row_major(r: DMat3) -> [[f32; 3]; 3] {
 
 /// Rotates every vertex's SH vector (`n²` values each) by its own rotation `rotations[j]`.
 pub fn rotate_each(
-    rotation: &ShRotation,
+    rotation: &EulerRotation,
     transfer: &[f32],
     rotations: impl Fn(usize) -> DMat3 + Sync,
 ) -> Vec<f32> {
@@ -46,9 +47,9 @@ pub fn rotate_each(
         .zip(transfer.par_chunks(n2))
         .enumerate()
         .for_each(|(j, (o, t))| {
-            rotation
-                .rotate(&row_major(rotations(j)), t, o)
-                .expect("order matches the slices");
+            o.copy_from_slice(t);
+            let r = rotations(j).transpose().to_cols_array_2d();
+            rotation.apply(&r, o).expect("order matches the slices");
         });
     out
 }
