@@ -49,7 +49,7 @@ pub fn exp(r: DVec3) -> DQuat {
 /// Of the rotation vectors equal to `v` as rotations (`v̂ (|v| + 2πk)`), the one nearest
 /// `previous`: applied frame by frame, it keeps a clip's pose vectors continuous where a joint
 /// turns through a half turn and [`log`] jumps to the other side.
-pub fn nearest_turn(v: DVec3, previous: DVec3) -> DVec3 {
+fn nearest_turn(v: DVec3, previous: DVec3) -> DVec3 {
     let angle = v.length();
     if angle == 0.0 {
         return v;

@@ -381,7 +381,7 @@ impl BvhRig {
             let v = DVec3::from_slice(v);
             match *e {
                 Entry::Translation(j) => translation[j] += v,
-                Entry::Rotation(j) => rotation[j] = DQuat::from_scaled_axis(v),
+                Entry::Rotation(j) => rotation[j] = crate::rotation::exp(v),
             }
         }
         let axes = DAffine3::from_quat(to_mesh_frame());
