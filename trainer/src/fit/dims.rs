@@ -18,6 +18,18 @@ pub enum Dims {
     All,
 }
 
+impl Dims {
+    /// The most components this choice may keep when the runtime holds `runtime`: all or a
+    /// fraction stop there; an explicit count is kept as asked (the writer then says it is too
+    /// many).
+    pub fn cap(self, runtime: usize) -> usize {
+        match self {
+            Dims::Count(_) => usize::MAX,
+            Dims::Variance(_) | Dims::All => runtime,
+        }
+    }
+}
+
 /// Number of singular values (sorted descending) above `max(m, n) · ε · σ_max`, the usual
 /// threshold of LAPACK's rank decisions. `epsilon` is the unit roundoff of the data's storage:
 /// transfer baked in f32 carries rounding noise at the f32 level, and singular values at that

@@ -45,15 +45,9 @@ impl PosePca {
         let energies: Vec<f64> = sigma.iter().map(|s| s * s).collect();
         let total: f64 = energies.iter().sum();
         let rank = dims::numerical_rank(sigma, p, a, f64::EPSILON);
-        // All or a variance fraction keep at most what the runtime holds; an explicit count is
-        // kept as asked (the writer then says it is too many).
-        let cap = match dims {
-            Dims::Count(_) => usize::MAX,
-            _ => MAX_POSE_DIMS,
-        };
         let keep = dims::choose(dims, &energies, total, rank)
             .unwrap_or(rank)
-            .min(cap);
+            .min(dims.cap(MAX_POSE_DIMS));
         let v_t = svd.v_t.expect("SVD computed with V");
         let scale = 1.0 / (p.max(2) - 1) as f64;
         Self {

@@ -149,7 +149,7 @@ pub struct VertexBasisFit {
 /// engine can load.
 pub fn fit_vertex_basis(rows: &impl RowOperator, dims: Dims) -> VertexBasisFit {
     let max_width = rows.nrows().min(rows.ncols());
-    let cap = MAX_COEF_DIMS.min(max_width);
+    let cap = dims.cap(MAX_COEF_DIMS).min(max_width);
     let total_energy = rows.frobenius_sq();
     let mut width = match dims {
         Dims::Count(k) => k + OVERSAMPLE,
@@ -188,7 +188,7 @@ pub fn fit_vertex_basis(rows: &impl RowOperator, dims: Dims) -> VertexBasisFit {
         } else {
             max_width
         };
-        let capped = !matches!(dims, Dims::Count(_)) && trusted >= cap;
+        let capped = trusted >= cap;
         let chosen = dims::choose(dims, &energies, total_energy, rank);
         if let Some(keep) = chosen
             .map(|k| if capped { k.min(cap) } else { k })
@@ -200,10 +200,7 @@ pub fn fit_vertex_basis(rows: &impl RowOperator, dims: Dims) -> VertexBasisFit {
                 total_energy,
             };
         }
-        width = (2 * width).min(max_width);
-        if !matches!(dims, Dims::Count(_)) {
-            width = width.min(cap + OVERSAMPLE);
-        }
+        width = (2 * width).min(max_width).min(cap + OVERSAMPLE);
     }
 }
 
