@@ -251,9 +251,7 @@ mod tests {
     }
 
     #[test]
-    fn equals_the_ivanic_ruedenberg_matrix_for_any_rotation() {
-        let order = 6;
-        let euler = EulerRotation::new(order).unwrap();
+    fn equals_the_ivanic_ruedenberg_matrix_for_any_rotation_and_order() {
         let input: [f32; 36] = core::array::from_fn(|i| ((i * 37 % 11) as f32 - 5.0) / 7.0);
         let pi = core::f64::consts::PI;
         // Generic rotations, then the degenerate ones: identity, z only, half turns about x and
@@ -275,7 +273,8 @@ mod tests {
         cases[203] = ([0.0, 1.0, 0.0], pi - 1e-10);
         cases[204] = ([1.0, 0.0, 0.0], 1e-10);
         cases[205] = ([0.6, 0.0, 0.8], pi);
-        for (axis, angle) in cases {
+        for (order, (axis, angle)) in (1..=MAX_ORDER).flat_map(|n| cases.map(|c| (n, c))) {
+            let n2 = coeff_count(order);
             let r = axis_angle(axis, angle);
             let r32 = r.map(|row| row.map(|x| x as f32));
             let mut want = [0.0f32; 36];
@@ -284,13 +283,18 @@ mod tests {
                 .apply(&input, &mut want)
                 .unwrap();
             let mut got = input;
-            euler.apply(&r, &mut got).unwrap();
-            for (g, w) in got.iter().zip(&want) {
+            EulerRotation::new(order)
+                .unwrap()
+                .apply(&r, &mut got)
+                .unwrap();
+            for (g, w) in got[..n2].iter().zip(&want[..n2]) {
                 assert!(
                     math::abs(g - w) < 2e-5,
-                    "{axis:?} {angle}: {got:?} vs {want:?}"
+                    "order {order}, {axis:?} {angle}: {got:?} vs {want:?}"
                 );
             }
+            // Coefficients past the order are left alone.
+            assert_eq!(got[n2..], input[n2..]);
         }
     }
 

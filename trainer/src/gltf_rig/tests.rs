@@ -503,6 +503,7 @@ fn clips_unwrap_rotations_through_half_turns() {
     let rig = rig.unwrap();
     let clip = rig.clip("spin").unwrap();
     let tip_x: Vec<f64> = clip.frames.iter().map(|f| f[3]).collect();
+    assert_eq!(tip_x.len(), 5, "{tip_x:?}");
     for (got, expect) in tip_x.iter().zip([0.0, 1.0, 2.0, 3.0, 4.0]) {
         assert!((got - expect).abs() < 1e-5, "{tip_x:?}");
     }
