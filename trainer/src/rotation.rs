@@ -63,13 +63,18 @@ fn nearest_turn(v: DVec3, previous: DVec3) -> DVec3 {
     }
 }
 
-/// Unwraps each 3-number rotation vector of `pose` at `joints` (indices of triples) to the
-/// turn nearest the same joint in `previous`; see [`nearest_turn`].
-pub fn continue_turns(pose: &mut [f64], previous: &[f64], joints: impl IntoIterator<Item = usize>) {
-    for i in joints {
-        let v = DVec3::from_slice(&pose[3 * i..]);
-        let u = DVec3::from_slice(&previous[3 * i..]);
-        nearest_turn(v, u).write_to_slice(&mut pose[3 * i..]);
+/// Makes a clip's rotation vectors continuous: frame by frame, each 3-number vector at
+/// `joints` (indices of triples) becomes the turn nearest the same joint in the frame before;
+/// see [`nearest_turn`].
+pub fn continue_turns(frames: &mut [Vec<f64>], joints: impl Iterator<Item = usize> + Clone) {
+    for f in 1..frames.len() {
+        let (done, rest) = frames.split_at_mut(f);
+        let (previous, pose) = (&done[f - 1], &mut rest[0]);
+        for i in joints.clone() {
+            let v = DVec3::from_slice(&pose[3 * i..]);
+            let u = DVec3::from_slice(&previous[3 * i..]);
+            nearest_turn(v, u).write_to_slice(&mut pose[3 * i..]);
+        }
     }
 }
 
@@ -148,9 +153,15 @@ mod tests {
         assert!((back.y - (0.5 - 2.0 * PI)).abs() < 1e-12, "{back}");
         assert_eq!(nearest_turn(raw, raw), raw);
         assert_eq!(nearest_turn(DVec3::ZERO, DVec3::X), DVec3::ZERO);
-        let mut pose = [0.0, 0.0, 0.0, raw.x, raw.y, raw.z];
-        continue_turns(&mut pose, &[9.0, 9.0, 9.0, 0.0, 3.1, 0.0], [1]);
-        assert_eq!(pose[..3], [0.0; 3], "joint 0 was not asked for");
-        assert!((pose[4] - 3.2).abs() < 1e-12, "{pose:?}");
+        // Frame 1 continues frame 0, frame 2 continues the continued frame 1.
+        let mut frames = vec![
+            vec![9.0, 9.0, 9.0, 0.0, 3.1, 0.0],
+            vec![0.0, 0.0, 0.0, raw.x, raw.y, raw.z],
+            vec![0.0, 0.0, 0.0, raw.x, raw.y, raw.z],
+        ];
+        continue_turns(&mut frames, 1..2);
+        assert_eq!(frames[1][..3], [0.0; 3], "joint 0 was not asked for");
+        assert!((frames[1][4] - 3.2).abs() < 1e-12, "{frames:?}");
+        assert!((frames[2][4] - 3.2).abs() < 1e-12, "{frames:?}");
     }
 }

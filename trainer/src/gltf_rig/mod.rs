@@ -272,14 +272,11 @@ impl GltfRig {
     /// The clip called `name`: one pose vector per frame.
     pub fn clip(&self, name: &str) -> Result<Clip, GltfError> {
         let (animation, times) = self.frame_times(name)?;
-        let mut frames: Vec<Vec<f64>> = Vec::with_capacity(times.len());
-        for &t in &times {
-            let mut pose = self.pose_of(&animation.locals_at(&self.skeleton.rest, t));
-            if let Some(previous) = frames.last() {
-                crate::rotation::continue_turns(&mut pose, previous, 0..self.skeleton.joints.len());
-            }
-            frames.push(pose);
-        }
+        let mut frames: Vec<Vec<f64>> = times
+            .iter()
+            .map(|&t| self.pose_of(&animation.locals_at(&self.skeleton.rest, t)))
+            .collect();
+        crate::rotation::continue_turns(&mut frames, 0..self.skeleton.joints.len());
         Ok(Clip {
             name: name.to_owned(),
             fps: self.fps,

@@ -327,17 +327,18 @@ impl BvhRig {
             });
         }
         let n = n as usize;
-        let mut out: Vec<Vec<f64>> = Vec::with_capacity(n);
-        for k in 0..n {
-            let at = frames.start as f64 + (k as f64 * step).min(last);
-            let mut pose = self.pose_of(source, map, at);
-            if let Some(previous) = out.last() {
-                let rotations = (self.entries.iter().enumerate())
-                    .filter_map(|(i, e)| matches!(e, Entry::Rotation(_)).then_some(i));
-                crate::rotation::continue_turns(&mut pose, previous, rotations);
-            }
-            out.push(pose);
-        }
+        let mut out: Vec<Vec<f64>> = (0..n)
+            .map(|k| {
+                self.pose_of(
+                    source,
+                    map,
+                    frames.start as f64 + (k as f64 * step).min(last),
+                )
+            })
+            .collect();
+        let rotations = (self.entries.iter().enumerate())
+            .filter_map(|(i, e)| matches!(e, Entry::Rotation(_)).then_some(i));
+        crate::rotation::continue_turns(&mut out, rotations);
         Ok(Clip {
             name: name.into(),
             fps,
