@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use aprt_core::{BlobSource, Model, PoseWeights, SliceSource, SourceError};
-use run::{aprt, refuse, succeed};
+use run::{aprt, read_npy, refuse, succeed};
 
 mod run;
 
@@ -70,17 +70,6 @@ fn setup(dir: &Path, poses: usize) -> (PathBuf, PathBuf) {
     (seq, angles)
 }
 
-fn read_npy_f32(path: &Path) -> (String, Vec<f32>) {
-    let bytes = std::fs::read(path).unwrap();
-    let header_len = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
-    let header = String::from_utf8(bytes[10..10 + header_len].to_vec()).unwrap();
-    let data = bytes[10 + header_len..]
-        .chunks_exact(4)
-        .map(|b| f32::from_le_bytes(b.try_into().unwrap()))
-        .collect();
-    (header, data)
-}
-
 struct Streamed<'a>(&'a [u8]);
 
 impl BlobSource for Streamed<'_> {
@@ -136,8 +125,8 @@ fn train_inspect_eval_and_stream_agree() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let (header, predicted) = read_npy_f32(&npy);
-    assert!(header.contains("'shape': (9, 12, 9)"), "{header}");
+    let (shape, predicted) = read_npy(&npy);
+    assert_eq!(shape, [9, 12, 9]);
 
     // The core from a slice and streamed through a buffer of one block: the same bits.
     let blob = std::fs::read(&model_path).unwrap();
@@ -187,8 +176,8 @@ fn train_inspect_eval_and_stream_agree() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let (header, truth) = read_npy_f32(&truth);
-    assert!(header.contains("'shape': (12, 9)"), "{header}");
+    let (shape, truth) = read_npy(&truth);
+    assert_eq!(shape, [12, 9]);
     let err: f32 = truth
         .iter()
         .zip(&predicted[4 * 108..5 * 108])
