@@ -6,7 +6,7 @@
 //! the message must contain. `{fx}` is `fixtures/malformed`, `{out}` a fresh empty output
 //! directory, `{model}` a model trained from `{fx}/ok`.
 
-use run::aprt;
+use run::{aprt, succeed};
 use std::path::{Path, PathBuf};
 
 mod run;
@@ -354,12 +354,7 @@ fn every_malformed_input_is_refused_clearly_and_leaves_nothing() {
     let mut args = command_line(&ok, work.path(), &model);
     let o = args.iter().position(|a| a == "-o").unwrap();
     args[o + 1] = model.to_str().unwrap().to_owned();
-    let out = aprt(&args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeed(&args);
 
     let mut failures = Vec::new();
     for (i, case) in CASES.iter().enumerate() {
@@ -417,12 +412,7 @@ fn the_bvh_baseline_is_accepted() {
         args.push(ok.to_str().unwrap().to_owned());
         args.extend(mannequin.iter().map(|s| (*s).to_owned()));
         args.extend(["--npy".to_owned(), npy.to_str().unwrap().to_owned()]);
-        let out = aprt(&args);
-        assert!(
-            out.status.success(),
-            "{args:?}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        succeed(&args);
     }
 }
 
@@ -438,10 +428,6 @@ fn simulate_needs_no_angles() {
         .chain([seq.to_str().unwrap().to_owned(), "--npy".to_owned()])
         .chain([npy.to_str().unwrap().to_owned()])
         .collect();
-    let out = aprt(&args);
-    assert!(
-        out.status.success() && npy.exists(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeed(&args);
+    assert!(npy.exists());
 }
