@@ -64,8 +64,8 @@ fn nearest_turn(v: DVec3, previous: DVec3) -> DVec3 {
 }
 
 /// Makes a clip's rotation vectors continuous: frame by frame, each 3-number vector at
-/// `joints` (indices of triples) becomes the turn nearest the same joint in the frame before;
-/// see [`nearest_turn`].
+/// `joints` (indices of triples) becomes, of the vectors `v̂ (|v| + 2πk)` equal to it as
+/// rotations, the one nearest the same joint in the frame before.
 pub fn continue_turns(frames: &mut [Vec<f64>], joints: impl Iterator<Item = usize> + Clone) {
     for f in 1..frames.len() {
         let (done, rest) = frames.split_at_mut(f);
