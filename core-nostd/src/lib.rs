@@ -1,26 +1,77 @@
 //! aprt-core: the `no_std`, allocation-free runtime of aprt.
 //!
-//! It reads a model blob written by the trainer (from a byte slice, or streamed from any
-//! [`BlobSource`] through a caller-owned buffer) and turns joint angles and an SH lighting
-//! vector into per-vertex shading or transfer. Every entry point returns a `Result`; no input
-//! makes it panic, allocate, or read out of bounds.
+//! It reads a model blob written by the trainer and, every frame, turns a pose vector and an
+//! SH lighting vector into per-vertex shading or transfer (Nowrouzezahrai et al., *Compact
+//! and Efficient Generation of Radiance Transfer for Dynamically Articulated Characters*).
+//! Every entry point returns a `Result`; no input makes it panic, allocate, or read out of
+//! bounds, and all state is caller-owned and fixed-size.
 //!
-//! ```text
-//! let model = Model::parse(&blob)?;                              // validates everything once
-//! let mut src = SliceSource(&blob);
-//! model.set_pose(&mut src, &angles, &mut [], &mut pose)?;         // per frame
-//! model.light(&pose, &sh_lighting, &mut lit)?;
-//! model.shade(&mut src, &lit, 0, &mut shading, &mut [])?;         // or any vertex range
+//! - [`Model`] holds a resident blob and reads it in place; [`StreamedModel`] reads any
+//!   [`BlobSource`] (flash, a file) through a caller's buffer. Both validate the whole blob
+//!   once and have the same per-frame calls.
+//! - A frame is [`Model::set_pose`] (the pose vector, see there for its exact contract),
+//!   [`Model::light`] (SH lighting, and the bones' rotations for a bone-frame model), then
+//!   [`Model::shade`] or [`Model::transfer`] over any vertex range.
+//! - [`PoseWeights`] and [`LitWeights`] carry a frame's state; their `const fn new` lets them
+//!   live in a `static`, and their capacity parameter sizes them for the models you load.
+//! - The SH convention (real, orthonormal, `c = l² + l + m`, no Condon–Shortley phase, z up)
+//!   is stated once, at [`eval_basis`]; [`project_directional`] and [`clamped_cosine`] project
+//!   lights, [`ShRotation`] rotates SH vectors.
+//!
 //! ```
+//! use aprt_core::{LitWeights, Model, PoseWeights, project_directional};
+//!
+//! let blob: &[u8] = include_bytes!("../../fixtures/golden/v1-world.aprt");
+//! let model = Model::parse(blob)?; // validates header, sections, CRCs, values, once
+//! let info = *model.info();
+//!
+//! // Per frame: pose, lighting, shading. The state can live anywhere, a `static` included.
+//! let (mut pose, mut lit) = (PoseWeights::new(), LitWeights::new());
+//! let mut lighting = [0.0; 9];
+//! project_directional(info.order(), [0.5, -0.8, 0.9], 3.0, &mut lighting)?;
+//! model.set_pose(&[0.1, -0.2, 0.3, 0.0], &mut pose)?;
+//! model.light(&pose, &lighting[..info.coeffs()], &[], &mut lit)?;
+//! let mut shading = vec![0.0; info.vertices()];
+//! model.shade(&lit, 0, &mut shading)?;
+//! # Ok::<(), Box<dyn core::error::Error>>(())
+//! ```
+//!
+//! The `format` feature adds [`format`]: the byte layout, for blob writers and tools.
 #![no_std]
 #![forbid(unsafe_code)]
 
-pub mod blob;
-pub mod euler;
-pub mod eval;
-pub mod math;
-pub mod rotate;
-pub mod sh;
+mod blob;
+mod eval;
+mod math;
+mod model;
+mod rotation;
+mod sh;
 
-pub use blob::{BlobSource, Error, Model, SliceSource, SourceError};
-pub use eval::{LitWeights, PoseWeights};
+pub use blob::format::{
+    Basis, Encoding, Frame, MAX_BONES, MAX_COEF_DIMS, MAX_LIT, MAX_POSE_DIMS, MAX_POSE_LEN,
+    MAX_VERTICES, SectionKind, VERSION as FORMAT_VERSION, VERTEX_BLOCK,
+};
+pub use blob::{AngleNames, BlobSource, Dim, Error, Input, ModelInfo, SourceError};
+pub use eval::{LitWeights, MAX_POSE_WEIGHTS, PoseWeights};
+pub use model::{Model, StreamedModel};
+pub use rotation::{Rotation, ShRotation};
+pub use sh::{
+    CLAMPED_COSINE_BANDS, MAX_COEFFS, MAX_ORDER, ShError, band_of, clamped_cosine, coeff_count,
+    eval_basis, project_directional, rotate_zonal,
+};
+
+/// The blob's byte layout, for writers and tools (the trainer's writer, `aprt inspect`, the
+/// tests' independent decoder): the preamble, the postcard [`Header`](format::Header) and its
+/// section table. See `FORMAT.md`. Engines need none of it.
+#[cfg(feature = "format")]
+pub mod format {
+    pub use crate::blob::format::{
+        Header, MAGIC, MAX_HEADER_LEN, MAX_SECTIONS, PREAMBLE_LEN, SECTION_ALIGN, SectionEntry,
+        align_up, crc32, padded_vertices,
+    };
+    pub use crate::blob::read_header;
+}
+
+#[cfg(doctest)]
+#[doc = include_str!("../../README.md")]
+struct ReadmeDoctests;

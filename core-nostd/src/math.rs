@@ -3,54 +3,59 @@
 
 /// Square root.
 #[inline]
-pub fn sqrt(x: f32) -> f32 {
+pub(crate) fn sqrt(x: f32) -> f32 {
     libm::sqrtf(x)
 }
 
 /// Cosine.
-#[inline]
-pub fn cos(x: f32) -> f32 {
+#[cfg(test)]
+pub(crate) fn cos(x: f32) -> f32 {
     libm::cosf(x)
 }
 
 /// Sine.
-#[inline]
-pub fn sin(x: f32) -> f32 {
+#[cfg(test)]
+pub(crate) fn sin(x: f32) -> f32 {
     libm::sinf(x)
-}
-
-/// Arc cosine, with the argument clamped to [-1, 1] so rounding never yields NaN.
-#[inline]
-pub fn acos(x: f32) -> f32 {
-    libm::acosf(x.clamp(-1.0, 1.0))
-}
-
-/// Four-quadrant arc tangent of `y / x`.
-#[inline]
-pub fn atan2(y: f32, x: f32) -> f32 {
-    libm::atan2f(y, x)
 }
 
 /// Absolute value.
 #[inline]
-pub fn abs(x: f32) -> f32 {
+pub(crate) fn abs(x: f32) -> f32 {
     libm::fabsf(x)
 }
 
 /// Four-quadrant arc tangent of `y / x`, in f64 (rotation angles extracted from a matrix).
 #[inline]
-pub fn atan2_f64(y: f64, x: f64) -> f64 {
+pub(crate) fn atan2_f64(y: f64, x: f64) -> f64 {
     libm::atan2(y, x)
 }
 
 /// `√(x² + y²)` without intermediate overflow, in f64.
 #[inline]
-pub fn hypot_f64(x: f64, y: f64) -> f64 {
+pub(crate) fn hypot_f64(x: f64, y: f64) -> f64 {
     libm::hypot(x, y)
 }
 
 /// Sine and cosine of `x`, in f64.
 #[inline]
-pub fn sin_cos_f64(x: f64) -> (f64, f64) {
+pub(crate) fn sin_cos_f64(x: f64) -> (f64, f64) {
     libm::sincos(x)
+}
+
+/// Square root for constant evaluation (`f64::sqrt` is not `const`), 0 for `x ≤ 0`: Newton's
+/// iteration from an over-estimate decreases monotonically to ⌊√x⌋ or ⌈√x⌉ in f64, far below
+/// f32 resolution, and stops there.
+pub(crate) const fn const_sqrt(x: f64) -> f64 {
+    if x <= 0.0 {
+        return 0.0;
+    }
+    let mut y = if x > 1.0 { x } else { 1.0 };
+    loop {
+        let next = 0.5 * (y + x / y);
+        if next >= y {
+            return y;
+        }
+        y = next;
+    }
 }

@@ -1,13 +1,6 @@
 //! Real, orthonormal spherical harmonics up to order [`MAX_ORDER`].
 //!
-//! # Convention (the one place it is stated)
-//! - Order `n` means bands `l = 0..n`, so `n²` coefficients; coefficient index `c = l² + l + m`.
-//! - Directions are unit vectors `(x, y, z)` with `z = cos θ` and `φ = atan2(y, x)`.
-//! - No Condon–Shortley phase: `y_{1,-1} = k·y`, `y_{1,0} = k·z`, `y_{1,1} = k·x` with
-//!   `k = √(3/4π)`. For `m > 0`: `y_{l,m} = √2 K_l^m P_l^m(cos θ) cos(mφ)` and
-//!   `y_{l,-m} = √2 K_l^m P_l^m(cos θ) sin(mφ)`, `K_l^m = √((2l+1)/4π · (l−m)!/(l+m)!)`.
-//! - Lighting `L` and transfer `t` are projected with the same basis; the shading integral is
-//!   the dot product `Σ_c L_c t_c` (orthonormality), and the renderer applies albedo / π.
+//! The convention is stated once, on [`eval_basis`], where the crate's documentation shows it.
 
 use crate::math;
 
@@ -57,7 +50,7 @@ pub const fn coeff_count(order: usize) -> usize {
 }
 
 /// Coefficient index of band `l`, index `m` (−l..=l).
-pub const fn index(l: usize, m: i32) -> usize {
+pub(crate) const fn index(l: usize, m: i32) -> usize {
     ((l * l + l) as isize + m as isize) as usize
 }
 
@@ -85,7 +78,7 @@ fn normalise(dir: [f32; 3]) -> Result<[f32; 3], ShError> {
     if !dir.iter().all(|x| x.is_finite()) {
         return Err(ShError::BadDirection);
     }
-    let largest = dir.iter().fold(0.0f32, |m, x| m.max(x.abs()));
+    let largest = dir.iter().fold(0.0f32, |m, &x| m.max(math::abs(x)));
     if largest == 0.0 {
         return Err(ShError::BadDirection);
     }
@@ -102,20 +95,7 @@ const fn norm_f64(l: usize, m: usize) -> f64 {
         ratio /= k as f64;
         k += 1;
     }
-    const_sqrt((2 * l + 1) as f64 / (4.0 * core::f64::consts::PI) * ratio)
-}
-
-/// Square root for constant evaluation (`f64::sqrt` is not `const`): Newton's iteration from
-/// an over-estimate decreases monotonically to ⌊√x⌋ or ⌈√x⌉ in f64, far below f32 resolution.
-const fn const_sqrt(x: f64) -> f64 {
-    let mut y = if x > 1.0 { x } else { 1.0 };
-    loop {
-        let next = 0.5 * (y + x / y);
-        if next >= y {
-            return y;
-        }
-        y = next;
-    }
+    math::const_sqrt((2 * l + 1) as f64 / (4.0 * core::f64::consts::PI) * ratio)
 }
 
 /// `NORMS[l][m] = K_l^m` as f32, computed at compile time: [`eval_basis`] runs once per ray in
@@ -137,9 +117,26 @@ const NORMS: [[f32; MAX_ORDER]; MAX_ORDER] = {
 
 /// Evaluates all `order²` basis functions in direction `dir` (normalised here) into `out`.
 ///
+/// # The SH convention (the one place it is stated)
+/// - Order `n` means bands `l = 0..n`, so `n²` coefficients; coefficient index `c = l² + l + m`.
+/// - Directions are unit vectors `(x, y, z)` with `z = cos θ` and `φ = atan2(y, x)`.
+/// - No Condon–Shortley phase: `y_{1,-1} = k·y`, `y_{1,0} = k·z`, `y_{1,1} = k·x` with
+///   `k = √(3/4π)`. For `m > 0`: `y_{l,m} = √2 K_l^m P_l^m(cos θ) cos(mφ)` and
+///   `y_{l,-m} = √2 K_l^m P_l^m(cos θ) sin(mφ)`, `K_l^m = √((2l+1)/4π · (l−m)!/(l+m)!)`.
+/// - Lighting `L` and transfer `t` are projected with the same basis; the shading integral is
+///   the dot product `Σ_c L_c t_c` (orthonormality), and the renderer applies albedo / π.
+///
 /// Uses the Cartesian recurrences (no trigonometry): `P_l^m / sin^m θ` by the three-term
 /// recurrence in `z`, and `sin^m θ (cos mφ, sin mφ)` as the real and imaginary parts of
 /// `(x + iy)^m`, so it is exact at the poles where `φ` is undefined.
+///
+/// ```
+/// let mut y = [0.0; 4];
+/// aprt_core::eval_basis(2, [0.0, 0.0, 2.0], &mut y)?; // any length: normalised here
+/// let k = (3.0 / (4.0 * std::f32::consts::PI)).sqrt();
+/// assert!((y[2] - k).abs() < 1e-6 && y[1] == 0.0 && y[3] == 0.0); // y_10 = k z
+/// # Ok::<(), aprt_core::ShError>(())
+/// ```
 pub fn eval_basis(order: usize, dir: [f32; 3], out: &mut [f32]) -> Result<(), ShError> {
     check(order, out.len())?;
     let [x, y, z] = normalise(dir)?;
@@ -180,6 +177,14 @@ pub fn eval_basis(order: usize, dir: [f32; 3], out: &mut [f32]) -> Result<(), Sh
 
 /// Projects a directional light of `intensity` arriving from `dir` (pointing toward the light):
 /// a delta function, so `L_c = intensity · y_c(dir)`.
+///
+/// ```
+/// let mut sun = [0.0; 9];
+/// aprt_core::project_directional(3, [0.5, -0.8, 0.9], 3.0, &mut sun)?;
+/// let dc = 3.0 * 0.5 / std::f32::consts::PI.sqrt(); // 3 · y_00
+/// assert!((sun[0] - dc).abs() < 1e-6);
+/// # Ok::<(), aprt_core::ShError>(())
+/// ```
 pub fn project_directional(
     order: usize,
     dir: [f32; 3],
@@ -298,42 +303,6 @@ mod tests {
         assert!((out[index(3, 0)] as f64 - y30).abs() < 1e-6);
         assert!((out[index(3, 3)] as f64 - y33).abs() < 1e-6);
         assert!((out[index(3, -3)] as f64 - y3m3).abs() < 1e-6);
-    }
-
-    /// Orthonormality by a product Gauss–Legendre (θ) × uniform (φ) quadrature, exact for
-    /// band-limited integrands of this degree.
-    #[test]
-    fn orthonormal_by_quadrature() {
-        const NT: usize = 24;
-        const NP: usize = 48;
-        let (mut nodes, mut weights) = ([0.0f64; NT], [0.0f64; NT]);
-        crate::rotate::gauss_legendre(NT, &mut nodes, &mut weights);
-        let mut gram = [[0.0f64; MAX_COEFFS]; MAX_COEFFS];
-        let mut y = [0.0f32; MAX_COEFFS];
-        for (t, w) in nodes.iter().zip(weights) {
-            for j in 0..NP {
-                let phi = 2.0 * PI * j as f64 / NP as f64;
-                let s = (1.0 - t * t).sqrt();
-                eval_basis(
-                    MAX_ORDER,
-                    [(s * phi.cos()) as f32, (s * phi.sin()) as f32, *t as f32],
-                    &mut y,
-                )
-                .unwrap();
-                let dw = w * 2.0 * PI / NP as f64;
-                for (row, ya) in gram.iter_mut().zip(&y) {
-                    for (g, yb) in row.iter_mut().zip(&y) {
-                        *g += dw * *ya as f64 * *yb as f64;
-                    }
-                }
-            }
-        }
-        for (a, row) in gram.iter().enumerate() {
-            for (b, g) in row.iter().enumerate() {
-                let expect = if a == b { 1.0 } else { 0.0 };
-                assert!((g - expect).abs() < 2e-5, "<y{a}, y{b}> = {g}");
-            }
-        }
     }
 
     #[test]

@@ -5,9 +5,9 @@
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
-use aprt_core::{LitWeights, Model, PoseWeights, SliceSource};
+use aprt_core::format::read_header;
+use aprt_core::{LitWeights, Model, PoseWeights, SectionKind, StreamedModel};
 use aprt_tests::{Streamed, noise, random_model};
-use aprt_trainer::runtime::light as push_light;
 use aprt_trainer::{BoneFrames, LinearModel, Precision, encode_model};
 
 const VERTICES: usize = 11_500;
@@ -90,44 +90,50 @@ fn main() {
             .collect();
         let blob = encode_model(&reference, precision).unwrap();
         let m = Model::parse(&blob).unwrap();
-        let row_bytes = m.block_bytes() * VERTICES.div_ceil(aprt_core::blob::VERTEX_BLOCK);
-        let rows = &blob[blob.len() - row_bytes..];
+        let rows = read_header(&blob)
+            .unwrap()
+            .sections
+            .iter()
+            .find(|e| {
+                let kind = SectionKind::from_tag(e.kind);
+                kind == SectionKind::VertexBasis || kind == SectionKind::VertexWeights
+            })
+            .map(|e| &blob[e.offset as usize..(e.offset + e.len) as usize])
+            .unwrap();
+        let row_bytes = rows.len();
         let mut copy = vec![0u8; row_bytes];
         let memcpy = time(budget, || {
             copy.copy_from_slice(black_box(rows));
             black_box(&copy);
         });
-        let mut pose = PoseWeights::default();
-        let mut lit = LitWeights::default();
+        let mut pose = Box::new(PoseWeights::new());
+        let mut lit = Box::new(LitWeights::new());
         let mut shading = vec![0.0f32; VERTICES];
         let mut transfer = vec![0.0f32; VERTICES * ORDER * ORDER];
-        let mut src = SliceSource(&blob);
         let shade = time(budget, || {
-            m.set_pose(&mut src, black_box(&angles), &mut [], &mut pose)
+            m.set_pose(black_box(&angles), &mut pose).unwrap();
+            m.light(&pose, black_box(&light), &rotations, &mut lit)
                 .unwrap();
-            push_light(&m, &pose, black_box(&light), &rotations, &mut lit).unwrap();
-            m.shade(&mut src, &lit, 0, &mut shading, &mut []).unwrap();
+            m.shade(&lit, 0, &mut shading).unwrap();
             black_box(&shading);
         });
         let mut scratch = vec![0u8; 16 * 1024];
-        let mut streamed = Streamed::new(&blob);
+        let mut streamed = StreamedModel::open(Streamed::new(&blob), &mut scratch).unwrap();
         let shade_streamed = time(budget, || {
-            m.set_pose(&mut streamed, black_box(&angles), &mut scratch, &mut pose)
+            streamed.set_pose(black_box(&angles), &mut pose).unwrap();
+            streamed
+                .light(&pose, black_box(&light), &rotations, &mut lit)
                 .unwrap();
-            push_light(&m, &pose, black_box(&light), &rotations, &mut lit).unwrap();
-            m.shade(&mut streamed, &lit, 0, &mut shading, &mut scratch)
-                .unwrap();
+            streamed.shade(&lit, 0, &mut shading).unwrap();
             black_box(&shading);
         });
         let full_transfer = time(budget, || {
-            m.set_pose(&mut src, black_box(&angles), &mut [], &mut pose)
-                .unwrap();
-            m.transfer(&mut src, &pose, 0, &mut transfer, &mut [])
-                .unwrap();
+            m.set_pose(black_box(&angles), &mut pose).unwrap();
+            m.transfer(&pose, 0, &mut transfer).unwrap();
             black_box(&transfer);
         });
         let n2 = (ORDER * ORDER) as f64;
-        let (v, ka, width) = (VERTICES as f64, ka as f64, m.row_width() as f64);
+        let (v, ka, width) = (VERTICES as f64, ka as f64, m.info().row_width() as f64);
         let pose_flops = 2.0 * ka * JOINTS as f64
             + if kv.is_some() {
                 2.0 * n2 * (ka + 1.0) * width

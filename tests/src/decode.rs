@@ -2,9 +2,8 @@
 //! evaluator's code, so the f64 reference `LinearModel::predict` of what the blob *stores* can
 //! judge the core's f32 evaluation, and the writer's quantisation can be checked value by value.
 
-use aprt_core::blob::{
-    Basis, Encoding, Frame, SectionEntry, SectionKind, VERTEX_BLOCK, padded_vertices, read_header,
-};
+use aprt_core::format::{SectionEntry, padded_vertices, read_header};
+use aprt_core::{Basis, Encoding, Frame, SectionKind, VERTEX_BLOCK};
 use aprt_trainer::{BoneFrames, LinearModel, VertexBasis};
 
 /// The values of one section, exactly widened to f64.
@@ -27,10 +26,8 @@ fn values(blob: &[u8], e: &SectionEntry) -> Option<Vec<f64>> {
 /// needs is missing or does not fit (the first entry of each kind is used).
 pub fn decode(blob: &[u8]) -> Option<LinearModel> {
     let h = read_header(blob).ok()?;
-    let section = |kind: SectionKind| {
-        let e = h.sections.iter().find(|e| e.kind == kind as u16)?;
-        values(blob, e)
-    };
+    let entry = |kind: SectionKind| h.sections.iter().find(|e| e.kind == kind.tag());
+    let section = |kind: SectionKind| values(blob, entry(kind)?);
     let (n2, v, ka) = (
         (h.order as usize).pow(2),
         h.vertices as usize,
@@ -66,13 +63,16 @@ pub fn decode(blob: &[u8]) -> Option<LinearModel> {
     Some(LinearModel {
         order: h.order as usize,
         vertices: v,
-        joints: h.joints as usize,
+        joints: h.pose_len as usize,
         pose_mean: section(SectionKind::PoseMean)?,
         pose_projection: section(SectionKind::PoseProjection)?,
         weights,
         basis,
         alpha: h.alpha as f64,
-        angle_names: aprt_trainer::export::read_angle_names(blob).unwrap_or_default(),
+        angle_names: entry(SectionKind::AngleNames)
+            .and_then(|e| blob.get(e.offset as usize..(e.offset + e.len) as usize))
+            .and_then(|bytes| std::str::from_utf8(bytes).ok())
+            .map_or_else(Vec::new, |text| text.lines().map(str::to_owned).collect()),
         bones: match h.frame {
             Frame::World => None,
             Frame::Bones { count } => Some(BoneFrames {

@@ -2,7 +2,7 @@
 //! random byte mutations. A mutated blob whose checksums are recomputed ("resealed") gets past
 //! the CRCs to the deeper validation: dimensions, section table, lengths, finiteness.
 
-use aprt_core::blob::{Header, MAX_HEADER_LEN, PREAMBLE_LEN, crc32, read_header};
+use aprt_core::format::{Header, MAX_HEADER_LEN, PREAMBLE_LEN, crc32, read_header};
 
 /// The blob with its header edited and re-encoded (header CRC recomputed). The section bytes
 /// keep their places relative to each other; if the header grew past them, everything after it

@@ -8,12 +8,12 @@
 //! the matching slice of the whole; and whatever the core accepts evaluates to what the blob
 //! stores, by the f64 reference. A panic anywhere is a finding.
 
-use aprt_core::blob::{Error, Frame};
-use aprt_core::{BlobSource, LitWeights, Model, PoseWeights, SliceSource};
+use aprt_core::{
+    Error, Frame, Input, LitWeights, Model, ModelInfo, PoseWeights, Rotation, StreamedModel,
+};
 
-use crate::Streamed;
 use crate::decode::decode;
-use crate::reference;
+use crate::{Eval, Streamed, reference};
 
 /// Bytes of a serialised [`Probe`].
 pub const PROBE_BYTES: usize = 48;
@@ -37,9 +37,9 @@ pub struct Probe {
     pub count: u32,
     /// See `first`.
     pub far: bool,
-    /// Streamed evaluation gets `Model::scratch_bytes() + scratch_delta` bytes of scratch.
+    /// Streamed evaluation gets `ModelInfo::scratch_bytes() + scratch_delta` bytes of scratch.
     pub scratch_delta: i16,
-    /// Streamed opening gets `open_scratch % 64` bytes of scratch.
+    /// A streamed opening gets `open_scratch % 64` bytes of scratch.
     pub open_scratch: u8,
 }
 
@@ -98,7 +98,7 @@ impl Probe {
         (Probe::from_bytes(&data[..n]), &data[n..])
     }
 
-    fn rotation(&self, bone: usize) -> [[f32; 3]; 3] {
+    fn rotation(&self, bone: usize) -> Rotation {
         if self.skew {
             return [[2.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
         }
@@ -135,13 +135,13 @@ pub struct Evaluation {
     pub angles: Vec<f32>,
     /// World SH lighting.
     pub lighting: Vec<f32>,
-    /// Bones' world rotations (empty for world-frame models).
-    pub rotations: Vec<[[f32; 3]; 3]>,
-    /// `Model::transfer`, `v × n²`.
+    /// Bones' skinning rotations (empty for world-frame models).
+    pub rotations: Vec<Rotation>,
+    /// `transfer`, `v × n²`.
     pub transfer: Vec<f32>,
-    /// `Model::shade`.
+    /// `shade`.
     pub shading: Vec<f32>,
-    /// `Model::vertex_bones`.
+    /// `vertex_bones`.
     pub bones: Vec<u16>,
 }
 
@@ -149,76 +149,73 @@ pub struct Evaluation {
 /// checks everything listed in the module documentation (panicking on a violation). Returns
 /// the reader's error, or the evaluation of every vertex at the probe's inputs made finite.
 pub fn exercise(blob: &[u8], probe: &Probe) -> Result<Evaluation, Error> {
-    let parsed = Model::parse(blob);
-    let streamed = Model::open(&mut Streamed::new(blob), &mut [0u8; 4]);
+    let parsed = Model::parse(blob).map(|m| *m.info());
+    let least = parsed.map_or(4, |info| info.scratch_bytes());
+    let streamed =
+        StreamedModel::open(Streamed::new(blob), &mut vec![0u8; least]).map(|m| *m.info());
     assert_eq!(streamed, parsed, "streamed and resident readers disagree");
     let mut scratch = vec![0u8; probe.open_scratch as usize % 64];
-    let opened = Model::open(&mut Streamed::new(blob), &mut scratch);
-    assert!(
-        opened == parsed
-            || scratch.len() < 4 && matches!(opened, Err(Error::BufferTooSmall { .. })),
-        "open with {} bytes of scratch: {opened:?}, parse: {parsed:?}",
+    let opened = StreamedModel::open(Streamed::new(blob), &mut scratch).map(|m| *m.info());
+    // Any blob is validated whatever the buffer; a valid one is then refused a buffer too
+    // small for evaluation, with the size it needs.
+    let expected = match parsed {
+        Ok(info) if scratch.len() < least => Err(Error::BufferTooSmall {
+            needed: info.scratch_bytes(),
+        }),
+        verdict => verdict,
+    };
+    assert_eq!(
+        opened,
+        expected,
+        "open with {} bytes of scratch",
         scratch.len()
     );
-    let model = parsed?;
+    let model = Model::parse(blob)?;
 
-    check_refusals(&model, blob, probe);
+    check_refusals(&model, probe);
     let inputs = probe.sanitised();
-    let eval = evaluate(&model, &mut SliceSource(blob), &inputs, &mut [])
+    let eval = evaluate(&mut { model }, &inputs)
         .expect("a valid model evaluates finite inputs from a resident blob");
-    let len = model.scratch_bytes();
-    let len = len.saturating_add_signed(inputs.scratch_delta as isize);
-    check_streamed(&model, blob, &inputs, &eval, len);
-    check_range(&model, blob, probe, &eval);
+    let len = least.saturating_add_signed(inputs.scratch_delta as isize);
+    check_streamed(blob, &inputs, &eval, len);
+    check_range(&model, probe, &eval);
     let stored = decode(blob).expect("FORMAT.md reads every blob the core accepts");
     reference::assert_matches(&stored, &eval, |_| 0.0);
     Ok(eval)
 }
 
-fn angles(model: &Model, probe: &Probe) -> Vec<f32> {
-    (0..model.joints()).map(|j| probe.angles[j % 4]).collect()
+fn angles(info: &ModelInfo, probe: &Probe) -> Vec<f32> {
+    (0..info.pose_len()).map(|j| probe.angles[j % 4]).collect()
 }
 
-fn lighting(model: &Model, probe: &Probe) -> Vec<f32> {
-    (0..model.order() * model.order())
-        .map(|c| probe.lighting[c % 4])
-        .collect()
+fn lighting(info: &ModelInfo, probe: &Probe) -> Vec<f32> {
+    (0..info.coeffs()).map(|c| probe.lighting[c % 4]).collect()
 }
 
-fn rotations(model: &Model, probe: &Probe) -> Vec<[[f32; 3]; 3]> {
-    match model.frame() {
-        Frame::World => Vec::new(),
-        Frame::Bones { count } => (0..count as usize).map(|b| probe.rotation(b)).collect(),
-    }
+fn rotations(info: &ModelInfo, probe: &Probe) -> Vec<Rotation> {
+    (0..info.bones()).map(|b| probe.rotation(b)).collect()
 }
 
 /// A pose set and lit from a probe's inputs.
 struct Lit {
     angles: Vec<f32>,
     lighting: Vec<f32>,
-    rotations: Vec<[[f32; 3]; 3]>,
-    pose: PoseWeights,
-    lit: LitWeights,
+    rotations: Vec<Rotation>,
+    pose: Box<PoseWeights>,
+    lit: Box<LitWeights>,
 }
 
-fn set_and_light<S: BlobSource>(
-    model: &Model,
-    src: &mut S,
-    probe: &Probe,
-    scratch: &mut [u8],
-) -> Result<Lit, Error> {
+fn set_and_light(model: &mut impl Eval, probe: &Probe) -> Result<Lit, Error> {
+    let info = *model.info();
     let (angles, lighting, rotations) = (
-        angles(model, probe),
-        lighting(model, probe),
-        rotations(model, probe),
+        angles(&info, probe),
+        lighting(&info, probe),
+        rotations(&info, probe),
     );
-    let mut pose = PoseWeights::default();
-    model.set_pose(src, &angles, scratch, &mut pose)?;
-    let mut lit = LitWeights::default();
-    match model.frame() {
-        Frame::World => model.light(&pose, &lighting, &mut lit)?,
-        Frame::Bones { .. } => model.light_skinned(&pose, &lighting, &rotations, &mut lit)?,
-    }
+    let mut pose = Box::new(PoseWeights::new());
+    model.set_pose(&angles, &mut pose)?;
+    let mut lit = Box::new(LitWeights::new());
+    model.light(&pose, &lighting, &rotations, &mut lit)?;
     Ok(Lit {
         angles,
         lighting,
@@ -229,20 +226,15 @@ fn set_and_light<S: BlobSource>(
 }
 
 /// Sets the pose, lights it and evaluates every vertex.
-fn evaluate<S: BlobSource>(
-    model: &Model,
-    src: &mut S,
-    probe: &Probe,
-    scratch: &mut [u8],
-) -> Result<Evaluation, Error> {
-    let l = set_and_light(model, src, probe, scratch)?;
-    let v = model.vertices();
+fn evaluate(model: &mut impl Eval, probe: &Probe) -> Result<Evaluation, Error> {
+    let l = set_and_light(model, probe)?;
+    let v = model.info().vertices();
     let mut transfer = vec![0.0f32; v * l.lighting.len()];
-    model.transfer(src, &l.pose, 0, &mut transfer, scratch)?;
+    model.transfer(&l.pose, 0, &mut transfer)?;
     let mut shading = vec![0.0f32; v];
-    model.shade(src, &l.lit, 0, &mut shading, scratch)?;
+    model.shade(&l.lit, 0, &mut shading)?;
     let mut bones = vec![0u16; v];
-    model.vertex_bones(src, 0, &mut bones, scratch)?;
+    model.vertex_bones(0, &mut bones)?;
     Ok(Evaluation {
         angles: l.angles,
         lighting: l.lighting,
@@ -253,111 +245,129 @@ fn evaluate<S: BlobSource>(
     })
 }
 
-/// Raw probe inputs: non-finite values, wrong lengths, skewed rotations and the wrong lighting
-/// call for the frame each get their own error, and never a panic.
-fn check_refusals(model: &Model, blob: &[u8], probe: &Probe) {
-    let src = &mut SliceSource(blob);
+/// Raw probe inputs: non-finite values, wrong lengths, skewed rotations and weights that were
+/// never set each get their own error, and never a panic.
+fn check_refusals(model: &Model, probe: &Probe) {
+    let info = *model.info();
     let (angles, lighting, rotations) = (
-        angles(model, probe),
-        lighting(model, probe),
-        rotations(model, probe),
+        angles(&info, probe),
+        lighting(&info, probe),
+        rotations(&info, probe),
     );
-    let finite = |xs: &[f32]| xs.iter().all(|x| x.is_finite());
-    let mut pose = PoseWeights::default();
+    let first_bad = |xs: &[f32]| xs.iter().position(|x| !x.is_finite());
+    let mut pose = Box::new(PoseWeights::new());
     let a = angles.len();
     assert_eq!(
-        model.set_pose(src, &angles[..a - 1], &mut [], &mut pose),
+        model.set_pose(&angles[..a - 1], &mut pose),
         Err(Error::WrongLength {
+            what: Input::Angles,
             expected: a,
             found: a - 1
         })
     );
-    let mut lit = LitWeights::default();
+    let mut lit = Box::new(LitWeights::new());
     assert_eq!(
-        model.light(&pose, &[], &mut lit).unwrap_err(),
-        match model.frame() {
-            Frame::World => Error::ShapeMismatch,
-            Frame::Bones { .. } => Error::FrameMismatch,
-        },
+        model.light(&pose, &lighting, &rotations, &mut lit),
+        Err(Error::WeightsNotSet),
         "lighting before any pose"
     );
-    let set = model.set_pose(src, &angles, &mut [], &mut pose);
-    if !finite(&angles) {
-        assert_eq!(set, Err(Error::NonFiniteInput));
+    let set = model.set_pose(&angles, &mut pose);
+    if let Some(index) = first_bad(&angles) {
+        assert_eq!(set, Err(Error::NonFiniteAngle { index }));
         return;
     }
     set.unwrap();
-    let bad_rotation = probe.skew || !rotations.iter().flatten().all(|r| finite(r));
-    let lit_result = match model.frame() {
-        Frame::World => {
-            assert_eq!(
-                model.light_skinned(&pose, &lighting, &rotations, &mut lit),
-                Err(Error::FrameMismatch)
-            );
-            model.light(&pose, &lighting, &mut lit)
-        }
-        Frame::Bones { .. } => {
-            assert_eq!(
-                model.light(&pose, &lighting, &mut lit),
-                Err(Error::FrameMismatch)
-            );
-            assert!(matches!(
-                model.light_skinned(&pose, &lighting, &rotations[1..], &mut lit),
-                Err(Error::WrongLength { .. })
-            ));
-            match model.light_skinned(&pose, &lighting, &rotations, &mut lit) {
-                Err(Error::BadRotation) if finite(&lighting) => {
-                    assert!(bad_rotation, "a true rotation refused: {rotations:?}");
-                    return;
-                }
-                result => result,
-            }
-        }
+    // The first bone whose matrix is not a rotation: all of them when skewed, else the first
+    // whose turn overflowed.
+    let bad_bone = match probe.skew {
+        true if !rotations.is_empty() => Some(0),
+        _ => rotations
+            .iter()
+            .position(|r| first_bad(r.as_flattened()).is_some()),
     };
-    if !finite(&lighting) {
-        assert_eq!(lit_result, Err(Error::NonFiniteInput));
+    if let Frame::Bones { .. } = info.frame() {
+        assert_eq!(
+            model.light(&pose, &lighting, &rotations[1..], &mut lit),
+            Err(Error::WrongLength {
+                what: Input::BoneRotations,
+                expected: rotations.len(),
+                found: rotations.len() - 1
+            })
+        );
+    }
+    let lit_result = model.light(&pose, &lighting, &rotations, &mut lit);
+    if let Some(index) = first_bad(&lighting) {
+        assert_eq!(lit_result, Err(Error::NonFiniteLighting { index }));
+        return;
+    }
+    if let Some(bone) = bad_bone {
+        assert_eq!(lit_result, Err(Error::BadRotation { bone }));
+        assert_eq!(
+            model.shade(&lit, 0, &mut [0.0; 1]),
+            Err(Error::WeightsNotSet),
+            "shading with the weights of a failed light"
+        );
         return;
     }
     lit_result.unwrap();
-    assert!(
-        !bad_rotation || rotations.is_empty(),
-        "a skewed rotation accepted"
-    );
+    if info.frame() == Frame::World {
+        // A world-frame model ignores bone rotations, however many.
+        let mut ignoring = Box::new(LitWeights::new());
+        let skeleton = [[[2.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]; 3];
+        model
+            .light(&pose, &lighting, &skeleton, &mut ignoring)
+            .unwrap();
+        let shade = |lit: &LitWeights| {
+            let mut out = vec![0.0f32; info.vertices()];
+            model.shade(lit, 0, &mut out).unwrap();
+            out.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+        };
+        assert!(
+            shade(&ignoring) == shade(&lit),
+            "bone rotations changed a world-frame model"
+        );
+    }
     let n2 = lighting.len();
     if n2 > 1 {
         assert!(matches!(
-            model.transfer(src, &pose, 0, &mut [0.0; 1], &mut []),
-            Err(Error::WrongLength { .. })
+            model.transfer(&pose, 0, &mut [0.0; 1]),
+            Err(Error::WrongLength {
+                what: Input::Transfer,
+                ..
+            })
         ));
     }
 }
 
 /// Streamed evaluation with `len` bytes of scratch: bit-identical to resident evaluation when
-/// it succeeds, which it must when the scratch is at least `Model::scratch_bytes`.
-fn check_streamed(model: &Model, blob: &[u8], inputs: &Probe, resident: &Evaluation, len: usize) {
-    let least = model.scratch_bytes();
+/// the model opens, which it must when the scratch holds `ModelInfo::scratch_bytes`.
+fn check_streamed(blob: &[u8], inputs: &Probe, resident: &Evaluation, len: usize) {
     let mut scratch = vec![0u8; len];
-    match evaluate(model, &mut Streamed::new(blob), inputs, &mut scratch) {
-        Ok(streamed) => assert!(
-            bits(&streamed) == bits(resident),
-            "streamed evaluation with {len} bytes of scratch differs"
-        ),
+    let least = Model::parse(blob).unwrap().info().scratch_bytes();
+    match StreamedModel::open(Streamed::new(blob), &mut scratch) {
+        Ok(mut model) => {
+            let streamed = evaluate(&mut model, inputs).expect("streamed evaluation");
+            assert!(
+                bits(&streamed) == bits(resident),
+                "streamed evaluation with {len} bytes of scratch differs"
+            );
+        }
         Err(Error::BufferTooSmall { needed }) => assert!(
-            len < least && needed > len,
+            len < least && needed == least,
             "scratch of {len} bytes refused (least {least}, needed {needed})"
         ),
-        Err(e) => panic!("streamed evaluation failed: {e:?}"),
+        Err(e) => panic!("streamed opening failed: {e:?}"),
     }
 }
 
 /// `check_streamed` for every scratch length in `lens`, against one resident evaluation of
 /// the valid blob `blob` at the probe's inputs made finite.
 pub fn check_streaming(blob: &[u8], probe: &Probe, lens: impl IntoIterator<Item = usize>) {
-    let model = Model::parse(blob).expect("a valid blob");
+    let mut model = Model::parse(blob).expect("a valid blob");
     let inputs = probe.sanitised();
-    let resident = evaluate(&model, &mut SliceSource(blob), &inputs, &mut []).unwrap();
+    let resident = evaluate(&mut model, &inputs).unwrap();
     for len in lens {
-        check_streamed(&model, blob, &inputs, &resident, len);
+        check_streamed(blob, &inputs, &resident, len);
     }
 }
 
@@ -369,8 +379,8 @@ fn bits(e: &Evaluation) -> (Vec<u32>, Vec<u32>, &[u16]) {
 
 /// The probe's vertex range: the matching slice of the whole when inside the model, a
 /// `VertexRange` error otherwise, for shading, transfer and bone indices alike.
-fn check_range(model: &Model, blob: &[u8], probe: &Probe, whole: &Evaluation) {
-    let v = model.vertices();
+fn check_range(model: &Model, probe: &Probe, whole: &Evaluation) {
+    let v = model.info().vertices();
     let first = if probe.far {
         usize::MAX - probe.first as usize % 8
     } else {
@@ -378,9 +388,8 @@ fn check_range(model: &Model, blob: &[u8], probe: &Probe, whole: &Evaluation) {
     };
     let count = probe.count as usize % (v + 9);
     let inside = first.checked_add(count).is_some_and(|end| end <= v);
-    let n2 = model.order() * model.order();
-    let src = &mut SliceSource(blob);
-    let Lit { pose, lit, .. } = set_and_light(model, src, &probe.sanitised(), &mut []).unwrap();
+    let n2 = model.info().coeffs();
+    let Lit { pose, lit, .. } = set_and_light(&mut { *model }, &probe.sanitised()).unwrap();
     let refused = Err(Error::VertexRange { first, count });
     let (mut shading, mut transfer, mut bones) = (
         vec![0.0f32; count],
@@ -388,9 +397,9 @@ fn check_range(model: &Model, blob: &[u8], probe: &Probe, whole: &Evaluation) {
         vec![0u16; count],
     );
     let results = [
-        model.shade(src, &lit, first, &mut shading, &mut []),
-        model.transfer(src, &pose, first, &mut transfer, &mut []),
-        model.vertex_bones(src, first, &mut bones, &mut []),
+        model.shade(&lit, first, &mut shading),
+        model.transfer(&pose, first, &mut transfer),
+        model.vertex_bones(first, &mut bones),
     ];
     if !inside {
         assert!(

@@ -5,11 +5,15 @@
 pub mod decode;
 pub mod edit;
 pub mod harness;
+pub mod quadrature;
 pub mod reference;
 pub mod samples;
 pub mod spec;
 
-use aprt_core::{BlobSource, SourceError};
+use aprt_core::{
+    BlobSource, Error, LitWeights, Model, ModelInfo, PoseWeights, Rotation, SourceError,
+    StreamedModel,
+};
 use aprt_trainer::{LinearModel, VertexBasis};
 
 /// A source that is not resident: every read copies, as from flash or a file, and is counted.
@@ -38,6 +42,70 @@ impl BlobSource for Streamed<'_> {
         buf.copy_from_slice(self.bytes.get(start..end).ok_or(SourceError)?);
         Ok(())
     }
+}
+
+/// The per-frame calls of a resident and a streamed model, so one test drives both.
+pub trait Eval {
+    /// `info()`.
+    fn info(&self) -> &ModelInfo;
+    /// `set_pose`.
+    fn set_pose(&mut self, angles: &[f32], pose: &mut PoseWeights) -> Result<(), Error>;
+    /// `light`.
+    fn light(
+        &mut self,
+        pose: &PoseWeights,
+        lighting: &[f32],
+        bones: &[Rotation],
+        lit: &mut LitWeights,
+    ) -> Result<(), Error>;
+    /// `shade`.
+    fn shade(&mut self, lit: &LitWeights, first: usize, out: &mut [f32]) -> Result<(), Error>;
+    /// `transfer`.
+    fn transfer(&mut self, pose: &PoseWeights, first: usize, out: &mut [f32]) -> Result<(), Error>;
+    /// `vertex_bones`.
+    fn vertex_bones(&mut self, first: usize, out: &mut [u16]) -> Result<(), Error>;
+}
+
+macro_rules! forward_eval {
+    () => {
+        fn info(&self) -> &ModelInfo {
+            Self::info(self)
+        }
+        fn set_pose(&mut self, angles: &[f32], pose: &mut PoseWeights) -> Result<(), Error> {
+            Self::set_pose(self, angles, pose)
+        }
+        fn light(
+            &mut self,
+            pose: &PoseWeights,
+            lighting: &[f32],
+            bones: &[Rotation],
+            lit: &mut LitWeights,
+        ) -> Result<(), Error> {
+            Self::light(self, pose, lighting, bones, lit)
+        }
+        fn shade(&mut self, lit: &LitWeights, first: usize, out: &mut [f32]) -> Result<(), Error> {
+            Self::shade(self, lit, first, out)
+        }
+        fn transfer(
+            &mut self,
+            pose: &PoseWeights,
+            first: usize,
+            out: &mut [f32],
+        ) -> Result<(), Error> {
+            Self::transfer(self, pose, first, out)
+        }
+        fn vertex_bones(&mut self, first: usize, out: &mut [u16]) -> Result<(), Error> {
+            Self::vertex_bones(self, first, out)
+        }
+    };
+}
+
+impl Eval for Model<'_> {
+    forward_eval!();
+}
+
+impl<S: BlobSource> Eval for StreamedModel<'_, S> {
+    forward_eval!();
 }
 
 /// Deterministic pseudo-random values in [-1, 1) (xorshift64).

@@ -3,7 +3,7 @@
 //! models span many orders of magnitude, and a fixed tolerance would either miss real errors
 //! on small values or fail on honest rounding of large ones.
 
-use aprt_core::rotate::ShRotation;
+use crate::quadrature::QuadratureRotation;
 use aprt_trainer::{LinearModel, VertexBasis};
 
 use crate::harness::Evaluation;
@@ -125,7 +125,7 @@ pub fn assert_matches(reference: &LinearModel, eval: &Evaluation, stored: impl F
     let local: Vec<Vec<f32>> = match &reference.bones {
         None => vec![eval.lighting.clone()],
         Some(_) => {
-            let rotation = ShRotation::new(reference.order).expect("orders 1..=6 rotate");
+            let rotation = QuadratureRotation::new(reference.order).expect("orders 1..=6 rotate");
             eval.rotations
                 .iter()
                 .map(|r| {

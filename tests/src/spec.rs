@@ -3,8 +3,7 @@
 //! and the proptest in `tests/tests/roundtrip.rs` (random bytes), so what the fuzzer explores
 //! for hours is what `cargo test` checks in seconds.
 
-use aprt_core::blob::{MAX_BONES, MAX_COEF_DIMS, MAX_JOINTS, MAX_LIT, MAX_POSE_DIMS};
-use aprt_core::sh::MAX_ORDER;
+use aprt_core::{MAX_BONES, MAX_COEF_DIMS, MAX_LIT, MAX_ORDER, MAX_POSE_DIMS, MAX_POSE_LEN};
 use aprt_trainer::{BoneFrames, ExportError, LinearModel, Precision, VertexBasis, encode_model};
 use arbitrary::{Arbitrary, Unstructured};
 
@@ -71,7 +70,7 @@ impl<'a> Arbitrary<'a> for ModelSpec {
         let edge = u.ratio(1, 16)?;
         let order = u.int_in_range(1..=MAX_ORDER)?;
         let joints = match edge {
-            true => *u.choose(&[MAX_JOINTS, MAX_POSE_DIMS, MAX_POSE_DIMS + 1])?,
+            true => *u.choose(&[MAX_POSE_LEN, MAX_POSE_DIMS, MAX_POSE_DIMS + 1])?,
             false => u.int_in_range(1..=12)?,
         };
         let pose_dims = u.int_in_range(0..=joints.min(if edge { MAX_POSE_DIMS } else { 6 }))?;

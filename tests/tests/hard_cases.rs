@@ -1,6 +1,6 @@
 //! Hard numerical cases that cross the trainer → blob → core boundary.
 
-use aprt_core::{Model, PoseWeights, SliceSource};
+use aprt_core::{Model, PoseWeights};
 use aprt_trainer::{ExportError, LinearModel, Precision, VertexBasis, encode_model};
 
 /// A model whose transfer is the constant `values` (order 1, one coefficient per vertex, no
@@ -43,14 +43,10 @@ fn f16_sections_keep_the_documented_bound_and_refuse_overflow() {
     ];
     let blob = encode_model(&constant_model(&values), Precision::F16).unwrap();
     let model = Model::parse(&blob).unwrap();
-    let mut pose = PoseWeights::default();
-    model
-        .set_pose(&mut SliceSource(&blob), &[0.3], &mut [], &mut pose)
-        .unwrap();
+    let mut pose = PoseWeights::new();
+    model.set_pose(&[0.3], &mut pose).unwrap();
     let mut got = vec![0.0f32; values.len()];
-    model
-        .transfer(&mut SliceSource(&blob), &pose, 0, &mut got, &mut [])
-        .unwrap();
+    model.transfer(&pose, 0, &mut got).unwrap();
     for (&want, &got) in values.iter().zip(&got) {
         let bound = (want.abs() * 2f64.powi(-11)).max(2f64.powi(-25));
         let err = (f64::from(got) - want).abs();
@@ -99,16 +95,9 @@ fn a_joint_the_projection_ignores_cannot_overflow_the_pose() {
     };
     let blob = encode_model(&model, Precision::F32).unwrap();
     let core = Model::parse(&blob).unwrap();
-    let mut pose = PoseWeights::default();
-    core.set_pose(
-        &mut SliceSource(&blob),
-        &[2f32.powi(103), 0.5],
-        &mut [],
-        &mut pose,
-    )
-    .unwrap();
+    let mut pose = PoseWeights::new();
+    core.set_pose(&[2f32.powi(103), 0.5], &mut pose).unwrap();
     let mut got = [0.0f32; 1];
-    core.transfer(&mut SliceSource(&blob), &pose, 0, &mut got, &mut [])
-        .unwrap();
+    core.transfer(&pose, 0, &mut got).unwrap();
     assert_eq!(got[0], 0.25 + 2.0 * 0.5);
 }

@@ -2,8 +2,8 @@
 //! its checksums catch every single-bit flip inside the header and the sections. The same
 //! properties are fuzzed for longer by the cargo-fuzz targets.
 
-use aprt_core::Model;
-use aprt_core::blob::{Error, Header, MAGIC, PREAMBLE_LEN, SectionEntry, read_header};
+use aprt_core::format::{Header, MAGIC, PREAMBLE_LEN, SectionEntry, crc32, read_header};
+use aprt_core::{Basis, Error, Frame, Model, ModelInfo, SectionKind};
 use std::sync::LazyLock;
 
 use aprt_tests::edit::{self, Mutation, reseal};
@@ -15,6 +15,11 @@ use proptest::prelude::*;
 
 fn valid_blob() -> Vec<u8> {
     encode_model(&random_model(2, 9, 3, 2, Some(3)), Precision::F32).unwrap()
+}
+
+/// What the reader makes of a blob.
+fn parse(blob: &[u8]) -> Result<ModelInfo, Error> {
+    Model::parse(blob).map(|m| *m.info())
 }
 
 /// The shared fuzz harness with gentle inputs.
@@ -67,7 +72,9 @@ fn every_single_bit_flip_is_caught_or_harmless() {
                 let expected = match (i, section(i)) {
                     (..PREAMBLE_LEN, _) => None,
                     (i, _) if i < header_end => Some(Error::HeaderChecksum),
-                    (_, Some(s)) => Some(Error::ChecksumMismatch { kind: s.kind }),
+                    (_, Some(s)) => Some(Error::ChecksumMismatch {
+                        section: SectionKind::from_tag(s.kind),
+                    }),
                     (_, None) => {
                         assert_eq!(
                             result.as_ref(),
@@ -97,49 +104,37 @@ fn crafted_headers_get_the_right_error() {
     let blob = valid_blob();
     let mut future = blob.clone();
     future[8..12].copy_from_slice(&2u32.to_le_bytes());
-    assert_eq!(
-        Model::parse(&future),
-        Err(Error::UnsupportedVersion { found: 2 })
-    );
+    assert_eq!(parse(&future), Err(Error::UnsupportedVersion { found: 2 }));
     let mut magic = blob.clone();
     magic[0] = b'X';
-    assert_eq!(Model::parse(&magic), Err(Error::BadMagic));
+    assert_eq!(parse(&magic), Err(Error::BadMagic));
     let mut trailing = blob.clone();
     trailing.push(0);
-    assert_eq!(
-        Model::parse(&trailing),
-        Err(Error::TrailingBytes { extra: 1 })
-    );
+    assert_eq!(parse(&trailing), Err(Error::TrailingBytes { extra: 1 }));
 
     // Regression (found by the mutation test): a NaN α was accepted, and the model was then
     // unequal to itself.
     for alpha in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
         let bad = with_header(&blob, |h| h.alpha = alpha);
-        assert_eq!(Model::parse(&bad), Err(Error::HeaderMalformed));
+        assert_eq!(parse(&bad), Err(Error::HeaderMalformed));
     }
 
     let huge = with_header(&blob, |h| h.vertices = u32::MAX);
-    assert!(matches!(
-        Model::parse(&huge),
-        Err(Error::BadDimension { .. })
-    ));
+    assert!(matches!(parse(&huge), Err(Error::BadDimension { .. })));
     let overlap = with_header(&blob, |h| h.sections[1].offset = h.sections[0].offset);
-    assert!(matches!(
-        Model::parse(&overlap),
-        Err(Error::SectionOverlap { .. })
-    ));
+    assert!(matches!(parse(&overlap), Err(Error::SectionOverlap { .. })));
     let outside = with_header(&blob, |h| h.sections[2].offset = u64::MAX - 15);
     assert!(matches!(
-        Model::parse(&outside),
+        parse(&outside),
         Err(Error::SectionOutOfRange { .. })
     ));
     let misaligned = with_header(&blob, |h| h.sections[3].offset += 4);
-    assert!(Model::parse(&misaligned).is_err());
+    assert!(parse(&misaligned).is_err());
     let missing = with_header(&blob, |h| {
         h.sections.remove(0);
     });
     assert!(matches!(
-        Model::parse(&missing),
+        parse(&missing),
         Err(Error::MissingSection { .. }) | Err(Error::TrailingBytes { .. })
     ));
 
@@ -153,7 +148,7 @@ fn crafted_headers_get_the_right_error() {
         encoding: 0,
         offset: extended.len() as u64,
         len: 16,
-        crc32: aprt_core::blob::crc32(&[7u8; 16]),
+        crc32: crc32(&[7u8; 16]),
     };
     extended.extend_from_slice(&[7u8; 16]);
     let optional = with_header(&extended, |h| h.sections.push(extra).unwrap());
@@ -162,8 +157,10 @@ fn crafted_headers_get_the_right_error() {
         h.sections.push(SectionEntry { crc32: 0, ..extra }).unwrap()
     });
     assert_eq!(
-        Model::parse(&corrupt),
-        Err(Error::ChecksumMismatch { kind: 999 })
+        parse(&corrupt),
+        Err(Error::ChecksumMismatch {
+            section: SectionKind::Unknown(999)
+        })
     );
     let required = with_header(&extended, |h| {
         h.sections
@@ -174,8 +171,10 @@ fn crafted_headers_get_the_right_error() {
             .unwrap()
     });
     assert_eq!(
-        Model::parse(&required),
-        Err(Error::UnknownRequiredSection { kind: 999 })
+        parse(&required),
+        Err(Error::UnknownRequiredSection {
+            section: SectionKind::Unknown(999)
+        })
     );
 }
 
@@ -225,7 +224,7 @@ proptest! {
         let mut sealed = MAGIC.to_vec();
         sealed.extend_from_slice(&1u32.to_le_bytes());
         sealed.extend_from_slice(&(header.len() as u32).to_le_bytes());
-        sealed.extend_from_slice(&aprt_core::blob::crc32(header).to_le_bytes());
+        sealed.extend_from_slice(&crc32(header).to_le_bytes());
         sealed.extend_from_slice(&bytes);
         let result = exercise(&sealed);
         prop_assert!(
@@ -254,16 +253,16 @@ proptest! {
         let mut header = read_header(&valid_blob()).unwrap();
         header.order = order;
         header.vertices = vertices;
-        header.joints = joints;
+        header.pose_len = joints;
         header.pose_dims = pose_dims;
         header.coef_dims = coef_dims;
-        header.basis = if identity { aprt_core::blob::Basis::Identity } else { aprt_core::blob::Basis::Stored };
+        header.basis = if identity { Basis::Identity } else { Basis::Stored };
         header.sections = entries.into_iter().collect();
         let bytes = postcard::to_allocvec(&header).unwrap();
         let mut blob = MAGIC.to_vec();
         blob.extend_from_slice(&1u32.to_le_bytes());
         blob.extend_from_slice(&(bytes.len() as u32).to_le_bytes());
-        blob.extend_from_slice(&aprt_core::blob::crc32(&bytes).to_le_bytes());
+        blob.extend_from_slice(&crc32(&bytes).to_le_bytes());
         blob.extend_from_slice(&bytes);
         blob.extend_from_slice(&body);
         let _ = exercise(&blob);
@@ -373,10 +372,10 @@ fn overflowing_dimensions_are_refused() {
         for (&a, &kv) in joints.iter().zip(&coef) {
             for (pose_dims, bones) in [(0u16, 0u16), (64, 256), (65, 257), (u16::MAX, u16::MAX)] {
                 let edited = with_header(&blob, |h| {
-                    (h.order, h.vertices, h.joints, h.pose_dims, h.coef_dims) =
+                    (h.order, h.vertices, h.pose_len, h.pose_dims, h.coef_dims) =
                         (order, v, a, pose_dims, kv);
                     if i % 2 == 1 {
-                        h.frame = aprt_core::blob::Frame::Bones { count: bones };
+                        h.frame = Frame::Bones { count: bones };
                     }
                     let n2 = (order as u64).pow(2);
                     let wrapped = n2
@@ -423,26 +422,29 @@ proptest! {
             b
         };
         prop_assert_eq!(
-            Model::parse(&patched(8, version)),
+            parse(&patched(8, version)),
             Err(Error::UnsupportedVersion { found: version })
         );
         prop_assert_eq!(
-            Model::parse(&patched(12, header_len)),
+            parse(&patched(12, header_len)),
             Err(Error::HeaderTooLarge { len: header_len })
         );
         let header_crc = u32::from_le_bytes(blob[16..20].try_into().unwrap());
         if crc != header_crc {
-            prop_assert_eq!(Model::parse(&patched(16, crc)), Err(Error::HeaderChecksum));
+            prop_assert_eq!(parse(&patched(16, crc)), Err(Error::HeaderChecksum));
         }
         let entries = read_header(blob).unwrap().sections;
         let e = entries[section % entries.len()];
         if crc != e.crc32 {
             let wrong = with_header(blob, |h| h.sections[section % entries.len()].crc32 = crc);
-            prop_assert_eq!(Model::parse(&wrong), Err(Error::ChecksumMismatch { kind: e.kind }));
+            prop_assert_eq!(
+                parse(&wrong),
+                Err(Error::ChecksumMismatch { section: SectionKind::from_tag(e.kind) })
+            );
         }
         let long = [&blob[..], &trailing].concat();
         prop_assert_eq!(
-            Model::parse(&long),
+            parse(&long),
             Err(Error::TrailingBytes { extra: trailing.len() as u64 })
         );
     }
@@ -450,18 +452,19 @@ proptest! {
 
 /// Moving or resizing any section, with every checksum recomputed to match, is refused:
 /// sections are packed, so it now overlaps another, the header or the end, or its length no
-/// longer matches the dimensions. Two edits may leave a valid blob: an empty section (no pose
-/// dimensions) moved to another boundary, and the optional metadata section, whose length is
-/// free, moved or resized so that it still ends the blob. Every section of every sample, every
-/// move by up to 64 alignment steps either way and every resize by up to 64 values (about
-/// 330k blobs, a second).
+/// longer matches the dimensions; the angle names, whose length is free, no longer hold one
+/// name per pose entry. One edit may leave a valid blob: an empty section (no pose
+/// dimensions) moved to another boundary. Every section of every sample, every move by up to
+/// 64 alignment steps either way and every resize by up to 64 values (about 330k blobs, a
+/// second).
 #[test]
 fn moved_or_resized_sections_are_refused() {
-    // Valid results of each kind of edit that may stay valid: empty section, metadata.
-    let mut valid = [0usize; 2];
+    // Empty sections moved and still valid; angle names edited and refused for their content.
+    let (mut empty_valid, mut names_refused) = (0usize, 0usize);
     for (name, blob) in samples() {
         let entries = read_header(blob).unwrap().sections;
         for (section, before) in entries.iter().enumerate() {
+            let is_names = SectionKind::from_tag(before.kind) == SectionKind::AngleNames;
             for (offset_delta, len_delta) in
                 (-64i64..64).flat_map(|o| (-64i64..64).map(move |l| (o, l)))
             {
@@ -475,11 +478,8 @@ fn moved_or_resized_sections_are_refused() {
                 });
                 let result = exercise(&reseal(&edited));
                 let empty_moved = before.len == 0 && len == 0 && offset <= blob.len() as u64;
-                let metadata_ends_blob = !before.required && offset + len == blob.len() as u64;
-                let may_stay_valid = empty_moved || metadata_ends_blob;
-                if result.is_ok() {
-                    valid[usize::from(metadata_ends_blob)] += 1;
-                }
+                empty_valid += usize::from(empty_moved && result.is_ok());
+                names_refused += usize::from(result == Err(Error::BadAngleNames));
                 assert!(
                     matches!(
                         result,
@@ -488,30 +488,55 @@ fn moved_or_resized_sections_are_refused() {
                             | Error::SectionLength { .. }
                             | Error::SectionMisaligned { .. }
                             | Error::TrailingBytes { .. })
-                    ) || (may_stay_valid && result.is_ok()),
+                    ) || (is_names && result == Err(Error::BadAngleNames))
+                        || (empty_moved && result.is_ok()),
                     "{name}, section {section} moved to {offset}, resized to {len}: {result:?}"
                 );
             }
         }
     }
     assert!(
-        valid.iter().all(|&n| n > 0),
-        "the edits that keep a blob valid were never accepted (empty, metadata): {valid:?}"
+        empty_valid > 0 && names_refused > 0,
+        "empty sections moved and valid: {empty_valid}, angle names refused: {names_refused}"
     );
 }
 
 /// A source whose bytes change after the model was opened from it (a file rewritten under a
 /// streaming reader) gives wrong numbers, never a panic: the evaluator reads the changed
 /// sections of every sample, filled with NaN, huge values and random bytes, through every
-/// call a frame makes, in place and streamed through the least buffer.
+/// call a frame makes, streamed through the least buffer. (A resident `Model` borrows its
+/// blob, so its bytes cannot change under it.)
 #[test]
 fn a_source_changed_after_open_never_panics() {
-    use aprt_core::{BlobSource, LitWeights, PoseWeights, SliceSource};
-    use aprt_tests::Streamed;
+    use aprt_core::{BlobSource, LitWeights, PoseWeights, SourceError, StreamedModel};
+    use std::cell::Cell;
+
+    /// The original bytes until `changed` is set, then the others.
+    struct Changing<'a> {
+        before: &'a [u8],
+        after: &'a [u8],
+        changed: Cell<bool>,
+    }
+    impl BlobSource for &Changing<'_> {
+        fn len(&self) -> u64 {
+            self.before.len() as u64
+        }
+        fn read_at(&mut self, offset: u64, buf: &mut [u8]) -> Result<(), SourceError> {
+            let bytes = if self.changed.get() {
+                self.after
+            } else {
+                self.before
+            };
+            let start = offset as usize;
+            buf.copy_from_slice(bytes.get(start..start + buf.len()).ok_or(SourceError)?);
+            Ok(())
+        }
+    }
+
     // Frames that reached the shading loop: some garbage must get that far.
     let mut shaded = 0;
     for (_, blob) in samples() {
-        let model = Model::parse(blob).unwrap();
+        let info = *Model::parse(blob).unwrap().info();
         let sections = read_header(blob).unwrap().sections;
         let data_start = sections.iter().map(|s| s.offset).min().unwrap() as usize;
         let noise = aprt_tests::noise(5, blob.len());
@@ -522,34 +547,34 @@ fn a_source_changed_after_open_never_panics() {
             &|i| ((noise[i] + 1.0) * 128.0) as u8,
         ];
         for fill in fills {
-            let mut changed = blob.clone();
-            (data_start..blob.len()).for_each(|i| changed[i] = fill(i));
-            let mut scratch = vec![0u8; model.scratch_bytes()];
-            let sources: [(&mut dyn BlobSource, &mut [u8]); 2] = [
-                (&mut SliceSource(&changed), &mut []),
-                (&mut Streamed::new(&changed), &mut scratch),
-            ];
-            for (src, scratch) in sources {
-                let mut pose = PoseWeights::default();
-                let angles = vec![0.5; model.joints()];
-                let _ = model.set_pose(src, &angles, scratch, &mut pose);
-                let n2 = model.order() * model.order();
-                let lighting = vec![1.0; n2];
-                let mut lit = LitWeights::default();
-                let bones = match model.frame() {
-                    aprt_core::blob::Frame::Bones { count } => count as usize,
-                    aprt_core::blob::Frame::World => 0,
-                };
-                let rotations = vec![[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]; bones];
-                let _ = model.light(&pose, &lighting, &mut lit);
-                let _ = model.light_skinned(&pose, &lighting, &rotations, &mut lit);
-                let mut shading = vec![0.0; model.vertices()];
-                shaded += usize::from(model.shade(src, &lit, 0, &mut shading, scratch).is_ok());
-                let mut transfer = vec![0.0; model.vertices() * n2];
-                let _ = model.transfer(src, &pose, 0, &mut transfer, scratch);
-                let mut bones = vec![0u16; model.vertices()];
-                let _ = model.vertex_bones(src, 0, &mut bones, scratch);
-            }
+            let mut after = blob.clone();
+            (data_start..blob.len()).for_each(|i| after[i] = fill(i));
+            let source = Changing {
+                before: blob,
+                after: &after,
+                changed: Cell::new(false),
+            };
+            let mut scratch = vec![0u8; info.scratch_bytes()];
+            let mut model = StreamedModel::open(&source, &mut scratch).unwrap();
+            source.changed.set(true);
+            let mut pose = Box::new(PoseWeights::new());
+            let _ = model.set_pose(&vec![0.5; info.pose_len()], &mut pose);
+            let identity = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+            let mut lit = Box::new(LitWeights::new());
+            let _ = model.light(
+                &pose,
+                &vec![1.0; info.coeffs()],
+                &vec![identity; info.bones()],
+                &mut lit,
+            );
+            let mut shading = vec![0.0; info.vertices()];
+            shaded += usize::from(model.shade(&lit, 0, &mut shading).is_ok());
+            let mut transfer = vec![0.0; info.vertices() * info.coeffs()];
+            let _ = model.transfer(&pose, 0, &mut transfer);
+            let mut bones = vec![0u16; info.vertices()];
+            let _ = model.vertex_bones(0, &mut bones);
+            let mut names = vec![0u8; info.angle_names_bytes()];
+            let _ = model.angle_names(&mut names);
         }
     }
     assert!(shaded > 0, "no changed source reached the shading loop");

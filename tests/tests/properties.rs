@@ -1,12 +1,10 @@
 //! Property tests of the core's mathematics: SH rotations preserve each band's energy, and
 //! shading is linear in the lighting. (Orthonormality of the basis by quadrature is tested in
-//! `core-nostd/src/sh.rs`; streaming and the round trip in `roundtrip.rs`.)
+//! `tests/src/quadrature.rs`; streaming and the round trip in `roundtrip.rs`.)
 
-use aprt_core::blob::Frame;
-use aprt_core::rotate::{ShRotation, ShRotationMatrix};
-use aprt_core::sh::MAX_ORDER;
-use aprt_core::{LitWeights, Model, PoseWeights, SliceSource};
+use aprt_core::{LitWeights, MAX_ORDER, Model, PoseWeights, ShRotation};
 use aprt_tests::decode::decode;
+use aprt_tests::quadrature::QuadratureRotation;
 use aprt_tests::reference::{magnitude, rounding};
 use aprt_tests::spec::ModelSpec;
 use aprt_trainer::encode_model;
@@ -57,7 +55,8 @@ proptest! {
     #![proptest_config(ProptestConfig { cases: 300, ..ProptestConfig::default() })]
 
     /// A rotation mixes coefficients only within a band and is orthogonal there, so each
-    /// band's energy `Σ_m x_lm²` is unchanged, by the recurrences and the quadrature alike.
+    /// band's energy `Σ_m x_lm²` is unchanged, by the core's Euler angles (built on the
+    /// Ivanic–Ruedenberg recurrences) and the quadrature alike.
     #[test]
     fn rotation_preserves_band_energies(
         order in 1usize..=MAX_ORDER,
@@ -66,10 +65,11 @@ proptest! {
     ) {
         let before = band_energies(order, &x);
         let total: f64 = before.iter().sum();
-        let (mut by_recurrence, mut by_quadrature) = ([0.0f32; 36], [0.0f32; 36]);
-        ShRotationMatrix::new(order, &r).unwrap().apply(&x, &mut by_recurrence).unwrap();
-        ShRotation::new(order).unwrap().rotate(&r, &x, &mut by_quadrature).unwrap();
-        for rotated in [&by_recurrence, &by_quadrature] {
+        let mut by_euler: [f32; 36] = x.clone().try_into().unwrap();
+        ShRotation::new(order).unwrap().apply(&r.map(|row| row.map(f64::from)), &mut by_euler).unwrap();
+        let mut by_quadrature = [0.0f32; 36];
+        QuadratureRotation::new(order).unwrap().rotate(&r, &x, &mut by_quadrature).unwrap();
+        for rotated in [&by_euler, &by_quadrature] {
             for (l, (a, b)) in before.iter().zip(band_energies(order, rotated)).enumerate() {
                 prop_assert!((a - b).abs() <= 1e-4 * total.max(1e-3), "band {l}: {a} -> {b}");
             }
@@ -93,34 +93,27 @@ proptest! {
             .chain(&spec.model.pose_mean).all(|x| x.abs() < 1e6));
         let Ok(blob) = encode_model(&spec.model, spec.precision) else { return Ok(()) };
         let model = Model::parse(&blob).expect("the reader accepts what the writer writes");
+        let info = *model.info();
         let stored = decode(&blob).unwrap();
         prop_assume!(match &stored.basis {
             aprt_trainer::VertexBasis::Stored { data, .. } => data.iter().all(|x| x.abs() < 1e6),
             aprt_trainer::VertexBasis::Identity => true,
         });
-        let n2 = model.order() * model.order();
+        let n2 = info.coeffs();
         let (l1, l2) = (&l1[..n2], &l2[..n2]);
         let mix: Vec<f32> = l1.iter().zip(l2).map(|(x, y)| a * x + b * y).collect();
-        let angles = vec![angle; model.joints()];
-        let src = &mut SliceSource(&blob);
-        let mut pose = PoseWeights::default();
-        model.set_pose(src, &angles, &mut [], &mut pose).unwrap();
-        let rotations: Vec<[[f32; 3]; 3]> = match model.frame() {
-            Frame::World => Vec::new(),
-            Frame::Bones { count } => (0..count).map(|k| {
-                let (s, c) = (0.3 * k as f32).sin_cos();
-                [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
-            }).collect(),
-        };
+        let angles = vec![angle; info.pose_len()];
+        let mut pose = Box::new(PoseWeights::new());
+        model.set_pose(&angles, &mut pose).unwrap();
+        let rotations: Vec<[[f32; 3]; 3]> = (0..info.bones()).map(|k| {
+            let (s, c) = (0.3 * k as f32).sin_cos();
+            [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
+        }).collect();
         let shade = |lighting: &[f32]| {
-            let mut lit = LitWeights::default();
-            match model.frame() {
-                Frame::World => model.light(&pose, lighting, &mut lit),
-                Frame::Bones { .. } => model.light_skinned(&pose, lighting, &rotations, &mut lit),
-            }
-            .unwrap();
-            let mut out = vec![0.0f32; model.vertices()];
-            model.shade(&mut SliceSource(&blob), &lit, 0, &mut out, &mut []).unwrap();
+            let mut lit = Box::new(LitWeights::new());
+            model.light(&pose, lighting, &rotations, &mut lit).unwrap();
+            let mut out = vec![0.0f32; info.vertices()];
+            model.shade(&lit, 0, &mut out).unwrap();
             out
         };
         let (s1, s2, s) = (shade(l1), shade(l2), shade(&mix));
@@ -128,7 +121,7 @@ proptest! {
         let light = norm(&mix) + (a as f64).abs() * norm(l1) + (b as f64).abs() * norm(l2);
         let terms = magnitude(&stored, &angles.iter().map(|&x| x as f64).collect::<Vec<_>>(), |x| x);
         let gamma = rounding(&stored);
-        for j in 0..model.vertices() {
+        for j in 0..info.vertices() {
             let want = a as f64 * s1[j] as f64 + b as f64 * s2[j] as f64;
             let bound = 2.0 * gamma * light * terms[j * n2..(j + 1) * n2].iter().sum::<f64>() + 1e-30;
             prop_assert!(

@@ -1,49 +1,36 @@
 //! Trainer model → blob → aprt-core, from a resident slice and streamed through a
 //! `BlobSource` with small buffers: the same numbers as the trainer's f64 reference.
 
-use aprt_core::{BlobSource, LitWeights, Model, PoseWeights, SliceSource};
-use aprt_tests::{Streamed, noise, random_model};
+use aprt_core::{Error, Input, LitWeights, Model, PoseWeights, StreamedModel};
+use aprt_tests::{Eval, Streamed, noise, random_model};
 use aprt_trainer::{LinearModel, Precision, encode_model};
 
-/// Transfer and shading for every vertex, through the core, with the given source and scratch.
-fn evaluate<S: BlobSource>(
-    model: &Model,
-    src: &mut S,
-    scratch: &mut [u8],
-    angles: &[f32],
-    light: &[f32],
-) -> (Vec<f32>, Vec<f32>) {
-    let n2 = model.order() * model.order();
-    let mut pose = PoseWeights::default();
-    model.set_pose(src, angles, scratch, &mut pose).unwrap();
-    let mut lit = LitWeights::default();
-    model.light(&pose, light, &mut lit).unwrap();
-    let mut transfer = vec![0.0f32; model.vertices() * n2];
-    let mut shading = vec![0.0f32; model.vertices()];
+/// Transfer and shading for every vertex, through the core, resident or streamed.
+fn evaluate(model: &mut impl Eval, angles: &[f32], light: &[f32]) -> (Vec<f32>, Vec<f32>) {
+    let info = *model.info();
+    let (n2, v) = (info.coeffs(), info.vertices());
+    let mut pose = Box::new(PoseWeights::new());
+    model.set_pose(angles, &mut pose).unwrap();
+    let mut lit = Box::new(LitWeights::new());
+    model.light(&pose, light, &[], &mut lit).unwrap();
+    let mut transfer = vec![0.0f32; v * n2];
+    let mut shading = vec![0.0f32; v];
     // Uneven vertex ranges, to cross chunk boundaries at odd places.
     let mut first = 0;
     for (i, step) in [1usize, 7, 3, 64, 5].iter().cycle().enumerate() {
-        if first >= model.vertices() {
+        if first >= v {
             break;
         }
-        let count = (*step + i % 2).min(model.vertices() - first);
+        let count = (*step + i % 2).min(v - first);
         model
             .transfer(
-                src,
                 &pose,
                 first,
                 &mut transfer[first * n2..(first + count) * n2],
-                scratch,
             )
             .unwrap();
         model
-            .shade(
-                src,
-                &lit,
-                first,
-                &mut shading[first..first + count],
-                scratch,
-            )
+            .shade(&lit, first, &mut shading[first..first + count])
             .unwrap();
         first += count;
     }
@@ -52,17 +39,15 @@ fn evaluate<S: BlobSource>(
 
 fn check_model(reference: &LinearModel, precision: Precision, tolerance: f64) {
     let blob = encode_model(reference, precision).unwrap();
-    let model = Model::parse(&blob).unwrap();
-    assert_eq!(
-        aprt_trainer::export::read_angle_names(&blob).as_deref(),
-        Some(&reference.angle_names[..])
-    );
+    let mut model = Model::parse(&blob).unwrap();
+    let names: Vec<&str> = model.angle_names().iter().collect();
+    assert_eq!(names, reference.angle_names);
     let n2 = reference.order * reference.order;
     let angles64 = noise(9, reference.joints);
     let angles: Vec<f32> = angles64.iter().map(|&x| x as f32).collect();
     let light: Vec<f32> = noise(10, n2).iter().map(|&x| x as f32).collect();
 
-    let (t_slice, s_slice) = evaluate(&model, &mut SliceSource(&blob), &mut [], &angles, &light);
+    let (t_slice, s_slice) = evaluate(&mut model, &angles, &light);
     // The f64 reference from the trainer, evaluated at the angles the core saw.
     let expect = reference.predict(&angles.iter().map(|&x| x as f64).collect::<Vec<_>>());
     let scale = expect.iter().fold(1.0f64, |m, x| m.max(x.abs()));
@@ -80,13 +65,16 @@ fn check_model(reference: &LinearModel, precision: Precision, tolerance: f64) {
         );
     }
 
-    // Streaming with buffers from one row up: bit-identical to the resident evaluation.
-    let opened = Model::open(&mut Streamed::new(&blob), &mut [0u8; 4]).unwrap();
-    assert_eq!(opened, model);
+    // Streaming with buffers from the least up: bit-identical to the resident evaluation.
+    let least = model.info().scratch_bytes();
     for extra in [0usize, 1, 13, 4096] {
-        let mut scratch = vec![0u8; model.scratch_bytes() + extra];
+        let mut scratch = vec![0u8; least + extra];
         let mut src = Streamed::new(&blob);
-        let (t, s) = evaluate(&model, &mut src, &mut scratch, &angles, &light);
+        let mut streamed = StreamedModel::open(&mut src, &mut scratch).unwrap();
+        assert_eq!(streamed.info(), model.info());
+        let mut buf = vec![0u8; streamed.info().angle_names_bytes()];
+        assert_eq!(streamed.angle_names(&mut buf).unwrap(), model.angle_names());
+        let (t, s) = evaluate(&mut streamed, &angles, &light);
         assert!(src.reads > 0);
         assert_eq!(
             t.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
@@ -131,32 +119,17 @@ fn f16_round_trip_within_half_precision() {
 fn streaming_rejects_a_buffer_smaller_than_a_block() {
     let reference = random_model(3, 10, 4, 2, Some(8));
     let blob = encode_model(&reference, Precision::F32).unwrap();
-    let model = Model::parse(&blob).unwrap();
-    let mut src = Streamed::new(&blob);
-    let mut pose = PoseWeights::default();
-    model
-        .set_pose(
-            &mut src,
-            &[0.0; 4],
-            &mut vec![0u8; model.scratch_bytes()],
-            &mut pose,
-        )
-        .unwrap();
-    let mut lit = LitWeights::default();
-    model.light(&pose, &[1.0; 9], &mut lit).unwrap();
-    let mut out = [0.0f32; 3];
-    let err = model
-        .shade(&mut src, &lit, 0, &mut out, &mut [0u8; 255])
-        .unwrap_err();
-    assert_eq!(err, aprt_core::Error::BufferTooSmall { needed: 8 * 8 * 4 });
+    let err = StreamedModel::open(Streamed::new(&blob), &mut [0u8; 255]).unwrap_err();
+    assert_eq!(err, Error::BufferTooSmall { needed: 8 * 8 * 4 });
+    assert!(StreamedModel::open(Streamed::new(&blob), &mut [0u8; 256]).is_ok());
 }
 
 /// Bone-frame models: `transfer` gives bone-frame transfer equal to the trainer's reference,
-/// and `light_skinned` + `shade` equal world lighting rotated into each vertex's bone frame
-/// dotted with that transfer, for resident and streamed blobs alike.
+/// and `light` with the bones' rotations + `shade` equal world lighting rotated into each
+/// vertex's bone frame dotted with that transfer, for resident and streamed blobs alike.
 #[test]
 fn bone_frame_model_shades_with_per_bone_lighting() {
-    use aprt_core::rotate::ShRotation;
+    use aprt_tests::quadrature::QuadratureRotation;
     use aprt_trainer::BoneFrames;
     for (order, kv) in [(3usize, Some(7usize)), (2, None)] {
         let mut reference = random_model(order, 45, 6, 3, kv);
@@ -180,35 +153,31 @@ fn bone_frame_model_shades_with_per_bone_lighting() {
                 }
             })
             .collect();
-        let rotation = ShRotation::new(order).unwrap();
+        let rotation = QuadratureRotation::new(order).unwrap();
         let expect = reference.predict(&angles.iter().map(|&x| x as f64).collect::<Vec<_>>());
-        for streamed in [false, true] {
-            let mut scratch = vec![0u8; if streamed { model.scratch_bytes() } else { 0 }];
-            let run = |src: &mut dyn BlobSource, scratch: &mut [u8]| {
-                let mut pose = PoseWeights::default();
-                let mut lit = LitWeights::default();
-                let (mut transfer, mut shading, mut bones_out) =
-                    (vec![0.0f32; 45 * n2], vec![0.0f32; 45], vec![0u16; 45]);
-                model.set_pose(src, &angles, scratch, &mut pose).unwrap();
-                assert_eq!(
-                    model.light(&pose, &light, &mut lit),
-                    Err(aprt_core::Error::FrameMismatch)
-                );
-                model
-                    .light_skinned(&pose, &light, &rotations, &mut lit)
-                    .unwrap();
-                model
-                    .transfer(src, &pose, 0, &mut transfer, scratch)
-                    .unwrap();
-                model.shade(src, &lit, 0, &mut shading, scratch).unwrap();
-                model.vertex_bones(src, 0, &mut bones_out, scratch).unwrap();
-                (transfer, shading, bones_out)
-            };
-            let (transfer, shading, vertex_bones) = if streamed {
-                run(&mut Streamed::new(&blob), &mut scratch)
-            } else {
-                run(&mut SliceSource(&blob), &mut scratch)
-            };
+        let run = |model: &mut dyn Eval| {
+            let mut pose = Box::new(PoseWeights::new());
+            let mut lit = Box::new(LitWeights::new());
+            let (mut transfer, mut shading, mut bones_out) =
+                (vec![0.0f32; 45 * n2], vec![0.0f32; 45], vec![0u16; 45]);
+            model.set_pose(&angles, &mut pose).unwrap();
+            assert_eq!(
+                model.light(&pose, &light, &[], &mut lit),
+                Err(Error::WrongLength {
+                    what: Input::BoneRotations,
+                    expected: bones,
+                    found: 0
+                })
+            );
+            model.light(&pose, &light, &rotations, &mut lit).unwrap();
+            model.transfer(&pose, 0, &mut transfer).unwrap();
+            model.shade(&lit, 0, &mut shading).unwrap();
+            model.vertex_bones(0, &mut bones_out).unwrap();
+            (transfer, shading, bones_out)
+        };
+        let mut scratch = vec![0u8; model.info().scratch_bytes()];
+        let mut streamed = StreamedModel::open(Streamed::new(&blob), &mut scratch).unwrap();
+        for (transfer, shading, vertex_bones) in [run(&mut { model }), run(&mut streamed)] {
             assert_eq!(vertex_bones, reference.bones.as_ref().unwrap().vertex_bone);
             for (got, want) in transfer.iter().zip(&expect) {
                 assert!((*got as f64 - want).abs() < 1e-5, "{got} vs {want}");
@@ -229,8 +198,8 @@ fn bone_frame_model_shades_with_per_bone_lighting() {
     }
 }
 
-/// Weights computed for one model are refused by a model of another shape or frame, even when
-/// their dimensions agree: they would shade with another model's numbers.
+/// Weights computed for one model are refused by any other: of another frame, and of the
+/// very same shape with other numbers, which a check of the dimensions alone let through.
 #[test]
 fn weights_of_another_model_are_refused() {
     use aprt_trainer::BoneFrames;
@@ -240,32 +209,46 @@ fn weights_of_another_model_are_refused() {
         count: 2,
         vertex_bone: vec![1; 16],
     });
-    let (a, b) = (
-        encode_model(&world, Precision::F32).unwrap(),
-        encode_model(&skinned, Precision::F32).unwrap(),
-    );
-    let (ma, mb) = (Model::parse(&a).unwrap(), Model::parse(&b).unwrap());
-    let mut pose = PoseWeights::default();
-    ma.set_pose(&mut SliceSource(&a), &[0.1; 3], &mut [], &mut pose)
-        .unwrap();
-    let mut lit = LitWeights::default();
-    ma.light(&pose, &[1.0; 4], &mut lit).unwrap();
+    let mut same_shape = world.clone();
+    same_shape.weights[0] += 0.5;
+    let blobs = [&world, &skinned, &same_shape].map(|m| encode_model(m, Precision::F32).unwrap());
+    let models = blobs.each_ref().map(|b| Model::parse(b).unwrap());
+    let mut pose = PoseWeights::new();
+    models[0].set_pose(&[0.1; 3], &mut pose).unwrap();
+    let mut lit = LitWeights::new();
+    models[0].light(&pose, &[1.0; 4], &[], &mut lit).unwrap();
     let mut out = [0.0f32; 16];
-    assert_eq!(
-        mb.shade(&mut SliceSource(&b), &lit, 0, &mut out, &mut []),
-        Err(aprt_core::Error::ShapeMismatch)
-    );
-    assert_eq!(
-        mb.transfer(&mut SliceSource(&b), &pose, 0, &mut [0.0; 64], &mut []),
-        Err(aprt_core::Error::ShapeMismatch)
-    );
+    assert!(models[0].shade(&lit, 0, &mut out).is_ok());
+    for other in &models[1..] {
+        assert_ne!(other.info().id(), models[0].info().id());
+        assert_eq!(
+            other.shade(&lit, 0, &mut out),
+            Err(Error::WeightsForOtherModel)
+        );
+        assert_eq!(
+            other.transfer(&pose, 0, &mut [0.0; 64]),
+            Err(Error::WeightsForOtherModel)
+        );
+        // Lighting another model's pose is refused too, and leaves its output unset.
+        let mut other_lit = LitWeights::new();
+        let identity = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        assert_eq!(
+            other.light(&pose, &[1.0; 4], &[identity; 2], &mut other_lit),
+            Err(Error::WeightsForOtherModel)
+        );
+        assert_eq!(
+            other.shade(&other_lit, 0, &mut out),
+            Err(Error::WeightsNotSet)
+        );
+    }
 }
 
-/// Regression (found by the fuzz harness): `Model::open` promises that any scratch of at least
-/// 4 bytes works, but checked a bone-frame model's bone rows a whole block at a time and
-/// refused buffers under 32 bytes.
+/// Regression (found by the fuzz harness): validation checked a bone-frame model's bone rows a
+/// whole block at a time and refused small buffers with the size of that step. Any buffer now
+/// gets through validation, and one too small for evaluation is refused with the size
+/// evaluation needs.
 #[test]
-fn bone_frame_model_opens_with_the_smallest_scratch() {
+fn bone_frame_model_validates_through_the_smallest_scratch() {
     use aprt_trainer::BoneFrames;
     let mut reference = random_model(2, 13, 3, 1, Some(5));
     reference.bones = Some(BoneFrames {
@@ -274,10 +257,10 @@ fn bone_frame_model_opens_with_the_smallest_scratch() {
     });
     for precision in [Precision::F32, Precision::F16] {
         let blob = encode_model(&reference, precision).unwrap();
-        let model = Model::parse(&blob).unwrap();
+        let needed = Model::parse(&blob).unwrap().info().scratch_bytes();
         assert_eq!(
-            Model::open(&mut Streamed::new(&blob), &mut [0u8; 4]),
-            Ok(model)
+            StreamedModel::open(Streamed::new(&blob), &mut [0u8; 4]).unwrap_err(),
+            Error::BufferTooSmall { needed }
         );
     }
 }
@@ -316,8 +299,8 @@ mod random_shapes {
         #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
 
         /// Streaming through a `BlobSource` equals whole-slice evaluation bit for bit for
-        /// every scratch size from nothing to one block beyond the least, and sizes below the
-        /// least are refused with `BufferTooSmall`, never a panic.
+        /// every scratch size from nothing to twice the least, and sizes below the least are
+        /// refused with `BufferTooSmall`, never a panic.
         #[test]
         fn streaming_equals_resident_for_every_buffer_size(
             spec in proptest::collection::vec(any::<u8>(), 0..256),
@@ -330,7 +313,7 @@ mod random_shapes {
                 .expect("the reader accepts what the writer writes");
             // Every size is thousands of evaluations for shapes at the format's limits; the
             // small shapes cross the same chunk boundaries.
-            let sizes = 0..=model.scratch_bytes() + model.block_bytes();
+            let sizes = 0..=2 * model.info().scratch_bytes();
             prop_assume!(*sizes.end() <= 1024);
             harness::check_streaming(&blob, &Probe::GENTLE, sizes);
         }

@@ -3,7 +3,7 @@
 //! shadowing changes with the pose.
 
 use anyhow::{Result, bail};
-use aprt_core::euler::EulerRotation;
+use aprt_core::ShRotation;
 use glam::DMat3;
 
 use crate::model::BoneFrames;
@@ -87,7 +87,7 @@ pub fn change_frames(
     }
     let vertices = bones.vertex_bone.len();
     let order = (transfer.first().map_or(0, |t| t.len() / vertices.max(1)) as f64).sqrt() as usize;
-    let rotation = EulerRotation::new(order)?;
+    let rotation = ShRotation::new(order)?;
     Ok(transfer
         .iter()
         .zip(rotations)
@@ -97,7 +97,7 @@ pub fn change_frames(
 
 /// Transfer moved between world and bone frames: into the bone frame (`Rᵀ`) or out of it.
 pub fn change_frame(
-    rotation: &EulerRotation,
+    rotation: &ShRotation,
     transfer: &[f32],
     bones: &BoneFrames,
     rotations: &[DMat3],

@@ -259,7 +259,7 @@ fn eval(args: &EvalArgs) -> Result<()> {
         let Some(csv) = &args.source.angles else {
             bail!("give the poses: --angles FILE, or a clip of the model's character");
         };
-        let poses = crate::angles::read_angles(csv, Some(info.joints))?;
+        let poses = crate::angles::read_angles(csv, Some(info.pose_len))?;
         if crate::runtime::bone_frames(&blob)?.is_some() {
             bail!("{model_name} learns transfer in bone frames: give its character's clip (not --angles) so the bones' rotations are known");
         }

@@ -1,6 +1,6 @@
 //! Accuracy against ground truth, and the baselines every model is measured against.
 
-use aprt_core::euler::EulerRotation;
+use aprt_core::ShRotation;
 use glam::{DMat3, Mat4};
 
 use crate::sh_rotate::{nearest_rotation, rotate_each};
@@ -51,7 +51,7 @@ pub fn nearest_pose(train_angles: &[Vec<f64>], angles: &[f64]) -> usize {
 /// nearest rotation to its blended skinning matrix. Right for rigid motion of an isolated
 /// part; blind to the shadows that other parts cast as they move.
 pub fn skinned_transfer(
-    rotation: &EulerRotation,
+    rotation: &ShRotation,
     bind_transfer: &[f32],
     influences: impl Fn(usize) -> Vec<(u32, f32)> + Sync,
     joint_matrices: &[Mat4],
@@ -91,14 +91,14 @@ mod tests {
     #[test]
     fn skinning_rotates_transfer_with_a_rigid_joint() {
         let order = 3;
-        let rot = EulerRotation::new(order).unwrap();
+        let rot = ShRotation::new(order).unwrap();
         let mut t = [0.0f32; 9];
-        aprt_core::sh::clamped_cosine(order, [0.0, 0.0, 1.0], &mut t).unwrap();
+        aprt_core::clamped_cosine(order, [0.0, 0.0, 1.0], &mut t).unwrap();
         let m = Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2);
         let out = skinned_transfer(&rot, &t, |_| vec![(0, 1.0)], &[m]);
         // +z rotated a quarter turn about x points along −y.
         let mut expect = [0.0f32; 9];
-        aprt_core::sh::clamped_cosine(order, [0.0, -1.0, 0.0], &mut expect).unwrap();
+        aprt_core::clamped_cosine(order, [0.0, -1.0, 0.0], &mut expect).unwrap();
         for (a, b) in out.iter().zip(expect) {
             assert!((a - b).abs() < 1e-5, "{out:?} vs {expect:?}");
         }

@@ -7,8 +7,8 @@ use std::fmt::Write as _;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use aprt_core::euler::EulerRotation;
-use aprt_core::{LitWeights, Model, PoseWeights, SliceSource};
+use aprt_core::ShRotation;
+use aprt_core::{LitWeights, Model, ModelInfo, PoseWeights, Rotation};
 use glam::DMat3;
 use nalgebra::DMatrix;
 
@@ -304,7 +304,7 @@ pub fn run(
             }
             Err(err) => return Err(err).with_context(|| format!("writing {}", config.name)),
         };
-        let model = Model::parse(&blob)?;
+        let model = *Model::parse(&blob)?.info();
         let error = |clip: &BakedClip| -> Result<f64> {
             let predicted = predict_world(&blob, &clip.angles, &clip.rotations)?;
             Ok(relative_error(&predicted, &clip.transfer))
@@ -366,7 +366,7 @@ fn baselines(
     };
     let bind_transfer =
         bake_poses(std::slice::from_ref(rig.bind_mesh()), settings, false)?.remove(0);
-    let rotation = EulerRotation::new(settings.order)?;
+    let rotation = ShRotation::new(settings.order)?;
     let skin = rig.skin();
     let skinned_of = |set: &BakedClip| -> Result<Vec<Vec<f32>>> {
         set.poses
@@ -429,46 +429,44 @@ fn median_seconds(mut f: impl FnMut()) -> f64 {
 fn time_core(
     blob: &[u8],
     angles: &[f64],
-    rotations: &[[[f32; 3]; 3]],
+    rotations: &[Rotation],
     lighting: &[f32],
 ) -> Result<(f64, f64)> {
     let model = Model::parse(blob)?;
+    let info = model.info();
     let a: Vec<f32> = angles.iter().map(|&x| x as f32).collect();
-    let mut pose = PoseWeights::default();
-    let mut lit = LitWeights::default();
-    let mut shading = vec![0.0f32; model.vertices()];
-    let mut transfer = vec![0.0f32; model.vertices() * model.order() * model.order()];
-    let mut src = SliceSource(blob);
+    let mut pose = Box::new(PoseWeights::new());
+    let mut lit = Box::new(LitWeights::new());
+    let mut shading = vec![0.0f32; info.vertices()];
+    let mut transfer = vec![0.0f32; info.vertices() * info.coeffs()];
     let mut result = Ok(());
     let shade = median_seconds(|| {
         result = result
-            .and(model.set_pose(&mut src, &a, &mut [], &mut pose))
-            .and(crate::runtime::light(
-                &model, &pose, lighting, rotations, &mut lit,
-            ))
-            .and(model.shade(&mut src, &lit, 0, &mut shading, &mut []));
+            .and(model.set_pose(&a, &mut pose))
+            .and(model.light(&pose, lighting, rotations, &mut lit))
+            .and(model.shade(&lit, 0, &mut shading));
     });
     let full = median_seconds(|| {
         result = result
-            .and(model.set_pose(&mut src, &a, &mut [], &mut pose))
-            .and(model.transfer(&mut src, &pose, 0, &mut transfer, &mut []));
+            .and(model.set_pose(&a, &mut pose))
+            .and(model.transfer(&pose, 0, &mut transfer));
     });
     result?;
     Ok((shade * 1e6, full * 1e6))
 }
 
 /// Multiply-adds per frame for RGB shading of every vertex.
-fn megaops(model: &Model) -> f64 {
+fn megaops(model: &ModelInfo) -> f64 {
     let (n2, ka, kv, v, a) = (
-        (model.order() * model.order()) as f64,
+        model.coeffs() as f64,
         model.pose_dims() as f64,
         model.coef_dims() as f64,
         model.vertices() as f64,
-        model.joints() as f64,
+        model.pose_len() as f64,
     );
     let ops = match model.basis() {
-        aprt_core::blob::Basis::Stored => ka * a + n2 * (ka + 1.0) * kv + 3.0 * (n2 * kv + kv * v),
-        aprt_core::blob::Basis::Identity => ka * a + 3.0 * n2 * (ka + 1.0) * (1.0 + v),
+        aprt_core::Basis::Stored => ka * a + n2 * (ka + 1.0) * kv + 3.0 * (n2 * kv + kv * v),
+        aprt_core::Basis::Identity => ka * a + 3.0 * n2 * (ka + 1.0) * (1.0 + v),
     };
     ops / 1e6
 }

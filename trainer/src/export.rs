@@ -1,11 +1,13 @@
-//! Model blob writer: quantises a [`LinearModel`] into the layout of `aprt_core::blob`.
+//! Model blob writer: quantises a [`LinearModel`] into the layout of `aprt_core::format`.
 
-use aprt_core::blob::{
-    ANGLE_NAMES_TAG, Basis, Encoding, Frame, Header, MAGIC, MAX_BONES, MAX_COEF_DIMS,
-    MAX_HEADER_LEN, MAX_JOINTS, MAX_LIT, MAX_POSE_DIMS, MAX_SECTIONS, MAX_VERTICES, PREAMBLE_LEN,
-    SectionEntry, SectionKind, VERSION, VERTEX_BLOCK, align_up, crc32, padded_vertices,
+use aprt_core::format::{
+    Header, MAGIC, MAX_HEADER_LEN, MAX_SECTIONS, PREAMBLE_LEN, SectionEntry, align_up, crc32,
+    padded_vertices,
 };
-use aprt_core::sh::MAX_ORDER;
+use aprt_core::{
+    Basis, Encoding, FORMAT_VERSION, Frame, MAX_BONES, MAX_COEF_DIMS, MAX_LIT, MAX_ORDER,
+    MAX_POSE_DIMS, MAX_POSE_LEN, MAX_VERTICES, SectionKind, VERTEX_BLOCK,
+};
 
 use crate::model::{BoneFrames, LinearModel, VertexBasis};
 
@@ -157,7 +159,7 @@ pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>
     );
     limit("order", model.order, 1, MAX_ORDER)?;
     limit("vertices", v, 1, MAX_VERTICES)?;
-    limit("joints", a, 1, MAX_JOINTS)?;
+    limit("joints", a, 1, MAX_POSE_LEN)?;
     limit("pose dims", ka, 0, MAX_POSE_DIMS.min(a))?;
     let frame = match &model.bones {
         None => Frame::World,
@@ -234,7 +236,7 @@ pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>
     let mut table: Vec<SectionBytes> = sections
         .into_iter()
         .map(|(kind, encoding, bytes)| SectionBytes {
-            tag: kind as u16,
+            tag: kind.tag(),
             required: true,
             encoding,
             bytes,
@@ -271,21 +273,11 @@ fn angle_names_section(names: &[String], joints: usize) -> Result<SectionBytes, 
         .flat_map(|n| n.bytes().chain([b'\n']))
         .collect();
     Ok(SectionBytes {
-        tag: ANGLE_NAMES_TAG,
+        tag: SectionKind::AngleNames.tag(),
         required: false,
         encoding: Encoding::F32,
         bytes,
     })
-}
-
-/// The pose-entry names recorded in a blob, if it has them. The blob must already have been
-/// validated (its CRCs checked) by `Model::parse`.
-pub fn read_angle_names(blob: &[u8]) -> Option<Vec<String>> {
-    let header = aprt_core::blob::read_header(blob).ok()?;
-    let entry = header.sections.iter().find(|e| e.kind == ANGLE_NAMES_TAG)?;
-    let bytes = blob.get(entry.offset as usize..(entry.offset + entry.len) as usize)?;
-    let text = std::str::from_utf8(bytes).ok()?;
-    Some(text.lines().map(str::to_owned).collect())
 }
 
 /// Lays out preamble, header and aligned sections. The header holds the section offsets,
@@ -315,7 +307,7 @@ fn assemble(
         let header = Header {
             order: model.order as u8,
             vertices: model.vertices as u32,
-            joints: model.joints as u16,
+            pose_len: model.joints as u16,
             pose_dims: model.pose_dims() as u16,
             coef_dims: model.coef_dims() as u32,
             basis,
@@ -334,7 +326,7 @@ fn assemble(
         );
         let mut blob = Vec::new();
         blob.extend_from_slice(&MAGIC);
-        blob.extend_from_slice(&VERSION.to_le_bytes());
+        blob.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
         blob.extend_from_slice(&(header_len as u32).to_le_bytes());
         blob.extend_from_slice(&crc32(&encoded).to_le_bytes());
         blob.extend_from_slice(&encoded);
@@ -382,10 +374,11 @@ mod tests {
             for precision in [Precision::F32, Precision::F16] {
                 let blob = encode_model(&model, precision).unwrap();
                 let parsed = aprt_core::Model::parse(&blob).unwrap();
-                assert_eq!(parsed.order(), 2);
-                assert_eq!(parsed.vertices(), 3);
-                assert_eq!(parsed.pose_dims(), 2);
-                assert_eq!(parsed.coef_dims(), model.coef_dims());
+                let info = parsed.info();
+                assert_eq!(info.order(), 2);
+                assert_eq!(info.vertices(), 3);
+                assert_eq!(info.pose_dims(), 2);
+                assert_eq!(info.coef_dims(), model.coef_dims());
             }
         }
     }

@@ -14,10 +14,10 @@ use crate::render::{Colormap, View, render_scalar, save_png_atomic, side_by_side
 /// dim uniform sky, so shadowed regions stay readable.
 pub fn picture_lighting(order: usize, to_light: Vec3) -> Vec<f32> {
     let mut l = vec![0.0f32; order * order];
-    aprt_core::sh::project_directional(order, to_light.normalize().to_array(), 1.0, &mut l)
+    aprt_core::project_directional(order, to_light.normalize().to_array(), 1.0, &mut l)
         .expect("valid order and direction");
     for (c, x) in l.iter_mut().enumerate() {
-        let band = aprt_core::sh::band_of(c) as f32;
+        let band = aprt_core::band_of(c) as f32;
         *x *= 0.5 * (1.0 + (std::f32::consts::PI * band / order as f32).cos());
     }
     l[0] += 0.15 * (4.0 * std::f32::consts::PI).sqrt() / std::f32::consts::PI;

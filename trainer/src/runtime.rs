@@ -1,8 +1,8 @@
 //! The trainer's view of a written model: evaluation through `aprt-core`, exactly as an
 //! engine would run it, and a description of the blob for `aprt inspect`.
 
-use aprt_core::blob::{ANGLE_NAMES_TAG, Basis, Encoding, Frame, SectionKind, read_header};
-use aprt_core::{LitWeights, Model, PoseWeights, SliceSource};
+use aprt_core::format::read_header;
+use aprt_core::{Basis, Encoding, Frame, LitWeights, Model, PoseWeights, Rotation, SectionKind};
 
 use crate::model::BoneFrames;
 
@@ -13,15 +13,15 @@ pub fn predict_transfer(
     poses: &[Vec<f64>],
 ) -> Result<Vec<Vec<f32>>, aprt_core::Error> {
     let model = Model::parse(blob)?;
-    let n2 = model.order() * model.order();
-    let mut pose = PoseWeights::default();
+    let info = model.info();
+    let mut pose = Box::new(PoseWeights::new());
     poses
         .iter()
         .map(|angles| {
             let angles: Vec<f32> = angles.iter().map(|&a| a as f32).collect();
-            model.set_pose(&mut SliceSource(blob), &angles, &mut [], &mut pose)?;
-            let mut out = vec![0.0f32; model.vertices() * n2];
-            model.transfer(&mut SliceSource(blob), &pose, 0, &mut out, &mut [])?;
+            model.set_pose(&angles, &mut pose)?;
+            let mut out = vec![0.0f32; info.vertices() * info.coeffs()];
+            model.transfer(&pose, 0, &mut out)?;
             Ok(out)
         })
         .collect()
@@ -30,48 +30,33 @@ pub fn predict_transfer(
 /// The bone of each vertex, for bone-frame models; `None` for world-frame models.
 pub fn bone_frames(blob: &[u8]) -> Result<Option<BoneFrames>, aprt_core::Error> {
     let model = Model::parse(blob)?;
-    let Frame::Bones { count } = model.frame() else {
+    let Frame::Bones { count } = model.info().frame() else {
         return Ok(None);
     };
-    let mut vertex_bone = vec![0u16; model.vertices()];
-    model.vertex_bones(&mut SliceSource(blob), 0, &mut vertex_bone, &mut [])?;
+    let mut vertex_bone = vec![0u16; model.info().vertices()];
+    model.vertex_bones(0, &mut vertex_bone)?;
     Ok(Some(BoneFrames {
         count: count as usize,
         vertex_bone,
     }))
 }
 
-/// Pushes world lighting through the pose weights, rotating it into each bone's frame first
-/// for bone-frame models (`rotations`: each bone's world rotation, row-major; empty for
-/// world-frame models).
-pub fn light(
-    model: &Model,
-    pose: &PoseWeights,
-    lighting: &[f32],
-    rotations: &[[[f32; 3]; 3]],
-    lit: &mut LitWeights,
-) -> Result<(), aprt_core::Error> {
-    match model.frame() {
-        Frame::World => model.light(pose, lighting, lit),
-        Frame::Bones { .. } => model.light_skinned(pose, lighting, rotations, lit),
-    }
-}
-
-/// Per-vertex shading `Σ_c L_c t_c` for one pose and world SH lighting, through `aprt-core`.
+/// Per-vertex shading `Σ_c L_c t_c` for one pose and world SH lighting, through `aprt-core`
+/// (`rotations`: the bones' skinning rotations of a bone-frame model, empty otherwise).
 pub fn predict_shading(
     blob: &[u8],
     angles: &[f64],
-    rotations: &[[[f32; 3]; 3]],
+    rotations: &[Rotation],
     lighting: &[f32],
 ) -> Result<Vec<f32>, aprt_core::Error> {
     let model = Model::parse(blob)?;
     let angles: Vec<f32> = angles.iter().map(|&a| a as f32).collect();
-    let mut pose = PoseWeights::default();
-    model.set_pose(&mut SliceSource(blob), &angles, &mut [], &mut pose)?;
-    let mut lit = LitWeights::default();
-    light(&model, &pose, lighting, rotations, &mut lit)?;
-    let mut out = vec![0.0f32; model.vertices()];
-    model.shade(&mut SliceSource(blob), &lit, 0, &mut out, &mut [])?;
+    let mut pose = Box::new(PoseWeights::new());
+    model.set_pose(&angles, &mut pose)?;
+    let mut lit = Box::new(LitWeights::new());
+    model.light(&pose, lighting, rotations, &mut lit)?;
+    let mut out = vec![0.0f32; model.info().vertices()];
+    model.shade(&lit, 0, &mut out)?;
     Ok(out)
 }
 
@@ -97,8 +82,9 @@ pub struct BlobInfo {
     pub order: usize,
     /// Vertex count.
     pub vertices: usize,
-    /// Joint angles per pose.
-    pub joints: usize,
+    /// Entries of the pose vector (JSON key `joints`, which scripts read).
+    #[serde(rename = "joints")]
+    pub pose_len: usize,
     /// k_a.
     pub pose_dims: usize,
     /// k_v (vertices for the identity basis).
@@ -107,8 +93,16 @@ pub struct BlobInfo {
     pub basis: String,
     /// The fit's Tikhonov parameter.
     pub alpha: f32,
+    /// Bones of a bone-frame model (0: world frame).
+    pub bones: usize,
     /// Total blob bytes.
     pub bytes: usize,
+    /// Scratch bytes a streaming reader needs (one block of vertex rows).
+    pub scratch_bytes: usize,
+    /// Values the runtime's pose weights hold for this model.
+    pub pose_weights: usize,
+    /// Values the runtime's lighting weights hold for this model.
+    pub lit_weights: usize,
     /// Bytes of one frame of uncompressed f32 PRT (`v · n² · 4`), for comparison.
     pub frame_prt_bytes: usize,
     /// The section table.
@@ -120,15 +114,15 @@ pub struct BlobInfo {
 /// Validates `blob` completely and describes it.
 pub fn describe(blob: &[u8]) -> Result<BlobInfo, aprt_core::Error> {
     let model = Model::parse(blob)?;
+    let info = model.info();
     let header = read_header(blob)?;
     let sections = header
         .sections
         .iter()
         .map(|e| SectionInfo {
             kind: match SectionKind::from_tag(e.kind) {
-                Some(k) => format!("{k:?}"),
-                None if e.kind == ANGLE_NAMES_TAG => "AngleNames".into(),
-                None => format!("unknown({})", e.kind),
+                SectionKind::Unknown(tag) => format!("unknown({tag})"),
+                kind => format!("{kind:?}"),
             },
             encoding: match Encoding::from_tag(e.encoding) {
                 Some(Encoding::F32) => "f32".into(),
@@ -140,21 +134,25 @@ pub fn describe(blob: &[u8]) -> Result<BlobInfo, aprt_core::Error> {
         })
         .collect();
     Ok(BlobInfo {
-        version: aprt_core::blob::VERSION,
-        order: model.order(),
-        vertices: model.vertices(),
-        joints: model.joints(),
-        pose_dims: model.pose_dims(),
-        coef_dims: model.coef_dims(),
-        basis: match model.basis() {
+        version: aprt_core::FORMAT_VERSION,
+        order: info.order(),
+        vertices: info.vertices(),
+        pose_len: info.pose_len(),
+        pose_dims: info.pose_dims(),
+        coef_dims: info.coef_dims(),
+        basis: match info.basis() {
             Basis::Stored => "stored".into(),
             Basis::Identity => "identity".into(),
         },
-        alpha: model.alpha(),
+        alpha: info.alpha(),
+        bones: info.bones(),
         bytes: blob.len(),
-        frame_prt_bytes: model.vertices() * model.order() * model.order() * 4,
+        scratch_bytes: info.scratch_bytes(),
+        pose_weights: info.pose_weights_len(),
+        lit_weights: info.lit_weights_len(),
+        frame_prt_bytes: info.vertices() * info.coeffs() * 4,
         sections,
-        angle_names: crate::export::read_angle_names(blob).unwrap_or_default(),
+        angle_names: model.angle_names().iter().map(str::to_owned).collect(),
     })
 }
 
@@ -168,7 +166,7 @@ impl std::fmt::Display for BlobInfo {
             self.order * self.order
         )?;
         writeln!(f, "  vertices        {}", self.vertices)?;
-        writeln!(f, "  joint angles    {}", self.joints)?;
+        writeln!(f, "  joint angles    {}", self.pose_len)?;
         writeln!(f, "  pose dims k_a   {}", self.pose_dims)?;
         writeln!(
             f,
@@ -176,12 +174,20 @@ impl std::fmt::Display for BlobInfo {
             self.coef_dims, self.basis
         )?;
         writeln!(f, "  alpha           {:.6e}", self.alpha)?;
+        if self.bones > 0 {
+            writeln!(f, "  bone frames     {}", self.bones)?;
+        }
         writeln!(
             f,
             "  bytes           {} ({:.1}% of one frame of f32 PRT, {} bytes)",
             self.bytes,
             100.0 * self.bytes as f64 / self.frame_prt_bytes as f64,
             self.frame_prt_bytes
+        )?;
+        writeln!(
+            f,
+            "  runtime state   {} bytes of streaming scratch, {} pose and {} lighting weights",
+            self.scratch_bytes, self.pose_weights, self.lit_weights
         )?;
         if !self.angle_names.is_empty() {
             writeln!(f, "  pose entries    {}", self.angle_names.join(" "))?;

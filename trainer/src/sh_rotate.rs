@@ -1,8 +1,8 @@
 //! Rotations for moving transfer between the world and a vertex's bone frame, by the core's
-//! Euler-angle SH rotation ([`aprt_core::euler::EulerRotation`]), as the bake and the runtime
+//! Euler-angle SH rotation ([`aprt_core::ShRotation`]), as the bake and the runtime
 //! rotate.
 
-use aprt_core::euler::EulerRotation;
+use aprt_core::ShRotation;
 use glam::DMat3;
 
 /// The rotation nearest to `m` (polar decomposition by Newton iteration `Q ← (Q + Q⁻ᵀ)/2`),
@@ -36,7 +36,7 @@ pub fn row_major(r: DMat3) -> [[f32; 3]; 3] {
 
 /// Rotates every vertex's SH vector (`n²` values each) by its own rotation `rotations[j]`.
 pub fn rotate_each(
-    rotation: &EulerRotation,
+    rotation: &ShRotation,
     transfer: &[f32],
     rotations: impl Fn(usize) -> DMat3 + Sync,
 ) -> Vec<f32> {

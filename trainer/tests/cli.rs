@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use aprt_core::{BlobSource, Model, PoseWeights, SliceSource, SourceError};
+use aprt_core::{Model, PoseWeights, StreamedModel};
 use run::{aprt, read_npy, refuse, succeed};
 
 mod run;
@@ -70,19 +70,6 @@ fn setup(dir: &Path, poses: usize) -> (PathBuf, PathBuf) {
     (seq, angles)
 }
 
-struct Streamed<'a>(&'a [u8]);
-
-impl BlobSource for Streamed<'_> {
-    fn len(&self) -> u64 {
-        self.0.len() as u64
-    }
-    fn read_at(&mut self, offset: u64, buf: &mut [u8]) -> Result<(), SourceError> {
-        let start = offset as usize;
-        buf.copy_from_slice(self.0.get(start..start + buf.len()).ok_or(SourceError)?);
-        Ok(())
-    }
-}
-
 #[test]
 fn train_inspect_eval_and_stream_agree() {
     let dir = tempfile::tempdir().unwrap();
@@ -131,7 +118,9 @@ fn train_inspect_eval_and_stream_agree() {
     // The core from a slice and streamed through a buffer of one block: the same bits.
     let blob = std::fs::read(&model_path).unwrap();
     let model = Model::parse(&blob).unwrap();
-    let mut scratch = vec![0u8; model.scratch_bytes()];
+    let mut scratch = vec![0u8; model.info().scratch_bytes()];
+    // A slice as a BlobSource copies on every read, as flash or a file would.
+    let mut streamed = StreamedModel::open(&blob[..], &mut scratch).unwrap();
     let csv = std::fs::read_to_string(&angles).unwrap();
     for (p, line) in csv.lines().skip(1).enumerate() {
         let a: Vec<f32> = line
@@ -139,22 +128,14 @@ fn train_inspect_eval_and_stream_agree() {
             .map(|x| x.parse::<f64>().unwrap() as f32)
             .collect();
         let (mut pose, mut t_slice, mut t_stream) = (
-            PoseWeights::default(),
+            PoseWeights::new(),
             vec![0.0f32; 12 * 9],
             vec![0.0f32; 12 * 9],
         );
-        model
-            .set_pose(&mut SliceSource(&blob), &a, &mut [], &mut pose)
-            .unwrap();
-        model
-            .transfer(&mut SliceSource(&blob), &pose, 0, &mut t_slice, &mut [])
-            .unwrap();
-        model
-            .set_pose(&mut Streamed(&blob), &a, &mut scratch, &mut pose)
-            .unwrap();
-        model
-            .transfer(&mut Streamed(&blob), &pose, 0, &mut t_stream, &mut scratch)
-            .unwrap();
+        model.set_pose(&a, &mut pose).unwrap();
+        model.transfer(&pose, 0, &mut t_slice).unwrap();
+        streamed.set_pose(&a, &mut pose).unwrap();
+        streamed.transfer(&pose, 0, &mut t_stream).unwrap();
         assert_eq!(t_slice, t_stream);
         assert_eq!(&predicted[p * 108..(p + 1) * 108], &t_slice[..]);
     }

@@ -1,26 +1,43 @@
-//! The one error type of the core: small, `Copy`, no heap payload.
+//! The one error type of the core: small, `Copy`, no heap payload, one variant per way a blob
+//! or a call can be wrong, each saying where.
 
-use super::format::SectionKind;
+use super::format::{SectionKind, VERSION};
 
 /// Which header dimension was out of range.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Dim {
     /// SH order (1..=6).
     Order,
     /// Vertex count.
     Vertices,
-    /// Joint angles per pose.
-    Joints,
+    /// Entries of the pose vector.
+    PoseLen,
     /// Pose dimensions k_a after projection.
     PoseDims,
     /// Vertex-basis dimensions k_v.
     CoefDims,
-    /// Bones of a skinned-frame model.
+    /// Bones of a bone-frame model.
     Bones,
+}
+
+/// Which slice argument of a call had the wrong length.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Input {
+    /// The pose vector of `set_pose`.
+    Angles,
+    /// The SH lighting of `light` (n² values).
+    Lighting,
+    /// The bone rotations of `light` (one per bone of a bone-frame model).
+    BoneRotations,
+    /// The output of `transfer` (n² values per vertex).
+    Transfer,
 }
 
 /// Everything that can go wrong reading a blob or evaluating a model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Error {
     /// The blob ends before byte `needed`.
     Truncated {
@@ -57,23 +74,23 @@ pub enum Error {
     },
     /// A section lies outside the blob or inside the header.
     SectionOutOfRange {
-        /// Section kind tag.
-        kind: u16,
+        /// The section.
+        section: SectionKind,
     },
     /// A section does not start on a multiple of the section alignment.
     SectionMisaligned {
-        /// Section kind tag.
-        kind: u16,
+        /// The section.
+        section: SectionKind,
     },
     /// Two sections share bytes.
     SectionOverlap {
-        /// Kind tag of the later section.
-        kind: u16,
+        /// The later of the two in the section table.
+        section: SectionKind,
     },
     /// A section's length differs from what the header dimensions require.
     SectionLength {
-        /// Section kind tag.
-        kind: u16,
+        /// The section.
+        section: SectionKind,
         /// Bytes required by the dimensions.
         expected: u64,
         /// Bytes announced.
@@ -83,48 +100,75 @@ pub enum Error {
     LengthOverflow,
     /// The same section kind appears twice.
     DuplicateSection {
-        /// Section kind tag.
-        kind: u16,
+        /// The section.
+        section: SectionKind,
     },
     /// A section the model needs is absent.
     MissingSection {
         /// The missing section.
-        kind: SectionKind,
+        section: SectionKind,
     },
     /// A section marked required has a kind this reader does not know.
     UnknownRequiredSection {
-        /// Section kind tag.
-        kind: u16,
+        /// The section ([`SectionKind::Unknown`]).
+        section: SectionKind,
     },
     /// A section uses an encoding not allowed for it.
     BadEncoding {
-        /// Section kind tag.
-        kind: u16,
+        /// The section.
+        section: SectionKind,
     },
     /// A section's bytes do not match its checksum.
     ChecksumMismatch {
-        /// Section kind tag.
-        kind: u16,
+        /// The section.
+        section: SectionKind,
     },
     /// A section holds NaN or infinity.
     NonFinite {
-        /// Section kind tag.
-        kind: u16,
+        /// The section.
+        section: SectionKind,
     },
+    /// A vertex's bone index is not an integer below the bone count.
+    BadBoneIndex,
+    /// The angle-names section is not UTF-8, or not one non-empty `\n`-terminated line per
+    /// pose entry.
+    BadAngleNames,
     /// The caller's buffer is too small; `needed` bytes would do.
     BufferTooSmall {
         /// Minimum size in bytes.
         needed: usize,
     },
-    /// An input or output slice has the wrong length.
+    /// The pose or lighting weights have too small a capacity for this model.
+    WeightsTooSmall {
+        /// Values this model needs.
+        needed: usize,
+        /// Values the weights hold.
+        capacity: usize,
+    },
+    /// A slice argument has the wrong length.
     WrongLength {
+        /// Which argument.
+        what: Input,
         /// Length required.
         expected: usize,
         /// Length given.
         found: usize,
     },
-    /// An input value (angle or lighting coefficient) is NaN or infinite.
-    NonFiniteInput,
+    /// A pose-vector entry is NaN or infinite.
+    NonFiniteAngle {
+        /// Index of the entry.
+        index: usize,
+    },
+    /// A lighting coefficient is NaN or infinite.
+    NonFiniteLighting {
+        /// Index of the coefficient.
+        index: usize,
+    },
+    /// A bone rotation is not orthonormal (within 10⁻³) or holds NaN or infinity.
+    BadRotation {
+        /// Index of the bone.
+        bone: usize,
+    },
     /// The vertex range runs past the model's vertices.
     VertexRange {
         /// First vertex requested.
@@ -132,15 +176,11 @@ pub enum Error {
         /// Number of vertices requested.
         count: usize,
     },
-    /// The pose or lighting weights were computed for another model shape.
-    ShapeMismatch,
-    /// A vertex's bone index is not an integer below the bone count.
-    BadBoneIndex,
-    /// The call does not match the model's frame: `light` is for world-frame models,
-    /// `light_skinned` for bone-frame models.
-    FrameMismatch,
-    /// A bone rotation is not orthonormal or holds NaN.
-    BadRotation,
+    /// The pose or lighting weights hold nothing: they are new, or the call that was to fill
+    /// them failed.
+    WeightsNotSet,
+    /// The pose or lighting weights were computed for another model.
+    WeightsForOtherModel,
     /// The [`BlobSource`](super::BlobSource) failed to read.
     Source,
 }
@@ -152,13 +192,10 @@ impl core::fmt::Display for Error {
                 write!(f, "blob truncated: needs at least {needed} bytes")
             }
             Error::BadMagic => write!(f, "not an aprt model (bad magic)"),
-            Error::UnsupportedVersion { found } => {
-                write!(
-                    f,
-                    "unsupported format version {found} (this reader knows {})",
-                    super::VERSION
-                )
-            }
+            Error::UnsupportedVersion { found } => write!(
+                f,
+                "unsupported format version {found} (this reader knows {VERSION})"
+            ),
             Error::HeaderTooLarge { len } => write!(f, "header length {len} exceeds the maximum"),
             Error::HeaderChecksum => write!(f, "header checksum mismatch"),
             Error::HeaderMalformed => {
@@ -168,38 +205,61 @@ impl core::fmt::Display for Error {
             Error::BadDimension { what, value } => {
                 write!(f, "dimension {what:?} = {value} is out of range")
             }
-            Error::SectionOutOfRange { kind } => write!(f, "section {kind} lies outside the blob"),
-            Error::SectionMisaligned { kind } => write!(f, "section {kind} is misaligned"),
-            Error::SectionOverlap { kind } => write!(f, "section {kind} overlaps another section"),
+            Error::SectionOutOfRange { section } => {
+                write!(f, "section {section} lies outside the blob")
+            }
+            Error::SectionMisaligned { section } => write!(f, "section {section} is misaligned"),
+            Error::SectionOverlap { section } => {
+                write!(f, "section {section} overlaps another section")
+            }
             Error::SectionLength {
-                kind,
+                section,
                 expected,
                 found,
-            } => {
-                write!(
-                    f,
-                    "section {kind} is {found} bytes, dimensions need {expected}"
-                )
-            }
+            } => write!(
+                f,
+                "section {section} is {found} bytes, dimensions need {expected}"
+            ),
             Error::LengthOverflow => write!(f, "dimension product overflows"),
-            Error::DuplicateSection { kind } => write!(f, "section {kind} appears twice"),
-            Error::MissingSection { kind } => write!(f, "required section {kind:?} is missing"),
-            Error::UnknownRequiredSection { kind } => write!(f, "unknown required section {kind}"),
-            Error::BadEncoding { kind } => write!(f, "section {kind} has an unsupported encoding"),
-            Error::ChecksumMismatch { kind } => write!(f, "section {kind} checksum mismatch"),
-            Error::NonFinite { kind } => write!(f, "section {kind} holds NaN or infinity"),
-            Error::BufferTooSmall { needed } => write!(f, "buffer too small: needs {needed} bytes"),
-            Error::WrongLength { expected, found } => {
-                write!(f, "slice length {found}, expected {expected}")
+            Error::DuplicateSection { section } => write!(f, "section {section} appears twice"),
+            Error::MissingSection { section } => {
+                write!(f, "required section {section} is missing")
             }
-            Error::NonFiniteInput => write!(f, "input holds NaN or infinity"),
+            Error::UnknownRequiredSection { section } => {
+                write!(f, "{section} is marked required")
+            }
+            Error::BadEncoding { section } => {
+                write!(f, "section {section} has an unsupported encoding")
+            }
+            Error::ChecksumMismatch { section } => write!(f, "section {section} checksum mismatch"),
+            Error::NonFinite { section } => write!(f, "section {section} holds NaN or infinity"),
+            Error::BadBoneIndex => write!(f, "vertex bone index out of range"),
+            Error::BadAngleNames => write!(f, "angle names are not one UTF-8 line per pose entry"),
+            Error::BufferTooSmall { needed } => write!(f, "buffer too small: needs {needed} bytes"),
+            Error::WeightsTooSmall { needed, capacity } => write!(
+                f,
+                "weights hold {capacity} values, this model needs {needed}"
+            ),
+            Error::WrongLength {
+                what,
+                expected,
+                found,
+            } => write!(
+                f,
+                "{what:?}: {found} values given, the model needs {expected}"
+            ),
+            Error::NonFiniteAngle { index } => write!(f, "pose entry {index} is NaN or infinite"),
+            Error::NonFiniteLighting { index } => {
+                write!(f, "lighting coefficient {index} is NaN or infinite")
+            }
+            Error::BadRotation { bone } => {
+                write!(f, "rotation of bone {bone} is not orthonormal")
+            }
             Error::VertexRange { first, count } => {
                 write!(f, "vertex range {first}..{first}+{count} is out of bounds")
             }
-            Error::ShapeMismatch => write!(f, "weights were computed for a different model"),
-            Error::BadBoneIndex => write!(f, "vertex bone index out of range"),
-            Error::FrameMismatch => write!(f, "lighting call does not match the model's frame"),
-            Error::BadRotation => write!(f, "bone rotation is not orthonormal"),
+            Error::WeightsNotSet => write!(f, "weights were not computed (or their call failed)"),
+            Error::WeightsForOtherModel => write!(f, "weights were computed for another model"),
             Error::Source => write!(f, "blob source read failed"),
         }
     }

@@ -26,8 +26,8 @@ pub const MAX_SECTIONS: usize = 16;
 /// Largest header accepted; a real header is well under 200 bytes.
 pub const MAX_HEADER_LEN: u32 = 1024;
 
-/// Most joint angles per pose the evaluator accepts.
-pub const MAX_JOINTS: usize = 512;
+/// Most entries of a pose vector (joint angles) the evaluator accepts.
+pub const MAX_POSE_LEN: usize = 512;
 /// Most pose dimensions k_a after projection.
 pub const MAX_POSE_DIMS: usize = 64;
 /// Most vertex-basis vectors k_v.
@@ -48,7 +48,8 @@ pub const MAX_VERTICES: usize = 1 << 22;
 
 /// Most bones a skinned-frame model may have.
 pub const MAX_BONES: usize = 256;
-/// Capacity of the per-frame lighting weights: bones × row width for skinned-frame models.
+/// Most lighting weights a model may need per frame: bones × row width for bone-frame models,
+/// the row width for world-frame ones. The default capacity of [`LitWeights`](crate::LitWeights).
 pub const MAX_LIT: usize = 16384;
 
 /// The frame the model's transfer is expressed in.
@@ -104,55 +105,96 @@ impl Encoding {
     }
 }
 
-/// The section kinds this version knows. Tags of unknown kinds are skipped unless required.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[repr(u16)]
+/// What a section holds, from its tag in the section table. Tags this version does not know
+/// are [`SectionKind::Unknown`]: skipped when the entry is optional, refused when required.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 pub enum SectionKind {
-    /// Mean pose μ: `joints` values, f32.
-    PoseMean = 1,
-    /// Pose projection P: `pose_dims × joints` row-major, f32.
-    PoseProjection = 2,
-    /// Stored basis only: `n² × (1 + pose_dims) × coef_dims`; `[c][0][k]` is the intercept.
-    Weights = 3,
-    /// Stored basis only: U, `coef_dims` values per vertex, in blocks of [`VERTEX_BLOCK`]
-    /// vertices: value `(j, k)` at `(j / 8) · 8 k_v + 8 k + j % 8`.
-    VertexBasis = 4,
-    /// Identity basis only: `n² × (1 + pose_dims)` values `(c, i)` per vertex, blocked like
-    /// `VertexBasis` with row index `r = c (1 + k_a) + i`.
-    VertexWeights = 5,
+    /// Tag 1. Mean pose μ: `pose_len` values, f32.
+    PoseMean,
+    /// Tag 2. Pose projection P: `pose_dims × pose_len` row-major, f32.
+    PoseProjection,
+    /// Tag 3, stored basis only: `n² × (1 + pose_dims) × coef_dims`; `[c][0][k]` is the
+    /// intercept.
+    Weights,
+    /// Tag 4, stored basis only: U, `coef_dims` values per vertex, in blocks of
+    /// [`VERTEX_BLOCK`] vertices: value `(j, k)` at `(j / 8) · 8 k_v + 8 k + j % 8`.
+    VertexBasis,
+    /// Tag 5, identity basis only: `n² × (1 + pose_dims)` values `(c, i)` per vertex, blocked
+    /// like `VertexBasis` with row index `r = c (1 + k_a) + i`.
+    VertexWeights,
+    /// Tag 6, optional: the names of the pose vector's entries, UTF-8, one `\n`-terminated
+    /// non-empty name per entry (`pose_len` lines), so an engine can bind its joints by name.
+    AngleNames,
+    /// A tag this version does not know.
+    Unknown(u16),
 }
 
 impl SectionKind {
-    /// All known kinds.
-    pub const ALL: [SectionKind; 5] = [
+    /// The kinds this version knows, in tag order.
+    const KNOWN: [SectionKind; 6] = [
         SectionKind::PoseMean,
         SectionKind::PoseProjection,
         SectionKind::Weights,
         SectionKind::VertexBasis,
         SectionKind::VertexWeights,
+        SectionKind::AngleNames,
     ];
 
-    /// Decodes a tag; `None` for kinds this version does not know.
-    pub fn from_tag(tag: u16) -> Option<SectionKind> {
-        Self::ALL.into_iter().find(|k| *k as u16 == tag)
+    /// The kind of a section-table tag.
+    pub const fn from_tag(tag: u16) -> SectionKind {
+        match tag {
+            1..=6 => Self::KNOWN[tag as usize - 1],
+            other => SectionKind::Unknown(other),
+        }
     }
+
+    /// The tag written in the section table.
+    pub const fn tag(self) -> u16 {
+        match self {
+            SectionKind::PoseMean => 1,
+            SectionKind::PoseProjection => 2,
+            SectionKind::Weights => 3,
+            SectionKind::VertexBasis => 4,
+            SectionKind::VertexWeights => 5,
+            SectionKind::AngleNames => 6,
+            SectionKind::Unknown(tag) => tag,
+        }
+    }
+
+    /// Index among the known kinds (for duplicate detection), `None` for unknown tags.
+    pub(crate) const fn known_index(self) -> Option<usize> {
+        match self {
+            SectionKind::Unknown(_) => None,
+            known => Some(known.tag() as usize - 1),
+        }
+    }
+
+    /// Number of known kinds.
+    pub(crate) const KNOWN_COUNT: usize = Self::KNOWN.len();
 
     /// Whether the kind may be stored in half precision (the big per-vertex arrays and weights).
     pub const fn allows_f16(self) -> bool {
-        !matches!(self, SectionKind::PoseMean | SectionKind::PoseProjection)
+        matches!(
+            self,
+            SectionKind::Weights | SectionKind::VertexBasis | SectionKind::VertexWeights
+        )
     }
 }
 
-/// Tag of the optional section in which the trainer records the names of the pose entries
-/// (UTF-8, one name per `\n`-terminated line, `joints` lines), so tools can map a clip's joints
-/// onto the model's pose vector. The core checks its CRC and otherwise ignores it: an engine
-/// binds its skeleton to the pose vector once, offline.
-pub const ANGLE_NAMES_TAG: u16 = 6;
+impl core::fmt::Display for SectionKind {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            SectionKind::Unknown(tag) => write!(f, "unknown section kind {tag}"),
+            known => write!(f, "{known:?}"),
+        }
+    }
+}
 
 /// One entry of the section table.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct SectionEntry {
-    /// [`SectionKind`] tag, or a newer kind's tag.
+    /// [`SectionKind::tag`], or a newer kind's tag.
     pub kind: u16,
     /// Readers that do not know `kind` must reject the blob when set, skip it otherwise.
     pub required: bool,
@@ -173,8 +215,8 @@ pub struct Header {
     pub order: u8,
     /// Vertex count v.
     pub vertices: u32,
-    /// Joint angles per pose a.
-    pub joints: u16,
+    /// Entries of the pose vector a (joint angles).
+    pub pose_len: u16,
     /// Pose dimensions k_a (0 allowed: an intercept-only model).
     pub pose_dims: u16,
     /// Vertex-basis dimensions k_v (equals `vertices` for the identity basis).
@@ -190,6 +232,7 @@ pub struct Header {
 }
 
 /// Rounds `x` up to the next multiple of [`SECTION_ALIGN`], `None` on overflow.
+#[cfg_attr(not(feature = "format"), allow(dead_code))]
 pub const fn align_up(x: u64) -> Option<u64> {
     match x.checked_add(SECTION_ALIGN - 1) {
         Some(y) => Some(y / SECTION_ALIGN * SECTION_ALIGN),

@@ -1,12 +1,19 @@
-//! The model blob: format definition, validation, and streaming access.
+//! The model blob: its layout, where its bytes come from, and validating it once so that
+//! evaluation can trust every offset and length.
 
 mod error;
-pub mod format;
-mod model;
+pub(crate) mod format;
+mod header;
+mod info;
+mod names;
 mod source;
+mod validate;
 
-pub use error::{Dim, Error};
-pub use format::*;
-pub use model::{Model, Section, read_header};
-pub(crate) use source::for_each_chunk;
-pub use source::{BlobSource, SliceSource, SourceError};
+pub use error::{Dim, Error, Input};
+#[cfg(feature = "format")]
+pub use header::read_header;
+pub use info::ModelInfo;
+pub(crate) use info::Span;
+pub use names::AngleNames;
+pub use source::{BlobSource, SourceError};
+pub(crate) use source::{Reader, Resident, Streaming};

@@ -1,5 +1,6 @@
-//! Where blob bytes come from: a resident slice, or any random-access store (flash, a file)
-//! read through a caller-owned buffer, so a model never has to be resident.
+//! Where blob bytes come from: a resident slice read in place, or any random-access store
+//! (flash, a file) read through a caller-owned buffer, so a model never has to be resident.
+//! The reader and the evaluator are written once, over [`Reader`].
 
 use super::Error;
 
@@ -7,7 +8,8 @@ use super::Error;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SourceError;
 
-/// Random-access, read-only bytes.
+/// Random-access, read-only bytes that need not be in memory: flash, a file, a network
+/// cache. [`StreamedModel`](crate::StreamedModel) reads a model from one.
 pub trait BlobSource {
     /// Total length in bytes.
     fn len(&self) -> u64;
@@ -20,75 +22,144 @@ pub trait BlobSource {
     /// Fills `buf` with the bytes at `offset..offset + buf.len()`. The reader only asks for
     /// ranges inside `0..len()`.
     fn read_at(&mut self, offset: u64, buf: &mut [u8]) -> Result<(), SourceError>;
+}
 
-    /// The whole blob, if it is resident: the reader then works in place and needs no buffer.
-    fn as_slice(&self) -> Option<&[u8]> {
-        None
+impl<S: BlobSource + ?Sized> BlobSource for &mut S {
+    fn len(&self) -> u64 {
+        (**self).len()
+    }
+
+    fn read_at(&mut self, offset: u64, buf: &mut [u8]) -> Result<(), SourceError> {
+        (**self).read_at(offset, buf)
     }
 }
 
-/// A resident blob.
-#[derive(Clone, Copy, Debug)]
-pub struct SliceSource<'a>(pub &'a [u8]);
-
-impl BlobSource for SliceSource<'_> {
+/// A slice as a source: every read copies, as from flash. For a resident blob use
+/// [`Model`](crate::Model), which reads in place.
+impl BlobSource for &[u8] {
     fn len(&self) -> u64 {
-        self.0.len() as u64
+        <[u8]>::len(self) as u64
     }
 
     fn read_at(&mut self, offset: u64, buf: &mut [u8]) -> Result<(), SourceError> {
         let start = usize::try_from(offset).map_err(|_| SourceError)?;
         let end = start.checked_add(buf.len()).ok_or(SourceError)?;
-        buf.copy_from_slice(self.0.get(start..end).ok_or(SourceError)?);
+        buf.copy_from_slice(self.get(start..end).ok_or(SourceError)?);
         Ok(())
-    }
-
-    fn as_slice(&self) -> Option<&[u8]> {
-        Some(self.0)
     }
 }
 
-/// Delivers `count` items of `item_bytes` each, starting at byte `offset`, to `visit` in
-/// chunks of whole items, as `(index of the chunk's first item, bytes)`. A resident source
-/// yields one chunk in place; otherwise chunks are read into `scratch`, which must hold at
-/// least one item.
-pub(crate) fn for_each_chunk<S: BlobSource + ?Sized>(
-    src: &mut S,
-    offset: u64,
-    item_bytes: usize,
-    count: usize,
-    scratch: &mut [u8],
-    mut visit: impl FnMut(usize, &[u8]) -> Result<(), Error>,
-) -> Result<(), Error> {
+/// How the reader and the evaluator get at blob bytes.
+pub(crate) trait Reader {
+    /// Total length in bytes.
+    fn len(&self) -> u64;
+
+    /// Fills `buf` with the bytes at `offset`.
+    fn read_at(&mut self, offset: u64, buf: &mut [u8]) -> Result<(), Error>;
+
+    /// Delivers `count` items of `item_bytes` each, starting at byte `offset`, to `visit` in
+    /// chunks of whole items, as `(index of the chunk's first item, bytes)`.
+    fn chunks(
+        &mut self,
+        offset: u64,
+        item_bytes: usize,
+        count: usize,
+        visit: impl FnMut(usize, &[u8]) -> Result<(), Error>,
+    ) -> Result<(), Error>;
+}
+
+/// The end of `count` items of `item_bytes` from `offset`, checked against a blob of `len`.
+fn span_end(offset: u64, item_bytes: usize, count: usize, len: u64) -> Result<u64, Error> {
     let total = item_bytes.checked_mul(count).ok_or(Error::LengthOverflow)?;
     let end = offset
         .checked_add(total as u64)
         .ok_or(Error::LengthOverflow)?;
-    if end > src.len() {
+    if end > len {
         return Err(Error::Truncated { needed: end });
     }
-    if count == 0 {
-        return Ok(());
+    Ok(end)
+}
+
+/// A resident blob: one chunk, in place.
+#[derive(Clone, Copy)]
+pub(crate) struct Resident<'a>(pub(crate) &'a [u8]);
+
+impl Resident<'_> {
+    fn range(&self, offset: u64, end: u64) -> Result<&[u8], Error> {
+        usize::try_from(offset)
+            .ok()
+            .zip(usize::try_from(end).ok())
+            .and_then(|(a, b)| self.0.get(a..b))
+            .ok_or(Error::Truncated { needed: end })
     }
-    if let Some(all) = src.as_slice() {
-        let range = usize::try_from(offset).ok().zip(usize::try_from(end).ok());
-        let bytes = range
-            .and_then(|(a, b)| all.get(a..b))
-            .ok_or(Error::Truncated { needed: end })?;
-        return visit(0, bytes);
+}
+
+impl Reader for Resident<'_> {
+    fn len(&self) -> u64 {
+        self.0.len() as u64
     }
-    let per_chunk = scratch.len().checked_div(item_bytes).unwrap_or(0);
-    if per_chunk == 0 {
-        return Err(Error::BufferTooSmall { needed: item_bytes });
+
+    fn read_at(&mut self, offset: u64, buf: &mut [u8]) -> Result<(), Error> {
+        let end = span_end(offset, 1, buf.len(), self.len())?;
+        buf.copy_from_slice(self.range(offset, end)?);
+        Ok(())
     }
-    let mut first = 0;
-    while first < count {
-        let n = per_chunk.min(count - first);
-        let buf = &mut scratch[..n * item_bytes];
-        let at = offset + (first * item_bytes) as u64;
-        src.read_at(at, buf).map_err(|_| Error::Source)?;
-        visit(first, buf)?;
-        first += n;
+
+    fn chunks(
+        &mut self,
+        offset: u64,
+        item_bytes: usize,
+        count: usize,
+        mut visit: impl FnMut(usize, &[u8]) -> Result<(), Error>,
+    ) -> Result<(), Error> {
+        let end = span_end(offset, item_bytes, count, self.len())?;
+        if count == 0 {
+            return Ok(());
+        }
+        visit(0, self.range(offset, end)?)
     }
-    Ok(())
+}
+
+/// A [`BlobSource`] read through a caller's buffer, as many whole items at a time as fit.
+pub(crate) struct Streaming<'r, S: ?Sized> {
+    pub(crate) src: &'r mut S,
+    pub(crate) scratch: &'r mut [u8],
+}
+
+impl<S: BlobSource + ?Sized> Reader for Streaming<'_, S> {
+    fn len(&self) -> u64 {
+        self.src.len()
+    }
+
+    fn read_at(&mut self, offset: u64, buf: &mut [u8]) -> Result<(), Error> {
+        span_end(offset, 1, buf.len(), self.len())?;
+        self.src.read_at(offset, buf).map_err(|_| Error::Source)
+    }
+
+    fn chunks(
+        &mut self,
+        offset: u64,
+        item_bytes: usize,
+        count: usize,
+        mut visit: impl FnMut(usize, &[u8]) -> Result<(), Error>,
+    ) -> Result<(), Error> {
+        span_end(offset, item_bytes, count, self.len())?;
+        if count == 0 {
+            return Ok(());
+        }
+        let per_chunk = self.scratch.len().checked_div(item_bytes).unwrap_or(0);
+        if per_chunk == 0 {
+            return Err(Error::BufferTooSmall { needed: item_bytes });
+        }
+        let mut first = 0;
+        while first < count {
+            let n = per_chunk.min(count - first);
+            let buf = &mut self.scratch[..n * item_bytes];
+            let at = offset + (first * item_bytes) as u64;
+            self.src.read_at(at, buf).map_err(|_| Error::Source)?;
+            visit(first, buf)?;
+            first += n;
+        }
+        Ok(())
+    }
 }

@@ -9,14 +9,14 @@
 //! Every vertex uses the same local pattern, only placed in its own frame `R = [t, b, n]`, so
 //! the basis is evaluated once per bake at the local directions: each vertex sums the rows of
 //! that table for its unoccluded rays (its transfer in the local frame) and rotates the sum to
-//! world space once, `Σ y(R ω_i) = D(R) Σ y(ω_i)`, by ZYZ Euler angles (`aprt_core::euler`). On the
+//! world space once, `Σ y(R ω_i) = D(R) Σ y(ω_i)`, by ZYZ Euler angles (`aprt_core::ShRotation`). On the
 //! benchmark scene (`benches/bake.rs`) this replaced one basis evaluation per unoccluded ray
 //! (23% of the bake's instructions): one pose went from 11.75 to 9.01 G instructions
 //! (callgrind) with a full Ivanic–Ruedenberg matrix per vertex. The Euler form does not build
 //! that matrix: 8.25 G against 9.07 G with the matrix, measured in one harness that includes
 //! the scene and hierarchy build. With the matrix, the f32 rotation moved each vertex's
 //! transfer by at most 4.4·10⁻⁷ of its size; the Euler form agrees with the matrix within
-//! 2·10⁻⁵ absolute (`aprt_core::euler` tests).
+//! 2·10⁻⁵ absolute (`aprt_core::ShRotation` tests).
 //!
 //! Optional inter-reflections (the paper's Figure 7): with albedo ρ,
 //! `t^{b+1}(x) = (ρ/N) Σ_{occluded i, front-facing hit} t^b(y_i)`, where `t^b(y_i)` is
@@ -45,8 +45,7 @@ mod wide;
 
 pub use tracer::Accel;
 
-use aprt_core::euler::EulerRotation;
-use aprt_core::sh::{self, ShError};
+use aprt_core::{MAX_COEFFS, MAX_ORDER, ShError, ShRotation, coeff_count, eval_basis};
 use glam::DVec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
@@ -97,7 +96,7 @@ impl Default for BakeSettings {
 impl BakeSettings {
     /// Checks every field; the bake calls this first.
     pub fn validate(&self) -> Result<(), BakeError> {
-        if self.order == 0 || self.order > sh::MAX_ORDER {
+        if self.order == 0 || self.order > MAX_ORDER {
             return Err(BakeError::BadOrder(self.order));
         }
         if self.rays == 0 || self.rays > MAX_RAYS {
@@ -114,7 +113,7 @@ impl BakeSettings {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum BakeError {
     /// SH order outside `1..=6`.
-    #[error("SH order {0} is outside 1..={max}", max = sh::MAX_ORDER)]
+    #[error("SH order {0} is outside 1..={max}", max = MAX_ORDER)]
     BadOrder(usize),
     /// Ray count outside `1..=MAX_RAYS`.
     #[error("ray count {0} is outside 1..={MAX_RAYS}")]
@@ -294,7 +293,7 @@ struct Prepared<'a> {
     /// `y_c` of every pattern direction in the local frame, `n2` values per direction.
     local_basis: Vec<f64>,
     /// Takes each vertex's local-frame sum to world space.
-    to_world: EulerRotation,
+    to_world: ShRotation,
     offset: f64,
     t_min: f32,
 }
@@ -342,10 +341,10 @@ impl<'a> Prepared<'a> {
         Ok(Prepared {
             mesh,
             settings: *settings,
-            n2: sh::coeff_count(settings.order),
+            n2: coeff_count(settings.order),
             normals: usable_normals(mesh),
             local_basis: local_basis(settings.order, &pattern)?,
-            to_world: EulerRotation::new(settings.order).map_err(BakeError::Basis)?,
+            to_world: ShRotation::new(settings.order).map_err(BakeError::Basis)?,
             pattern,
             offset: ORIGIN_OFFSET * diagonal,
             t_min: (T_MIN * diagonal) as f32,
@@ -399,7 +398,7 @@ impl<'a> Prepared<'a> {
                     }
                 }
                 // Local frame to world: the rotation whose columns are t, b, n.
-                let mut world: [f32; sh::MAX_COEFFS] =
+                let mut world: [f32; MAX_COEFFS] =
                     std::array::from_fn(|c| t.get(c).map_or(0.0, |&acc| (acc * scale) as f32));
                 self.to_world
                     .apply(&directions::frame_matrix(&frame), &mut world)
@@ -472,15 +471,11 @@ struct Scratch {
 /// The SH basis of every direction of `pattern`, `order²` values per direction, widened to
 /// f64 once here so the per-ray accumulation is plain f64 additions.
 fn local_basis(order: usize, pattern: &[DVec3]) -> Result<Vec<f64>, BakeError> {
-    let mut basis = [0.0f32; sh::MAX_COEFFS];
-    let mut table = Vec::with_capacity(pattern.len() * sh::coeff_count(order));
+    let mut basis = [0.0f32; MAX_COEFFS];
+    let mut table = Vec::with_capacity(pattern.len() * coeff_count(order));
     for d in pattern {
-        sh::eval_basis(order, d.as_vec3().to_array(), &mut basis).map_err(BakeError::Basis)?;
-        table.extend(
-            basis[..sh::coeff_count(order)]
-                .iter()
-                .map(|&y| f64::from(y)),
-        );
+        eval_basis(order, d.as_vec3().to_array(), &mut basis).map_err(BakeError::Basis)?;
+        table.extend(basis[..coeff_count(order)].iter().map(|&y| f64::from(y)));
     }
     Ok(table)
 }

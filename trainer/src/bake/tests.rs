@@ -109,11 +109,11 @@ fn unoccluded_transfer_is_the_clamped_cosine_lobe() {
             .map(|p| (p + DVec3::splat(0.5)).as_vec3().to_array())
             .to_vec();
         let mesh = Mesh::with_area_weighted_normals(positions, vec![[0, 1, 2]]);
-        for order in 1..=sh::MAX_ORDER {
+        for order in 1..=aprt_core::MAX_ORDER {
             let n2 = order * order;
             let baked = bake_pose(&mesh, &settings(order, 4096)).unwrap();
-            let mut expect = [0.0f32; sh::MAX_COEFFS];
-            sh::clamped_cosine(order, n.as_vec3().to_array(), &mut expect).unwrap();
+            let mut expect = [0.0f32; aprt_core::MAX_COEFFS];
+            aprt_core::clamped_cosine(order, n.as_vec3().to_array(), &mut expect).unwrap();
             for j in 0..3 {
                 assert!((DVec3::from(mesh.normals[j].map(f64::from)) - n).length() < 1e-6);
                 for c in 0..n2 {
@@ -139,7 +139,7 @@ fn unoccluded_transfer_is_the_clamped_cosine_lobe() {
 /// Expected: agreement to f32 rounding of the order-6 rotation, 1e-5 of the vector's size.
 #[test]
 fn rotated_local_sum_equals_the_world_sum() {
-    let order = sh::MAX_ORDER;
+    let order = aprt_core::MAX_ORDER;
     let n2 = order * order;
     let pattern = directions::cosine_hammersley(500);
     let table = local_basis(order, &pattern).unwrap();
@@ -160,13 +160,13 @@ fn rotated_local_sum_equals_the_world_sum() {
             for (acc, &b) in local.iter_mut().zip(&table[i * n2..][..n2]) {
                 *acc += b;
             }
-            sh::eval_basis(order, d.as_vec3().to_array(), &mut y).unwrap();
+            aprt_core::eval_basis(order, d.as_vec3().to_array(), &mut y).unwrap();
             for (acc, &b) in world.iter_mut().zip(&y) {
                 *acc += f64::from(b);
             }
         }
         let mut rotated = local.map(|x| x as f32);
-        EulerRotation::new(order)
+        ShRotation::new(order)
             .unwrap()
             .apply(&directions::frame_matrix(&frame), &mut rotated)
             .unwrap();

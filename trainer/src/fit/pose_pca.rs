@@ -5,7 +5,7 @@
 //! the raw angles. The projection is cut at the numerical rank, which removes constant joints
 //! and exactly collinear angle combinations before the regression ever sees them.
 
-use aprt_core::blob::MAX_POSE_DIMS;
+use aprt_core::MAX_POSE_DIMS;
 use nalgebra::DMatrix;
 
 use super::dims::{self, Dims};

@@ -419,7 +419,7 @@ fn invalid_inputs_are_named() {
 #[test]
 fn variance_fraction_and_all_stop_at_the_runtime_limit() {
     let rows = uniform(160, 300, 77);
-    let limit = aprt_core::blob::MAX_COEF_DIMS;
+    let limit = aprt_core::MAX_COEF_DIMS;
     for dims in [Dims::Variance(0.9999), Dims::All] {
         assert_eq!(
             fit_vertex_basis(&rows, dims).basis.ncols(),

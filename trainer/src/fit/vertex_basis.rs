@@ -7,7 +7,7 @@
 //! self-occlusion). Centring would spend no vector on it and the model could not reproduce it.
 //! The intercept of the ridge then lives in basis coordinates like every other weight.
 
-use aprt_core::blob::MAX_COEF_DIMS;
+use aprt_core::MAX_COEF_DIMS;
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 

@@ -6,9 +6,25 @@
 //! Ivanic–Ruedenberg matrix (about 65k instructions at order 6), and no set-up. Used for the
 //! bake's per-vertex frames and the runtime's per-bone lighting.
 
+mod recurrence;
+
 use crate::math;
-use crate::rotate::ShRotationMatrix;
 use crate::sh::{MAX_COEFFS, MAX_ORDER, ShError, coeff_count, index};
+use recurrence::ShRotationMatrix;
+
+/// A 3×3 rotation matrix, row-major (`r[row][column]`): `r · v` rotates the column vector `v`.
+pub type Rotation = [[f32; 3]; 3];
+
+/// Whether `r` is a rotation within `tol`: its columns unit and orthogonal. Guards callers
+/// that pass a blended (non-orthogonal) skinning matrix; the angle-preserving part is all a
+/// rotation of SH needs.
+pub(crate) fn is_rotation(r: &Rotation, tol: f32) -> bool {
+    let col = |j: usize| [r[0][j], r[1][j], r[2][j]];
+    let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    (0..3).all(|i| {
+        (0..3).all(|j| math::abs(dot(col(i), col(j)) - if i == j { 1.0 } else { 0.0 }) <= tol)
+    })
+}
 
 /// `D(Rx(90°))` for every band, built at compile time.
 static QUARTER: ParityBlocks = ParityBlocks::of(&quarter_turn(1.0));
@@ -152,9 +168,10 @@ fn block<'a, const N: usize>(
     rest
 }
 
-/// Rotations of SH vectors of one order by any rotation.
+/// Rotations of SH vectors of one order by any rotation, by ZYZ Euler angles: what the
+/// runtime does to the lighting of each bone, and the trainer to each vertex's transfer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct EulerRotation {
+pub struct ShRotation {
     order: usize,
 }
 
@@ -176,13 +193,18 @@ fn zyz(r: &[[f64; 3]; 3]) -> (f64, f64, f64) {
     }
 }
 
-impl EulerRotation {
+impl ShRotation {
     /// Rotations of order-`order` vectors (1..=6).
-    pub fn new(order: usize) -> Result<EulerRotation, ShError> {
+    pub fn new(order: usize) -> Result<ShRotation, ShError> {
         if order == 0 || order > MAX_ORDER {
             return Err(ShError::BadOrder);
         }
-        Ok(EulerRotation { order })
+        Ok(ShRotation { order })
+    }
+
+    /// Rotations of a validated order (1..=[`MAX_ORDER`]).
+    pub(crate) const fn of_order(order: usize) -> ShRotation {
+        ShRotation { order }
     }
 
     /// The SH order of the vectors it rotates.
@@ -190,12 +212,37 @@ impl EulerRotation {
         self.order
     }
 
-    /// `v` rotated by the row-major rotation `r` (taking `f(ω)` to `f(rᵀω)`, as
-    /// [`ShRotationMatrix::new`]), in place; `v` holds at least `order²` values.
+    /// `v` rotated by the row-major rotation `r`, in place: the function `f(ω)` it holds
+    /// becomes `f(rᵀω)`, so a lobe around direction `d` moves to `r d`. `v` holds at least
+    /// `order²` values; values past them are left alone.
+    ///
+    /// ```
+    /// use aprt_core::{ShRotation, clamped_cosine};
+    ///
+    /// // A quarter turn about x takes +z to −y.
+    /// let quarter = [[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]];
+    /// let (mut up, mut back) = ([0.0; 9], [0.0; 9]);
+    /// clamped_cosine(3, [0.0, 0.0, 1.0], &mut up)?;
+    /// clamped_cosine(3, [0.0, -1.0, 0.0], &mut back)?;
+    /// ShRotation::new(3)?.apply(&quarter, &mut up)?;
+    /// assert!(up.iter().zip(back).all(|(a, b)| (a - b).abs() < 1e-5));
+    /// # Ok::<(), aprt_core::ShError>(())
+    /// ```
     pub fn apply(&self, r: &[[f64; 3]; 3], v: &mut [f32]) -> Result<(), ShError> {
         if v.len() < coeff_count(self.order) {
             return Err(ShError::OutputTooSmall);
         }
+        self.rotate_slice(r, v);
+        Ok(())
+    }
+
+    /// [`ShRotation::apply`] of a whole SH vector, which cannot be too short.
+    pub(crate) fn rotate(&self, r: &[[f64; 3]; 3], v: &mut [f32; MAX_COEFFS]) {
+        self.rotate_slice(r, v);
+    }
+
+    /// [`ShRotation::apply`] without the length check: `v` holds at least `order²` values.
+    fn rotate_slice(&self, r: &[[f64; 3]; 3], v: &mut [f32]) {
         let (alpha, beta, gamma) = zyz(r);
         let mut tmp = [0.0f32; MAX_COEFFS];
         self.turn_z(gamma, v);
@@ -203,7 +250,6 @@ impl EulerRotation {
         self.turn_z(beta, &mut tmp);
         QUARTER_BACK.apply(self.order, &tmp, v);
         self.turn_z(alpha, v);
-        Ok(())
     }
 
     /// Rotation about z by `theta`: `f(φ) → f(φ − θ)`.
@@ -283,10 +329,7 @@ mod tests {
                 .apply(&input, &mut want)
                 .unwrap();
             let mut got = input;
-            EulerRotation::new(order)
-                .unwrap()
-                .apply(&r, &mut got)
-                .unwrap();
+            ShRotation::new(order).unwrap().apply(&r, &mut got).unwrap();
             for (g, w) in got[..n2].iter().zip(&want[..n2]) {
                 assert!(
                     math::abs(g - w) < 2e-5,
@@ -331,7 +374,7 @@ mod tests {
 
     #[test]
     fn refuses_a_vector_shorter_than_the_order() {
-        let euler = EulerRotation::new(3).unwrap();
+        let euler = ShRotation::new(3).unwrap();
         let identity = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
         assert_eq!(
             euler.apply(&identity, &mut [0.0; 8]),

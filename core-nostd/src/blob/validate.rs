@@ -1,0 +1,306 @@
+//! Opening a model: decode the header, validate every dimension, offset and length, and
+//! verify every section's checksum and values once, so evaluation can trust the layout.
+
+use super::format::{
+    Basis, Encoding, Frame, MAX_BONES, MAX_COEF_DIMS, MAX_LIT, MAX_POSE_DIMS, MAX_POSE_LEN,
+    MAX_SECTIONS, MAX_VERTICES, SECTION_ALIGN, SectionEntry, SectionKind, VERTEX_BLOCK,
+    padded_vertices,
+};
+use super::header::decode_header;
+use super::info::{ModelInfo, Span};
+use super::names::NamesCheck;
+use super::{Dim, Error, Reader};
+use crate::sh::{MAX_ORDER, coeff_count};
+
+fn dim(what: Dim, value: u64, min: u64, max: u64) -> Result<usize, Error> {
+    if value < min || value > max {
+        return Err(Error::BadDimension { what, value });
+    }
+    usize::try_from(value).map_err(|_| Error::BadDimension { what, value })
+}
+
+fn product(factors: &[usize]) -> Result<u64, Error> {
+    factors
+        .iter()
+        .try_fold(1u64, |acc, &f| acc.checked_mul(f as u64))
+        .ok_or(Error::LengthOverflow)
+}
+
+impl ModelInfo {
+    /// Validates a whole blob: header, dimensions, section table, checksums, finiteness of
+    /// every value, bone indices and angle names. A streaming reader's buffer must hold at
+    /// least 4 bytes.
+    pub(crate) fn open<R: Reader>(r: &mut R) -> Result<ModelInfo, Error> {
+        let decoded = decode_header(r)?;
+        let h = &decoded.header;
+        let order = dim(Dim::Order, h.order as u64, 1, MAX_ORDER as u64)?;
+        let vertices = dim(Dim::Vertices, h.vertices as u64, 1, MAX_VERTICES as u64)?;
+        let pose_len = dim(Dim::PoseLen, h.pose_len as u64, 1, MAX_POSE_LEN as u64)?;
+        let pose_dims = dim(
+            Dim::PoseDims,
+            h.pose_dims as u64,
+            0,
+            MAX_POSE_DIMS.min(pose_len) as u64,
+        )?;
+        let coef_dims = match h.basis {
+            Basis::Stored => dim(Dim::CoefDims, h.coef_dims as u64, 1, MAX_COEF_DIMS as u64)?,
+            Basis::Identity => dim(
+                Dim::CoefDims,
+                h.coef_dims as u64,
+                vertices as u64,
+                vertices as u64,
+            )?,
+        };
+        let n2 = coeff_count(order);
+        let padded = padded_vertices(vertices);
+        let lead = match h.frame {
+            Frame::World => 0,
+            Frame::Bones { count } => {
+                let bones = dim(Dim::Bones, count as u64, 1, MAX_BONES as u64)?;
+                let width = match h.basis {
+                    Basis::Stored => coef_dims,
+                    Basis::Identity => n2 * (1 + pose_dims),
+                };
+                if bones * width > MAX_LIT {
+                    return Err(Error::BadDimension {
+                        what: Dim::Bones,
+                        value: bones as u64,
+                    });
+                }
+                1
+            }
+        };
+        // Elements of each array section this basis uses; `None` for the others.
+        let expected_elems = |kind: SectionKind| -> Option<Result<u64, Error>> {
+            Some(match (kind, h.basis) {
+                (SectionKind::PoseMean, _) => product(&[pose_len]),
+                (SectionKind::PoseProjection, _) => product(&[pose_dims, pose_len]),
+                (SectionKind::Weights, Basis::Stored) => product(&[n2, 1 + pose_dims, coef_dims]),
+                (SectionKind::VertexBasis, Basis::Stored) => product(&[padded, lead + coef_dims]),
+                (SectionKind::VertexWeights, Basis::Identity) => {
+                    product(&[padded, lead + n2 * (1 + pose_dims)])
+                }
+                _ => return None,
+            })
+        };
+
+        let mut found: [Option<Span>; SectionKind::KNOWN_COUNT] = [None; SectionKind::KNOWN_COUNT];
+        let mut end_of_data = decoded.end;
+        check_no_overlap(&h.sections, decoded.end, r.len())?;
+        for e in &h.sections {
+            end_of_data = end_of_data.max(e.offset + e.len); // no overflow: checked above
+            let kind = SectionKind::from_tag(e.kind);
+            let Some(slot) = kind.known_index() else {
+                if e.required {
+                    return Err(Error::UnknownRequiredSection { section: kind });
+                }
+                // An optional section from a newer writer, or metadata for tools.
+                check_crc(r, e, |_| {})?;
+                continue;
+            };
+            let span = if kind == SectionKind::AngleNames {
+                if found[slot].is_some() {
+                    return Err(Error::DuplicateSection { section: kind });
+                }
+                check_angle_names(r, e, pose_len)?
+            } else if let Some(elems) = expected_elems(kind) {
+                let span = array_span(e, kind, elems?)?;
+                if found[slot].is_some() {
+                    return Err(Error::DuplicateSection { section: kind });
+                }
+                verify_array(r, e, span)?;
+                span
+            } else {
+                // A known section that this basis does not use.
+                check_crc(r, e, |_| {})?;
+                continue;
+            };
+            found[slot] = Some(span);
+        }
+        if r.len() > end_of_data {
+            return Err(Error::TrailingBytes {
+                extra: r.len() - end_of_data,
+            });
+        }
+        let get = |kind: SectionKind| kind.known_index().and_then(|i| found[i]);
+        let need = |kind: SectionKind| get(kind).ok_or(Error::MissingSection { section: kind });
+        let (weights, rows) = match h.basis {
+            Basis::Stored => (
+                Some(need(SectionKind::Weights)?),
+                need(SectionKind::VertexBasis)?,
+            ),
+            Basis::Identity => (None, need(SectionKind::VertexWeights)?),
+        };
+        let info = ModelInfo {
+            id: decoded.crc,
+            order,
+            vertices,
+            pose_len,
+            pose_dims,
+            coef_dims,
+            basis: h.basis,
+            frame: h.frame,
+            alpha: h.alpha,
+            pose_mean: need(SectionKind::PoseMean)?,
+            pose_projection: need(SectionKind::PoseProjection)?,
+            weights,
+            rows,
+            angle_names: get(SectionKind::AngleNames),
+        };
+        info.verify_bones(r)?;
+        Ok(info)
+    }
+
+    /// Checks every block's bone row: integers below the bone count.
+    fn verify_bones<R: Reader>(&self, r: &mut R) -> Result<(), Error> {
+        let Frame::Bones { count } = self.frame else {
+            return Ok(());
+        };
+        let size = self.rows.encoding.size();
+        let blocks = padded_vertices(self.vertices) / VERTEX_BLOCK;
+        let mut ok = true;
+        let mut check = |v: f32| ok &= v >= 0.0 && v < count as f32 && v == (v as u32) as f32;
+        for b in 0..blocks {
+            let offset = self.rows.offset + (b * self.block_bytes()) as u64;
+            // Item by item, so any scratch that holds one value will do.
+            r.chunks(offset, size, VERTEX_BLOCK, |_, bytes| {
+                match self.rows.encoding {
+                    Encoding::F32 => bytes
+                        .as_chunks::<4>()
+                        .0
+                        .iter()
+                        .for_each(|x| check(f32::from_le_bytes(*x))),
+                    Encoding::F16 => bytes
+                        .as_chunks::<2>()
+                        .0
+                        .iter()
+                        .for_each(|x| check(half::f16::from_le_bytes(*x).to_f32())),
+                }
+                Ok(())
+            })?;
+        }
+        if ok { Ok(()) } else { Err(Error::BadBoneIndex) }
+    }
+}
+
+/// Sections must lie after the header, inside the blob, aligned, and not share bytes.
+fn check_no_overlap(
+    sections: &heapless::Vec<SectionEntry, MAX_SECTIONS>,
+    header_end: u64,
+    len: u64,
+) -> Result<(), Error> {
+    for (i, e) in sections.iter().enumerate() {
+        let section = SectionKind::from_tag(e.kind);
+        let end = e
+            .offset
+            .checked_add(e.len)
+            .ok_or(Error::SectionOutOfRange { section })?;
+        if e.offset < header_end || end > len {
+            return Err(Error::SectionOutOfRange { section });
+        }
+        if e.offset % SECTION_ALIGN != 0 {
+            return Err(Error::SectionMisaligned { section });
+        }
+        for other in &sections[..i] {
+            if e.offset < other.offset + other.len && other.offset < end {
+                return Err(Error::SectionOverlap { section });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Streams a section's bytes to `visit` in chunks and checks its CRC, so a flipped bit
+/// anywhere in a blob is caught, whatever the section.
+fn check_crc<R: Reader>(
+    r: &mut R,
+    e: &SectionEntry,
+    mut visit: impl FnMut(&[u8]),
+) -> Result<(), Error> {
+    let len = usize::try_from(e.len).map_err(|_| Error::LengthOverflow)?;
+    let mut hasher = crc32fast::Hasher::new();
+    r.chunks(e.offset, 1, len, |_, bytes| {
+        hasher.update(bytes);
+        visit(bytes);
+        Ok(())
+    })?;
+    if hasher.finalize() != e.crc32 {
+        return Err(Error::ChecksumMismatch {
+            section: SectionKind::from_tag(e.kind),
+        });
+    }
+    Ok(())
+}
+
+/// The angle names: checksummed, then one UTF-8 line per pose entry. Their encoding byte
+/// carries no meaning and is not checked.
+fn check_angle_names<R: Reader>(
+    r: &mut R,
+    e: &SectionEntry,
+    pose_len: usize,
+) -> Result<Span, Error> {
+    let mut names = NamesCheck::default();
+    check_crc(r, e, |bytes| names.feed(bytes))?;
+    names.finish(pose_len)?;
+    Ok(Span {
+        offset: e.offset,
+        len: e.len,
+        encoding: Encoding::F32,
+    })
+}
+
+/// Where an array section lies, once its encoding is allowed for its kind and its length is
+/// what the dimensions require.
+fn array_span(e: &SectionEntry, section: SectionKind, elems: u64) -> Result<Span, Error> {
+    let encoding = Encoding::from_tag(e.encoding)
+        .filter(|enc| *enc == Encoding::F32 || section.allows_f16())
+        .ok_or(Error::BadEncoding { section })?;
+    let expected = elems
+        .checked_mul(encoding.size() as u64)
+        .ok_or(Error::LengthOverflow)?;
+    if e.len != expected {
+        return Err(Error::SectionLength {
+            section,
+            expected,
+            found: e.len,
+        });
+    }
+    Ok(Span {
+        offset: e.offset,
+        len: e.len,
+        encoding,
+    })
+}
+
+/// Checks an array section's CRC and that every value is finite, streaming it.
+fn verify_array<R: Reader>(r: &mut R, e: &SectionEntry, span: Span) -> Result<(), Error> {
+    let section = SectionKind::from_tag(e.kind);
+    let size = span.encoding.size();
+    let count = usize::try_from(span.len).map_err(|_| Error::LengthOverflow)? / size;
+    // Stream in chunks of whole elements: 4-byte words hold 1 f32 or 2 f16.
+    let mut hasher = crc32fast::Hasher::new();
+    let mut finite = true;
+    r.chunks(span.offset, size, count, |_, bytes| {
+        hasher.update(bytes);
+        finite &= match span.encoding {
+            Encoding::F32 => bytes
+                .as_chunks::<4>()
+                .0
+                .iter()
+                .all(|w| f32::from_le_bytes(*w).is_finite()),
+            Encoding::F16 => bytes
+                .as_chunks::<2>()
+                .0
+                .iter()
+                .all(|w| half::f16::from_le_bytes(*w).is_finite()),
+        };
+        Ok(())
+    })?;
+    if hasher.finalize() != e.crc32 {
+        return Err(Error::ChecksumMismatch { section });
+    }
+    if !finite {
+        return Err(Error::NonFinite { section });
+    }
+    Ok(())
+}

@@ -1,0 +1,308 @@
+//! Per-frame evaluation: pose vector → pose projection → per-coefficient weights → per-vertex
+//! shading (lighting pushed through the basis) or per-vertex transfer.
+//!
+//! A frame is three steps, each with caller-owned state:
+//! 1. `set_pose`: `z = P(a − μ)`, then `w^c = W^c z'` with `z' = [1, z]` (O(n² k_a k_v),
+//!    reads only the small sections).
+//! 2. `light`: push an SH lighting vector `L` through the weights, `s_k = Σ_c L_c w^c_k`
+//!    (O(n² k_v), no blob access), rotated into each bone's frame first for bone-frame models.
+//! 3. `shade` streams the vertex rows: `shade_j = Σ_k s_k U_jk` (O(k_v) per vertex); or
+//!    `transfer` gives the n² transfer values per vertex for a GPU (O(n² k_v)).
+//!
+//! With the identity basis (the full linear model) the rows are the per-vertex weights and the
+//! same steps cost O(n² k_a) per vertex, as in the paper. The steps are written once here,
+//! over [`Reader`], for the resident and the streamed model alike.
+
+mod kernels;
+mod weights;
+
+use kernels::{Decode, RowRef, bone_lane, dot, shade_block, transfer_identity, transfer_stored};
+pub use weights::{LitWeights, MAX_POSE_WEIGHTS, PoseWeights};
+use weights::{check_capacity, check_stamp};
+
+use crate::blob::format::{Basis, Encoding, Frame, MAX_POSE_LEN, VERTEX_BLOCK};
+use crate::blob::{Error, Input, ModelInfo, Reader, Span};
+use crate::rotation::{Rotation, ShRotation, is_rotation};
+use crate::sh::MAX_COEFFS;
+
+/// The index of the first NaN or infinite value, if any.
+fn first_non_finite(xs: &[f32]) -> Option<usize> {
+    xs.iter().position(|x| !x.is_finite())
+}
+
+impl ModelInfo {
+    /// Streams a section as rows of `width` values: `f(row index, row)`.
+    fn each_row<R: Reader>(
+        &self,
+        r: &mut R,
+        s: Span,
+        width: usize,
+        mut f: impl FnMut(usize, RowRef<'_>),
+    ) -> Result<(), Error> {
+        let size = s.encoding.size();
+        let rows = (s.len as usize).checked_div(width * size).unwrap_or(0);
+        r.chunks(s.offset, width * size, rows, |first, bytes| {
+            match s.encoding {
+                Encoding::F32 => bytes
+                    .as_chunks::<4>()
+                    .0
+                    .chunks_exact(width)
+                    .enumerate()
+                    .for_each(|(i, r)| f(first + i, RowRef::F32(r))),
+                Encoding::F16 => bytes
+                    .as_chunks::<2>()
+                    .0
+                    .chunks_exact(width)
+                    .enumerate()
+                    .for_each(|(i, r)| f(first + i, RowRef::F16(r))),
+            }
+            Ok(())
+        })
+    }
+
+    pub(crate) fn set_pose<R: Reader, const N: usize>(
+        &self,
+        r: &mut R,
+        angles: &[f32],
+        pose: &mut PoseWeights<N>,
+    ) -> Result<(), Error> {
+        pose.stamp = None;
+        if angles.len() != self.pose_len {
+            return Err(Error::WrongLength {
+                what: Input::Angles,
+                expected: self.pose_len,
+                found: angles.len(),
+            });
+        }
+        if let Some(index) = first_non_finite(angles) {
+            return Err(Error::NonFiniteAngle { index });
+        }
+        check_capacity(self.pose_weights_len(), N)?;
+        let (a, ka, kv) = (self.pose_len, self.pose_dims, self.coef_dims);
+        let mut mean = [0.0f32; MAX_POSE_LEN];
+        let mean = &mut mean[..a];
+        // The mean row decoded (added to zeros), then centred in f64 by `dot_centred`.
+        self.each_row(r, self.pose_mean, a, |_, mu| {
+            mu.add_scaled(1.0, mean.iter_mut())
+        })?;
+        let z = &mut pose.z[..=ka];
+        z[0] = 1.0;
+        self.each_row(r, self.pose_projection, a, |i, p| {
+            z[1 + i] = p.dot_centred(angles, mean) as f32
+        })?;
+        if let (Basis::Stored, Some(weights)) = (self.basis, self.weights) {
+            let n2 = self.coeffs();
+            let w = &mut pose.w[..n2 * kv];
+            w.fill(0.0);
+            let z = &pose.z;
+            // Row (c, i) of W holds W[c][i][0..k_v]; it adds z'_i W[c][i][k] to w[k][c].
+            self.each_row(r, weights, kv, |ci, row| {
+                let (c, zi) = (ci / (ka + 1), z[ci % (ka + 1)]);
+                row.add_scaled(zi, w[c..].iter_mut().step_by(n2))
+            })?;
+        }
+        pose.pose_dims = ka;
+        pose.stamp = Some(self.id);
+        Ok(())
+    }
+
+    pub(crate) fn light<const P: usize, const L: usize>(
+        &self,
+        pose: &PoseWeights<P>,
+        lighting: &[f32],
+        bones: &[Rotation],
+        lit: &mut LitWeights<L>,
+    ) -> Result<(), Error> {
+        lit.stamp = None;
+        check_stamp(pose.stamp, self)?;
+        if self.frame != Frame::World && bones.len() != self.bones() {
+            return Err(Error::WrongLength {
+                what: Input::BoneRotations,
+                expected: self.bones(),
+                found: bones.len(),
+            });
+        }
+        let n2 = self.coeffs();
+        if lighting.len() != n2 {
+            return Err(Error::WrongLength {
+                what: Input::Lighting,
+                expected: n2,
+                found: lighting.len(),
+            });
+        }
+        if let Some(index) = first_non_finite(lighting) {
+            return Err(Error::NonFiniteLighting { index });
+        }
+        check_capacity(self.lit_weights_len(), L)?;
+        let width = self.row_width();
+        if self.frame == Frame::World {
+            self.push(pose, lighting, &mut lit.q[..width]);
+        } else {
+            let rotation = ShRotation::of_order(self.order);
+            let mut local = [0.0f32; MAX_COEFFS];
+            for (bone, (r, q)) in bones.iter().zip(lit.q.chunks_exact_mut(width)).enumerate() {
+                if !r.iter().flatten().all(|x| x.is_finite()) || !is_rotation(r, 1e-3) {
+                    return Err(Error::BadRotation { bone });
+                }
+                // Bone-frame lighting is the world lighting rotated by Rᵀ.
+                let rt = core::array::from_fn(|i| core::array::from_fn(|j| f64::from(r[j][i])));
+                local[..n2].copy_from_slice(lighting);
+                rotation.rotate(&rt, &mut local);
+                self.push(pose, &local[..n2], q);
+            }
+        }
+        lit.stamp = Some(self.id);
+        Ok(())
+    }
+
+    /// `q` = the lighting pushed through the pose weights: `s_k = Σ_c L_c w^c_k` (stored
+    /// basis) or `L_c z'_i` (identity basis).
+    fn push<const P: usize>(&self, pose: &PoseWeights<P>, lighting: &[f32], q: &mut [f32]) {
+        match self.basis {
+            Basis::Stored => {
+                for (qk, wk) in q.iter_mut().zip(pose.w.chunks_exact(lighting.len())) {
+                    *qk = dot(wk, lighting);
+                }
+            }
+            Basis::Identity => {
+                let z = &pose.z[..=self.pose_dims];
+                for (l, qc) in lighting.iter().zip(q.chunks_exact_mut(z.len())) {
+                    for (qi, zi) in qc.iter_mut().zip(z) {
+                        *qi = l * zi;
+                    }
+                }
+            }
+        }
+    }
+
+    fn check_range(&self, first: usize, count: usize) -> Result<(), Error> {
+        match first.checked_add(count) {
+            Some(end) if end <= self.vertices => Ok(()),
+            _ => Err(Error::VertexRange { first, count }),
+        }
+    }
+
+    /// Streams the blocks holding vertices `first .. first + count` to
+    /// `visit(first vertex of the block, bone lanes, row bytes)`; the bone lanes are all 0 for
+    /// world-frame models.
+    fn each_block<R: Reader>(
+        &self,
+        r: &mut R,
+        first: usize,
+        count: usize,
+        mut visit: impl FnMut(usize, [usize; VERTEX_BLOCK], &[u8]),
+    ) -> Result<(), Error> {
+        let block_bytes = self.block_bytes();
+        let encoding = self.rows.encoding;
+        let lead_bytes = self.lead_rows() * VERTEX_BLOCK * encoding.size();
+        let last_bone = self.bones().max(1) - 1;
+        let (b0, b1) = (first / VERTEX_BLOCK, (first + count).div_ceil(VERTEX_BLOCK));
+        let offset = self.rows.offset + (b0 as u64) * block_bytes as u64;
+        r.chunks(offset, block_bytes, b1 - b0, |i0, bytes| {
+            for (i, block) in bytes.chunks_exact(block_bytes).enumerate() {
+                let (lead, rows) = block.split_at(lead_bytes);
+                let mut bones = [0usize; VERTEX_BLOCK];
+                match encoding {
+                    Encoding::F32 => lead
+                        .as_chunks::<4>()
+                        .0
+                        .iter()
+                        .zip(&mut bones)
+                        .for_each(|(x, b)| *b = bone_lane(x.value(), last_bone)),
+                    Encoding::F16 => lead
+                        .as_chunks::<2>()
+                        .0
+                        .iter()
+                        .zip(&mut bones)
+                        .for_each(|(x, b)| *b = bone_lane(x.value(), last_bone)),
+                }
+                visit((b0 + i0 + i) * VERTEX_BLOCK, bones, rows);
+            }
+            Ok(())
+        })
+    }
+
+    pub(crate) fn vertex_bones<R: Reader>(
+        &self,
+        r: &mut R,
+        first: usize,
+        out: &mut [u16],
+    ) -> Result<(), Error> {
+        self.check_range(first, out.len())?;
+        let end = first + out.len();
+        self.each_block(r, first, out.len(), |v0, bones, _| {
+            for j in v0.max(first)..(v0 + VERTEX_BLOCK).min(end) {
+                out[j - first] = bones[j - v0] as u16;
+            }
+        })
+    }
+
+    pub(crate) fn shade<R: Reader, const L: usize>(
+        &self,
+        r: &mut R,
+        lit: &LitWeights<L>,
+        first: usize,
+        out: &mut [f32],
+    ) -> Result<(), Error> {
+        check_stamp(lit.stamp, self)?;
+        self.check_range(first, out.len())?;
+        let width = self.row_width();
+        let q = &lit.q[..self.lit_weights_len()];
+        let encoding = self.rows.encoding;
+        let end = first + out.len();
+        self.each_block(r, first, out.len(), |v0, bones, bytes| {
+            let lanes = match encoding {
+                Encoding::F32 => shade_block(bytes.as_chunks::<4>().0, q, width, bones),
+                Encoding::F16 => shade_block(bytes.as_chunks::<2>().0, q, width, bones),
+            };
+            let (lo, hi) = (v0.max(first), (v0 + VERTEX_BLOCK).min(end));
+            let dst = &mut out[lo - first..hi - first];
+            if let Ok(whole) = <&mut [f32; VERTEX_BLOCK]>::try_from(&mut *dst) {
+                *whole = lanes;
+            } else {
+                dst.copy_from_slice(&lanes[lo - v0..hi - v0]);
+            }
+        })
+    }
+
+    pub(crate) fn transfer<R: Reader, const P: usize>(
+        &self,
+        r: &mut R,
+        pose: &PoseWeights<P>,
+        first: usize,
+        out: &mut [f32],
+    ) -> Result<(), Error> {
+        check_stamp(pose.stamp, self)?;
+        let n2 = self.coeffs();
+        if !out.len().is_multiple_of(n2) {
+            return Err(Error::WrongLength {
+                what: Input::Transfer,
+                expected: out.len() / n2 * n2,
+                found: out.len(),
+            });
+        }
+        let count = out.len() / n2;
+        self.check_range(first, count)?;
+        let encoding = self.rows.encoding;
+        let (basis, z) = (self.basis, &pose.z[..=self.pose_dims]);
+        let w = &pose.w[..self.pose_weights_len()];
+        let end = first + count;
+        let mut lanes = [0.0f32; VERTEX_BLOCK * MAX_COEFFS];
+        self.each_block(r, first, count, |v0, _, bytes| {
+            let t = &mut lanes[..VERTEX_BLOCK * n2];
+            match (basis, encoding) {
+                (Basis::Stored, Encoding::F32) => transfer_stored(bytes.as_chunks::<4>().0, w, t),
+                (Basis::Stored, Encoding::F16) => transfer_stored(bytes.as_chunks::<2>().0, w, t),
+                (Basis::Identity, Encoding::F32) => {
+                    transfer_identity(bytes.as_chunks::<4>().0, z, t)
+                }
+                (Basis::Identity, Encoding::F16) => {
+                    transfer_identity(bytes.as_chunks::<2>().0, z, t)
+                }
+            }
+            let (lo, hi) = (v0.max(first), (v0 + VERTEX_BLOCK).min(end));
+            out[(lo - first) * n2..(hi - first) * n2]
+                .copy_from_slice(&t[(lo - v0) * n2..(hi - v0) * n2]);
+        })
+    }
+}

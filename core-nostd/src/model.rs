@@ -1,0 +1,384 @@
+//! The two ways to hold a model: [`Model`] over a resident blob, read in place, and
+//! [`StreamedModel`] over any [`BlobSource`], read through a caller's buffer. Both validate
+//! the whole blob once and share one evaluator; their per-frame calls take the same
+//! arguments in the same order (inputs, then the first vertex, then the output).
+
+use crate::blob::{AngleNames, BlobSource, Error, ModelInfo, Resident, Streaming};
+use crate::eval::{LitWeights, PoseWeights};
+use crate::rotation::Rotation;
+
+/// A model whose blob is in memory: every call reads it in place, with no buffer.
+///
+/// `Model` is `Copy` and its calls take `&self`, so threads may shade disjoint vertex ranges
+/// of one model at once, each with its own output.
+///
+/// ```
+/// # fn main() -> Result<(), aprt_core::Error> {
+/// use aprt_core::{LitWeights, Model, PoseWeights};
+///
+/// let blob: &[u8] = include_bytes!("../../fixtures/golden/v1-world.aprt");
+/// let model = Model::parse(blob)?;
+/// let info = model.info();
+/// let (mut pose, mut lit) = (PoseWeights::new(), LitWeights::new());
+/// model.set_pose(&vec![0.1; info.pose_len()], &mut pose)?;
+/// model.light(&pose, &vec![1.0; info.coeffs()], &[], &mut lit)?;
+/// let mut shading = vec![0.0; info.vertices()];
+/// model.shade(&lit, 0, &mut shading)?;
+/// # Ok(())
+/// # }
+/// ```
+#[derive(Clone, Copy, PartialEq)]
+pub struct Model<'a> {
+    blob: &'a [u8],
+    info: ModelInfo,
+}
+
+impl<'a> Model<'a> {
+    /// Validates a resident blob completely, once: header, dimensions, section table,
+    /// checksums, finiteness of every value, bone indices and angle names.
+    ///
+    /// ```
+    /// use aprt_core::{Error, Model};
+    ///
+    /// let blob = include_bytes!("../../fixtures/golden/v1-world.aprt");
+    /// assert_eq!(Model::parse(blob)?.info().order(), 3);
+    /// assert_eq!(Model::parse(&blob[..10]), Err(Error::Truncated { needed: 20 }));
+    /// # Ok::<(), Error>(())
+    /// ```
+    pub fn parse(blob: &'a [u8]) -> Result<Model<'a>, Error> {
+        let info = ModelInfo::open(&mut Resident(blob))?;
+        Ok(Model { blob, info })
+    }
+
+    /// The model's dimensions and what its calls need.
+    pub fn info(&self) -> &ModelInfo {
+        &self.info
+    }
+
+    /// The blob it reads.
+    pub fn blob(&self) -> &'a [u8] {
+        self.blob
+    }
+
+    /// The names of the pose-vector entries, to bind an engine's joints by name (empty when
+    /// the blob records none).
+    ///
+    /// ```
+    /// let model = aprt_core::Model::parse(include_bytes!("../../fixtures/golden/v1-bones.aprt"))?;
+    /// let names = model.angle_names();
+    /// assert_eq!(names.len(), model.info().pose_len());
+    /// assert_eq!(names.index_of("neck.y"), Some(1));
+    /// # Ok::<(), aprt_core::Error>(())
+    /// ```
+    pub fn angle_names(&self) -> AngleNames<'a> {
+        let Some(span) = self.info.angle_names else {
+            return AngleNames::default();
+        };
+        // Validated by `parse`; the blob cannot have changed since (it is borrowed).
+        self.blob
+            .get(span.offset as usize..(span.offset + span.len) as usize)
+            .and_then(|b| AngleNames::parse(b, self.info.pose_len).ok())
+            .unwrap_or_default()
+    }
+
+    /// Computes the pose weights of one frame from the pose vector `angles`
+    /// ([`ModelInfo::pose_len`] values): `z = P(a − μ)`, then `w^c = W^c [1, z]`.
+    ///
+    /// # The pose vector
+    /// Entry `i` is the value named by [`Model::angle_names`]`.get(i)`, exactly as the trainer
+    /// computed it for the training clip:
+    /// - For a character (glTF skin, BVH mannequin) the entries `<joint>.x/.y/.z` are the
+    ///   joint's rotation vector relative to its rest pose: the log map (angle × unit axis,
+    ///   radians) of `q_rest⁻¹ · q_local`, the joint's local rotation seen in its own rest
+    ///   frame. The built-in character's entries are single named angles in radians.
+    /// - Along a clip each joint's vector is unwrapped: of the equal rotations
+    ///   `v̂ (|v| + 2πk)`, take the one nearest the same joint's vector in the previous frame
+    ///   (the first frame takes `k = 0`, angle ≤ π). A joint that turns past a half turn
+    ///   otherwise jumps to the other side.
+    /// - Only the entries the model kept are passed (joints that never moved in training
+    ///   were dropped); bind them by name once with [`AngleNames::index_of`].
+    ///
+    /// ```
+    /// use aprt_core::{Error, Input, Model, PoseWeights};
+    ///
+    /// let model = Model::parse(include_bytes!("../../fixtures/golden/v1-world.aprt"))?;
+    /// let mut pose = PoseWeights::new();
+    /// model.set_pose(&[0.1, -0.2, 0.3, 0.0], &mut pose)?;
+    /// assert_eq!(pose.projected().len(), model.info().pose_dims());
+    /// assert_eq!(
+    ///     model.set_pose(&[0.1], &mut pose),
+    ///     Err(Error::WrongLength { what: Input::Angles, expected: 4, found: 1 })
+    /// );
+    /// # Ok::<(), Error>(())
+    /// ```
+    pub fn set_pose<const N: usize>(
+        &self,
+        angles: &[f32],
+        pose: &mut PoseWeights<N>,
+    ) -> Result<(), Error> {
+        self.info.set_pose(&mut Resident(self.blob), angles, pose)
+    }
+
+    /// Pushes the world SH lighting `lighting` ([`ModelInfo::coeffs`] values) through the
+    /// pose weights: `s_k = Σ_c L_c w^c_k`. Reads no blob bytes.
+    ///
+    /// `bones` holds the bones' rotations, which a bone-frame model needs (one per bone,
+    /// [`ModelInfo::bones`]; it rotates the lighting into each bone's frame once per frame)
+    /// and a world-frame model ignores, so an engine may always pass its skeleton's. Bone `b`'s rotation is
+    /// the rotation part of its *skinning* matrix `world(b) · inverse_bind(b)`, row-major
+    /// (not its world rotation); bone indices are the skin's joint order (glTF `skin.joints`).
+    /// A skinning matrix with scale or shear must be reduced to its nearest rotation first
+    /// (polar decomposition): a matrix more than 10⁻³ from orthonormal is refused.
+    ///
+    /// ```
+    /// use aprt_core::{Error, Input, LitWeights, Model, PoseWeights};
+    ///
+    /// let model = Model::parse(include_bytes!("../../fixtures/golden/v1-bones.aprt"))?;
+    /// let (mut pose, mut lit) = (PoseWeights::new(), LitWeights::new());
+    /// model.set_pose(&[0.2; 5], &mut pose)?;
+    /// let lighting = [1.0, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    /// let identity = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    /// assert_eq!(
+    ///     model.light(&pose, &lighting, &[], &mut lit),
+    ///     Err(Error::WrongLength { what: Input::BoneRotations, expected: 3, found: 0 })
+    /// );
+    /// model.light(&pose, &lighting, &[identity; 3], &mut lit)?;
+    /// # Ok::<(), Error>(())
+    /// ```
+    pub fn light<const P: usize, const L: usize>(
+        &self,
+        pose: &PoseWeights<P>,
+        lighting: &[f32],
+        bones: &[Rotation],
+        lit: &mut LitWeights<L>,
+    ) -> Result<(), Error> {
+        self.info.light(pose, lighting, bones, lit)
+    }
+
+    /// Per-vertex shading `Σ_c L_c t_c(j)` of vertices `first .. first + out.len()`, from the
+    /// lighting weights of [`Model::light`]. Multiply by albedo / π for exit radiance. Any
+    /// range works; ranges starting at multiples of [`VERTEX_BLOCK`](crate::VERTEX_BLOCK) read
+    /// no block twice.
+    ///
+    /// ```
+    /// use aprt_core::{LitWeights, Model, PoseWeights};
+    ///
+    /// let model = Model::parse(include_bytes!("../../fixtures/golden/v1-world.aprt"))?;
+    /// let (mut pose, mut lit) = (PoseWeights::new(), LitWeights::new());
+    /// model.set_pose(&[0.0; 4], &mut pose)?;
+    /// model.light(&pose, &[1.0; 9], &[], &mut lit)?;
+    /// let (mut all, mut part) = (vec![0.0; model.info().vertices()], [0.0; 5]);
+    /// model.shade(&lit, 0, &mut all)?;
+    /// model.shade(&lit, 3, &mut part)?;
+    /// assert_eq!(part, all[3..8]);
+    /// # Ok::<(), aprt_core::Error>(())
+    /// ```
+    pub fn shade<const L: usize>(
+        &self,
+        lit: &LitWeights<L>,
+        first: usize,
+        out: &mut [f32],
+    ) -> Result<(), Error> {
+        self.info.shade(&mut Resident(self.blob), lit, first, out)
+    }
+
+    /// Per-vertex transfer of vertices `first ..`, n² values each, vertex-major, into `out`
+    /// (`count · n²` values), for a GPU that does the lighting dot product. A bone-frame model
+    /// gives each vertex's transfer in its bone's frame ([`Model::vertex_bones`]): light it
+    /// with that bone's rotated lighting.
+    ///
+    /// ```
+    /// use aprt_core::{Model, PoseWeights};
+    ///
+    /// let model = Model::parse(include_bytes!("../../fixtures/golden/v1-world.aprt"))?;
+    /// let mut pose = PoseWeights::new();
+    /// model.set_pose(&[0.0; 4], &mut pose)?;
+    /// let mut transfer = vec![0.0; 2 * model.info().coeffs()];
+    /// model.transfer(&pose, 10, &mut transfer)?; // vertices 10 and 11
+    /// # Ok::<(), aprt_core::Error>(())
+    /// ```
+    pub fn transfer<const P: usize>(
+        &self,
+        pose: &PoseWeights<P>,
+        first: usize,
+        out: &mut [f32],
+    ) -> Result<(), Error> {
+        self.info
+            .transfer(&mut Resident(self.blob), pose, first, out)
+    }
+
+    /// The bone of each vertex `first .. first + out.len()` (all 0 for a world-frame model),
+    /// for engines that light [`Model::transfer`] output on the GPU.
+    ///
+    /// ```
+    /// let model = aprt_core::Model::parse(include_bytes!("../../fixtures/golden/v1-bones.aprt"))?;
+    /// let mut bones = [0u16; 4];
+    /// model.vertex_bones(0, &mut bones)?;
+    /// assert!(bones.iter().all(|&b| (b as usize) < model.info().bones()));
+    /// # Ok::<(), aprt_core::Error>(())
+    /// ```
+    pub fn vertex_bones(&self, first: usize, out: &mut [u16]) -> Result<(), Error> {
+        self.info.vertex_bones(&mut Resident(self.blob), first, out)
+    }
+}
+
+/// A model read from a [`BlobSource`] (flash, a file) through a caller-owned buffer, so the
+/// blob is never resident. Its calls are those of [`Model`], on `&mut self`.
+///
+/// ```
+/// use aprt_core::{Error, LitWeights, PoseWeights, StreamedModel};
+///
+/// let blob: &[u8] = include_bytes!("../../fixtures/golden/v1-world.aprt");
+/// // Any BlobSource; a slice copies on every read, as flash would.
+/// let mut scratch = [0u8; 16];
+/// let Err(Error::BufferTooSmall { needed }) = StreamedModel::open(blob, &mut scratch) else {
+///     panic!("16 bytes cannot hold a block of vertex rows");
+/// };
+/// let mut scratch = vec![0u8; needed];
+/// let mut model = StreamedModel::open(blob, &mut scratch)?;
+/// let (mut pose, mut lit) = (PoseWeights::new(), LitWeights::new());
+/// model.set_pose(&[0.0; 4], &mut pose)?;
+/// model.light(&pose, &[1.0; 9], &[], &mut lit)?;
+/// let mut shading = vec![0.0; model.info().vertices()];
+/// model.shade(&lit, 0, &mut shading)?;
+/// # Ok::<(), Error>(())
+/// ```
+pub struct StreamedModel<'s, S> {
+    src: S,
+    scratch: &'s mut [u8],
+    info: ModelInfo,
+}
+
+/// The dimensions and the blob's length, not its bytes.
+impl core::fmt::Debug for Model<'_> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Model")
+            .field("bytes", &self.blob.len())
+            .field("info", &self.info)
+            .finish()
+    }
+}
+
+/// The dimensions and the buffer's size, not the source or its bytes.
+impl<S> core::fmt::Debug for StreamedModel<'_, S> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("StreamedModel")
+            .field("scratch_bytes", &self.scratch.len())
+            .field("info", &self.info)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<'s, S: BlobSource> StreamedModel<'s, S> {
+    /// Validates the blob in `src` completely, as [`Model::parse`] does, streaming it through
+    /// `scratch`, which the model keeps for its calls. `scratch` must hold
+    /// [`ModelInfo::scratch_bytes`] (one block of eight vertex rows; `aprt inspect` prints
+    /// it): a valid blob with a smaller one gives [`Error::BufferTooSmall`] with that size.
+    pub fn open(mut src: S, scratch: &'s mut [u8]) -> Result<StreamedModel<'s, S>, Error> {
+        // Validation reads items of at most 4 bytes: a buffer too small even for that is
+        // replaced by one on the stack, so the error names what evaluation needs.
+        let mut fallback = [0u8; 64];
+        let validation = match scratch.len() < fallback.len() {
+            true => &mut fallback[..],
+            false => &mut *scratch,
+        };
+        let info = ModelInfo::open(&mut Streaming {
+            src: &mut src,
+            scratch: validation,
+        })?;
+        let needed = info.scratch_bytes();
+        if scratch.len() < needed {
+            return Err(Error::BufferTooSmall { needed });
+        }
+        Ok(StreamedModel { src, scratch, info })
+    }
+
+    fn reader(&mut self) -> Streaming<'_, S> {
+        Streaming {
+            src: &mut self.src,
+            scratch: &mut *self.scratch,
+        }
+    }
+
+    /// The model's dimensions and what its calls need.
+    pub fn info(&self) -> &ModelInfo {
+        &self.info
+    }
+
+    /// The names of the pose-vector entries, read into `buf`, which must hold
+    /// [`ModelInfo::angle_names_bytes`]. Empty when the blob records none.
+    ///
+    /// ```
+    /// use aprt_core::StreamedModel;
+    ///
+    /// let blob: &[u8] = include_bytes!("../../fixtures/golden/v1-bones.aprt");
+    /// let mut scratch = [0u8; 512];
+    /// let mut model = StreamedModel::open(blob, &mut scratch)?;
+    /// let mut buf = [0u8; 64];
+    /// assert_eq!(model.angle_names(&mut buf)?.index_of("l_elbow"), Some(3));
+    /// # Ok::<(), aprt_core::Error>(())
+    /// ```
+    pub fn angle_names<'b>(&mut self, buf: &'b mut [u8]) -> Result<AngleNames<'b>, Error> {
+        let Some(span) = self.info.angle_names else {
+            return Ok(AngleNames::default());
+        };
+        let needed = self.info.angle_names_bytes();
+        let dst = buf
+            .get_mut(..needed)
+            .ok_or(Error::BufferTooSmall { needed })?;
+        self.src
+            .read_at(span.offset, dst)
+            .map_err(|_| Error::Source)?;
+        // Checked again: the source may have changed since `open`.
+        AngleNames::parse(dst, self.info.pose_len)
+    }
+
+    /// [`Model::set_pose`], streaming the pose sections.
+    pub fn set_pose<const N: usize>(
+        &mut self,
+        angles: &[f32],
+        pose: &mut PoseWeights<N>,
+    ) -> Result<(), Error> {
+        let info = self.info;
+        info.set_pose(&mut self.reader(), angles, pose)
+    }
+
+    /// [`Model::light`]: reads no blob bytes.
+    pub fn light<const P: usize, const L: usize>(
+        &self,
+        pose: &PoseWeights<P>,
+        lighting: &[f32],
+        bones: &[Rotation],
+        lit: &mut LitWeights<L>,
+    ) -> Result<(), Error> {
+        self.info.light(pose, lighting, bones, lit)
+    }
+
+    /// [`Model::shade`], streaming the blocks of the range.
+    pub fn shade<const L: usize>(
+        &mut self,
+        lit: &LitWeights<L>,
+        first: usize,
+        out: &mut [f32],
+    ) -> Result<(), Error> {
+        let info = self.info;
+        info.shade(&mut self.reader(), lit, first, out)
+    }
+
+    /// [`Model::transfer`], streaming the blocks of the range.
+    pub fn transfer<const P: usize>(
+        &mut self,
+        pose: &PoseWeights<P>,
+        first: usize,
+        out: &mut [f32],
+    ) -> Result<(), Error> {
+        let info = self.info;
+        info.transfer(&mut self.reader(), pose, first, out)
+    }
+
+    /// [`Model::vertex_bones`], streaming the blocks of the range.
+    pub fn vertex_bones(&mut self, first: usize, out: &mut [u16]) -> Result<(), Error> {
+        let info = self.info;
+        info.vertex_bones(&mut self.reader(), first, out)
+    }
+}

@@ -1,0 +1,82 @@
+//! Golden blobs: small models of each frame, checked into `fixtures/golden/`, that every later
+//! reader must keep reading the same way (the format's compatibility promise) and that the
+//! core's documentation examples run on. `cargo test -p aprt-tests --release --test golden --
+//! --ignored` writes them again from the models below.
+
+use std::path::PathBuf;
+
+use aprt_core::{Frame, Model};
+use aprt_tests::decode::decode;
+use aprt_tests::harness::{Probe, exercise};
+use aprt_tests::random_model;
+use aprt_trainer::{BoneFrames, LinearModel, Precision, encode_model};
+
+fn golden_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../fixtures/golden")
+}
+
+/// `(file name, model, precision)` of each golden blob.
+fn golden_models() -> Vec<(&'static str, LinearModel, Precision)> {
+    let names = |names: &[&str]| names.iter().map(|n| n.to_string()).collect();
+    let mut world = random_model(3, 20, 4, 2, Some(3));
+    world.angle_names = names(&["hip.x", "hip.y", "hip.z", "knee"]);
+    let mut bones = random_model(3, 24, 5, 3, Some(4));
+    bones.angle_names = names(&["neck.x", "neck.y", "neck.z", "l_elbow", "r_elbow"]);
+    bones.bones = Some(BoneFrames {
+        count: 3,
+        vertex_bone: (0..24).map(|j| (j / 8) as u16).collect(),
+    });
+    vec![
+        ("v1-world.aprt", world, Precision::F32),
+        ("v1-bones.aprt", bones, Precision::F16),
+    ]
+}
+
+#[test]
+#[ignore = "writes fixtures/golden; run when the golden models change"]
+fn write_golden_blobs() {
+    for (name, model, precision) in golden_models() {
+        let blob = encode_model(&model, precision).unwrap();
+        std::fs::write(golden_dir().join(name), blob).unwrap();
+    }
+}
+
+/// Each checked-in blob reads with the dimensions and names it was written with, evaluates
+/// like the f64 reference of what it stores (resident and streamed, through the fuzz
+/// harness), and is what the writer writes today.
+#[test]
+fn golden_blobs_read_as_written() {
+    for (name, model, precision) in golden_models() {
+        let path = golden_dir().join(name);
+        let blob = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let core = Model::parse(&blob).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let info = core.info();
+        assert_eq!(
+            (
+                info.order(),
+                info.vertices(),
+                info.pose_len(),
+                info.pose_dims()
+            ),
+            (model.order, model.vertices, model.joints, model.pose_dims()),
+            "{name}"
+        );
+        assert_eq!(info.coef_dims(), model.coef_dims(), "{name}");
+        let bones = model.bones.as_ref().map_or(0, |b| b.count);
+        assert_eq!(info.bones(), bones, "{name}");
+        assert_eq!(info.frame() == Frame::World, bones == 0, "{name}");
+        assert!(
+            core.angle_names()
+                .iter()
+                .eq(model.angle_names.iter().map(String::as_str))
+        );
+        let stored = decode(&blob).unwrap();
+        assert_eq!(stored.angle_names, model.angle_names, "{name}");
+        exercise(&blob, &Probe::GENTLE).unwrap();
+        assert!(
+            encode_model(&model, precision).unwrap() == blob,
+            "{name}: the writer's bytes changed; if that is intended, keep this blob as a \
+             compatibility fixture and write the new one under a new name"
+        );
+    }
+}
