@@ -37,6 +37,7 @@
 //! order and every vertex writes only its own output, so the result is bit-identical for any
 //! thread count (no float reduction crosses threads).
 
+pub mod checkpoint;
 mod directions;
 #[cfg(test)]
 mod tests;
@@ -53,7 +54,7 @@ use rayon::prelude::*;
 use std::ops::Range;
 use tracer::{Hit, Tracer, TraversalStack};
 
-use crate::mesh::{Mesh, area_weighted_normals};
+use crate::rig::mesh::{Mesh, area_weighted_normals};
 
 /// Ray origins are offset along the normal by this fraction of the bounding-box diagonal.
 pub const ORIGIN_OFFSET: f64 = 1e-4;

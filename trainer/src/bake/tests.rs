@@ -645,7 +645,7 @@ fn cube_over_floor(scale: f64, shift: f64) -> Mesh {
     for p in &mut mesh.positions {
         *p = p.map(|x| (f64::from(x) * scale) as f32);
     }
-    mesh.normals = crate::mesh::area_weighted_normals(&mesh.positions, &mesh.triangles);
+    mesh.normals = crate::rig::mesh::area_weighted_normals(&mesh.positions, &mesh.triangles);
     mesh
 }
 
