@@ -66,7 +66,7 @@ pub fn decode(blob: &[u8]) -> Option<LinearModel> {
     Some(LinearModel {
         order: h.order as usize,
         vertices: v,
-        joints: h.joints as usize,
+        pose_len: h.joints as usize,
         pose_mean: section(SectionKind::PoseMean)?,
         pose_projection: section(SectionKind::PoseProjection)?,
         weights,

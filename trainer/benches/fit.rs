@@ -35,7 +35,7 @@ fn main() {
     let world = bake_poses(&meshes, &settings, true).expect("the character bakes");
     let transfers = aprt_trainer::bone_frames::to_bone_frames(&character, &clip.frames, &world)
         .expect("clip poses are valid");
-    let angles = DMatrix::from_fn(clip.frames.len(), character.joint_angle_count(), |i, j| {
+    let angles = DMatrix::from_fn(clip.frames.len(), character.pose_len(), |i, j| {
         clip.frames[i][j]
     });
     let vertices = character.bind_mesh().vertex_count();

@@ -37,8 +37,8 @@ pub use report::render::{
 };
 pub use rig::character::{Character, CharacterError, JointAngle};
 pub use rig::gltf::{GltfError, GltfRig, HeldChannel};
-pub use rig::mannequin::{BvhOptions, BvhRig, BvhRigError, Retargeted};
+pub use rig::mannequin::{MocapOptions, MocapRig, MocapRigError, Retargeted};
 pub use rig::mesh::Mesh;
-pub use rig::mocap::{Bvh, BvhError};
+pub use rig::mocap::{Mocap, MocapError};
 pub use rig::skin::{Skin, SkinError, skin};
 pub use rig::{Clip, Rig};

@@ -39,7 +39,7 @@ pub enum AnglesError {
         /// Line of the first data row.
         first_row: usize,
     },
-    /// A row has a different number of cells than the model has joints.
+    /// A row has a different number of cells than the model has pose entries.
     #[error("{path}: row {row} has {found} angles, the model takes {expected}")]
     Width {
         /// The file.
@@ -48,7 +48,7 @@ pub enum AnglesError {
         row: usize,
         /// Cells found.
         found: usize,
-        /// The model's joint count.
+        /// The model's pose length.
         expected: usize,
     },
     /// No data rows.
@@ -61,21 +61,21 @@ pub enum AnglesError {
 
 /// Reads an angles CSV: comma-separated numbers, one row per pose. A first row that is not
 /// numeric is taken as a header; blank lines and lines starting with `#` are skipped. With
-/// `joints` (a model's joint count), a row of another width is an error naming that row.
-pub fn read_angles(path: &Path, joints: Option<usize>) -> Result<Vec<Vec<f64>>, AnglesError> {
+/// `pose_len` (a model's pose length), a row of another width is an error naming that row.
+pub fn read_angles(path: &Path, pose_len: Option<usize>) -> Result<Vec<Vec<f64>>, AnglesError> {
     let text = std::fs::read_to_string(path).map_err(|source| AnglesError::Read {
         path: path.into(),
         source,
     })?;
-    parse_angles(path, &text, joints)
+    parse_angles(path, &text, pose_len)
 }
 
-/// Parses angles CSV text; `path` only names the source in errors. With `joints`, every row
+/// Parses angles CSV text; `path` only names the source in errors. With `pose_len`, every row
 /// must have that many cells; without, as many as the first data row.
 pub fn parse_angles(
     path: &Path,
     text: &str,
-    joints: Option<usize>,
+    pose_len: Option<usize>,
 ) -> Result<Vec<Vec<f64>>, AnglesError> {
     let mut rows: Vec<Vec<f64>> = Vec::new();
     let mut first_row = 0;
@@ -104,7 +104,7 @@ pub fn parse_angles(
                 Err(_) => return Err(bad(format!("'{cell}' is not a number"))),
             }
         }
-        if let Some(expected) = joints.filter(|&j| j != row.len()) {
+        if let Some(expected) = pose_len.filter(|&n| n != row.len()) {
             return Err(AnglesError::Width {
                 path: path.into(),
                 row: i + 1,

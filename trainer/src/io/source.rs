@@ -9,9 +9,9 @@ use anyhow::{Context, Result, bail};
 use crate::report::experiment::pose_all;
 use crate::rig::character::Character;
 use crate::rig::gltf::GltfRig;
-use crate::rig::mannequin::{BvhOptions, BvhRig};
+use crate::rig::mannequin::{MocapOptions, MocapRig};
 use crate::rig::mesh::Mesh;
-use crate::rig::mocap::Bvh;
+use crate::rig::mocap::Mocap;
 use crate::rig::{Clip, Rig};
 
 /// Source options shared by `train`, `simulate` and `eval`.
@@ -136,19 +136,19 @@ impl SourceArgs {
 
     /// The mannequin (of --mannequin's skeleton, or the file's own) and the file's motion.
     fn bvh_rig(&self, path: &Path) -> Result<(Box<dyn Rig>, Clip)> {
-        let options = BvhOptions {
+        let options = MocapOptions {
             root_translation: self.root_translation,
             hat: !self.no_hat,
             fps: self.fps,
         };
         let Some(skeleton) = &self.mannequin else {
-            let rig = BvhRig::from_file(path, &options)?;
-            let frames = self.frames.clone().unwrap_or(0..rig.bvh().frame_count());
+            let rig = MocapRig::from_file(path, &options)?;
+            let frames = self.frames.clone().unwrap_or(0..rig.mocap().frame_count());
             let clip = rig.clip_range(frames)?;
             return Ok((Box::new(rig), clip));
         };
-        let rig = BvhRig::from_file(skeleton, &options)?;
-        let motion = Bvh::read(path)?;
+        let rig = MocapRig::from_file(skeleton, &options)?;
+        let motion = Mocap::read(path)?;
         let frames = self.frames.clone().unwrap_or(0..motion.frame_count());
         let name = path
             .file_stem()

@@ -152,7 +152,7 @@ pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>
     let (n2, v, a, ka) = (
         model.order * model.order,
         model.vertices,
-        model.joints,
+        model.pose_len,
         model.pose_dims(),
     );
     limit("order", model.order, 1, MAX_ORDER)?;
@@ -255,10 +255,10 @@ struct SectionBytes {
 }
 
 /// The optional section of pose-entry names: one per line, so a name may not hold a newline.
-fn angle_names_section(names: &[String], joints: usize) -> Result<SectionBytes, ExportError> {
-    if names.len() != joints {
+fn angle_names_section(names: &[String], pose_len: usize) -> Result<SectionBytes, ExportError> {
+    if names.len() != pose_len {
         return Err(ExportError::AngleNames {
-            problem: format!("{} names for {joints} pose entries", names.len()),
+            problem: format!("{} names for {pose_len} pose entries", names.len()),
         });
     }
     if let Some(bad) = names.iter().find(|n| n.is_empty() || n.contains('\n')) {
@@ -315,7 +315,7 @@ fn assemble(
         let header = Header {
             order: model.order as u8,
             vertices: model.vertices as u32,
-            joints: model.joints as u16,
+            joints: model.pose_len as u16,
             pose_dims: model.pose_dims() as u16,
             coef_dims: model.coef_dims() as u32,
             basis,
@@ -356,7 +356,7 @@ mod tests {
         LinearModel {
             order: 2,
             vertices: v,
-            joints: 3,
+            pose_len: 3,
             pose_mean: vec![0.1, -0.2, 0.3],
             pose_projection: vec![1.0, 0.0, 0.5, 0.0, 1.0, -0.5],
             weights: (0..n2 * (ka + 1) * kv)

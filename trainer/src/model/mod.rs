@@ -42,8 +42,8 @@ pub struct LinearModel {
     pub order: usize,
     /// Number of mesh vertices v.
     pub vertices: usize,
-    /// Number of joint angles a per pose.
-    pub joints: usize,
+    /// Length a of the pose vector: entries per pose (joint angles, rotation-vector components).
+    pub pose_len: usize,
     /// Mean pose μ (a values).
     pub pose_mean: Vec<f64>,
     /// Pose projection P, `k_a × a` row-major.
@@ -57,7 +57,7 @@ pub struct LinearModel {
     /// `None`: transfer in world space; otherwise in each vertex's bone frame, and
     /// [`LinearModel::predict`] gives bone-frame transfer.
     pub bones: Option<BoneFrames>,
-    /// Names of the `joints` pose entries, so tools can map a clip onto the model's pose
+    /// Names of the `pose_len` pose entries, so tools can map a clip onto the model's pose
     /// vector; empty when the source had none (an unnamed angle CSV).
     pub angle_names: Vec<String>,
 }
@@ -67,7 +67,7 @@ impl LinearModel {
     pub fn pose_dims(&self) -> usize {
         self.pose_projection
             .len()
-            .checked_div(self.joints)
+            .checked_div(self.pose_len)
             .unwrap_or(0)
     }
 
@@ -82,7 +82,7 @@ impl LinearModel {
     /// Reference prediction in f64: per-vertex transfer, `v × n²` vertex-major.
     pub fn predict(&self, angles: &[f64]) -> Vec<f64> {
         let (a, ka, kv, n2) = (
-            self.joints,
+            self.pose_len,
             self.pose_dims(),
             self.coef_dims(),
             self.order * self.order,

@@ -57,7 +57,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         "aprt demo: built-in character, {} vertices, {} triangles, {} joint angles; order {order}, {} rays",
         bind.vertex_count(),
         bind.triangles.len(),
-        character.joint_angle_count(),
+        character.pose_len(),
         args.rays
     );
     let settings = BakeSettings {
@@ -122,7 +122,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         character: format!(
             "built-in, {} vertices, {} joint angles",
             bind.vertex_count(),
-            character.joint_angle_count()
+            character.pose_len()
         ),
         order,
         rays: args.rays,

@@ -23,8 +23,8 @@ use crate::report::figures::{picture_lighting, save_model_frame};
 use crate::report::plots::{Axes, Series, line_plot};
 use crate::rig::Rig;
 use crate::rig::gltf::GltfRig;
-use crate::rig::mannequin::{BvhOptions, BvhRig};
-use crate::rig::mocap::Bvh;
+use crate::rig::mannequin::{MocapOptions, MocapRig};
+use crate::rig::mocap::Mocap;
 use crate::rig::pose_layout::PoseLayout;
 
 /// A clip's name and frames (the rig's pose vectors).
@@ -477,12 +477,12 @@ pub fn asset_studies(assets: &Path) -> Result<Vec<Study>> {
         tests,
     });
 
-    let options = BvhOptions {
+    let options = MocapOptions {
         fps: Some(STUDY_FPS),
-        ..BvhOptions::default()
+        ..MocapOptions::default()
     };
-    let subject = BvhRig::from_file(&bvh.join("cmu_01_01.bvh"), &options)?;
-    let walk = Bvh::read(&bvh.join("cmu_walk_delfem2.bvh"))?;
+    let subject = MocapRig::from_file(&bvh.join("cmu_01_01.bvh"), &options)?;
+    let walk = Mocap::read(&bvh.join("cmu_walk_delfem2.bvh"))?;
     let train = subject.clip_range(0..1200)?.frames;
     let later = subject.clip_range(1200..1800)?.frames;
     let retargeted = subject

@@ -256,7 +256,7 @@ pub fn fit(
     let model = LinearModel {
         order,
         vertices,
-        joints: angles.ncols(),
+        pose_len: angles.ncols(),
         pose_mean: pca.mean.clone(),
         // nalgebra is column-major; the model stores P row-major.
         pose_projection: pca.projection.transpose().as_slice().to_vec(),

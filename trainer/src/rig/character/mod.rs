@@ -98,7 +98,7 @@ impl Character {
     }
 
     /// Number of joint angles a pose has.
-    pub fn joint_angle_count(&self) -> usize {
+    pub fn pose_len(&self) -> usize {
         self.angles.len()
     }
 

@@ -29,7 +29,7 @@ fn character_sizes_are_in_range() {
     let c = character();
     let v = c.bind_mesh().vertex_count();
     assert!((10_000..=25_000).contains(&v), "{v} vertices");
-    assert!(c.joint_angle_count() >= 20);
+    assert!(c.pose_len() >= 20);
     let names = c.angle_names();
     let mut unique = names.clone();
     unique.sort_unstable();
@@ -38,7 +38,7 @@ fn character_sizes_are_in_range() {
     for a in c.joint_angles() {
         assert!(a.min < a.max && (a.min..=a.max).contains(&a.rest), "{a:?}");
     }
-    assert_eq!(c.limits().len(), c.joint_angle_count());
+    assert_eq!(c.limits().len(), c.pose_len());
 }
 
 #[test]
@@ -210,7 +210,7 @@ fn character_pose_rejects_bad_input() {
     assert_eq!(
         c.joint_matrices(&[0.0; 3]),
         Err(CharacterError::Pose(PoseError::Length {
-            expected: c.joint_angle_count(),
+            expected: c.pose_len(),
             got: 3
         }))
     );
@@ -244,7 +244,7 @@ fn character_clips_are_named_smooth_and_inside_the_limits() {
         }
         assert_eq!(clip.fps, 30.0);
         for (f, frame) in clip.frames.iter().enumerate() {
-            assert_eq!(frame.len(), c.joint_angle_count());
+            assert_eq!(frame.len(), c.pose_len());
             for (value, a) in frame.iter().zip(c.joint_angles()) {
                 assert!(
                     (a.min..=a.max).contains(value),

@@ -34,7 +34,7 @@ use crate::rig::character::body::{
     CROWN, HAT_ORIGIN, HEAD_CENTRE, NOSE_ORIGIN, RING_STEP, hat, head, nose,
 };
 use crate::rig::lathe::{self, Band, Lathe, Part, band, capsule_profile};
-use crate::rig::mocap::Bvh;
+use crate::rig::mocap::Mocap;
 
 /// Pipe-model constant (see the module docs).
 const PIPE: f64 = 0.057;
@@ -77,10 +77,15 @@ impl Bone {
     }
 }
 
-/// Builds the surface for `bvh` whose rest joint positions (file frame) are `rest`;
+/// Builds the surface for `mocap` whose rest joint positions (file frame) are `rest`;
 /// `to_mesh` turns file axes into mesh axes. `None` if no bone has a nonzero length.
-pub(super) fn build(bvh: &Bvh, rest: &[DVec3], to_mesh: DQuat, with_hat: bool) -> Option<Built> {
-    let joints = bvh.joints();
+pub(super) fn build(
+    mocap: &Mocap,
+    rest: &[DVec3],
+    to_mesh: DQuat,
+    with_hat: bool,
+) -> Option<Built> {
+    let joints = mocap.joints();
     let at = |j: usize| to_mesh * rest[j];
     // Every bone end, zero-length ones included, to measure the height.
     let mut bones: Vec<Bone> = Vec::new();

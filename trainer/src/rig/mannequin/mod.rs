@@ -16,7 +16,7 @@
 //! on a non-root joint they change the skeleton's shape and are always entries
 //! (`<joint>.tx`, `.ty`, `.tz`, file units, added to the offset); on the root they only move
 //! the whole body, and PRT transfer is invariant under translation, so they are entries only
-//! when [`BvhOptions::root_translation`] asks for them (to render the actor walking).
+//! when [`MocapOptions::root_translation`] asks for them (to render the actor walking).
 //! [`Rig::joint_matrices`] rebuilds the skeleton from the pose vector alone.
 //!
 //! **Clips.** A clip's frames are pose vectors sampled from the file's frames, optionally
@@ -25,7 +25,7 @@
 //! cost). A rotation vector is only defined up to whole turns about its axis; clips choose,
 //! frame by frame, the representative nearest the previous frame so that entries stay
 //! continuous through half turns (the root turning round), which the linear fit needs.
-//! Motion from another file drives the mannequin by joint name ([`BvhRig::retarget`]).
+//! Motion from another file drives the mannequin by joint name ([`MocapRig::retarget`]).
 
 mod body;
 
@@ -36,14 +36,14 @@ use anyhow::Result;
 use glam::{DAffine3, DQuat, DVec3, Mat4};
 
 use crate::rig::mesh::Mesh;
-use crate::rig::mocap::{Bvh, BvhError};
+use crate::rig::mocap::{Mocap, MocapError};
 use crate::rig::rotation_vector;
 use crate::rig::skin::Skin;
 use crate::rig::{Clip, MAX_FRAMES, PoseError, Rig, check_pose};
 
-/// How to build a [`BvhRig`].
+/// How to build a [`MocapRig`].
 #[derive(Clone, Debug, PartialEq)]
-pub struct BvhOptions {
+pub struct MocapOptions {
     /// Keep the root's position channels as pose entries (see the module docs). Off by
     /// default: transfer does not depend on where the body is.
     pub root_translation: bool,
@@ -53,9 +53,9 @@ pub struct BvhOptions {
     pub fps: Option<f64>,
 }
 
-impl Default for BvhOptions {
+impl Default for MocapOptions {
     fn default() -> Self {
-        BvhOptions {
+        MocapOptions {
             root_translation: false,
             hat: true,
             fps: None,
@@ -65,10 +65,10 @@ impl Default for BvhOptions {
 
 /// Why a mannequin, a pose or a clip could not be made.
 #[derive(Debug, thiserror::Error)]
-pub enum BvhRigError {
+pub enum MocapRigError {
     /// The BVH file could not be read or parsed.
     #[error(transparent)]
-    Bvh(#[from] BvhError),
+    Mocap(#[from] MocapError),
     /// The skeleton has no bone of nonzero length to put a surface around.
     #[error("the skeleton of {clip:?} has no bone of nonzero length")]
     NoBones {
@@ -142,10 +142,10 @@ pub struct Retargeted {
 
 /// A skinned mannequin around a BVH skeleton, with the file's motion as its clip.
 #[derive(Clone, Debug)]
-pub struct BvhRig {
+pub struct MocapRig {
     clip_name: String,
-    bvh: Bvh,
-    options: BvhOptions,
+    mocap: Mocap,
+    options: MocapOptions,
     entries: Vec<Entry>,
     rest: Vec<DVec3>,
     height: f64,
@@ -159,28 +159,28 @@ fn to_mesh_frame() -> DQuat {
     DQuat::from_rotation_x(std::f64::consts::FRAC_PI_2)
 }
 
-impl BvhRig {
+impl MocapRig {
     /// Reads a BVH file and builds its mannequin; the clip is named after the file stem.
-    pub fn from_file(path: &Path, options: &BvhOptions) -> Result<BvhRig, BvhRigError> {
-        let bvh = Bvh::read(path)?;
+    pub fn from_file(path: &Path, options: &MocapOptions) -> Result<MocapRig, MocapRigError> {
+        let mocap = Mocap::read(path)?;
         let name = path
             .file_stem()
             .map_or_else(|| "motion".into(), |s| s.to_string_lossy().into_owned());
-        BvhRig::from_bvh(bvh, &name, options)
+        MocapRig::from_mocap(mocap, &name, options)
     }
 
     /// Builds the mannequin of a parsed file; `clip_name` names its motion.
-    pub fn from_bvh(
-        bvh: Bvh,
+    pub fn from_mocap(
+        mocap: Mocap,
         clip_name: &str,
-        options: &BvhOptions,
-    ) -> Result<BvhRig, BvhRigError> {
+        options: &MocapOptions,
+    ) -> Result<MocapRig, MocapRigError> {
         if let Some(fps) = options.fps {
             check_fps(fps)?;
         }
-        let rest = bvh.rest_positions();
-        let body = body::build(&bvh, &rest, to_mesh_frame(), options.hat).ok_or_else(|| {
-            BvhRigError::NoBones {
+        let rest = mocap.rest_positions();
+        let body = body::build(&mocap, &rest, to_mesh_frame(), options.hat).ok_or_else(|| {
+            MocapRigError::NoBones {
                 clip: clip_name.into(),
             }
         })?;
@@ -189,7 +189,7 @@ impl BvhRig {
             unreachable!("lathe weights are positive partitions of unity: {e}")
         });
         let mut entries = Vec::new();
-        for (j, joint) in bvh.joints().iter().enumerate() {
+        for (j, joint) in mocap.joints().iter().enumerate() {
             if joint.translates() && (joint.parent.is_some() || options.root_translation) {
                 entries.push(Entry::Translation(j));
             }
@@ -197,9 +197,9 @@ impl BvhRig {
                 entries.push(Entry::Rotation(j));
             }
         }
-        Ok(BvhRig {
+        Ok(MocapRig {
             clip_name: clip_name.into(),
-            bvh,
+            mocap,
             options: options.clone(),
             entries,
             rest,
@@ -211,8 +211,8 @@ impl BvhRig {
     }
 
     /// The parsed file.
-    pub fn bvh(&self) -> &Bvh {
-        &self.bvh
+    pub fn mocap(&self) -> &Mocap {
+        &self.mocap
     }
 
     /// The skeleton's rest height in the file's units (lowest to highest joint or End Site
@@ -235,40 +235,40 @@ impl BvhRig {
     /// vectors have angles in `[0, π]`; clips unwrap them (see the module docs).
     ///
     /// # Panics
-    /// If `f >= self.bvh().frame_count()`.
+    /// If `f >= self.mocap().frame_count()`.
     pub fn frame_pose(&self, f: usize) -> Vec<f64> {
-        let identity: Vec<Option<usize>> = (0..self.bvh.joints().len()).map(Some).collect();
-        self.pose_of(&self.bvh, &identity, f as f64)
+        let identity: Vec<Option<usize>> = (0..self.mocap.joints().len()).map(Some).collect();
+        self.pose_of(&self.mocap, &identity, f as f64)
     }
 
     /// Frames `frames` of the file (indices at the file's rate), resampled to
-    /// [`BvhOptions::fps`] if set. Errors if the range is empty or runs past the end, saying
+    /// [`MocapOptions::fps`] if set. Errors if the range is empty or runs past the end, saying
     /// how many frames there are.
-    pub fn clip_range(&self, frames: Range<usize>) -> Result<Clip, BvhRigError> {
-        let identity: Vec<Option<usize>> = (0..self.bvh.joints().len()).map(Some).collect();
-        self.sample(&self.bvh, &self.clip_name, &identity, frames)
+    pub fn clip_range(&self, frames: Range<usize>) -> Result<Clip, MocapRigError> {
+        let identity: Vec<Option<usize>> = (0..self.mocap.joints().len()).map(Some).collect();
+        self.sample(&self.mocap, &self.clip_name, &identity, frames)
     }
 
     /// Drives the mannequin with `source`'s motion (frames `frames` of it, resampled like
-    /// [`BvhRig::clip_range`]) by copying the local rotations, and position channels where
+    /// [`MocapRig::clip_range`]) by copying the local rotations, and position channels where
     /// the mannequin has them as entries, of same-named joints. Joints of the mannequin the
     /// source lacks stay at rest; both lists are reported. Rotations are copied as they are,
     /// which is right when both skeletons share a rest pose convention (as CMU's do); root
     /// translation is copied in the source's units.
     pub fn retarget(
         &self,
-        source: &Bvh,
+        source: &Mocap,
         name: &str,
         frames: Range<usize>,
-    ) -> Result<Retargeted, BvhRigError> {
+    ) -> Result<Retargeted, MocapRigError> {
         let map: Vec<Option<usize>> = self
-            .bvh
+            .mocap
             .joints()
             .iter()
             .map(|j| source.joint_index(&j.name))
             .collect();
         if map.iter().all(Option::is_none) {
-            return Err(BvhRigError::NoCommonJoint {
+            return Err(MocapRigError::NoCommonJoint {
                 source_clip: name.into(),
             });
         }
@@ -277,7 +277,7 @@ impl BvhRig {
         };
         let mut missing: Vec<String> = Vec::new();
         for j in self.entries.iter().map(joint) {
-            let name = &self.bvh.joints()[j].name;
+            let name = &self.mocap.joints()[j].name;
             if map[j].is_none() && missing.last() != Some(name) {
                 missing.push(name.clone());
             }
@@ -285,7 +285,7 @@ impl BvhRig {
         let extra = source
             .joints()
             .iter()
-            .filter(|j| self.bvh.joint_index(&j.name).is_none())
+            .filter(|j| self.mocap.joint_index(&j.name).is_none())
             .map(|j| j.name.clone())
             .collect();
         Ok(Retargeted {
@@ -299,14 +299,14 @@ impl BvhRig {
     /// joint → source joint).
     fn sample(
         &self,
-        source: &Bvh,
+        source: &Mocap,
         name: &str,
         map: &[Option<usize>],
         frames: Range<usize>,
-    ) -> Result<Clip, BvhRigError> {
+    ) -> Result<Clip, MocapRigError> {
         let count = source.frame_count();
         if frames.start >= frames.end || frames.end > count {
-            return Err(BvhRigError::FrameRange {
+            return Err(MocapRigError::FrameRange {
                 clip: name.into(),
                 start: frames.start,
                 end: frames.end,
@@ -321,7 +321,7 @@ impl BvhRig {
         let last = (frames.end - 1 - frames.start) as f64;
         let n = (last / step + 1e-9).floor() + 1.0;
         if n > MAX_FRAMES as f64 {
-            return Err(BvhRigError::TooManyFrames {
+            return Err(MocapRigError::TooManyFrames {
                 clip: name.into(),
                 fps,
             });
@@ -348,7 +348,7 @@ impl BvhRig {
 
     /// The pose at fractional source frame `at`: rotations slerped and translations
     /// interpolated linearly between the two frames around it.
-    fn pose_of(&self, source: &Bvh, map: &[Option<usize>], at: f64) -> Vec<f64> {
+    fn pose_of(&self, source: &Mocap, map: &[Option<usize>], at: f64) -> Vec<f64> {
         let a = at.floor() as usize;
         let t = at - a as f64;
         let b = (a + 1).min(source.frame_count() - 1);
@@ -375,9 +375,9 @@ impl BvhRig {
     }
 
     /// Skinning matrices for a pose vector; see [`Rig::joint_matrices`].
-    pub fn joint_matrices(&self, pose: &[f64]) -> Result<Vec<Mat4>, BvhRigError> {
+    pub fn joint_matrices(&self, pose: &[f64]) -> Result<Vec<Mat4>, MocapRigError> {
         check_pose(pose, self.pose_len(), |i| self.angle_names().swap_remove(i))?;
-        let joints = self.bvh.joints();
+        let joints = self.mocap.joints();
         let mut rotation = vec![DQuat::IDENTITY; joints.len()];
         let mut translation: Vec<DVec3> = joints.iter().map(|j| j.offset).collect();
         for (e, v) in self.entries.iter().zip(pose.chunks_exact(3)) {
@@ -388,7 +388,7 @@ impl BvhRig {
             }
         }
         let axes = DAffine3::from_quat(to_mesh_frame());
-        let world = self.bvh.chain(|j| (rotation[j], translation[j]));
+        let world = self.mocap.chain(|j| (rotation[j], translation[j]));
         Ok(world
             .iter()
             .zip(&self.rest)
@@ -412,15 +412,15 @@ fn frame_step(ratio: f64) -> f64 {
     }
 }
 
-fn check_fps(fps: f64) -> Result<(), BvhRigError> {
+fn check_fps(fps: f64) -> Result<(), MocapRigError> {
     if fps.is_finite() && fps > 0.0 {
         Ok(())
     } else {
-        Err(BvhRigError::BadFps { fps })
+        Err(MocapRigError::BadFps { fps })
     }
 }
 
-impl Rig for BvhRig {
+impl Rig for MocapRig {
     fn angle_names(&self) -> Vec<String> {
         let mut names = Vec::with_capacity(self.pose_len());
         for e in &self.entries {
@@ -428,7 +428,7 @@ impl Rig for BvhRig {
                 Entry::Translation(j) => (j, ["tx", "ty", "tz"]),
                 Entry::Rotation(j) => (j, ["x", "y", "z"]),
             };
-            let joint = &self.bvh.joints()[j].name;
+            let joint = &self.mocap.joints()[j].name;
             names.extend(axes.map(|a| format!("{joint}.{a}")));
         }
         names
@@ -443,7 +443,7 @@ impl Rig for BvhRig {
     }
 
     fn joint_matrices(&self, pose: &[f64]) -> Result<Vec<Mat4>> {
-        Ok(BvhRig::joint_matrices(self, pose)?)
+        Ok(MocapRig::joint_matrices(self, pose)?)
     }
 
     fn clip_names(&self) -> Vec<String> {
@@ -452,13 +452,13 @@ impl Rig for BvhRig {
 
     fn clip(&self, name: &str) -> Result<Clip> {
         if name != self.clip_name {
-            return Err(BvhRigError::UnknownClip {
+            return Err(MocapRigError::UnknownClip {
                 name: name.into(),
                 available: self.clip_name.clone(),
             }
             .into());
         }
-        Ok(self.clip_range(0..self.bvh.frame_count())?)
+        Ok(self.clip_range(0..self.mocap.frame_count())?)
     }
 }
 

@@ -59,20 +59,20 @@ Frame Time: 0.1
     )
 }
 
-fn rig(options: &BvhOptions) -> BvhRig {
-    let bvh = Bvh::parse(&figure(), Path::new("figure.bvh")).unwrap();
-    BvhRig::from_bvh(bvh, "figure", options).unwrap()
+fn rig(options: &MocapOptions) -> MocapRig {
+    let mocap = Mocap::parse(&figure(), Path::new("figure.bvh")).unwrap();
+    MocapRig::from_mocap(mocap, "figure", options).unwrap()
 }
 
 #[test]
 fn pose_vector_lists_every_rotating_joint_and_root_translation_on_request() {
-    let plain = rig(&BvhOptions::default());
+    let plain = rig(&MocapOptions::default());
     let names = plain.angle_names();
     assert_eq!(names.len(), 18);
     assert_eq!(&names[..4], ["Hips.x", "Hips.y", "Hips.z", "LHipJoint.x"]);
-    let moving = rig(&BvhOptions {
+    let moving = rig(&MocapOptions {
         root_translation: true,
-        ..BvhOptions::default()
+        ..MocapOptions::default()
     });
     assert_eq!(
         &moving.angle_names()[..4],
@@ -93,7 +93,7 @@ fn pose_vector_lists_every_rotating_joint_and_root_translation_on_request() {
 
 #[test]
 fn pose_errors_name_the_entry() {
-    let r = rig(&BvhOptions::default());
+    let r = rig(&MocapOptions::default());
     assert_eq!(
         r.joint_matrices(&[0.0; 3]).unwrap_err().to_string(),
         "a pose needs 18 values, got 3"
@@ -108,13 +108,13 @@ fn pose_errors_name_the_entry() {
         Rig::clip(&r, "walk").unwrap_err().to_string(),
         "no clip named \"walk\"; available: figure"
     );
-    let bvh = Bvh::parse(&figure(), Path::new("figure.bvh")).unwrap();
-    let err = BvhRig::from_bvh(
-        bvh,
+    let mocap = Mocap::parse(&figure(), Path::new("figure.bvh")).unwrap();
+    let err = MocapRig::from_mocap(
+        mocap,
         "figure",
-        &BvhOptions {
+        &MocapOptions {
             fps: Some(0.0),
-            ..BvhOptions::default()
+            ..MocapOptions::default()
         },
     )
     .unwrap_err();
@@ -123,9 +123,9 @@ fn pose_errors_name_the_entry() {
         "frame rate 0 is not a positive finite number"
     );
     // A finite but absurd rate is refused before anything is allocated.
-    let fast = rig(&BvhOptions {
+    let fast = rig(&MocapOptions {
         fps: Some(1e12),
-        ..BvhOptions::default()
+        ..MocapOptions::default()
     });
     assert!(
         matches!(
@@ -138,7 +138,7 @@ fn pose_errors_name_the_entry() {
 
 #[test]
 fn mannequin_skips_zero_length_bones_and_blends_across_joints() {
-    let r = rig(&BvhOptions::default());
+    let r = rig(&MocapOptions::default());
     let names: Vec<&str> = r.parts().map(|(n, _)| n).collect();
     assert_eq!(
         names,
@@ -185,9 +185,9 @@ fn mannequin_skips_zero_length_bones_and_blends_across_joints() {
     assert!(moved(|p| p[2] < -12.0) > 3.0);
     assert_eq!(moved(|p| p[2] > 4.0), 0.0);
 
-    let bare = rig(&BvhOptions {
+    let bare = rig(&MocapOptions {
         hat: false,
-        ..BvhOptions::default()
+        ..MocapOptions::default()
     });
     assert!(bare.parts().all(|(n, _)| n != "hat"));
     assert!(bare.bind_mesh().vertex_count() < mesh.vertex_count());
@@ -197,16 +197,16 @@ fn mannequin_skips_zero_length_bones_and_blends_across_joints() {
 fn skeletons_without_bones_and_motions_without_shared_joints_are_refused() {
     let point = "HIERARCHY\nROOT A\n{\n OFFSET 0 0 0\n CHANNELS 3 Xrotation Yrotation Zrotation\n}\n\
                  MOTION\nFrames: 1\nFrame Time: 0.1\n0 0 0\n";
-    let bvh = Bvh::parse(point, Path::new("point.bvh")).unwrap();
+    let mocap = Mocap::parse(point, Path::new("point.bvh")).unwrap();
     assert_eq!(
-        BvhRig::from_bvh(bvh.clone(), "point", &BvhOptions::default())
+        MocapRig::from_mocap(mocap.clone(), "point", &MocapOptions::default())
             .unwrap_err()
             .to_string(),
         "the skeleton of \"point\" has no bone of nonzero length"
     );
-    let r = rig(&BvhOptions::default());
+    let r = rig(&MocapOptions::default());
     assert_eq!(
-        r.retarget(&bvh, "point", 0..1).unwrap_err().to_string(),
+        r.retarget(&mocap, "point", 0..1).unwrap_err().to_string(),
         "no joint of \"point\" has the name of a joint of this mannequin"
     );
 }

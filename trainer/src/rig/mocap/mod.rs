@@ -19,7 +19,7 @@ use std::path::Path;
 
 use glam::{DAffine3, DQuat, DVec3};
 
-pub use parse::{BvhError, Problem};
+pub use parse::{MocapError, Problem};
 
 /// One animation channel of a joint.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -104,7 +104,7 @@ impl Joint {
 
 /// A parsed BVH file: the hierarchy, the frame rate and every frame's channel values.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Bvh {
+pub struct Mocap {
     joints: Vec<Joint>,
     frame_time: f64,
     channel_count: usize,
@@ -113,19 +113,19 @@ pub struct Bvh {
     values: Vec<f64>,
 }
 
-impl Bvh {
+impl Mocap {
     /// Reads and parses a BVH file. Errors name the file, the line and the problem.
-    pub fn read(path: &Path) -> Result<Bvh, BvhError> {
-        let text = std::fs::read_to_string(path).map_err(|source| BvhError::Read {
+    pub fn read(path: &Path) -> Result<Mocap, MocapError> {
+        let text = std::fs::read_to_string(path).map_err(|source| MocapError::Read {
             path: path.to_owned(),
             source,
         })?;
-        Bvh::parse(&text, path)
+        Mocap::parse(&text, path)
     }
 
     /// Parses BVH text; `path` is only used to name the source in errors.
-    pub fn parse(text: &str, path: &Path) -> Result<Bvh, BvhError> {
-        parse::parse(text).map_err(|(line, problem)| BvhError::Parse {
+    pub fn parse(text: &str, path: &Path) -> Result<Mocap, MocapError> {
+        parse::parse(text).map_err(|(line, problem)| MocapError::Parse {
             path: path.to_owned(),
             line,
             problem,

@@ -11,11 +11,11 @@ use std::str::SplitAsciiWhitespace;
 
 use glam::DVec3;
 
-use super::{Bvh, Channel, Joint};
+use super::{Channel, Joint, Mocap};
 
 /// Why a BVH file could not be read.
 #[derive(Debug, thiserror::Error)]
-pub enum BvhError {
+pub enum MocapError {
     /// The file could not be read.
     #[error("cannot read {path}")]
     Read {
@@ -259,7 +259,7 @@ impl Open {
     }
 }
 
-pub(super) fn parse(text: &str) -> Result<Bvh, Failure> {
+pub(super) fn parse(text: &str) -> Result<Mocap, Failure> {
     let mut lex = Lexer::new(text);
     lex.expect("HIERARCHY")?;
     let joints = hierarchy(&mut lex)?;
@@ -460,7 +460,7 @@ fn open_joint(
 }
 
 /// Reads `Frames:`, `Frame Time:` and the frame lines after `MOTION`.
-fn motion(lex: &mut Lexer, joints: Vec<Joint>, text_len: usize) -> Result<Bvh, Failure> {
+fn motion(lex: &mut Lexer, joints: Vec<Joint>, text_len: usize) -> Result<Mocap, Failure> {
     lex.expect("Frames:")?;
     let (line, token) = lex.expect_any("a frame count")?;
     let declared = token.parse::<usize>().map_err(|_| {
@@ -529,7 +529,7 @@ fn motion(lex: &mut Lexer, joints: Vec<Joint>, text_len: usize) -> Result<Bvh, F
             Problem::FrameCount { declared, found },
         ));
     }
-    Ok(Bvh {
+    Ok(Mocap {
         joints,
         frame_time,
         channel_count,

@@ -37,8 +37,8 @@ Frame Time: 0.5
 10 20 30  90 90 90  90 90 90  0.5 90 0 0
 ";
 
-fn parse(text: &str) -> Result<Bvh, BvhError> {
-    Bvh::parse(text, Path::new("test.bvh"))
+fn parse(text: &str) -> Result<Mocap, MocapError> {
+    Mocap::parse(text, Path::new("test.bvh"))
 }
 
 fn err(text: &str) -> String {
@@ -66,10 +66,10 @@ fn assert_mat(a: DMat3, b: DMat3) {
 
 #[test]
 fn hierarchy_channels_and_frames_are_read() {
-    let bvh = parse(SMALL).unwrap();
-    let names: Vec<_> = bvh.joints().iter().map(|j| j.name.as_str()).collect();
+    let mocap = parse(SMALL).unwrap();
+    let names: Vec<_> = mocap.joints().iter().map(|j| j.name.as_str()).collect();
     assert_eq!(names, ["Hips", "Chest", "Left Arm"]);
-    let [hips, chest, arm] = [0, 1, 2].map(|i| &bvh.joints()[i]);
+    let [hips, chest, arm] = [0, 1, 2].map(|i| &mocap.joints()[i]);
     assert_eq!(
         (hips.parent, chest.parent, arm.parent),
         (None, Some(0), Some(0))
@@ -91,12 +91,12 @@ fn hierarchy_channels_and_frames_are_read() {
         ]
     );
     assert!(arm.translates() && arm.rotates() && !chest.translates());
-    assert_eq!(bvh.frame_count(), 2);
-    assert_eq!(bvh.fps(), 2.0);
-    assert_eq!(bvh.frame(1)[9], 0.5);
-    assert_eq!(bvh.joint_index("Left Arm"), Some(2));
+    assert_eq!(mocap.frame_count(), 2);
+    assert_eq!(mocap.fps(), 2.0);
+    assert_eq!(mocap.frame(1)[9], 0.5);
+    assert_eq!(mocap.joint_index("Left Arm"), Some(2));
     assert_eq!(
-        bvh.rest_positions(),
+        mocap.rest_positions(),
         [
             DVec3::Y,
             DVec3::new(0.0, 6.0, 0.0),
@@ -112,34 +112,34 @@ fn rotations_compose_in_the_listed_order() {
         "10 20 30  90 90 90  90 90 90",
         "10 20 30  30 -50 70  -20 65 110",
     );
-    let bvh = parse(&text).unwrap();
-    let frame = bvh.frame(1);
+    let mocap = parse(&text).unwrap();
+    let frame = mocap.frame(1);
     // Hips lists Z X Y: R = Rz · Rx · Ry.
-    let (hips, t) = bvh.joints()[0].local(frame);
+    let (hips, t) = mocap.joints()[0].local(frame);
     assert_mat(DMat3::from_quat(hips), rz(30.0) * rx(-50.0) * ry(70.0));
     assert_eq!(t, DVec3::new(10.0, 21.0, 30.0));
     // Chest lists X Y Z: R = Rx · Ry · Rz.
-    let (chest, _) = bvh.joints()[1].local(frame);
+    let (chest, _) = mocap.joints()[1].local(frame);
     assert_mat(DMat3::from_quat(chest), rx(-20.0) * ry(65.0) * rz(110.0));
 
     // At 90° about every axis the orders are easy to follow by hand: Z X Y sends x to −x
     // (Ry: x→−z, Rx: −z→y, Rz: y→−x), X Y Z sends x to z (Rz: x→y, Ry keeps y, Rx: y→z).
-    let bvh = parse(SMALL).unwrap();
-    let (hips, _) = bvh.joints()[0].local(bvh.frame(1));
-    let (chest, _) = bvh.joints()[1].local(bvh.frame(1));
+    let mocap = parse(SMALL).unwrap();
+    let (hips, _) = mocap.joints()[0].local(mocap.frame(1));
+    let (chest, _) = mocap.joints()[1].local(mocap.frame(1));
     assert!((hips * DVec3::X).abs_diff_eq(-DVec3::X, 1e-12));
     assert!((chest * DVec3::X).abs_diff_eq(DVec3::Z, 1e-12));
 }
 
 #[test]
 fn forward_kinematics_chains_parent_transforms_and_position_channels() {
-    let bvh = parse(SMALL).unwrap();
-    let world = bvh.world_transforms(bvh.frame(0));
+    let mocap = parse(SMALL).unwrap();
+    let world = mocap.world_transforms(mocap.frame(0));
     // Frame 0 translates the root only.
     assert_eq!(world[0].translation, DVec3::new(1.0, 3.0, 3.0));
     assert_eq!(world[1].translation, DVec3::new(1.0, 8.0, 3.0));
-    let frame = bvh.frame(1);
-    let world = bvh.world_transforms(frame);
+    let frame = mocap.frame(1);
+    let world = mocap.world_transforms(frame);
     let root = rz(90.0) * rx(90.0) * ry(90.0);
     // The arm's own Xposition (0.5) adds to its offset in the parent's frame.
     let arm = DVec3::new(10.0, 21.0, 30.0) + root * DVec3::new(3.5, 0.0, 0.0);
@@ -255,18 +255,18 @@ fn errors_name_the_file_line_and_problem() {
         "test.bvh:5: the file ends where an OFFSET coordinate should be"
     );
     assert!(matches!(
-        Bvh::read(Path::new("/nonexistent/x.bvh")),
-        Err(BvhError::Read { .. })
+        Mocap::read(Path::new("/nonexistent/x.bvh")),
+        Err(MocapError::Read { .. })
     ));
 }
 
 #[test]
 fn a_joint_without_channels_and_a_file_without_frames_are_valid() {
-    let bvh = parse(
+    let mocap = parse(
         "HIERARCHY\nROOT A\n{\n OFFSET 0 0 0\n JOINT B\n {\n  OFFSET 1 0 0\n }\n}\n\
          MOTION\nFrames: 0\nFrame Time: 0.1\n\n",
     )
     .unwrap();
-    assert_eq!(bvh.frame_count(), 0);
-    assert!(bvh.joints().iter().all(|j| j.channels.is_empty()));
+    assert_eq!(mocap.frame_count(), 0);
+    assert!(mocap.joints().iter().all(|j| j.channels.is_empty()));
 }

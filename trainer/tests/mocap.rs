@@ -5,7 +5,9 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use aprt_trainer::{Bvh, BvhOptions, BvhRig, Rig, View, lambert, render_scalar, save_png_atomic};
+use aprt_trainer::{
+    Mocap, MocapOptions, MocapRig, Rig, View, lambert, render_scalar, save_png_atomic,
+};
 use glam::{DQuat, Vec3};
 
 fn walk(dir: &Path) -> PathBuf {
@@ -23,18 +25,23 @@ fn cmu_files_parse_quickly_with_the_documented_shape() {
     };
     for (path, frames) in [(walk(&dir), 344), (subject_01(&dir), 2752)] {
         let start = Instant::now();
-        let bvh = Bvh::read(&path).unwrap();
+        let mocap = Mocap::read(&path).unwrap();
         let elapsed = start.elapsed();
         eprintln!("{}: parsed in {elapsed:?}", path.display());
-        assert_eq!(bvh.joints().len(), 31);
-        assert_eq!(bvh.frame_count(), frames);
-        assert!((bvh.fps() - 120.0).abs() < 0.01, "{} fps", bvh.fps());
+        assert_eq!(mocap.joints().len(), 31);
+        assert_eq!(mocap.frame_count(), frames);
+        assert!((mocap.fps() - 120.0).abs() < 0.01, "{} fps", mocap.fps());
         assert_eq!(
-            bvh.joints().iter().map(|j| j.channels.len()).sum::<usize>(),
+            mocap
+                .joints()
+                .iter()
+                .map(|j| j.channels.len())
+                .sum::<usize>(),
             96
         );
         assert_eq!(
-            bvh.joints()
+            mocap
+                .joints()
                 .iter()
                 .map(|j| j.end_sites.len())
                 .sum::<usize>(),
@@ -51,7 +58,7 @@ fn mannequin_is_a_sound_smoothly_skinned_mesh() {
     let Some(dir) = common::assets("mannequin_is_a_sound_smoothly_skinned_mesh") else {
         return;
     };
-    let rig = BvhRig::from_file(&walk(&dir), &BvhOptions::default()).unwrap();
+    let rig = MocapRig::from_file(&walk(&dir), &MocapOptions::default()).unwrap();
     let mesh = rig.bind_mesh();
     let v = mesh.vertex_count();
     eprintln!(
@@ -97,7 +104,7 @@ fn mannequin_is_a_sound_smoothly_skinned_mesh() {
     // No part around a zero-length bone (LHipJoint, LeftShoulder, ... sit on their parent).
     assert!(rig.parts().all(|(name, _)| !name.starts_with("Hips-")));
     // Deterministic.
-    let again = BvhRig::from_file(&walk(&dir), &BvhOptions::default()).unwrap();
+    let again = MocapRig::from_file(&walk(&dir), &MocapOptions::default()).unwrap();
     assert_eq!(again.bind_mesh(), mesh);
     assert_eq!(again.skin(), skin);
 }
@@ -111,18 +118,18 @@ fn pose_vectors_reproduce_forward_kinematics_from_the_raw_channels() {
     };
     let to_mesh = DQuat::from_rotation_x(std::f64::consts::FRAC_PI_2);
     for root_translation in [false, true] {
-        let options = BvhOptions {
+        let options = MocapOptions {
             root_translation,
-            ..BvhOptions::default()
+            ..MocapOptions::default()
         };
-        let rig = BvhRig::from_file(&walk(&dir), &options).unwrap();
-        let bvh = rig.bvh();
-        let rest = bvh.rest_positions();
+        let rig = MocapRig::from_file(&walk(&dir), &options).unwrap();
+        let mocap = rig.mocap();
+        let rest = mocap.rest_positions();
         let names = rig.angle_names();
         assert_eq!(names.len(), 3 * 31 + if root_translation { 3 } else { 0 });
         assert_eq!(names[names.len() - 3], "RThumb.x");
         for f in [0, 100, 343] {
-            let world = bvh.world_transforms(bvh.frame(f));
+            let world = mocap.world_transforms(mocap.frame(f));
             let matrices = rig.joint_matrices(&rig.frame_pose(f)).unwrap();
             for j in 0..31 {
                 let posed = matrices[j]
@@ -154,7 +161,7 @@ fn clips_cover_frame_ranges_resample_and_report_bad_ranges() {
     else {
         return;
     };
-    let rig = BvhRig::from_file(&walk(&dir), &BvhOptions::default()).unwrap();
+    let rig = MocapRig::from_file(&walk(&dir), &MocapOptions::default()).unwrap();
     assert_eq!(rig.clip_names(), ["cmu_walk_delfem2"]);
     let full = rig.clip("cmu_walk_delfem2").unwrap();
     assert_eq!((full.frames.len(), full.fps.round()), (344, 120.0));
@@ -170,11 +177,11 @@ fn clips_cover_frame_ranges_resample_and_report_bad_ranges() {
         "a range is a slice of the clip"
     );
 
-    let thirty = BvhRig::from_file(
+    let thirty = MocapRig::from_file(
         &walk(&dir),
-        &BvhOptions {
+        &MocapOptions {
             fps: Some(30.0),
-            ..BvhOptions::default()
+            ..MocapOptions::default()
         },
     )
     .unwrap();
@@ -195,8 +202,8 @@ fn motion_retargets_between_cmu_subjects_by_joint_name() {
     let Some(dir) = common::assets("motion_retargets_between_cmu_subjects_by_joint_name") else {
         return;
     };
-    let rig = BvhRig::from_file(&subject_01(&dir), &BvhOptions::default()).unwrap();
-    let walk = Bvh::read(&walk(&dir)).unwrap();
+    let rig = MocapRig::from_file(&subject_01(&dir), &MocapOptions::default()).unwrap();
+    let walk = Mocap::read(&walk(&dir)).unwrap();
     let moved = rig.retarget(&walk, "walk", 0..walk.frame_count()).unwrap();
     assert_eq!(moved.missing, ["LFingers", "RFingers"]);
     assert_eq!(moved.extra, ["LeftHandIndex1", "RightHandIndex1"]);
@@ -205,9 +212,9 @@ fn motion_retargets_between_cmu_subjects_by_joint_name() {
     // Shared joints carry the source's rotations exactly.
     let names = rig.angle_names();
     let knee = names.iter().position(|n| n == "LeftLeg.x").unwrap();
-    let own = BvhRig::from_file(
+    let own = MocapRig::from_file(
         &dir.join("bvh/cmu_walk_delfem2.bvh"),
-        &BvhOptions::default(),
+        &MocapOptions::default(),
     )
     .unwrap();
     let own_knee = own
@@ -229,7 +236,7 @@ fn mannequin_renders_in_bind_pose_and_mid_walk() {
     let Some(dir) = common::assets("mannequin_renders_in_bind_pose_and_mid_walk") else {
         return;
     };
-    let rig = BvhRig::from_file(&walk(&dir), &BvhOptions::default()).unwrap();
+    let rig = MocapRig::from_file(&walk(&dir), &MocapOptions::default()).unwrap();
     let mid = rig.clip("cmu_walk_delfem2").unwrap().frames[172].clone();
     let light = Vec3::new(0.4, -1.0, 0.8);
     for (name, mesh) in [
