@@ -41,4 +41,4 @@ pub use rig::mannequin::{MocapOptions, MocapRig, MocapRigError, Retargeted};
 pub use rig::mesh::Mesh;
 pub use rig::mocap::{Mocap, MocapError};
 pub use rig::skin::{Skin, SkinError, skin};
-pub use rig::{Clip, Rig};
+pub use rig::{Clip, Rig, RigError};

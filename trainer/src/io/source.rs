@@ -108,13 +108,13 @@ impl SourceArgs {
     pub fn rig(&self) -> Result<(Box<dyn Rig>, Clip)> {
         if self.builtin {
             let character = Character::builtin();
-            let clip = Rig::clip(&character, self.clip_name(&character)?)?;
+            let clip = character.clip(self.clip_name(&character)?)?;
             return Ok((Box::new(character), clip));
         }
         if let Some(path) = &self.gltf {
             must_exist(path, &["gltf", "glb"])?;
             let rig = GltfRig::load(path, self.fps.unwrap_or(GLTF_FPS))?;
-            let clip = GltfRig::clip(&rig, self.clip_name(&rig)?)?;
+            let clip = rig.clip(self.clip_name(&rig)?)?;
             for held in rig
                 .held_channels()
                 .iter()

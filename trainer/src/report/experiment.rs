@@ -63,7 +63,7 @@ pub fn pose_all(rig: &dyn Rig, name: &str, poses: &[Vec<f64>]) -> Result<Vec<Mes
     poses
         .iter()
         .map(|p| rig.pose(p))
-        .collect::<Result<Vec<_>>>()
+        .collect::<Result<Vec<_>, _>>()
         .with_context(|| format!("posing clip {name}"))
 }
 

@@ -445,7 +445,7 @@ pub fn asset_studies(assets: &Path) -> Result<Vec<Study>> {
     ] {
         let rig = GltfRig::load(&gltf.join(file), STUDY_FPS)?;
         let name = rig.clip_names()[0].clone();
-        let frames = GltfRig::clip(&rig, &name)?.frames;
+        let frames = rig.clip(&name)?.frames;
         let count = frames.len();
         let (train, test) = split_clip(&name, frames, 2.0 / 3.0);
         studies.push(Study {
@@ -461,9 +461,8 @@ pub fn asset_studies(assets: &Path) -> Result<Vec<Study>> {
         });
     }
     let fox = GltfRig::load(&gltf.join("Fox.gltf"), STUDY_FPS)?;
-    let clip = |name: &str| -> Result<NamedFrames> {
-        Ok((name.to_owned(), GltfRig::clip(&fox, name)?.frames))
-    };
+    let clip =
+        |name: &str| -> Result<NamedFrames> { Ok((name.to_owned(), fox.clip(name)?.frames)) };
     let (train, tests) = (clip("Survey")?, vec![clip("Walk")?, clip("Run")?]);
     studies.push(Study {
         id: "fox".into(),

@@ -14,11 +14,13 @@ pub mod rotation_vector;
 pub mod skin;
 pub mod transfer_rotation;
 
-use anyhow::Result;
 use glam::Mat4;
 
+use character::CharacterError;
+use gltf::GltfError;
+use mannequin::MocapRigError;
 use mesh::Mesh;
-use skin::{Skin, skin};
+use skin::{Skin, SkinError, skin};
 
 /// Most frames one sampled clip may have (an hour at 240 fps): a guard against a malformed
 /// end time or frame rate turning into an unbounded allocation.
@@ -69,6 +71,25 @@ pub fn check_pose(
     }
 }
 
+/// Why a rig could not be posed or could not give a clip: the typed error of the rig that was
+/// asked, unchanged (its message and its source chain are the rig's own), so code that holds a
+/// `dyn Rig` still reports which file, entry or clip was wrong.
+#[derive(Debug, thiserror::Error)]
+pub enum RigError {
+    /// From the built-in character.
+    #[error(transparent)]
+    Character(#[from] CharacterError),
+    /// From a glTF character.
+    #[error(transparent)]
+    Gltf(#[from] GltfError),
+    /// From a motion-capture mannequin.
+    #[error(transparent)]
+    Mocap(#[from] MocapRigError),
+    /// Linear blend skinning of the posed joints failed.
+    #[error(transparent)]
+    Skin(#[from] SkinError),
+}
+
 /// A sequence of poses sampled at a fixed rate. Each frame has one value per pose-vector
 /// entry, in the rig's [`Rig::angle_names`] order.
 #[derive(Clone, Debug, PartialEq)]
@@ -95,10 +116,10 @@ pub trait Rig: Sync {
 
     /// Skinning matrices (bind space → posed space), one per joint, for a pose vector.
     /// Errors name the entry that is wrong (count, NaN).
-    fn joint_matrices(&self, pose: &[f64]) -> Result<Vec<Mat4>>;
+    fn joint_matrices(&self, pose: &[f64]) -> Result<Vec<Mat4>, RigError>;
 
     /// The mesh posed by linear blend skinning.
-    fn pose(&self, pose: &[f64]) -> Result<Mesh> {
+    fn pose(&self, pose: &[f64]) -> Result<Mesh, RigError> {
         Ok(skin(
             self.bind_mesh(),
             self.skin(),
@@ -110,5 +131,5 @@ pub trait Rig: Sync {
     fn clip_names(&self) -> Vec<String>;
 
     /// The clip called `name`; the error lists the names that exist.
-    fn clip(&self, name: &str) -> Result<Clip>;
+    fn clip(&self, name: &str) -> Result<Clip, RigError>;
 }

@@ -18,7 +18,7 @@ use glam::Mat4;
 
 use crate::rig::mesh::Mesh;
 use crate::rig::skin::{Skin, SkinError};
-use crate::rig::{Clip, PoseError, Rig, check_pose};
+use crate::rig::{Clip, PoseError, Rig, RigError, check_pose};
 use skeleton::{Dof, Skeleton};
 
 /// Why a pose or clip request failed.
@@ -117,14 +117,6 @@ impl Character {
         self.angles.iter().map(|a| a.rest).collect()
     }
 
-    /// Skinning matrices (bind space → posed space) for each joint at `angles`.
-    pub fn joint_matrices(&self, angles: &[f64]) -> Result<Vec<Mat4>, CharacterError> {
-        check_pose(angles, self.angles.len(), |i| {
-            self.angles[i].name.to_owned()
-        })?;
-        Ok(skeleton::joint_matrices(&self.skeleton, &self.dofs, angles))
-    }
-
     /// The training clip ("training", 250 frames at 30 fps) that spans the pose space.
     pub fn training_clip(&self) -> Clip {
         clips::training(&self.angles)
@@ -136,32 +128,13 @@ impl Character {
         clips::novel(&self.angles)
     }
 
-    /// Names of every clip `clip` accepts, training first.
-    pub fn clip_names(&self) -> Vec<String> {
-        std::iter::once(self.training_clip())
-            .chain(self.novel_clips())
-            .map(|c| c.name)
-            .collect()
-    }
-
-    /// The clip called `name`; the error lists the names that exist.
-    pub fn clip(&self, name: &str) -> Result<Clip, CharacterError> {
-        std::iter::once(self.training_clip())
-            .chain(self.novel_clips())
-            .find(|c| c.name == name)
-            .ok_or_else(|| CharacterError::UnknownClip {
-                name: name.into(),
-                available: self.clip_names().join(", "),
-            })
-    }
-
     /// Names and triangle ranges of the closed parts the mesh is made of, in mesh order.
     pub fn parts(&self) -> impl Iterator<Item = (&'static str, Range<usize>)> + '_ {
         self.parts.iter().cloned()
     }
 }
 
-/// The built-in character as a [`Rig`]: the typed methods above, behind the common interface.
+/// The built-in character as a [`Rig`]. Its errors are [`RigError::Character`].
 impl Rig for Character {
     fn angle_names(&self) -> Vec<String> {
         self.angles.iter().map(|a| a.name.to_owned()).collect()
@@ -175,16 +148,31 @@ impl Rig for Character {
         &self.skin
     }
 
-    fn joint_matrices(&self, pose: &[f64]) -> anyhow::Result<Vec<Mat4>> {
-        Ok(Character::joint_matrices(self, pose)?)
+    /// Skinning matrices (bind space → posed space) for each joint at the joint angles `pose`.
+    fn joint_matrices(&self, pose: &[f64]) -> Result<Vec<Mat4>, RigError> {
+        check_pose(pose, self.angles.len(), |i| self.angles[i].name.to_owned())
+            .map_err(CharacterError::Pose)?;
+        Ok(skeleton::joint_matrices(&self.skeleton, &self.dofs, pose))
     }
 
+    /// The training clip first, then the novel clips.
     fn clip_names(&self) -> Vec<String> {
-        Character::clip_names(self)
+        std::iter::once(self.training_clip())
+            .chain(self.novel_clips())
+            .map(|c| c.name)
+            .collect()
     }
 
-    fn clip(&self, name: &str) -> anyhow::Result<Clip> {
-        Ok(Character::clip(self, name)?)
+    fn clip(&self, name: &str) -> Result<Clip, RigError> {
+        std::iter::once(self.training_clip())
+            .chain(self.novel_clips())
+            .find(|c| c.name == name)
+            .ok_or_else(|| {
+                RigError::from(CharacterError::UnknownClip {
+                    name: name.into(),
+                    available: self.clip_names().join(", "),
+                })
+            })
     }
 }
 

@@ -57,7 +57,7 @@ use glam::{DVec3, Mat4, Vec3};
 
 use crate::rig::mesh::Mesh;
 use crate::rig::skin::{Skin, SkinError};
-use crate::rig::{Clip, MAX_FRAMES, PoseError, Rig, check_pose};
+use crate::rig::{Clip, MAX_FRAMES, PoseError, Rig, RigError, check_pose};
 use animation::Animation;
 use skeleton::{Skeleton, Trs};
 
@@ -246,44 +246,6 @@ impl GltfRig {
         &self.held
     }
 
-    /// Skinning matrices for a pose vector: every joint at its rest translation and scale,
-    /// rotated by `exp` of its rotation vector from its rest rotation.
-    pub fn joint_matrices(&self, pose: &[f64]) -> Result<Vec<Mat4>, GltfError> {
-        check_pose(pose, self.angle_names.len(), |i| {
-            self.angle_names[i].clone()
-        })
-        .map_err(|source| GltfError::Pose {
-            path: self.path.clone(),
-            source,
-        })?;
-        let mut locals = self.skeleton.rest.clone();
-        for (&node, r) in self.skeleton.joints.iter().zip(pose.chunks_exact(3)) {
-            let delta = crate::rig::rotation_vector::exp(DVec3::new(r[0], r[1], r[2]));
-            locals[node].rotation = self.skeleton.rest[node].rotation * delta;
-        }
-        Ok(self.skeleton.joint_matrices(&locals))
-    }
-
-    /// Names of the clips, in file order.
-    pub fn clip_names(&self) -> Vec<String> {
-        self.animations.iter().map(|a| a.name.clone()).collect()
-    }
-
-    /// The clip called `name`: one pose vector per frame.
-    pub fn clip(&self, name: &str) -> Result<Clip, GltfError> {
-        let (animation, times) = self.frame_times(name)?;
-        let mut frames: Vec<Vec<f64>> = times
-            .iter()
-            .map(|&t| self.pose_of(&animation.locals_at(&self.skeleton.rest, t)))
-            .collect();
-        crate::rig::rotation_vector::continue_turns(&mut frames, 0..self.skeleton.joints.len());
-        Ok(Clip {
-            name: name.to_owned(),
-            fps: self.fps,
-            frames,
-        })
-    }
-
     /// Skinning matrices of frame `frame` of clip `name` with *every* animated property
     /// applied (translations, scales, non-joint nodes), as a glTF viewer would pose it: the
     /// reference the rotation-only pose vector is measured against.
@@ -347,7 +309,7 @@ impl GltfRig {
     }
 }
 
-/// The glTF character as a [`Rig`]: the typed methods above, behind the common interface.
+/// The glTF character as a [`Rig`]. Its errors are [`RigError::Gltf`], naming the file.
 impl Rig for GltfRig {
     fn angle_names(&self) -> Vec<String> {
         self.angle_names.clone()
@@ -361,16 +323,42 @@ impl Rig for GltfRig {
         &self.skin
     }
 
-    fn joint_matrices(&self, pose: &[f64]) -> anyhow::Result<Vec<Mat4>> {
-        Ok(GltfRig::joint_matrices(self, pose)?)
+    /// Skinning matrices for a pose vector: every joint at its rest translation and scale,
+    /// rotated by `exp` of its rotation vector from its rest rotation.
+    fn joint_matrices(&self, pose: &[f64]) -> Result<Vec<Mat4>, RigError> {
+        check_pose(pose, self.angle_names.len(), |i| {
+            self.angle_names[i].clone()
+        })
+        .map_err(|source| GltfError::Pose {
+            path: self.path.clone(),
+            source,
+        })?;
+        let mut locals = self.skeleton.rest.clone();
+        for (&node, r) in self.skeleton.joints.iter().zip(pose.chunks_exact(3)) {
+            let delta = crate::rig::rotation_vector::exp(DVec3::new(r[0], r[1], r[2]));
+            locals[node].rotation = self.skeleton.rest[node].rotation * delta;
+        }
+        Ok(self.skeleton.joint_matrices(&locals))
     }
 
+    /// Names of the clips, in file order.
     fn clip_names(&self) -> Vec<String> {
-        GltfRig::clip_names(self)
+        self.animations.iter().map(|a| a.name.clone()).collect()
     }
 
-    fn clip(&self, name: &str) -> anyhow::Result<Clip> {
-        Ok(GltfRig::clip(self, name)?)
+    /// The clip called `name`: one pose vector per frame.
+    fn clip(&self, name: &str) -> Result<Clip, RigError> {
+        let (animation, times) = self.frame_times(name)?;
+        let mut frames: Vec<Vec<f64>> = times
+            .iter()
+            .map(|&t| self.pose_of(&animation.locals_at(&self.skeleton.rest, t)))
+            .collect();
+        crate::rig::rotation_vector::continue_turns(&mut frames, 0..self.skeleton.joints.len());
+        Ok(Clip {
+            name: name.to_owned(),
+            fps: self.fps,
+            frames,
+        })
     }
 }
 

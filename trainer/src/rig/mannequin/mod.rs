@@ -32,14 +32,13 @@ mod body;
 use std::ops::Range;
 use std::path::Path;
 
-use anyhow::Result;
 use glam::{DAffine3, DQuat, DVec3, Mat4};
 
 use crate::rig::mesh::Mesh;
 use crate::rig::mocap::{Mocap, MocapError};
 use crate::rig::rotation_vector;
 use crate::rig::skin::Skin;
-use crate::rig::{Clip, MAX_FRAMES, PoseError, Rig, check_pose};
+use crate::rig::{Clip, MAX_FRAMES, PoseError, Rig, RigError, check_pose};
 
 /// How to build a [`MocapRig`].
 #[derive(Clone, Debug, PartialEq)]
@@ -140,7 +139,8 @@ pub struct Retargeted {
     pub extra: Vec<String>,
 }
 
-/// A skinned mannequin around a BVH skeleton, with the file's motion as its clip.
+/// A skinned mannequin around a BVH skeleton, with the file's motion as its clip. As a [`Rig`]
+/// its errors are [`RigError::Mocap`].
 #[derive(Clone, Debug)]
 pub struct MocapRig {
     clip_name: String,
@@ -373,31 +373,6 @@ impl MocapRig {
         }
         pose
     }
-
-    /// Skinning matrices for a pose vector; see [`Rig::joint_matrices`].
-    pub fn joint_matrices(&self, pose: &[f64]) -> Result<Vec<Mat4>, MocapRigError> {
-        check_pose(pose, self.pose_len(), |i| self.angle_names().swap_remove(i))?;
-        let joints = self.mocap.joints();
-        let mut rotation = vec![DQuat::IDENTITY; joints.len()];
-        let mut translation: Vec<DVec3> = joints.iter().map(|j| j.offset).collect();
-        for (e, v) in self.entries.iter().zip(pose.chunks_exact(3)) {
-            let v = DVec3::from_slice(v);
-            match *e {
-                Entry::Translation(j) => translation[j] += v,
-                Entry::Rotation(j) => rotation[j] = crate::rig::rotation_vector::exp(v),
-            }
-        }
-        let axes = DAffine3::from_quat(to_mesh_frame());
-        let world = self.mocap.chain(|j| (rotation[j], translation[j]));
-        Ok(world
-            .iter()
-            .zip(&self.rest)
-            .map(|(w, &rest)| {
-                let m = axes * *w * DAffine3::from_translation(-rest) * axes.inverse();
-                glam::DMat4::from(m).as_mat4()
-            })
-            .collect())
-    }
 }
 
 /// Source frames per output frame. `Frame Time` is printed to a few digits (CMU: `.0083333`
@@ -442,15 +417,37 @@ impl Rig for MocapRig {
         &self.skin
     }
 
-    fn joint_matrices(&self, pose: &[f64]) -> Result<Vec<Mat4>> {
-        Ok(MocapRig::joint_matrices(self, pose)?)
+    /// Rebuilds the skeleton from the pose vector alone (see the module docs).
+    fn joint_matrices(&self, pose: &[f64]) -> Result<Vec<Mat4>, RigError> {
+        check_pose(pose, self.pose_len(), |i| self.angle_names().swap_remove(i))
+            .map_err(MocapRigError::Pose)?;
+        let joints = self.mocap.joints();
+        let mut rotation = vec![DQuat::IDENTITY; joints.len()];
+        let mut translation: Vec<DVec3> = joints.iter().map(|j| j.offset).collect();
+        for (e, v) in self.entries.iter().zip(pose.chunks_exact(3)) {
+            let v = DVec3::from_slice(v);
+            match *e {
+                Entry::Translation(j) => translation[j] += v,
+                Entry::Rotation(j) => rotation[j] = crate::rig::rotation_vector::exp(v),
+            }
+        }
+        let axes = DAffine3::from_quat(to_mesh_frame());
+        let world = self.mocap.chain(|j| (rotation[j], translation[j]));
+        Ok(world
+            .iter()
+            .zip(&self.rest)
+            .map(|(w, &rest)| {
+                let m = axes * *w * DAffine3::from_translation(-rest) * axes.inverse();
+                glam::DMat4::from(m).as_mat4()
+            })
+            .collect())
     }
 
     fn clip_names(&self) -> Vec<String> {
         vec![self.clip_name.clone()]
     }
 
-    fn clip(&self, name: &str) -> Result<Clip> {
+    fn clip(&self, name: &str) -> Result<Clip, RigError> {
         if name != self.clip_name {
             return Err(MocapRigError::UnknownClip {
                 name: name.into(),

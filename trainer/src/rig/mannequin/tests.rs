@@ -105,7 +105,7 @@ fn pose_errors_name_the_entry() {
         "pose value 10 (LeftLeg.y) is NaN, not a finite number"
     );
     assert_eq!(
-        Rig::clip(&r, "walk").unwrap_err().to_string(),
+        r.clip("walk").unwrap_err().to_string(),
         "no clip named \"walk\"; available: figure"
     );
     let mocap = Mocap::parse(&figure(), Path::new("figure.bvh")).unwrap();
@@ -129,7 +129,7 @@ fn pose_errors_name_the_entry() {
     });
     assert!(
         matches!(
-            Rig::clip(&fast, "figure"),
+            fast.clip("figure"),
             Err(e) if e.to_string().contains("would have more than 864000 frames")
         ),
         "an unbounded resampling must be refused"
