@@ -16,8 +16,9 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::bake::{BakeError, BakeSettings, bake_pose_progress, progress_bar};
+use crate::bake::{BakeError, BakeSettings, bake_pose_progress};
 use crate::io::atomic::write_atomic;
+use crate::progress::Reporter;
 use crate::rig::mesh::Mesh;
 
 /// Version of the manifest and pose-file layout; a checkpoint of another version is refused.
@@ -260,9 +261,14 @@ impl Checkpoint {
     }
 
     /// Pose `pose`'s stored transfer, if a whole, uncorrupted file of `len` values is there.
-    /// A damaged file (only possible through disk faults: writes are atomic) is reported on
-    /// stderr and baked again.
-    fn load(&self, pose: usize, len: usize) -> Result<Option<Vec<f32>>, CheckpointError> {
+    /// A damaged file (only possible through disk faults: writes are atomic) is reported to
+    /// `reporter` and baked again.
+    fn load(
+        &self,
+        pose: usize,
+        len: usize,
+        reporter: &dyn Reporter,
+    ) -> Result<Option<Vec<f32>>, CheckpointError> {
         let path = self.pose_path(pose);
         let bytes = match std::fs::read(&path) {
             Ok(b) => b,
@@ -275,7 +281,10 @@ impl Checkpoint {
             && bytes[8..12] == crc32fast::hash(payload).to_le_bytes()
             && bytes[12..20] == (len as u64).to_le_bytes();
         if !whole {
-            eprintln!("aprt: {} is damaged; baking it again", path.display());
+            reporter.note(&format!(
+                "aprt: {} is damaged; baking it again",
+                path.display()
+            ));
             return Ok(None);
         }
         Ok(Some(
@@ -301,7 +310,8 @@ impl Checkpoint {
     /// checked again by fingerprint): stored poses are read back, missing ones baked one after
     /// the other and stored as soon as each is done. Equal, bit for bit, to
     /// [`crate::bake::bake_poses`] on the same meshes. A pose that fails to bake is named
-    /// `name(i)` in the error.
+    /// `name(i)` in the error. Progress, damaged pose files and the number of poses resumed go
+    /// to `reporter`.
     ///
     /// If the bake fails before any pose is stored, the checkpoint is removed again: it holds
     /// nothing worth resuming, and a failed run should leave no trace.
@@ -309,9 +319,9 @@ impl Checkpoint {
         &mut self,
         meshes: &[Mesh],
         name: impl Fn(usize) -> String,
-        progress: bool,
+        reporter: &dyn Reporter,
     ) -> Result<Vec<Vec<f32>>, CheckpointError> {
-        let result = self.bake_inner(meshes, name, progress);
+        let result = self.bake_inner(meshes, name, reporter);
         if result.is_err() && !self.holds_poses {
             // Best effort: the original error is the one worth reporting.
             let _ = self.remove();
@@ -323,41 +333,42 @@ impl Checkpoint {
         &mut self,
         meshes: &[Mesh],
         name: impl Fn(usize) -> String,
-        progress: bool,
+        reporter: &dyn Reporter,
     ) -> Result<Vec<Vec<f32>>, CheckpointError> {
         let count = meshes.len();
         self.check_count(count)?;
         let mut out = Vec::with_capacity(count);
-        let (mut bar, mut resumed) = (None, 0);
+        let (mut progress, mut resumed) = (None, 0);
         for (i, mesh) in meshes.iter().enumerate() {
             self.check_mesh(i, mesh)?;
             let len = mesh.vertex_count() * self.settings.order * self.settings.order;
-            if let Some(stored) = self.load(i, len)? {
+            if let Some(stored) = self.load(i, len, reporter)? {
                 resumed += 1;
                 out.push(stored);
                 continue;
             }
-            let bar = bar
-                .get_or_insert_with(|| progress_bar(mesh.vertex_count() * (count - i), progress));
-            bar.set_message(format!("pose {}/{count}", i + 1));
-            let transfer = bake_pose_progress(mesh, &self.settings, bar).map_err(|source| {
-                CheckpointError::Bake {
-                    name: name(i),
-                    source,
-                }
-            })?;
+            let progress = progress
+                .get_or_insert_with(|| reporter.bake_progress(mesh.vertex_count() * (count - i)));
+            progress.pose(i, count);
+            let transfer =
+                bake_pose_progress(mesh, &self.settings, progress.as_ref()).map_err(|source| {
+                    CheckpointError::Bake {
+                        name: name(i),
+                        source,
+                    }
+                })?;
             self.store(i, &transfer)?;
             self.holds_poses = true;
             out.push(transfer);
         }
-        if let Some(bar) = bar {
-            bar.finish_and_clear();
+        if let Some(progress) = progress {
+            progress.finish();
         }
-        if progress && resumed > 0 {
-            eprintln!(
+        if resumed > 0 {
+            reporter.note(&format!(
                 "resumed {resumed} of {count} poses from {}",
                 self.dir.display()
-            );
+            ));
         }
         Ok(out)
     }
@@ -420,6 +431,7 @@ impl Checkpoint {
 mod tests {
     use super::*;
     use crate::bake::bake_poses;
+    use crate::progress::Silent;
 
     fn meshes(n: usize) -> Vec<Mesh> {
         (0..n)
@@ -457,11 +469,11 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let ck = dir.path().join("m.aprt.bake");
         let poses = meshes(4);
-        let reference = bake_poses(&poses, &SETTINGS, false).unwrap();
+        let reference = bake_poses(&poses, &SETTINGS, &Silent).unwrap();
 
         // As if interrupted: pose 1's file is missing.
         let mut first = Checkpoint::open(&ck, false, &SETTINGS, &poses).unwrap();
-        assert_eq!(first.bake(&poses, pose_name, false).unwrap(), reference);
+        assert_eq!(first.bake(&poses, pose_name, &Silent).unwrap(), reference);
         std::fs::remove_file(ck.join("pose-000001.bin")).unwrap();
         // A damaged pose file is baked again, not trusted.
         std::fs::write(ck.join("pose-000000.bin"), b"APRTPOSE").unwrap();
@@ -471,10 +483,10 @@ mod tests {
             Err(CheckpointError::Exists { .. })
         ));
         let mut resumed = Checkpoint::open(&ck, true, &SETTINGS, &poses).unwrap();
-        assert_eq!(resumed.bake(&poses, pose_name, false).unwrap(), reference);
+        assert_eq!(resumed.bake(&poses, pose_name, &Silent).unwrap(), reference);
         // Every pose is now stored; a second resume bakes nothing and reads the same bits.
         let mut again = Checkpoint::open(&ck, true, &SETTINGS, &poses).unwrap();
-        assert_eq!(again.bake(&poses, pose_name, false).unwrap(), reference);
+        assert_eq!(again.bake(&poses, pose_name, &Silent).unwrap(), reference);
         again.remove().unwrap();
         assert!(!ck.exists());
     }
@@ -524,10 +536,10 @@ mod tests {
         // The matching inputs still resume, and baking other inputs through it is refused.
         let mut c = Checkpoint::open(&ck, true, &SETTINGS, &poses).unwrap();
         assert!(matches!(
-            c.bake(&moved[..], pose_name, false),
+            c.bake(&moved[..], pose_name, &Silent),
             Err(CheckpointError::Mismatch { .. })
         ));
-        assert!(c.bake(&poses[..2], pose_name, false).is_err());
+        assert!(c.bake(&poses[..2], pose_name, &Silent).is_err());
     }
 
     #[test]
@@ -543,7 +555,7 @@ mod tests {
         let ck = dir.path().join("empty");
         std::fs::create_dir(&ck).unwrap();
         let mut c = Checkpoint::open(&ck, false, &SETTINGS, &poses).unwrap();
-        c.bake(&poses, pose_name, false).unwrap();
+        c.bake(&poses, pose_name, &Silent).unwrap();
         std::fs::write(ck.join("keep.txt"), "mine").unwrap();
         c.remove().unwrap();
         let left: Vec<_> = std::fs::read_dir(&ck)
@@ -560,7 +572,7 @@ mod tests {
         let mut poses = meshes(2);
         poses[0].positions[0] = [2e12, 0.0, 0.0];
         let mut c = Checkpoint::open(&ck, false, &SETTINGS, &poses).unwrap();
-        let err = c.bake(&poses, pose_name, false).unwrap_err();
+        let err = c.bake(&poses, pose_name, &Silent).unwrap_err();
         let message = format!("{:#}", anyhow::Error::from(err));
         assert!(
             message.starts_with("pose 0: baking: mesh extent"),

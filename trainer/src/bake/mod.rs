@@ -49,11 +49,11 @@ pub use tracer::Accel;
 use aprt_core::euler::EulerRotation;
 use aprt_core::sh::{self, ShError};
 use glam::DVec3;
-use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use std::ops::Range;
 use tracer::{Hit, Tracer, TraversalStack};
 
+use crate::progress::{BakeProgress, Reporter, Silent};
 use crate::rig::mesh::{Mesh, area_weighted_normals};
 
 /// Ray origins are offset along the normal by this fraction of the bounding-box diagonal.
@@ -188,53 +188,43 @@ pub fn bake_pose_with(
     settings: &BakeSettings,
     accel: Accel,
 ) -> Result<Vec<f32>, BakeError> {
-    bake_pose_inner(mesh, settings, accel, &ProgressBar::hidden())
+    bake_pose_inner(mesh, settings, accel, &Silent)
 }
 
-/// Bakes several poses one after the other (each pose parallel over its vertices), optionally
-/// with a progress bar over all poses' vertices on stderr for long bakes.
+/// Bakes several poses one after the other (each pose parallel over its vertices), with one
+/// progress display over all poses' vertices from `reporter` (the command line's is a bar on
+/// stderr; [`Silent`] shows nothing).
 pub fn bake_poses(
     meshes: &[Mesh],
     settings: &BakeSettings,
-    progress: bool,
+    reporter: &dyn Reporter,
 ) -> Result<Vec<Vec<f32>>, BakeError> {
     settings.validate()?;
     let total: usize = meshes.iter().map(Mesh::vertex_count).sum();
-    let bar = progress_bar(total, progress);
+    let progress = reporter.bake_progress(total);
     let mut out = Vec::with_capacity(meshes.len());
     for (p, mesh) in meshes.iter().enumerate() {
-        bar.set_message(format!("pose {}/{}", p + 1, meshes.len()));
-        out.push(bake_pose_inner(mesh, settings, Accel::default(), &bar)?);
+        progress.pose(p, meshes.len());
+        out.push(bake_pose_inner(
+            mesh,
+            settings,
+            Accel::default(),
+            progress.as_ref(),
+        )?);
     }
-    bar.finish_and_clear();
+    progress.finish();
     Ok(out)
 }
 
-/// A progress bar over `vertices` vertices on stderr, or a hidden one when `visible` is false.
-/// Shared by [`bake_poses`] and the pose-by-pose bakes (checkpointing) so every long bake
-/// reports its progress the same way.
-pub fn progress_bar(vertices: usize, visible: bool) -> ProgressBar {
-    if !visible {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::new(vertices as u64);
-    if let Ok(style) = ProgressStyle::with_template(
-        "baking {msg} [{elapsed_precise}] {wide_bar} {pos}/{len} vertices ({eta} left)",
-    ) {
-        bar.set_style(style);
-    }
-    bar
-}
-
-/// [`bake_pose`] advancing a caller's progress bar by one per vertex, for callers that bake
-/// poses one at a time (checkpointing) yet show one bar over all of them. Bit-identical to
+/// [`bake_pose`] advancing a caller's progress by one per vertex, for callers that bake poses
+/// one at a time (checkpointing) yet show one display over all of them. Bit-identical to
 /// [`bake_pose`] and to the same pose in [`bake_poses`].
 pub fn bake_pose_progress(
     mesh: &Mesh,
     settings: &BakeSettings,
-    bar: &ProgressBar,
+    progress: &dyn BakeProgress,
 ) -> Result<Vec<f32>, BakeError> {
-    bake_pose_inner(mesh, settings, Accel::default(), bar)
+    bake_pose_inner(mesh, settings, Accel::default(), progress)
 }
 
 /// Direct (shadowed, no bounce) transfer of the vertices in `vertices` only, vertex-major like
@@ -259,7 +249,7 @@ pub fn bake_vertices(
     }
     let prepared = Prepared::new(mesh, settings)?;
     let tracer = Tracer::new(&mesh.positions, &mesh.triangles, accel);
-    let (direct, _) = prepared.direct(&tracer, vertices, false, &ProgressBar::hidden())?;
+    let (direct, _) = prepared.direct(&tracer, vertices, false, &Silent)?;
     Ok(direct.into_iter().map(|x| x as f32).collect())
 }
 
@@ -267,7 +257,7 @@ fn bake_pose_inner(
     mesh: &Mesh,
     settings: &BakeSettings,
     accel: Accel,
-    bar: &ProgressBar,
+    progress: &dyn BakeProgress,
 ) -> Result<Vec<f32>, BakeError> {
     let prepared = Prepared::new(mesh, settings)?;
     let v = mesh.vertex_count();
@@ -276,7 +266,7 @@ fn bake_pose_inner(
     }
     let tracer = Tracer::new(&mesh.positions, &mesh.triangles, accel);
     let record_hits = settings.bounces > 0;
-    let (direct, hits) = prepared.direct(&tracer, 0..v, record_hits, bar)?;
+    let (direct, hits) = prepared.direct(&tracer, 0..v, record_hits, progress)?;
     let total = if record_hits {
         prepared.add_bounces(direct, &hits, &mesh.triangles)
     } else {
@@ -360,7 +350,7 @@ impl<'a> Prepared<'a> {
         tracer: &Tracer,
         vertices: Range<usize>,
         record_hits: bool,
-        bar: &ProgressBar,
+        progress: &dyn BakeProgress,
     ) -> Result<(Vec<f64>, Vec<Vec<Hit>>), BakeError> {
         let n2 = self.n2;
         let mut out = vec![0.0f64; vertices.len() * n2];
@@ -408,7 +398,7 @@ impl<'a> Prepared<'a> {
                 for (acc, &w) in t.iter_mut().zip(&world) {
                     *acc = f64::from(w);
                 }
-                bar.inc(1);
+                progress.vertex_done();
                 Ok(())
             };
         let init = || Scratch {

@@ -442,7 +442,12 @@ fn poses_helper_matches_single_pose_bakes() {
     let a = floor_and_wall();
     let (b, _) = floor_under_square(&[DVec3::ZERO], 1.0, 1.0);
     let s = settings(2, 32);
-    let all = bake_poses(&[a.clone(), b.clone(), Mesh::default()], &s, false).unwrap();
+    let all = bake_poses(
+        &[a.clone(), b.clone(), Mesh::default()],
+        &s,
+        &crate::progress::Silent,
+    )
+    .unwrap();
     assert_eq!(
         all,
         vec![

@@ -7,6 +7,10 @@ use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
 
 use crate::bake::checkpoint::Checkpoint;
+mod terminal;
+
+pub use terminal::Terminal;
+
 use crate::io::atomic::write_atomic;
 use crate::io::source::{Poses, SourceArgs};
 use crate::model::export::Precision;
@@ -202,7 +206,7 @@ pub struct InspectArgs {
 /// Runs one command.
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Demo(args) => crate::report::demo::run(&args),
+        Command::Demo(args) => demo(&args),
         Command::Transfer(args) => transfer(&args),
         Command::Train(args) => train(&args),
         Command::Simulate(args) => simulate(&args),
@@ -210,6 +214,16 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Inspect(args) => inspect(&args),
         Command::Results(args) => results(&args),
     }
+}
+
+fn demo(args: &DemoArgs) -> Result<()> {
+    let markdown = crate::report::demo::run(args, &Terminal)?;
+    print!("{markdown}");
+    eprintln!(
+        "wrote {}/{{model.aprt, report.md, report.json, novel_pose.png, baselines.png}}",
+        args.out.display()
+    );
+    Ok(())
 }
 
 fn read_file(path: &Path) -> Result<Vec<u8>> {
@@ -239,7 +253,7 @@ fn eval(args: &EvalArgs) -> Result<()> {
         .with_context(|| format!("{}: invalid model", args.model.display()))?;
     let model_name = args.model.display();
     let transfer = if args.source.names_rig() {
-        let (rig, clip) = args.source.rig()?;
+        let (rig, clip) = args.source.rig(&Terminal)?;
         if info.angle_names.is_empty() {
             bail!("{model_name} records no pose-entry names, so a clip cannot be mapped onto it; use --angles");
         }
@@ -319,7 +333,7 @@ impl FitArgs {
 fn transfer(args: &TransferArgs) -> Result<()> {
     let mesh = crate::io::obj::read_obj(&args.mesh)?;
     let settings = bake_settings(&args.bake);
-    let transfer = crate::bake::bake_poses(std::slice::from_ref(&mesh), &settings, true)
+    let transfer = crate::bake::bake_poses(std::slice::from_ref(&mesh), &settings, &Terminal)
         .with_context(|| format!("baking {}", args.mesh.display()))?;
     let n2 = settings.order * settings.order;
     write_npy(&args.npy, &[mesh.vertex_count(), n2], &transfer[0])
@@ -345,15 +359,15 @@ fn results(args: &ResultsArgs) -> Result<()> {
         args.order,
         args.rays
     );
-    let path = write_document(&studies, &settings, &args.out, &command)?;
+    let path = write_document(&studies, &settings, &args.out, &command, &Terminal)?;
     eprintln!("wrote {}", path.display());
     Ok(())
 }
 
 fn simulate(args: &SimulateArgs) -> Result<()> {
     let settings = bake_settings(&args.bake);
-    let meshes = args.source.meshes()?;
-    let transfer = crate::bake::bake_poses(&meshes, &settings, true)?;
+    let meshes = args.source.meshes(&Terminal)?;
+    let transfer = crate::bake::bake_poses(&meshes, &settings, &Terminal)?;
     let n2 = settings.order * settings.order;
     write_npy(
         &args.npy,
@@ -369,7 +383,7 @@ fn train(args: &TrainArgs) -> Result<()> {
         .checkpoint
         .clone()
         .unwrap_or_else(|| Checkpoint::default_dir(&args.output));
-    let (fitted, checkpoint, poses) = match args.source.poses()? {
+    let (fitted, checkpoint, poses) = match args.source.poses(&Terminal)? {
         Poses::Meshes {
             files,
             meshes,
@@ -378,7 +392,7 @@ fn train(args: &TrainArgs) -> Result<()> {
             let mut checkpoint =
                 Checkpoint::open(&checkpoint_dir, args.resume, &settings, &meshes)?;
             let name = |i: usize| files[i].display().to_string();
-            let transfers = checkpoint.bake(&meshes, name, true)?;
+            let transfers = checkpoint.bake(&meshes, name, &Terminal)?;
             let a = nalgebra::DMatrix::from_fn(angles.len(), angles[0].len(), |i, j| angles[i][j]);
             let fitted = fit(&a, &transfers, settings.order, &options)?;
             (fitted, checkpoint, angles.len())
@@ -397,7 +411,7 @@ fn train(args: &TrainArgs) -> Result<()> {
             let mut checkpoint =
                 Checkpoint::open(&checkpoint_dir, args.resume, &settings, &meshes)?;
             let name = |i: usize| format!("clip {} frame {i}", clip.name);
-            let transfer = checkpoint.bake(&meshes, name, true)?;
+            let transfer = checkpoint.bake(&meshes, name, &Terminal)?;
             let frames = clip.frames.len();
             let baked = BakedClip::new(
                 rig.as_ref(),

@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 
+use crate::progress::Reporter;
 use crate::report::experiment::pose_all;
 use crate::rig::character::Character;
 use crate::rig::gltf::GltfRig;
@@ -104,8 +105,9 @@ impl SourceArgs {
         self.builtin || self.gltf.is_some() || self.bvh.is_some()
     }
 
-    /// The rig and clip the options name. Errors when they name no rig.
-    pub fn rig(&self) -> Result<(Box<dyn Rig>, Clip)> {
+    /// The rig and clip the options name. Errors when they name no rig. Notes on what the rig
+    /// leaves out of the clip go to `reporter`.
+    pub fn rig(&self, reporter: &dyn Reporter) -> Result<(Box<dyn Rig>, Clip)> {
         if self.builtin {
             let character = Character::builtin();
             let clip = character.clip(self.clip_name(&character)?)?;
@@ -120,7 +122,7 @@ impl SourceArgs {
                 .iter()
                 .filter(|h| h.animation == clip.name)
             {
-                eprintln!("note: {}: {held}", path.display());
+                reporter.note(&format!("note: {}: {held}", path.display()));
             }
             return Ok((Box::new(rig), clip));
         }
@@ -129,13 +131,13 @@ impl SourceArgs {
             if let Some(skeleton) = &self.mannequin {
                 must_exist(skeleton, &["bvh"])?;
             }
-            return self.bvh_rig(path);
+            return self.bvh_rig(path, reporter);
         }
         bail!("no character given: use --builtin, --gltf or --bvh (or --obj-seq with --angles)")
     }
 
     /// The mannequin (of --mannequin's skeleton, or the file's own) and the file's motion.
-    fn bvh_rig(&self, path: &Path) -> Result<(Box<dyn Rig>, Clip)> {
+    fn bvh_rig(&self, path: &Path, reporter: &dyn Reporter) -> Result<(Box<dyn Rig>, Clip)> {
         let options = MocapOptions {
             root_translation: self.root_translation,
             hat: !self.no_hat,
@@ -155,11 +157,11 @@ impl SourceArgs {
             .map_or_else(|| "motion".into(), |s| s.to_string_lossy().into_owned());
         let retargeted = rig.retarget(&motion, &name, frames)?;
         if !retargeted.missing.is_empty() {
-            eprintln!(
+            reporter.note(&format!(
                 "joints of the mannequin that {} does not animate (kept at rest): {}",
                 path.display(),
                 retargeted.missing.join(", ")
-            );
+            ));
         }
         Ok((Box::new(rig), retargeted.clip))
     }
@@ -175,9 +177,9 @@ impl SourceArgs {
 
     /// The meshes to bake, without angles: every OBJ of --obj-seq (--angles is not needed), or
     /// the rig posed at every frame of its clip.
-    pub fn meshes(&self) -> Result<Vec<Mesh>> {
+    pub fn meshes(&self, reporter: &dyn Reporter) -> Result<Vec<Mesh>> {
         if self.names_rig() {
-            let (rig, clip) = self.rig()?;
+            let (rig, clip) = self.rig(reporter)?;
             return pose_all(rig.as_ref(), &clip.name, &clip.frames);
         }
         let Some(dir) = &self.obj_seq else {
@@ -187,9 +189,9 @@ impl SourceArgs {
     }
 
     /// The poses the options name: a rig's clip, or an OBJ sequence with its angles.
-    pub fn poses(&self) -> Result<Poses> {
+    pub fn poses(&self, reporter: &dyn Reporter) -> Result<Poses> {
         if self.names_rig() {
-            let (rig, clip) = self.rig()?;
+            let (rig, clip) = self.rig(reporter)?;
             return Ok(Poses::Rig { rig, clip });
         }
         let (Some(dir), Some(csv)) = (&self.obj_seq, &self.angles) else {

@@ -9,6 +9,7 @@ use glam::Vec3;
 use crate::bake::BakeSettings;
 use crate::cli::DemoArgs;
 use crate::io::atomic::write_atomic;
+use crate::progress::Reporter;
 use crate::report::evaluate::{mean_transfer, nearest_pose};
 use crate::report::experiment::{
     self, BakedClip, Row, bake_clip, standard_configs, table_markdown,
@@ -46,20 +47,21 @@ fn strided(clip: &Clip, stride: usize) -> Vec<Vec<f64>> {
     clip.frames.iter().step_by(stride.max(1)).cloned().collect()
 }
 
-/// Runs the demo.
-pub fn run(args: &DemoArgs) -> Result<()> {
+/// Runs the demo, writes its files into `args.out` and returns the report as markdown (the
+/// command line prints it). Progress goes to `reporter`.
+pub fn run(args: &DemoArgs, reporter: &dyn Reporter) -> Result<String> {
     let out = &args.out;
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     let order = args.order as usize;
     let character = Character::builtin();
     let bind = character.bind_mesh();
-    eprintln!(
+    reporter.note(&format!(
         "aprt demo: built-in character, {} vertices, {} triangles, {} joint angles; order {order}, {} rays",
         bind.vertex_count(),
         bind.triangles.len(),
         character.pose_len(),
         args.rays
-    );
+    ));
     let settings = BakeSettings {
         order,
         rays: args.rays,
@@ -74,11 +76,12 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         &training.name,
         strided(&training, args.stride),
         &settings,
+        reporter,
     )?;
     let mut tests = Vec::new();
     for clip in character.novel_clips() {
         let poses = strided(&clip, args.stride);
-        tests.push(bake_clip(&character, &layout, &clip.name, poses, &settings)?.0);
+        tests.push(bake_clip(&character, &layout, &clip.name, poses, &settings, reporter)?.0);
     }
     let lighting = picture_lighting(order, Vec3::new(0.5, -0.8, 0.9));
     let result = experiment::run(
@@ -89,6 +92,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         &standard_configs(),
         &settings,
         &lighting,
+        reporter,
     )?;
     let default = result.model(experiment::DEFAULT_CONFIG)?;
     write_atomic(&out.join("model.aprt"), &default.blob)
@@ -142,12 +146,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     )?;
     let markdown = report.markdown(test, frame);
     write_atomic(&out.join("report.md"), markdown.as_bytes())?;
-    print!("{markdown}");
-    eprintln!(
-        "wrote {}/{{model.aprt, report.md, report.json, novel_pose.png, baselines.png}}",
-        out.display()
-    );
-    Ok(())
+    Ok(markdown)
 }
 
 impl Report {

@@ -15,6 +15,7 @@ use nalgebra::DMatrix;
 use crate::bake::{BakeSettings, bake_poses};
 use crate::model::export::{ExportError, Precision, encode_model};
 use crate::model::fit::{Alpha, CoefDims, Dims, Fit, FitOptions, fit};
+use crate::progress::{Reporter, Silent};
 use crate::report::evaluate::{mean_transfer, nearest_pose, relative_error, skinned_transfer};
 use crate::rig::Rig;
 use crate::rig::bone_frames::{all_rotations, change_frames, dominant_bones};
@@ -38,20 +39,25 @@ pub struct BakedClip {
     pub rotations: Vec<Vec<DMat3>>,
 }
 
-/// Poses and bakes `poses` of `rig`; returns the clip and the bake's seconds per frame.
+/// Poses and bakes `poses` of `rig`; returns the clip and the bake's seconds per frame. The
+/// bake's progress and its speed go to `reporter`.
 pub fn bake_clip(
     rig: &dyn Rig,
     layout: &PoseLayout,
     name: &str,
     poses: Vec<Vec<f64>>,
     settings: &BakeSettings,
+    reporter: &dyn Reporter,
 ) -> Result<(BakedClip, f64)> {
     let meshes = pose_all(rig, name, &poses)?;
     let start = Instant::now();
     let transfer =
-        bake_poses(&meshes, settings, true).with_context(|| format!("baking clip {name}"))?;
+        bake_poses(&meshes, settings, reporter).with_context(|| format!("baking clip {name}"))?;
     let per_frame = start.elapsed().as_secs_f64() / poses.len().max(1) as f64;
-    eprintln!("  {name}: {} frames, {per_frame:.2} s/frame", poses.len());
+    reporter.note(&format!(
+        "  {name}: {} frames, {per_frame:.2} s/frame",
+        poses.len()
+    ));
     Ok((
         BakedClip::new(rig, layout, name, poses, meshes, transfer)?,
         per_frame,
@@ -265,6 +271,8 @@ impl Experiment {
 /// Fits every configuration on `train` (skipping, with the reason, any whose model exceeds the
 /// runtime's limits), then measures each model and the baselines on
 /// `train` and `tests` (at least one). `lighting` is the SH lighting the timings shade with.
+/// Which configuration is being fitted, and which are skipped, goes to `reporter`.
+#[allow(clippy::too_many_arguments)]
 pub fn run(
     rig: &dyn Rig,
     layout: &PoseLayout,
@@ -273,6 +281,7 @@ pub fn run(
     configs: &[ModelConfig],
     settings: &BakeSettings,
     lighting: &[f32],
+    reporter: &dyn Reporter,
 ) -> Result<Experiment> {
     let order = settings.order;
     let vertices = rig.bind_mesh().vertex_count();
@@ -282,7 +291,7 @@ pub fn run(
     let mut rows = Vec::new();
     let mut skipped = Vec::new();
     for config in configs {
-        eprintln!("fitting {}", config.name);
+        reporter.note(&format!("fitting {}", config.name));
         let fitted = fit_clip(
             rig,
             layout,
@@ -298,7 +307,7 @@ pub fn run(
         let blob = match encode_model(&fitted.model, Precision::F32) {
             Ok(blob) => blob,
             Err(err @ ExportError::TooLarge { .. }) => {
-                eprintln!("skipping {}: {err}", config.name);
+                reporter.note(&format!("skipping {}: {err}", config.name));
                 skipped.push((config.name.clone(), err.to_string()));
                 continue;
             }
@@ -365,7 +374,7 @@ fn baselines(
             .collect())
     };
     let bind_transfer =
-        bake_poses(std::slice::from_ref(rig.bind_mesh()), settings, false)?.remove(0);
+        bake_poses(std::slice::from_ref(rig.bind_mesh()), settings, &Silent)?.remove(0);
     let rotation = EulerRotation::new(settings.order)?;
     let skin = rig.skin();
     let skinned_of = |set: &BakedClip| -> Result<Vec<Vec<f32>>> {

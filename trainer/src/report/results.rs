@@ -14,6 +14,7 @@ use crate::bake::BakeSettings;
 use crate::io::atomic::write_atomic;
 use crate::model::export::{Precision, encode_model};
 use crate::model::fit::{Alpha, CoefDims, FitOptions};
+use crate::progress::Reporter;
 use crate::report::evaluate::relative_error;
 use crate::report::experiment::{
     self, BakedClip, ModelConfig, TABLE_LEGEND, bake_clip, fit_clip, predict_world,
@@ -88,25 +89,34 @@ fn results_configs() -> Vec<ModelConfig> {
     configs
 }
 
-/// Runs one study, writes its figures into `out` and returns its markdown section.
-pub fn run_study(study: &Study, settings: &ResultsSettings, out: &Path) -> Result<String> {
+/// Runs one study, writes its figures into `out` and returns its markdown section. Progress goes
+/// to `reporter`.
+pub fn run_study(
+    study: &Study,
+    settings: &ResultsSettings,
+    out: &Path,
+    reporter: &dyn Reporter,
+) -> Result<String> {
     let start = Instant::now();
     let rig = study.rig.as_ref();
     let names = rig.angle_names();
     let layout = PoseLayout::from_training(&names, &study.train.1)
         .with_context(|| format!("{}: training clip {}", study.title, study.train.0))?;
-    eprintln!("study {}: baking", study.title);
+    reporter.note(&format!("study {}: baking", study.title));
     let (train, bake_s) = bake_clip(
         rig,
         &layout,
         &study.train.0,
         study.train.1.clone(),
         &settings.bake,
+        reporter,
     )?;
     let tests = study
         .tests
         .iter()
-        .map(|(name, frames)| Ok(bake_clip(rig, &layout, name, frames.clone(), &settings.bake)?.0))
+        .map(|(name, frames)| {
+            Ok(bake_clip(rig, &layout, name, frames.clone(), &settings.bake, reporter)?.0)
+        })
         .collect::<Result<Vec<_>>>()?;
     let order = settings.bake.order;
     let to_light = Quat::from_rotation_arc(study.up.normalize(), Vec3::Z).inverse()
@@ -120,6 +130,7 @@ pub fn run_study(study: &Study, settings: &ResultsSettings, out: &Path) -> Resul
         &results_configs(),
         &settings.bake,
         &lighting,
+        reporter,
     )?;
     let id = &study.id;
     let figure = |what: &str| out.join(format!("{id}_{what}.png"));
@@ -505,12 +516,14 @@ pub fn asset_studies(assets: &Path) -> Result<Vec<Study>> {
     Ok(studies)
 }
 
-/// Runs every study and writes `out/README.md` with their sections.
+/// Runs every study and writes `out/README.md` with their sections; returns its path.
+/// Progress goes to `reporter`.
 pub fn write_document(
     studies: &[Study],
     settings: &ResultsSettings,
     out: &Path,
     command: &str,
+    reporter: &dyn Reporter,
 ) -> Result<PathBuf> {
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     let mut doc = String::new();
@@ -520,7 +533,7 @@ pub fn write_document(
         settings.bake.order, settings.bake.rays
     );
     for study in studies {
-        doc.push_str(&run_study(study, settings, out)?);
+        doc.push_str(&run_study(study, settings, out, reporter)?);
     }
     let path = out.join("README.md");
     write_atomic(&path, doc.as_bytes())
