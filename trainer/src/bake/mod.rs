@@ -38,6 +38,7 @@
 //! thread count (no float reduction crosses threads).
 
 pub mod checkpoint;
+pub mod clip;
 mod directions;
 #[cfg(test)]
 mod tests;

@@ -1,5 +1,6 @@
-//! Where the command line's poses come from: an OBJ sequence with a joint-angle CSV, or a
-//! rig (the built-in character, a glTF skin, a BVH-driven mannequin) and one of its clips.
+//! Where poses come from: an OBJ sequence with a joint-angle CSV, or a rig (the built-in
+//! character, a glTF skin, a mannequin driven by motion capture) and one of its clips. The
+//! command line's source options (`cli::source`) name one of these; loading happens here.
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -7,77 +8,12 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 
 use crate::progress::Reporter;
-use crate::report::experiment::pose_all;
 use crate::rig::character::Character;
 use crate::rig::gltf::GltfRig;
 use crate::rig::mannequin::{MocapOptions, MocapRig};
 use crate::rig::mesh::Mesh;
 use crate::rig::mocap::Mocap;
 use crate::rig::{Clip, Rig};
-
-/// Source options shared by `train`, `simulate` and `eval`.
-#[derive(Debug, Clone, Default, clap::Args)]
-pub struct SourceArgs {
-    /// Directory of OBJ files, one per pose, sorted by file name, all with the same mesh
-    /// (with --angles for `train`).
-    #[arg(long, conflicts_with_all = ["builtin"])]
-    pub obj_seq: Option<PathBuf>,
-    /// CSV with one row of joint angles per pose (a header row is allowed).
-    #[arg(long)]
-    pub angles: Option<PathBuf>,
-    /// The built-in procedural character; pick its clip with --clip (training, wave, walk,
-    /// reach).
-    #[arg(long, conflicts_with_all = ["gltf", "bvh"])]
-    pub builtin: bool,
-    /// A glTF 2.0 character (.gltf with embedded or external buffers, or .glb) with a skin;
-    /// pick its animation with --clip.
-    #[arg(long, conflicts_with_all = ["bvh", "obj_seq"])]
-    pub gltf: Option<PathBuf>,
-    /// A BVH motion-capture file driving a mannequin built from its skeleton (or from
-    /// --mannequin's).
-    #[arg(long, conflicts_with = "obj_seq")]
-    pub bvh: Option<PathBuf>,
-    /// The clip to use: a glTF animation or a built-in clip.
-    #[arg(long)]
-    pub clip: Option<String>,
-    /// Sampling rate of the clip in frames per second (glTF default 30; BVH default: the
-    /// file's own rate).
-    #[arg(long, allow_negative_numbers = true)]
-    pub fps: Option<f64>,
-    /// BVH frames A..B (half-open, at the file's rate, before resampling); default all.
-    #[arg(long, value_parser = parse_range)]
-    pub frames: Option<Range<usize>>,
-    /// Build the mannequin from this BVH's skeleton and retarget --bvh's motion onto it by
-    /// joint name, so a model trained on one file can be evaluated on another.
-    #[arg(long, requires = "bvh")]
-    pub mannequin: Option<PathBuf>,
-    /// Leave the hat off the BVH mannequin.
-    #[arg(long, requires = "bvh")]
-    pub no_hat: bool,
-    /// Keep the BVH root's translation as pose entries (transfer does not depend on it).
-    #[arg(long, requires = "bvh")]
-    pub root_translation: bool,
-}
-
-/// Parses `A..B` (half-open frame indices).
-fn parse_range(text: &str) -> Result<Range<usize>, String> {
-    let (a, b) = text
-        .split_once("..")
-        .ok_or_else(|| format!("{text:?}: expected A..B, e.g. 0..120"))?;
-    let number = |s: &str| {
-        s.trim()
-            .parse::<usize>()
-            .map_err(|_| format!("{text:?}: {s:?} is not a frame index"))
-    };
-    let range = number(a)?..number(b)?;
-    if range.is_empty() {
-        return Err(format!("{text:?}: the range is empty"));
-    }
-    Ok(range)
-}
-
-/// The rate glTF clips are sampled at unless --fps says otherwise.
-const GLTF_FPS: f64 = 30.0;
 
 /// Poses from a source, ready to bake or evaluate.
 pub enum Poses {
@@ -99,113 +35,17 @@ pub enum Poses {
     },
 }
 
-impl SourceArgs {
-    /// Whether a rig (rather than files of meshes or angles) was named.
-    pub fn names_rig(&self) -> bool {
-        self.builtin || self.gltf.is_some() || self.bvh.is_some()
-    }
-
-    /// The rig and clip the options name. Errors when they name no rig. Notes on what the rig
-    /// leaves out of the clip go to `reporter`.
-    pub fn rig(&self, reporter: &dyn Reporter) -> Result<(Box<dyn Rig>, Clip)> {
-        if self.builtin {
-            let character = Character::builtin();
-            let clip = character.clip(self.clip_name(&character)?)?;
-            return Ok((Box::new(character), clip));
-        }
-        if let Some(path) = &self.gltf {
-            must_exist(path, &["gltf", "glb"])?;
-            let rig = GltfRig::load(path, self.fps.unwrap_or(GLTF_FPS))?;
-            let clip = rig.clip(self.clip_name(&rig)?)?;
-            for held in rig
-                .held_channels()
-                .iter()
-                .filter(|h| h.animation == clip.name)
-            {
-                reporter.note(&format!("note: {}: {held}", path.display()));
-            }
-            return Ok((Box::new(rig), clip));
-        }
-        if let Some(path) = &self.bvh {
-            must_exist(path, &["bvh"])?;
-            if let Some(skeleton) = &self.mannequin {
-                must_exist(skeleton, &["bvh"])?;
-            }
-            return self.bvh_rig(path, reporter);
-        }
-        bail!("no character given: use --builtin, --gltf or --bvh (or --obj-seq with --angles)")
-    }
-
-    /// The mannequin (of --mannequin's skeleton, or the file's own) and the file's motion.
-    fn bvh_rig(&self, path: &Path, reporter: &dyn Reporter) -> Result<(Box<dyn Rig>, Clip)> {
-        let options = MocapOptions {
-            root_translation: self.root_translation,
-            hat: !self.no_hat,
-            fps: self.fps,
-        };
-        let Some(skeleton) = &self.mannequin else {
-            let rig = MocapRig::from_file(path, &options)?;
-            let frames = self.frames.clone().unwrap_or(0..rig.mocap().frame_count());
-            let clip = rig.clip_range(frames)?;
-            return Ok((Box::new(rig), clip));
-        };
-        let rig = MocapRig::from_file(skeleton, &options)?;
-        let motion = Mocap::read(path)?;
-        let frames = self.frames.clone().unwrap_or(0..motion.frame_count());
-        let name = path
-            .file_stem()
-            .map_or_else(|| "motion".into(), |s| s.to_string_lossy().into_owned());
-        let retargeted = rig.retarget(&motion, &name, frames)?;
-        if !retargeted.missing.is_empty() {
-            reporter.note(&format!(
-                "joints of the mannequin that {} does not animate (kept at rest): {}",
-                path.display(),
-                retargeted.missing.join(", ")
-            ));
-        }
-        Ok((Box::new(rig), retargeted.clip))
-    }
-
-    fn clip_name<'a>(&'a self, rig: &dyn Rig) -> Result<&'a str> {
-        self.clip.as_deref().with_context(|| {
-            format!(
-                "--clip is needed; available: {}",
-                rig.clip_names().join(", ")
-            )
-        })
-    }
-
-    /// The meshes to bake, without angles: every OBJ of --obj-seq (--angles is not needed), or
-    /// the rig posed at every frame of its clip.
-    pub fn meshes(&self, reporter: &dyn Reporter) -> Result<Vec<Mesh>> {
-        if self.names_rig() {
-            let (rig, clip) = self.rig(reporter)?;
-            return pose_all(rig.as_ref(), &clip.name, &clip.frames);
-        }
-        let Some(dir) = &self.obj_seq else {
-            bail!("give a character (--builtin, --gltf or --bvh) or --obj-seq DIR");
-        };
-        read_same_meshes(&obj_sequence(dir)?)
-    }
-
-    /// The poses the options name: a rig's clip, or an OBJ sequence with its angles.
-    pub fn poses(&self, reporter: &dyn Reporter) -> Result<Poses> {
-        if self.names_rig() {
-            let (rig, clip) = self.rig(reporter)?;
-            return Ok(Poses::Rig { rig, clip });
-        }
-        let (Some(dir), Some(csv)) = (&self.obj_seq, &self.angles) else {
-            bail!(
-                "give a character (--builtin, --gltf or --bvh) or --obj-seq DIR with --angles FILE"
-            );
-        };
+impl Poses {
+    /// An OBJ sequence (every `.obj` file of `dir`, sorted by name, all with the same mesh)
+    /// with one row of `angles` per file.
+    pub fn from_obj_sequence(dir: &Path, angles: &Path) -> Result<Poses> {
         let files = obj_sequence(dir)?;
-        let angles = crate::io::angles::read_angles(csv, None)?;
-        if angles.len() != files.len() {
+        let rows = crate::io::angles::read_angles(angles, None)?;
+        if rows.len() != files.len() {
             bail!(
                 "{} has {} rows of angles but {} holds {} OBJ files: one row per pose is needed",
-                csv.display(),
-                angles.len(),
+                angles.display(),
+                rows.len(),
                 dir.display(),
                 files.len()
             );
@@ -213,9 +53,118 @@ impl SourceArgs {
         Ok(Poses::Meshes {
             meshes: read_same_meshes(&files)?,
             files,
-            angles,
+            angles: rows,
         })
     }
+}
+
+/// The meshes of an OBJ sequence, without angles: every `.obj` file of `dir`, sorted by name,
+/// all with the same mesh.
+pub fn obj_sequence_meshes(dir: &Path) -> Result<Vec<Mesh>> {
+    read_same_meshes(&obj_sequence(dir)?)
+}
+
+/// A character to load, and how to sample its clip.
+#[derive(Clone, Debug)]
+pub enum RigSource {
+    /// The built-in procedural character.
+    Builtin,
+    /// A glTF 2.0 character (`.gltf` or `.glb`) with a skin, its animations sampled at `fps`.
+    Gltf {
+        /// The file.
+        path: PathBuf,
+        /// Frames per second.
+        fps: f64,
+    },
+    /// BVH motion capture driving a mannequin built from the file's own skeleton, or from
+    /// `skeleton`'s with the motion retargeted onto it by joint name.
+    Mocap {
+        /// The motion-capture file.
+        path: PathBuf,
+        /// The file whose skeleton the mannequin is built from, if not `path`'s.
+        skeleton: Option<PathBuf>,
+        /// Frames of the motion (half-open, at the file's rate); all when `None`.
+        frames: Option<Range<usize>>,
+        /// How the mannequin is built and the motion resampled.
+        options: MocapOptions,
+    },
+}
+
+impl RigSource {
+    /// Loads the character and its clip. A file that does not exist is an error listing the
+    /// files of its kind beside it. `clip_name` picks the clip of a character with named clips
+    /// (the built-in character's, a glTF file's animations) once it is loaded; a mannequin's
+    /// clip is its motion, so it is not asked. Notes on what the clip leaves out (glTF channels
+    /// held at rest, mannequin joints the motion does not animate) go to `reporter`.
+    pub fn load<'a>(
+        &self,
+        clip_name: impl FnOnce(&dyn Rig) -> Result<&'a str>,
+        reporter: &dyn Reporter,
+    ) -> Result<(Box<dyn Rig>, Clip)> {
+        match self {
+            RigSource::Builtin => {
+                let character = Character::builtin();
+                let clip = character.clip(clip_name(&character)?)?;
+                Ok((Box::new(character), clip))
+            }
+            RigSource::Gltf { path, fps } => {
+                must_exist(path, &["gltf", "glb"])?;
+                let rig = GltfRig::load(path, *fps)?;
+                let clip = rig.clip(clip_name(&rig)?)?;
+                for held in rig
+                    .held_channels()
+                    .iter()
+                    .filter(|h| h.animation == clip.name)
+                {
+                    reporter.note(&format!("note: {}: {held}", path.display()));
+                }
+                Ok((Box::new(rig), clip))
+            }
+            RigSource::Mocap {
+                path,
+                skeleton,
+                frames,
+                options,
+            } => {
+                must_exist(path, &["bvh"])?;
+                if let Some(skeleton) = skeleton {
+                    must_exist(skeleton, &["bvh"])?;
+                }
+                mannequin(path, skeleton.as_deref(), frames.clone(), options, reporter)
+            }
+        }
+    }
+}
+
+/// The mannequin (of `skeleton`, or of `path`'s own skeleton) and `path`'s motion.
+fn mannequin(
+    path: &Path,
+    skeleton: Option<&Path>,
+    frames: Option<Range<usize>>,
+    options: &MocapOptions,
+    reporter: &dyn Reporter,
+) -> Result<(Box<dyn Rig>, Clip)> {
+    let Some(skeleton) = skeleton else {
+        let rig = MocapRig::from_file(path, options)?;
+        let frames = frames.unwrap_or(0..rig.mocap().frame_count());
+        let clip = rig.clip_range(frames)?;
+        return Ok((Box::new(rig), clip));
+    };
+    let rig = MocapRig::from_file(skeleton, options)?;
+    let motion = Mocap::read(path)?;
+    let frames = frames.unwrap_or(0..motion.frame_count());
+    let name = path
+        .file_stem()
+        .map_or_else(|| "motion".into(), |s| s.to_string_lossy().into_owned());
+    let retargeted = rig.retarget(&motion, &name, frames)?;
+    if !retargeted.missing.is_empty() {
+        reporter.note(&format!(
+            "joints of the mannequin that {} does not animate (kept at rest): {}",
+            path.display(),
+            retargeted.missing.join(", ")
+        ));
+    }
+    Ok((Box::new(rig), retargeted.clip))
 }
 
 /// Errors when `path` does not exist, listing the files with one of `extensions` that its

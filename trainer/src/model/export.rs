@@ -11,7 +11,7 @@ use crate::model::{BoneFrames, LinearModel, VertexBasis};
 
 /// Storage precision of the large sections (weights and per-vertex rows); pose sections are
 /// always f32.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize)]
 pub enum Precision {
     /// 4 bytes per value.
     #[default]

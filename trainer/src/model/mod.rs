@@ -10,7 +10,9 @@
 
 pub mod export;
 pub mod fit;
+pub mod predict;
 pub mod runtime;
+pub mod train;
 
 /// The vertex side of the model.
 #[derive(Clone, Debug, PartialEq)]

@@ -6,14 +6,14 @@ use std::fmt::Write as _;
 use anyhow::{Context, Result};
 use glam::Vec3;
 
+use std::path::PathBuf;
+
 use crate::bake::BakeSettings;
-use crate::cli::DemoArgs;
+use crate::bake::clip::{BakedClip, bake_clip};
 use crate::io::atomic::write_atomic;
 use crate::progress::Reporter;
 use crate::report::evaluate::{mean_transfer, nearest_pose};
-use crate::report::experiment::{
-    self, BakedClip, Row, bake_clip, standard_configs, table_markdown,
-};
+use crate::report::experiment::{self, Row, standard_configs, table_markdown};
 use crate::report::figures::{picture_lighting, save_model_frame, save_panels, shade_with};
 use crate::rig::character::Character;
 use crate::rig::pose_layout::PoseLayout;
@@ -42,6 +42,19 @@ pub struct Report {
     pub rows: Vec<Row>,
 }
 
+/// What the demo is asked for.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DemoSettings {
+    /// Directory for model.aprt, report.md, report.json and the PNG renders.
+    pub out: PathBuf,
+    /// SH order of the model and the ground truth.
+    pub order: usize,
+    /// Directions per vertex for the ground-truth bakes.
+    pub rays: usize,
+    /// Use every `stride`-th frame of the clips (1 = all).
+    pub stride: usize,
+}
+
 /// Every `stride`-th frame of a clip.
 fn strided(clip: &Clip, stride: usize) -> Vec<Vec<f64>> {
     clip.frames.iter().step_by(stride.max(1)).cloned().collect()
@@ -49,10 +62,10 @@ fn strided(clip: &Clip, stride: usize) -> Vec<Vec<f64>> {
 
 /// Runs the demo, writes its files into `args.out` and returns the report as markdown (the
 /// command line prints it). Progress goes to `reporter`.
-pub fn run(args: &DemoArgs, reporter: &dyn Reporter) -> Result<String> {
+pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
     let out = &args.out;
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
-    let order = args.order as usize;
+    let order = args.order;
     let character = Character::builtin();
     let bind = character.bind_mesh();
     reporter.note(&format!(

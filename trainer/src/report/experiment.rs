@@ -2,140 +2,23 @@
 //! clips, fit several model shapes, and measure each through aprt-core against three
 //! baselines. `aprt demo` runs it on the built-in character, `aprt results` on real assets.
 
-use std::borrow::Cow;
 use std::fmt::Write as _;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use aprt_core::euler::EulerRotation;
 use aprt_core::{LitWeights, Model, PoseWeights, SliceSource};
-use glam::DMat3;
-use nalgebra::DMatrix;
 
+use crate::bake::clip::BakedClip;
 use crate::bake::{BakeSettings, bake_poses};
 use crate::model::export::{ExportError, Precision, encode_model};
-use crate::model::fit::{Alpha, CoefDims, Dims, Fit, FitOptions, fit};
+use crate::model::fit::{Alpha, CoefDims, Dims, Fit, FitOptions};
+use crate::model::predict::predict_world;
+use crate::model::train::fit_clip;
 use crate::progress::{Reporter, Silent};
 use crate::report::evaluate::{mean_transfer, nearest_pose, relative_error, skinned_transfer};
 use crate::rig::Rig;
-use crate::rig::bone_frames::{all_rotations, change_frames, dominant_bones};
-use crate::rig::mesh::Mesh;
 use crate::rig::pose_layout::PoseLayout;
-use crate::rig::transfer_rotation::row_major;
-
-/// Ground truth of one clip: its poses, meshes and baked transfer.
-pub struct BakedClip {
-    /// Clip name.
-    pub name: String,
-    /// The rig's full pose vector of each frame.
-    pub poses: Vec<Vec<f64>>,
-    /// The model's pose vector of each frame (the layout's entries).
-    pub angles: Vec<Vec<f64>>,
-    /// The posed meshes.
-    pub meshes: Vec<Mesh>,
-    /// World-frame transfer of each frame, `v × n²` vertex-major.
-    pub transfer: Vec<Vec<f32>>,
-    /// Per frame, every bone's world rotation.
-    pub rotations: Vec<Vec<DMat3>>,
-}
-
-/// Poses and bakes `poses` of `rig`; returns the clip and the bake's seconds per frame. The
-/// bake's progress and its speed go to `reporter`.
-pub fn bake_clip(
-    rig: &dyn Rig,
-    layout: &PoseLayout,
-    name: &str,
-    poses: Vec<Vec<f64>>,
-    settings: &BakeSettings,
-    reporter: &dyn Reporter,
-) -> Result<(BakedClip, f64)> {
-    let meshes = pose_all(rig, name, &poses)?;
-    let start = Instant::now();
-    let transfer =
-        bake_poses(&meshes, settings, reporter).with_context(|| format!("baking clip {name}"))?;
-    let per_frame = start.elapsed().as_secs_f64() / poses.len().max(1) as f64;
-    reporter.note(&format!(
-        "  {name}: {} frames, {per_frame:.2} s/frame",
-        poses.len()
-    ));
-    Ok((
-        BakedClip::new(rig, layout, name, poses, meshes, transfer)?,
-        per_frame,
-    ))
-}
-
-/// Every pose of a clip skinned.
-pub fn pose_all(rig: &dyn Rig, name: &str, poses: &[Vec<f64>]) -> Result<Vec<Mesh>> {
-    poses
-        .iter()
-        .map(|p| rig.pose(p))
-        .collect::<Result<Vec<_>, _>>()
-        .with_context(|| format!("posing clip {name}"))
-}
-
-impl BakedClip {
-    /// A clip whose meshes were baked elsewhere (for example through a checkpoint).
-    pub fn new(
-        rig: &dyn Rig,
-        layout: &PoseLayout,
-        name: &str,
-        poses: Vec<Vec<f64>>,
-        meshes: Vec<Mesh>,
-        transfer: Vec<Vec<f32>>,
-    ) -> Result<BakedClip> {
-        let rotations = all_rotations(rig, &poses)?;
-        Ok(BakedClip {
-            name: name.to_owned(),
-            angles: poses.iter().map(|p| layout.reduce(p)).collect(),
-            poses,
-            meshes,
-            transfer,
-            rotations,
-        })
-    }
-
-    /// Frame `f`'s bone rotations as aprt-core takes them (row-major f32).
-    pub fn core_rotations(&self, f: usize) -> Vec<[[f32; 3]; 3]> {
-        self.rotations[f].iter().map(|r| row_major(*r)).collect()
-    }
-}
-
-/// Fits a model to `train`: in each vertex's dominant-bone frame when `bone_frame`, else in
-/// world space. The model records the layout's entry names.
-pub fn fit_clip(
-    rig: &dyn Rig,
-    layout: &PoseLayout,
-    train: &BakedClip,
-    order: usize,
-    options: &FitOptions,
-    bone_frame: bool,
-) -> Result<Fit> {
-    let bones = bone_frame.then(|| dominant_bones(rig));
-    let targets = match &bones {
-        Some(b) => Cow::Owned(change_frames(&train.transfer, &train.rotations, b, true)?),
-        None => Cow::Borrowed(&train.transfer),
-    };
-    let a = layout.names().len();
-    let angles = DMatrix::from_fn(train.angles.len(), a, |i, j| train.angles[i][j]);
-    let mut fitted = fit(&angles, &targets, order, options)?;
-    fitted.model.bones = bones;
-    fitted.model.angle_names = layout.names().to_vec();
-    Ok(fitted)
-}
-
-/// World-frame transfer a blob predicts through aprt-core for model pose vectors `angles`;
-/// `rotations` (each frame's bone rotations) are used when the model is in bone frames.
-pub fn predict_world(
-    blob: &[u8],
-    angles: &[Vec<f64>],
-    rotations: &[Vec<DMat3>],
-) -> Result<Vec<Vec<f32>>> {
-    let raw = crate::model::runtime::predict_transfer(blob, angles)?;
-    match crate::model::runtime::bone_frames(blob)? {
-        Some(b) => change_frames(&raw, rotations, &b, false),
-        None => Ok(raw),
-    }
-}
 
 /// One model shape the experiment fits.
 #[derive(Clone, Debug)]

@@ -6,7 +6,7 @@ use std::path::Path;
 use anyhow::Result;
 use glam::{Quat, Vec3};
 
-use crate::report::experiment::BakedClip;
+use crate::bake::clip::BakedClip;
 use crate::report::render::{Colormap, View, render_scalar, save_png_atomic, side_by_side};
 use crate::rig::mesh::Mesh;
 

@@ -11,14 +11,16 @@ use anyhow::{Context, Result};
 use glam::{Quat, Vec3};
 
 use crate::bake::BakeSettings;
+use crate::bake::clip::{BakedClip, bake_clip};
 use crate::io::atomic::write_atomic;
 use crate::model::export::{Precision, encode_model};
 use crate::model::fit::{Alpha, CoefDims, FitOptions};
+use crate::model::predict::predict_world;
+use crate::model::train::fit_clip;
 use crate::progress::Reporter;
 use crate::report::evaluate::relative_error;
 use crate::report::experiment::{
-    self, BakedClip, ModelConfig, TABLE_LEGEND, bake_clip, fit_clip, predict_world,
-    standard_configs, table_markdown,
+    self, ModelConfig, TABLE_LEGEND, standard_configs, table_markdown,
 };
 use crate::report::figures::{picture_lighting, save_model_frame};
 use crate::report::plots::{Axes, Series, line_plot};
