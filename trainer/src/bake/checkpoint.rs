@@ -92,6 +92,15 @@ pub enum CheckpointError {
     },
 }
 
+/// What [`Checkpoint::open`] does with a checkpoint that is already there.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OnExisting {
+    /// Continue its bake, if it was made from the same meshes and settings (`--resume`).
+    Resume,
+    /// Refuse it rather than overwrite it: it may hold hours of work.
+    Refuse,
+}
+
 /// What a checkpoint was made from; a resume must match it field for field.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 struct Manifest {
@@ -191,13 +200,14 @@ impl Checkpoint {
 
     /// Opens the checkpoint in `dir` for baking `meshes` with `settings`.
     ///
-    /// A missing (or empty) directory starts a new checkpoint, with or without `resume`, so
+    /// A missing (or empty) directory starts a new checkpoint whatever `existing` says, so
     /// scripts may always pass `--resume`. An existing checkpoint is continued only with
-    /// `resume`, and only if it was made from the same meshes and settings; without `resume` it
-    /// is an error rather than overwritten, because it may hold hours of work.
+    /// [`OnExisting::Resume`], and only if it was made from the same meshes and settings; with
+    /// [`OnExisting::Refuse`] it is an error rather than overwritten, because it may hold hours
+    /// of work.
     pub fn open(
         dir: &Path,
-        resume: bool,
+        existing: OnExisting,
         settings: &BakeSettings,
         meshes: &[Mesh],
     ) -> Result<Self, CheckpointError> {
@@ -215,7 +225,7 @@ impl Checkpoint {
         let manifest_path = dir.join(MANIFEST);
         let mut holds_poses = false;
         if manifest_path.exists() {
-            if !resume {
+            if existing == OnExisting::Refuse {
                 return Err(CheckpointError::Exists { dir: dir.into() });
             }
             let text = std::fs::read_to_string(&manifest_path).map_err(io(&manifest_path))?;
@@ -472,20 +482,20 @@ mod tests {
         let reference = bake_poses(&poses, &SETTINGS, &Silent).unwrap();
 
         // As if interrupted: pose 1's file is missing.
-        let mut first = Checkpoint::open(&ck, false, &SETTINGS, &poses).unwrap();
+        let mut first = Checkpoint::open(&ck, OnExisting::Refuse, &SETTINGS, &poses).unwrap();
         assert_eq!(first.bake(&poses, pose_name, &Silent).unwrap(), reference);
         std::fs::remove_file(ck.join("pose-000001.bin")).unwrap();
         // A damaged pose file is baked again, not trusted.
         std::fs::write(ck.join("pose-000000.bin"), b"APRTPOSE").unwrap();
 
         assert!(matches!(
-            Checkpoint::open(&ck, false, &SETTINGS, &poses),
+            Checkpoint::open(&ck, OnExisting::Refuse, &SETTINGS, &poses),
             Err(CheckpointError::Exists { .. })
         ));
-        let mut resumed = Checkpoint::open(&ck, true, &SETTINGS, &poses).unwrap();
+        let mut resumed = Checkpoint::open(&ck, OnExisting::Resume, &SETTINGS, &poses).unwrap();
         assert_eq!(resumed.bake(&poses, pose_name, &Silent).unwrap(), reference);
         // Every pose is now stored; a second resume bakes nothing and reads the same bits.
-        let mut again = Checkpoint::open(&ck, true, &SETTINGS, &poses).unwrap();
+        let mut again = Checkpoint::open(&ck, OnExisting::Resume, &SETTINGS, &poses).unwrap();
         assert_eq!(again.bake(&poses, pose_name, &Silent).unwrap(), reference);
         again.remove().unwrap();
         assert!(!ck.exists());
@@ -496,9 +506,9 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let ck = dir.path().join("ck");
         let poses = meshes(3);
-        Checkpoint::open(&ck, false, &SETTINGS, &poses).unwrap();
+        Checkpoint::open(&ck, OnExisting::Refuse, &SETTINGS, &poses).unwrap();
         let refused = |settings: BakeSettings, poses: &[Mesh], what: &str| {
-            let err = Checkpoint::open(&ck, true, &settings, poses).unwrap_err();
+            let err = Checkpoint::open(&ck, OnExisting::Resume, &settings, poses).unwrap_err();
             let message = err.to_string();
             assert!(
                 matches!(err, CheckpointError::Mismatch { .. }) && message.contains(what),
@@ -534,7 +544,7 @@ mod tests {
         moved[2].positions[4][2] += 1e-6;
         refused(SETTINGS, &moved, "the mesh of pose 2 differs");
         // The matching inputs still resume, and baking other inputs through it is refused.
-        let mut c = Checkpoint::open(&ck, true, &SETTINGS, &poses).unwrap();
+        let mut c = Checkpoint::open(&ck, OnExisting::Resume, &SETTINGS, &poses).unwrap();
         assert!(matches!(
             c.bake(&moved[..], pose_name, &Silent),
             Err(CheckpointError::Mismatch { .. })
@@ -548,13 +558,13 @@ mod tests {
         std::fs::write(dir.path().join("notes.txt"), "mine").unwrap();
         let poses = meshes(1);
         assert!(matches!(
-            Checkpoint::open(dir.path(), true, &SETTINGS, &poses),
+            Checkpoint::open(dir.path(), OnExisting::Resume, &SETTINGS, &poses),
             Err(CheckpointError::NotACheckpoint { .. })
         ));
         // An empty directory named by the user is used, and on removal only our files go.
         let ck = dir.path().join("empty");
         std::fs::create_dir(&ck).unwrap();
-        let mut c = Checkpoint::open(&ck, false, &SETTINGS, &poses).unwrap();
+        let mut c = Checkpoint::open(&ck, OnExisting::Refuse, &SETTINGS, &poses).unwrap();
         c.bake(&poses, pose_name, &Silent).unwrap();
         std::fs::write(ck.join("keep.txt"), "mine").unwrap();
         c.remove().unwrap();
@@ -571,7 +581,7 @@ mod tests {
         let ck = dir.path().join("ck");
         let mut poses = meshes(2);
         poses[0].positions[0] = [2e12, 0.0, 0.0];
-        let mut c = Checkpoint::open(&ck, false, &SETTINGS, &poses).unwrap();
+        let mut c = Checkpoint::open(&ck, OnExisting::Refuse, &SETTINGS, &poses).unwrap();
         let err = c.bake(&poses, pose_name, &Silent).unwrap_err();
         let message = format!("{:#}", anyhow::Error::from(err));
         assert!(

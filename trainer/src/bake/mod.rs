@@ -250,7 +250,7 @@ pub fn bake_vertices(
     }
     let prepared = Prepared::new(mesh, settings)?;
     let tracer = Tracer::new(&mesh.positions, &mesh.triangles, accel);
-    let (direct, _) = prepared.direct(&tracer, vertices, false, &Silent)?;
+    let (direct, _) = prepared.direct(&tracer, vertices, Hits::Skip, &Silent)?;
     Ok(direct.into_iter().map(|x| x as f32).collect())
 }
 
@@ -266,14 +266,27 @@ fn bake_pose_inner(
         return Ok(Vec::new());
     }
     let tracer = Tracer::new(&mesh.positions, &mesh.triangles, accel);
-    let record_hits = settings.bounces > 0;
-    let (direct, hits) = prepared.direct(&tracer, 0..v, record_hits, progress)?;
-    let total = if record_hits {
-        prepared.add_bounces(direct, &hits, &mesh.triangles)
+    let hits = if settings.bounces > 0 {
+        Hits::Record
+    } else {
+        Hits::Skip
+    };
+    let (direct, recorded) = prepared.direct(&tracer, 0..v, hits, progress)?;
+    let total = if hits == Hits::Record {
+        prepared.add_bounces(direct, &recorded, &mesh.triangles)
     } else {
         direct
     };
     Ok(total.into_iter().map(|x| x as f32).collect())
+}
+
+/// Whether the direct pass keeps the hits of the occluded rays, which the bounce passes need.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Hits {
+    /// Keep each vertex's front-facing hits (closest-hit rays).
+    Record,
+    /// Only ask whether each ray is blocked (any-hit rays, faster).
+    Skip,
 }
 
 /// Validated inputs and the per-bake constants shared by every vertex.
@@ -344,18 +357,18 @@ impl<'a> Prepared<'a> {
         })
     }
 
-    /// Direct transfer of `vertices` (vertex-major f64), and when `record_hits`, for each vertex
-    /// the front-facing hits of its occluded rays (for the bounce passes).
+    /// Direct transfer of `vertices` (vertex-major f64), and with [`Hits::Record`], for each
+    /// vertex the front-facing hits of its occluded rays (for the bounce passes).
     fn direct(
         &self,
         tracer: &Tracer,
         vertices: Range<usize>,
-        record_hits: bool,
+        hits_wanted: Hits,
         progress: &dyn BakeProgress,
     ) -> Result<(Vec<f64>, Vec<Vec<Hit>>), BakeError> {
         let n2 = self.n2;
         let mut out = vec![0.0f64; vertices.len() * n2];
-        let mut hits: Vec<Vec<Hit>> = if record_hits {
+        let mut hits: Vec<Vec<Hit>> = if hits_wanted == Hits::Record {
             vec![Vec::new(); vertices.len()]
         } else {
             Vec::new()
@@ -407,7 +420,7 @@ impl<'a> Prepared<'a> {
             stack: TraversalStack::default(),
         };
         let start = vertices.start;
-        if record_hits {
+        if hits_wanted == Hits::Record {
             out.par_chunks_mut(n2)
                 .zip(hits.par_iter_mut())
                 .enumerate()

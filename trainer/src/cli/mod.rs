@@ -18,8 +18,9 @@ pub use args::{
 pub use source::SourceArgs;
 pub use terminal::Terminal;
 
-use crate::bake::checkpoint::Checkpoint;
+use crate::bake::checkpoint::{Checkpoint, OnExisting};
 use crate::io::atomic::write_atomic;
+use crate::model::ModelFrame;
 use crate::model::predict::{predict_clip, predict_world};
 use crate::model::train::TrainSettings;
 
@@ -177,12 +178,20 @@ fn train(args: &TrainArgs) -> Result<()> {
         fit: args.fit.options()?,
         bake: args.bake.settings(),
         precision: args.fit.precision.into(),
-        bone_frame: !args.world_frame,
+        frame: if args.world_frame {
+            ModelFrame::World
+        } else {
+            ModelFrame::Bone
+        },
         checkpoint: args
             .checkpoint
             .clone()
             .unwrap_or_else(|| Checkpoint::default_dir(&args.output)),
-        resume: args.resume,
+        existing: if args.resume {
+            OnExisting::Resume
+        } else {
+            OnExisting::Refuse
+        },
     };
     let poses = args.source.poses(&Terminal)?;
     let trained = crate::model::train::train(poses, &args.output, &settings, &Terminal)?;

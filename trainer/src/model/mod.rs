@@ -28,6 +28,16 @@ pub enum VertexBasis {
     },
 }
 
+/// The frame a model learns each vertex's transfer in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ModelFrame {
+    /// The frame of the vertex's most influential bone: rigid limb motion needs no learning, at
+    /// the cost of rotating the lighting into every bone at runtime.
+    Bone,
+    /// World space: no bone rotations at runtime.
+    World,
+}
+
 /// For bone-frame models: which bone's frame each vertex's transfer is expressed in.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BoneFrames {

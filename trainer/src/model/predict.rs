@@ -5,7 +5,7 @@ use anyhow::{Context, Result, bail};
 use glam::DMat3;
 
 use crate::model::runtime::BlobInfo;
-use crate::rig::bone_frames::{all_rotations, change_frames};
+use crate::rig::bone_frames::{FrameChange, all_rotations, change_frames};
 use crate::rig::pose_layout::PoseLayout;
 use crate::rig::{Clip, Rig};
 
@@ -18,7 +18,7 @@ pub fn predict_world(
 ) -> Result<Vec<Vec<f32>>> {
     let raw = crate::model::runtime::predict_transfer(blob, angles)?;
     match crate::model::runtime::bone_frames(blob)? {
-        Some(b) => change_frames(&raw, rotations, &b, false),
+        Some(b) => change_frames(&raw, rotations, &b, FrameChange::BoneToWorld),
         None => Ok(raw),
     }
 }

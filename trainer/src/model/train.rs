@@ -9,32 +9,38 @@ use anyhow::{Context, Result};
 use nalgebra::DMatrix;
 
 use crate::bake::BakeSettings;
-use crate::bake::checkpoint::Checkpoint;
+use crate::bake::checkpoint::{Checkpoint, OnExisting};
 use crate::bake::clip::{BakedClip, pose_all};
 use crate::io::atomic::write_atomic;
 use crate::io::source::Poses;
+use crate::model::ModelFrame;
 use crate::model::export::{Precision, encode_model};
 use crate::model::fit::{Fit, FitOptions, fit};
 use crate::model::runtime::{BlobInfo, describe};
 use crate::progress::Reporter;
 use crate::rig::Rig;
-use crate::rig::bone_frames::{change_frames, dominant_bones};
+use crate::rig::bone_frames::{FrameChange, change_frames, dominant_bones};
 use crate::rig::mesh::Mesh;
 use crate::rig::pose_layout::PoseLayout;
 
-/// Fits a model to `train`: in each vertex's dominant-bone frame when `bone_frame`, else in
-/// world space. The model records the layout's entry names.
+/// Fits a model to `train` in `frame` (each vertex's dominant-bone frame, or world space). The
+/// model records the layout's entry names.
 pub fn fit_clip(
     rig: &dyn Rig,
     layout: &PoseLayout,
     train: &BakedClip,
     order: usize,
     options: &FitOptions,
-    bone_frame: bool,
+    frame: ModelFrame,
 ) -> Result<Fit> {
-    let bones = bone_frame.then(|| dominant_bones(rig));
+    let bones = (frame == ModelFrame::Bone).then(|| dominant_bones(rig));
     let targets = match &bones {
-        Some(b) => Cow::Owned(change_frames(&train.transfer, &train.rotations, b, true)?),
+        Some(b) => Cow::Owned(change_frames(
+            &train.transfer,
+            &train.rotations,
+            b,
+            FrameChange::WorldToBone,
+        )?),
         None => Cow::Borrowed(&train.transfer),
     };
     let a = layout.names().len();
@@ -54,13 +60,13 @@ pub struct TrainSettings {
     pub fit: FitOptions,
     /// Precision of the blob's large sections.
     pub precision: Precision,
-    /// For a rig's clip: learn transfer in each vertex's bone frame (else in world space).
-    /// Meshes read from files have no bones and always learn it in world space.
-    pub bone_frame: bool,
+    /// The frame a rig's clip is learned in. Meshes read from files have no bones and always
+    /// learn transfer in world space.
+    pub frame: ModelFrame,
     /// The checkpoint directory every baked pose is saved in until the model is written.
     pub checkpoint: PathBuf,
-    /// Continue the bake stored in an existing checkpoint (else an existing one is an error).
-    pub resume: bool,
+    /// What to do with a checkpoint that is already there.
+    pub existing: OnExisting,
 }
 
 /// What [`train`] wrote.
@@ -121,7 +127,7 @@ pub fn train(
                 &baked,
                 settings.bake.order,
                 &settings.fit,
-                settings.bone_frame,
+                settings.frame,
             )?;
             (fitted, checkpoint, frames)
         }
@@ -145,7 +151,7 @@ fn bake_checkpointed(
 ) -> Result<(Vec<Vec<f32>>, Checkpoint)> {
     let mut checkpoint = Checkpoint::open(
         &settings.checkpoint,
-        settings.resume,
+        settings.existing,
         &settings.bake,
         meshes,
     )?;

@@ -14,7 +14,9 @@ use crate::io::atomic::write_atomic;
 use crate::progress::Reporter;
 use crate::report::evaluate::{mean_transfer, nearest_pose};
 use crate::report::experiment::{self, Row, standard_configs, table_markdown};
-use crate::report::figures::{picture_lighting, save_model_frame, save_panels, shade_with};
+use crate::report::figures::{
+    ErrorPanel, picture_lighting, save_model_frame, save_panels, shade_with,
+};
 use crate::rig::character::Character;
 use crate::rig::pose_layout::PoseLayout;
 use crate::rig::{Clip, Rig};
@@ -132,7 +134,7 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
         &out.join("baselines.png"),
         mesh,
         &[&truth, &mean, &nearest],
-        false,
+        ErrorPanel::Omitted,
     )?;
 
     let report = Report {

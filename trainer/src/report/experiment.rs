@@ -11,6 +11,7 @@ use aprt_core::{LitWeights, Model, PoseWeights, SliceSource};
 
 use crate::bake::clip::BakedClip;
 use crate::bake::{BakeSettings, bake_poses};
+use crate::model::ModelFrame;
 use crate::model::export::{ExportError, Precision, encode_model};
 use crate::model::fit::{Alpha, CoefDims, Dims, Fit, FitOptions};
 use crate::model::predict::predict_world;
@@ -27,8 +28,8 @@ pub struct ModelConfig {
     pub name: String,
     /// Fit options.
     pub options: FitOptions,
-    /// Bone-frame (true) or world-frame model.
-    pub bone_frame: bool,
+    /// The frame the model learns transfer in.
+    pub frame: ModelFrame,
 }
 
 /// The name of the default model's configuration, the first of [`standard_configs`].
@@ -39,10 +40,10 @@ pub const DEFAULT_CONFIG: &str = "default: bone frame, LOSO α";
 /// and without regularisation, and two PCA settings.
 pub fn standard_configs() -> Vec<ModelConfig> {
     let default = FitOptions::default();
-    let config = |name: &str, options: FitOptions, bone_frame: bool| ModelConfig {
+    let config = |name: &str, options: FitOptions, frame: ModelFrame| ModelConfig {
         name: name.into(),
         options,
-        bone_frame,
+        frame,
     };
     let full = FitOptions {
         pose_dims: Dims::All,
@@ -50,24 +51,24 @@ pub fn standard_configs() -> Vec<ModelConfig> {
         ..default
     };
     vec![
-        config(DEFAULT_CONFIG, default, true),
+        config(DEFAULT_CONFIG, default, ModelFrame::Bone),
         config(
             "default shape, LOO α",
             FitOptions {
                 alpha: Alpha::Loo,
                 ..default
             },
-            true,
+            ModelFrame::Bone,
         ),
-        config("default shape, world frame", default, false),
-        config("full linear", full, true),
+        config("default shape, world frame", default, ModelFrame::World),
+        config("full linear", full, ModelFrame::Bone),
         config(
             "full linear, least squares (α = 0)",
             FitOptions {
                 alpha: Alpha::Fixed(0.0),
                 ..full
             },
-            true,
+            ModelFrame::Bone,
         ),
         config(
             "PCA(8, 22)",
@@ -76,7 +77,7 @@ pub fn standard_configs() -> Vec<ModelConfig> {
                 coef_dims: CoefDims::Count(22),
                 ..default
             },
-            true,
+            ModelFrame::Bone,
         ),
         config(
             "PCA(4, 12)",
@@ -85,7 +86,7 @@ pub fn standard_configs() -> Vec<ModelConfig> {
                 coef_dims: CoefDims::Count(12),
                 ..default
             },
-            true,
+            ModelFrame::Bone,
         ),
     ]
 }
@@ -175,15 +176,8 @@ pub fn run(
     let mut skipped = Vec::new();
     for config in configs {
         reporter.note(&format!("fitting {}", config.name));
-        let fitted = fit_clip(
-            rig,
-            layout,
-            train,
-            order,
-            &config.options,
-            config.bone_frame,
-        )
-        .with_context(|| format!("fitting {}", config.name))?;
+        let fitted = fit_clip(rig, layout, train, order, &config.options, config.frame)
+            .with_context(|| format!("fitting {}", config.name))?;
         let s = &fitted.report.seconds;
         let fit_s =
             s.validate + s.pose_pca + s.vertex_basis + s.projection + s.cross_validation + s.solve;
@@ -203,7 +197,7 @@ pub fn run(
         };
         let train_error = error(train)?;
         let test_errors = tests.iter().map(error).collect::<Result<Vec<_>>>()?;
-        let rotations = if config.bone_frame {
+        let rotations = if config.frame == ModelFrame::Bone {
             timing_clip.core_rotations(0)
         } else {
             Vec::new()

@@ -38,15 +38,24 @@ pub const PICTURE_VIEW: View = View {
     pitch: 0.15,
 };
 
-/// Writes `mesh` shaded by each of `shadings` side by side, in grey; with `with_error`,
-/// a last panel shows 4× the absolute difference between the first two (blue 0, red ≥ 0.25).
-pub fn save_panels(path: &Path, mesh: &Mesh, shadings: &[&[f32]], with_error: bool) -> Result<()> {
+/// Whether [`save_panels`] adds a panel of the error between the first two shadings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ErrorPanel {
+    /// A last panel shows 4× the absolute difference of the first two (blue 0, red ≥ 0.25).
+    Shown,
+    /// Only the shadings.
+    Omitted,
+}
+
+/// Writes `mesh` shaded by each of `shadings` side by side, in grey, and the error panel if
+/// `panel` asks for it.
+pub fn save_panels(path: &Path, mesh: &Mesh, shadings: &[&[f32]], panel: ErrorPanel) -> Result<()> {
     let (w, h) = (360, 480);
     let mut panels = shadings
         .iter()
         .map(|s| render_scalar(mesh, s, PICTURE_VIEW, w, h, Colormap::Grey))
         .collect::<Result<Vec<_>, _>>()?;
-    if with_error && shadings.len() >= 2 {
+    if panel == ErrorPanel::Shown && shadings.len() >= 2 {
         let error: Vec<f32> = shadings[0]
             .iter()
             .zip(shadings[1])
@@ -95,6 +104,6 @@ pub fn save_model_frame(
         lighting,
     )?;
     let mesh = upright(&clip.meshes[frame], up);
-    save_panels(path, &mesh, &[&truth, &model], true)?;
+    save_panels(path, &mesh, &[&truth, &model], ErrorPanel::Shown)?;
     Ok(truth)
 }

@@ -13,6 +13,7 @@ use glam::{Quat, Vec3};
 use crate::bake::BakeSettings;
 use crate::bake::clip::{BakedClip, bake_clip};
 use crate::io::atomic::write_atomic;
+use crate::model::ModelFrame;
 use crate::model::export::{Precision, encode_model};
 use crate::model::fit::{Alpha, CoefDims, FitOptions};
 use crate::model::predict::predict_world;
@@ -86,7 +87,7 @@ fn results_configs() -> Vec<ModelConfig> {
             coef_dims: CoefDims::Variance(0.999),
             ..FitOptions::default()
         },
-        bone_frame: true,
+        frame: ModelFrame::Bone,
     });
     configs
 }
@@ -250,7 +251,7 @@ fn alpha_sweep(
                 alpha: Alpha::Fixed(alpha),
                 ..FitOptions::default()
             };
-            let fitted = fit_clip(rig, layout, train, order, &options, true)?;
+            let fitted = fit_clip(rig, layout, train, order, &options, ModelFrame::Bone)?;
             let blob = encode_model(&fitted.model, Precision::F32)?;
             let error = |clip: &BakedClip| -> Result<f64> {
                 let predicted = predict_world(&blob, &clip.angles, &clip.rotations)?;

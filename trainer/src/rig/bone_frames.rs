@@ -40,6 +40,16 @@ pub fn all_rotations(rig: &dyn Rig, poses: &[Vec<f64>]) -> Result<Vec<Vec<DMat3>
     poses.iter().map(|a| bone_rotations(rig, a)).collect()
 }
 
+/// Which way transfer moves between world space and each vertex's bone frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameChange {
+    /// World-frame transfer re-expressed in each vertex's bone frame (by `Rᵀ`): the targets a
+    /// bone-frame model is fitted to.
+    WorldToBone,
+    /// Bone-frame transfer (as a bone-frame model predicts it) back in world space (by `R`).
+    BoneToWorld,
+}
+
 /// World-frame transfer of each pose re-expressed in each vertex's bone frame: the targets a
 /// bone-frame model is fitted to.
 pub fn to_bone_frames(
@@ -47,12 +57,7 @@ pub fn to_bone_frames(
     poses: &[Vec<f64>],
     world: &[Vec<f32>],
 ) -> Result<Vec<Vec<f32>>> {
-    change_frames(
-        world,
-        &all_rotations(rig, poses)?,
-        &dominant_bones(rig),
-        true,
-    )
+    change_rig_frames(rig, poses, world, FrameChange::WorldToBone)
 }
 
 /// Bone-frame transfer of each pose (as a bone-frame model predicts it) back in world space.
@@ -61,11 +66,21 @@ pub fn to_world_frames(
     poses: &[Vec<f64>],
     local: &[Vec<f32>],
 ) -> Result<Vec<Vec<f32>>> {
+    change_rig_frames(rig, poses, local, FrameChange::BoneToWorld)
+}
+
+/// [`change_frames`] with the bone rotations of `rig` in each of `poses`, and its bones.
+fn change_rig_frames(
+    rig: &dyn Rig,
+    poses: &[Vec<f64>],
+    transfer: &[Vec<f32>],
+    change: FrameChange,
+) -> Result<Vec<Vec<f32>>> {
     change_frames(
-        local,
+        transfer,
         &all_rotations(rig, poses)?,
         &dominant_bones(rig),
-        false,
+        change,
     )
 }
 
@@ -75,7 +90,7 @@ pub fn change_frames(
     transfer: &[Vec<f32>],
     rotations: &[Vec<DMat3>],
     bones: &BoneFrames,
-    into_bone: bool,
+    change: FrameChange,
 ) -> Result<Vec<Vec<f32>>> {
     if rotations.len() != transfer.len() {
         bail!(
@@ -91,21 +106,24 @@ pub fn change_frames(
     Ok(transfer
         .iter()
         .zip(rotations)
-        .map(|(t, r)| change_frame(&rotation, t, bones, r, into_bone))
+        .map(|(t, r)| change_frame(&rotation, t, bones, r, change))
         .collect())
 }
 
-/// Transfer moved between world and bone frames: into the bone frame (`Rᵀ`) or out of it.
+/// One frame's transfer moved between world and bone frames, as `change` says.
 pub fn change_frame(
     rotation: &EulerRotation,
     transfer: &[f32],
     bones: &BoneFrames,
     rotations: &[DMat3],
-    into_bone: bool,
+    change: FrameChange,
 ) -> Vec<f32> {
     rotate_each(rotation, transfer, |j| {
         let r = rotations[bones.vertex_bone[j] as usize];
-        if into_bone { r.transpose() } else { r }
+        match change {
+            FrameChange::WorldToBone => r.transpose(),
+            FrameChange::BoneToWorld => r,
+        }
     })
 }
 
@@ -120,13 +138,24 @@ mod tests {
             vertex_bone: vec![0],
         };
         let transfer = vec![vec![1.0f32; 4]; 2];
-        let err = change_frames(&transfer, &[vec![DMat3::IDENTITY]], &bones, false).unwrap_err();
+        let err = change_frames(
+            &transfer,
+            &[vec![DMat3::IDENTITY]],
+            &bones,
+            FrameChange::BoneToWorld,
+        )
+        .unwrap_err();
         assert!(
             err.to_string().contains("(2 frames, rotations for 1)"),
             "{err}"
         );
-        let moved =
-            change_frames(&transfer, &vec![vec![DMat3::IDENTITY]; 2], &bones, false).unwrap();
+        let moved = change_frames(
+            &transfer,
+            &vec![vec![DMat3::IDENTITY]; 2],
+            &bones,
+            FrameChange::BoneToWorld,
+        )
+        .unwrap();
         for (m, t) in moved.iter().flatten().zip(transfer.iter().flatten()) {
             assert!(
                 (m - t).abs() < 1e-6,
