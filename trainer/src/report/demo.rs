@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use anyhow::{Context, Result};
 use glam::Vec3;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use crate::bake::BakeSettings;
 use crate::bake::clip::{BakedClip, bake_clip};
@@ -85,19 +85,14 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
     };
     let training = character.training_clip();
     let layout = PoseLayout::from_training(&character.angle_names(), &training.frames)?;
-    let (train, bake_s) = bake_clip(
+    let (train, bake_s, tests) = bake_clips(
         &character,
         &layout,
-        &training.name,
-        strided(&training, args.stride),
+        &training,
         &settings,
+        args.stride,
         reporter,
     )?;
-    let mut tests = Vec::new();
-    for clip in character.novel_clips() {
-        let poses = strided(&clip, args.stride);
-        tests.push(bake_clip(&character, &layout, &clip.name, poses, &settings, reporter)?.0);
-    }
     let lighting = picture_lighting(order, Vec3::new(0.5, -0.8, 0.9));
     let result = experiment::run(
         &character,
@@ -113,29 +108,9 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
     write_atomic(&out.join("model.aprt"), &default.blob)
         .with_context(|| format!("cannot write {}", out.join("model.aprt").display()))?;
 
-    // Pictures of one novel pose: ground truth | model | 4× error, and the baselines.
     let test = &tests[0];
     let frame = test.angles.len() / 2;
-    let truth = save_model_frame(
-        &out.join("novel_pose.png"),
-        &default.blob,
-        test,
-        frame,
-        &lighting,
-        Vec3::Z,
-    )?;
-    let mesh = &test.meshes[frame];
-    let mean = shade_with(&mean_transfer(&train.transfer), &lighting);
-    let nearest = shade_with(
-        &train.transfer[nearest_pose(&train.angles, &test.angles[frame])],
-        &lighting,
-    );
-    save_panels(
-        &out.join("baselines.png"),
-        mesh,
-        &[&truth, &mean, &nearest],
-        ErrorPanel::Omitted,
-    )?;
+    save_pictures(out, &default.blob, &train, test, frame, &lighting)?;
 
     let report = Report {
         character: format!(
@@ -162,6 +137,65 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
     let markdown = report.markdown(test, frame);
     write_atomic(&out.join("report.md"), markdown.as_bytes())?;
     Ok(markdown)
+}
+
+/// `training` (with its bake's seconds per frame) and the novel clips of the built-in character,
+/// every `stride`-th frame of each, baked.
+fn bake_clips(
+    character: &Character,
+    layout: &PoseLayout,
+    training: &Clip,
+    settings: &BakeSettings,
+    stride: usize,
+    reporter: &dyn Reporter,
+) -> Result<(BakedClip, f64, Vec<BakedClip>)> {
+    let (train, bake_s) = bake_clip(
+        character,
+        layout,
+        &training.name,
+        strided(training, stride),
+        settings,
+        reporter,
+    )?;
+    let mut tests = Vec::new();
+    for clip in character.novel_clips() {
+        let poses = strided(&clip, stride);
+        tests.push(bake_clip(character, layout, &clip.name, poses, settings, reporter)?.0);
+    }
+    Ok((train, bake_s, tests))
+}
+
+/// Pictures of frame `frame` of `test` in `out`: ground truth | `blob`'s prediction | 4× error
+/// (`novel_pose.png`), and ground truth | mean training transfer | nearest training pose
+/// (`baselines.png`).
+fn save_pictures(
+    out: &Path,
+    blob: &[u8],
+    train: &BakedClip,
+    test: &BakedClip,
+    frame: usize,
+    lighting: &[f32],
+) -> Result<()> {
+    let truth = save_model_frame(
+        &out.join("novel_pose.png"),
+        blob,
+        test,
+        frame,
+        lighting,
+        Vec3::Z,
+    )?;
+    let mesh = &test.meshes[frame];
+    let mean = shade_with(&mean_transfer(&train.transfer), lighting);
+    let nearest = shade_with(
+        &train.transfer[nearest_pose(&train.angles, &test.angles[frame])],
+        lighting,
+    );
+    save_panels(
+        &out.join("baselines.png"),
+        mesh,
+        &[&truth, &mean, &nearest],
+        ErrorPanel::Omitted,
+    )
 }
 
 impl Report {

@@ -21,7 +21,7 @@ use crate::model::train::fit_clip;
 use crate::progress::Reporter;
 use crate::report::evaluate::relative_error;
 use crate::report::experiment::{
-    self, ModelConfig, TABLE_LEGEND, standard_configs, table_markdown,
+    self, Experiment, ModelConfig, TABLE_LEGEND, standard_configs, table_markdown,
 };
 use crate::report::figures::{picture_lighting, save_model_frame};
 use crate::report::plots::{Axes, Series, line_plot};
@@ -101,6 +101,54 @@ pub fn run_study(
     reporter: &dyn Reporter,
 ) -> Result<String> {
     let start = Instant::now();
+    let measured = measure(study, settings, reporter)?;
+    write_figures(study, &measured, out)?;
+    Ok(section_markdown(
+        study,
+        &measured,
+        start.elapsed().as_secs_f64(),
+    ))
+}
+
+/// Everything one study measured: what its figures and its section are made of.
+struct Measured {
+    /// The kept entries of the rig's pose vector.
+    layout: PoseLayout,
+    /// Ground truth of the training clip.
+    train: BakedClip,
+    /// Ground truth of the novel clips.
+    tests: Vec<BakedClip>,
+    /// Bake seconds per training frame.
+    bake_s: f64,
+    /// The lighting of the renders and timings.
+    lighting: Vec<f32>,
+    /// The models and the table.
+    experiment: Experiment,
+    /// (α, train error, test error per clip) of the default shape, for Figure 3.
+    sweep: Vec<(f64, f64, Vec<f64>)>,
+    /// The default model's per-vertex residuals on the novel clips, for Figure 2.
+    residuals: Vec<f64>,
+}
+
+impl Measured {
+    /// The default model (the study fails without it).
+    fn default_model(&self) -> Result<&experiment::Fitted> {
+        self.experiment.model(experiment::DEFAULT_CONFIG)
+    }
+
+    /// The novel frame the renders show: the middle of the first test clip.
+    fn novel_frame(&self) -> (&BakedClip, usize) {
+        let test = &self.tests[0];
+        (test, test.angles.len() / 2)
+    }
+
+    fn test_names(&self) -> Vec<String> {
+        self.tests.iter().map(|t| t.name.clone()).collect()
+    }
+}
+
+/// Bakes the study's clips, fits and measures its models, sweeps α and collects residuals.
+fn measure(study: &Study, settings: &ResultsSettings, reporter: &dyn Reporter) -> Result<Measured> {
     let rig = study.rig.as_ref();
     let names = rig.angle_names();
     let layout = PoseLayout::from_training(&names, &study.train.1)
@@ -125,7 +173,7 @@ pub fn run_study(
     let to_light = Quat::from_rotation_arc(study.up.normalize(), Vec3::Z).inverse()
         * Vec3::new(0.5, -0.8, 0.9);
     let lighting = picture_lighting(order, to_light);
-    let result = experiment::run(
+    let experiment = experiment::run(
         rig,
         &layout,
         &train,
@@ -135,11 +183,32 @@ pub fn run_study(
         &lighting,
         reporter,
     )?;
-    let id = &study.id;
-    let figure = |what: &str| out.join(format!("{id}_{what}.png"));
+    let default = experiment.model(experiment::DEFAULT_CONFIG)?;
+    let sweep = alpha_sweep(rig, &layout, &train, &tests, order, &settings.alphas)?;
+    let residuals = vertex_residuals(&default.blob, &tests)?;
+    Ok(Measured {
+        layout,
+        train,
+        tests,
+        bake_s,
+        lighting,
+        experiment,
+        sweep,
+        residuals,
+    })
+}
 
-    // Figure 4: the spectra.
-    let default = result.model(experiment::DEFAULT_CONFIG)?;
+/// The file name of figure `what` of the study `id`.
+fn figure_file(id: &str, what: &str) -> String {
+    format!("{id}_{what}.png")
+}
+
+/// Writes the study's figures into `out`: the spectra (Figure 4), error against α (Figure 3),
+/// the residual distribution and CDF (Figure 2), and a novel frame.
+fn write_figures(study: &Study, measured: &Measured, out: &Path) -> Result<()> {
+    let figure = |what: &str| out.join(figure_file(&study.id, what));
+    let result = &measured.experiment;
+    let default = measured.default_model()?;
     // A skipped (too large) energy model leaves the default's spectrum to plot.
     let by_energy = if result.skipped.iter().any(|(name, _)| name == BY_ENERGY) {
         default
@@ -147,42 +216,44 @@ pub fn run_study(
         result.model(BY_ENERGY)?
     };
     spectra_plot(&figure("spectra"), &study.title, by_energy)?;
-
-    // Figure 3: train and test error against α, default shape.
-    let sweep = alpha_sweep(rig, &layout, &train, &tests, order, &settings.alphas)?;
-    let test_names: Vec<String> = tests.iter().map(|t| t.name.clone()).collect();
     alpha_plot(
         &figure("alpha"),
         &study.title,
-        &sweep,
-        &test_names,
+        &measured.sweep,
+        &measured.test_names(),
         default.fit.report.alpha,
     )?;
-
-    // Figure 2: the default model's per-vertex residuals on the novel clips.
-    let residuals = vertex_residuals(&default.blob, &tests)?;
     residual_plots(
         &figure("residuals"),
         &figure("residual_cdf"),
         &study.title,
-        &residuals,
+        &measured.residuals,
     )?;
-
-    // A novel frame: ground truth | model | 4× error.
-    let test = &tests[0];
-    let frame = test.angles.len() / 2;
+    // Ground truth | model | 4× error.
+    let (test, frame) = measured.novel_frame();
     save_model_frame(
         &figure("frame"),
         &default.blob,
         test,
         frame,
-        &lighting,
+        &measured.lighting,
         study.up,
     )?;
+    Ok(())
+}
 
+/// The study's markdown section; `seconds` is how long the study took.
+fn section_markdown(study: &Study, measured: &Measured, seconds: f64) -> String {
+    let Measured {
+        layout,
+        train,
+        tests,
+        experiment: result,
+        ..
+    } = measured;
     let mut s = String::new();
     let _ = writeln!(s, "## {}\n\n{}\n", study.title, study.about);
-    let bind = rig.bind_mesh();
+    let bind = study.rig.bind_mesh();
     let _ = writeln!(
         s,
         "{} vertices, {} triangles; pose vector of {} entries ({} joints dropped as never moving in training{}). Trained on `{}` ({} frames); tested on {}. Bake {:.3} s per frame; study {:.0} s.\n",
@@ -202,14 +273,14 @@ pub fn run_study(
             .map(|t| format!("`{}` ({} frames)", t.name, t.angles.len()))
             .collect::<Vec<_>>()
             .join(", "),
-        bake_s,
-        start.elapsed().as_secs_f64(),
+        measured.bake_s,
+        seconds,
     );
-    s.push_str(&table_markdown(&result.rows, &test_names));
+    s.push_str(&table_markdown(&result.rows, &measured.test_names()));
     for (name, reason) in &result.skipped {
         let _ = writeln!(s, "\n*Not in the table: {name}, because {reason}.*");
     }
-    let file = |what: &str| format!("{id}_{what}.png");
+    let file = |what: &str| figure_file(&study.id, what);
     let _ = writeln!(
         s,
         "\n![PCA spectra]({})\n\n*Figure 4: eigenvalues of the pose covariance and energy of the vertex-coefficient components, each relative to its largest.*\n",
@@ -226,13 +297,14 @@ pub fn run_study(
         file("residuals"),
         file("residual_cdf")
     );
+    let (test, frame) = measured.novel_frame();
     let _ = writeln!(
         s,
         "![ground truth, model, 4x error]({})\n\n*Frame {frame} of `{}`: ground truth | default model through aprt-core | 4× absolute error.*\n",
         file("frame"),
         test.name
     );
-    Ok(s)
+    s
 }
 
 /// (α, train error, test error per clip) of the default shape at each α, plus α = 0 first.

@@ -112,12 +112,32 @@ pub(crate) fn build(skeleton: &Skeleton) -> (Body, Vec<&'static str>) {
     (crate::rig::lathe::build(parts), names)
 }
 
-/// Every part of the character, in a fixed order (the vertex order of the mesh).
+/// Every part of the character, in a fixed order (the vertex order of the mesh): the trunk and
+/// head, the left arm, the right arm, the left leg, the right leg.
 fn parts(skeleton: &Skeleton) -> Vec<(&'static str, Part)> {
     use joint::*;
+    let mut parts = trunk(skeleton);
+    for (side, shoulder, elbow, wrist) in [
+        (1.0, L_SHOULDER, L_ELBOW, L_WRIST),
+        (-1.0, R_SHOULDER, R_ELBOW, R_WRIST),
+    ] {
+        parts.extend(arm(skeleton, side, shoulder, elbow, wrist));
+    }
+    for (side, hip, knee, ankle) in [
+        (1.0, L_HIP, L_KNEE, L_ANKLE),
+        (-1.0, R_HIP, R_KNEE, R_ANKLE),
+    ] {
+        parts.extend(leg(skeleton, side, hip, knee, ankle));
+    }
+    parts
+}
+
+/// Torso, neck, head, nose and hat.
+fn trunk(skeleton: &Skeleton) -> Vec<(&'static str, Part)> {
+    use joint::*;
     let j = |i: usize| skeleton.bind[i];
-    let (x, y, z) = (DVec3::X, DVec3::Y, DVec3::Z);
-    let mut parts = vec![
+    let (x, z) = (DVec3::X, DVec3::Z);
+    vec![
         (
             "torso",
             Part {
@@ -174,129 +194,148 @@ fn parts(skeleton: &Skeleton) -> Vec<(&'static str, Part)> {
         ("head", head(HEAD_CENTRE, 1.0, HEAD)),
         ("nose", nose(NOSE_ORIGIN, 1.0, HEAD)),
         ("hat", hat(HAT_ORIGIN, 1.0, HEAD)),
-    ];
-    for (side, shoulder, elbow, wrist) in [
-        (1.0, L_SHOULDER, L_ELBOW, L_WRIST),
-        (-1.0, R_SHOULDER, R_ELBOW, R_WRIST),
-    ] {
-        let d = left_arm_direction() * DVec3::new(side, 1.0, 1.0);
-        let arm = |name, origin, length, start, end, base, bands, segments, scale| {
-            (
-                name,
-                Part {
-                    lathe: Lathe {
-                        origin,
-                        axis: d,
-                        side: y,
-                        scale,
-                        segments,
-                        profile: capsule_profile(RING_STEP, length, start, end),
-                    },
-                    base,
-                    bands,
-                },
-            )
-        };
-        parts.push(arm(
-            if side > 0.0 {
-                "l_upper_arm"
-            } else {
-                "r_upper_arm"
-            },
-            j(shoulder),
-            UPPER_ARM,
-            (0.056, 0.056),
-            (0.043, 0.043),
-            CHEST,
-            vec![band(0.0, 0.05, shoulder), band(UPPER_ARM, 0.05, elbow)],
-            28,
-            (1.0, 1.0),
-        ));
-        parts.push(arm(
-            if side > 0.0 { "l_forearm" } else { "r_forearm" },
-            j(elbow),
-            FOREARM,
-            (0.043, 0.043),
-            (0.031, 0.031),
-            shoulder,
-            vec![band(0.0, 0.05, elbow), band(FOREARM, 0.03, wrist)],
-            24,
-            (1.0, 1.0),
-        ));
-        // Flattened across the palm, which faces down and in toward the body.
-        parts.push(arm(
-            if side > 0.0 { "l_hand" } else { "r_hand" },
-            j(wrist),
-            0.09,
-            (0.032, 0.032),
-            (0.034, 0.045),
-            elbow,
-            vec![band(0.0, 0.03, wrist)],
-            20,
-            (1.3, 0.62),
-        ));
-    }
-    for (side, hip, knee, ankle) in [
-        (1.0, L_HIP, L_KNEE, L_ANKLE),
-        (-1.0, R_HIP, R_KNEE, R_ANKLE),
-    ] {
-        let left = side > 0.0;
-        let thigh = j(hip).z - j(knee).z;
-        let shin = j(knee).z - j(ankle).z;
-        let leg = |name, origin, length, start, end, base, bands, segments| {
-            (
-                name,
-                Part {
-                    lathe: Lathe {
-                        origin,
-                        axis: -z,
-                        side: x,
-                        scale: (1.0, 1.0),
-                        segments,
-                        profile: capsule_profile(RING_STEP, length, start, end),
-                    },
-                    base,
-                    bands,
-                },
-            )
-        };
-        parts.push(leg(
-            if left { "l_thigh" } else { "r_thigh" },
-            j(hip),
-            thigh,
-            (0.085, 0.085),
-            (0.056, 0.056),
-            PELVIS,
-            vec![band(0.0, 0.07, hip), band(thigh, 0.06, knee)],
-            32,
-        ));
-        parts.push(leg(
-            if left { "l_shin" } else { "r_shin" },
-            j(knee),
-            shin,
-            (0.054, 0.054),
-            (0.036, 0.036),
-            hip,
-            vec![band(0.0, 0.06, knee), band(shin, 0.04, ankle)],
-            28,
-        ));
-        parts.push((
-            if left { "l_foot" } else { "r_foot" },
+    ]
+}
+
+/// Upper arm, forearm and hand of one side (`side` +1 left, −1 right).
+fn arm(
+    skeleton: &Skeleton,
+    side: f64,
+    shoulder: usize,
+    elbow: usize,
+    wrist: usize,
+) -> Vec<(&'static str, Part)> {
+    use joint::*;
+    let j = |i: usize| skeleton.bind[i];
+    let y = DVec3::Y;
+    let mut parts = Vec::with_capacity(3);
+    let d = left_arm_direction() * DVec3::new(side, 1.0, 1.0);
+    let arm = |name, origin, length, start, end, base, bands, segments, scale| {
+        (
+            name,
             Part {
-                // Heel to toe along −y, sole on z = 0; rigid on the ankle, while the shin's lower
-                // end blends into the ankle above it.
                 lathe: Lathe {
-                    origin: DVec3::new(side * 0.09, 0.045, 0.045),
-                    axis: -y,
+                    origin,
+                    axis: d,
+                    side: y,
+                    scale,
+                    segments,
+                    profile: capsule_profile(RING_STEP, length, start, end),
+                },
+                base,
+                bands,
+            },
+        )
+    };
+    parts.push(arm(
+        if side > 0.0 {
+            "l_upper_arm"
+        } else {
+            "r_upper_arm"
+        },
+        j(shoulder),
+        UPPER_ARM,
+        (0.056, 0.056),
+        (0.043, 0.043),
+        CHEST,
+        vec![band(0.0, 0.05, shoulder), band(UPPER_ARM, 0.05, elbow)],
+        28,
+        (1.0, 1.0),
+    ));
+    parts.push(arm(
+        if side > 0.0 { "l_forearm" } else { "r_forearm" },
+        j(elbow),
+        FOREARM,
+        (0.043, 0.043),
+        (0.031, 0.031),
+        shoulder,
+        vec![band(0.0, 0.05, elbow), band(FOREARM, 0.03, wrist)],
+        24,
+        (1.0, 1.0),
+    ));
+    // Flattened across the palm, which faces down and in toward the body.
+    parts.push(arm(
+        if side > 0.0 { "l_hand" } else { "r_hand" },
+        j(wrist),
+        0.09,
+        (0.032, 0.032),
+        (0.034, 0.045),
+        elbow,
+        vec![band(0.0, 0.03, wrist)],
+        20,
+        (1.3, 0.62),
+    ));
+    parts
+}
+
+/// Thigh, shin and foot of one side (`side` +1 left, −1 right).
+fn leg(
+    skeleton: &Skeleton,
+    side: f64,
+    hip: usize,
+    knee: usize,
+    ankle: usize,
+) -> Vec<(&'static str, Part)> {
+    use joint::*;
+    let j = |i: usize| skeleton.bind[i];
+    let (x, y, z) = (DVec3::X, DVec3::Y, DVec3::Z);
+    let mut parts = Vec::with_capacity(3);
+    let left = side > 0.0;
+    let thigh = j(hip).z - j(knee).z;
+    let shin = j(knee).z - j(ankle).z;
+    let leg = |name, origin, length, start, end, base, bands, segments| {
+        (
+            name,
+            Part {
+                lathe: Lathe {
+                    origin,
+                    axis: -z,
                     side: x,
                     scale: (1.0, 1.0),
-                    segments: 24,
-                    profile: capsule_profile(RING_STEP, 0.17, (0.04, 0.03), (0.045, 0.05)),
+                    segments,
+                    profile: capsule_profile(RING_STEP, length, start, end),
                 },
-                base: ankle,
-                bands: vec![],
+                base,
+                bands,
             },
-        ));
-    }
+        )
+    };
+    parts.push(leg(
+        if left { "l_thigh" } else { "r_thigh" },
+        j(hip),
+        thigh,
+        (0.085, 0.085),
+        (0.056, 0.056),
+        PELVIS,
+        vec![band(0.0, 0.07, hip), band(thigh, 0.06, knee)],
+        32,
+    ));
+    parts.push(leg(
+        if left { "l_shin" } else { "r_shin" },
+        j(knee),
+        shin,
+        (0.054, 0.054),
+        (0.036, 0.036),
+        hip,
+        vec![band(0.0, 0.06, knee), band(shin, 0.04, ankle)],
+        28,
+    ));
+    parts.push((
+        if left { "l_foot" } else { "r_foot" },
+        Part {
+            // Heel to toe along −y, sole on z = 0; rigid on the ankle, while the shin's lower
+            // end blends into the ankle above it.
+            lathe: Lathe {
+                origin: DVec3::new(side * 0.09, 0.045, 0.045),
+                axis: -y,
+                side: x,
+                scale: (1.0, 1.0),
+                segments: 24,
+                profile: capsule_profile(RING_STEP, 0.17, (0.04, 0.03), (0.045, 0.05)),
+            },
+            base: ankle,
+            bands: vec![],
+        },
+    ));
     parts
 }

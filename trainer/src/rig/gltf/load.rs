@@ -26,6 +26,9 @@ pub struct Parts {
     pub animations: Vec<Animation>,
 }
 
+/// Each vertex's `(joint, weight)` influences, as [`Skin::from_influences`] takes them.
+type Influences = Vec<Vec<(u32, f32)>>;
+
 /// `kind index "name"`, the way every error names an item.
 fn item(kind: &str, index: usize, name: Option<&str>) -> String {
     match name {
@@ -40,17 +43,56 @@ pub fn read(path: &Path) -> Result<Parts, GltfError> {
         path: path.to_path_buf(),
         source,
     };
-    let invalid = |item: String, problem: String| GltfError::Invalid {
-        path: path.to_path_buf(),
-        item,
-        problem,
-    };
     let gltf = gltf::Gltf::open(path).map_err(read_error)?;
     let buffers = gltf::import_buffers(&gltf.document, path.parent(), gltf.blob.clone())
         .map_err(read_error)?;
-    let get = |b: gltf::Buffer| buffers.get(b.index()).map(|d| d.0.as_slice());
     let doc = &gltf.document;
+    let invalid = invalid_in(path);
 
+    let (skinned, skin) = skinned_nodes(doc, path)?;
+    let node_names = node_names(doc);
+    let parents = parents(doc).map_err(|(node, problem)| {
+        invalid(
+            item("node", node, doc.nodes().nth(node).and_then(|n| n.name())),
+            problem,
+        )
+    })?;
+    let rest = rest_transforms(doc, path)?;
+    let skin_item = item("skin", skin.index(), skin.name());
+    let joints: Vec<usize> = skin.joints().map(|n| n.index()).collect();
+    if joints.is_empty() {
+        return Err(invalid(skin_item, "has no joints".into()));
+    }
+    let inverse_bind = inverse_binds(&skin, &buffers, joints.len(), path)?;
+    let (bind, influences) = merge_primitives(&skinned, &buffers, joints.len(), path)?;
+    let skin = Skin::from_influences(&influences).map_err(|source| GltfError::Skin {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let skeleton = Skeleton::new(parents, rest, joints, inverse_bind, skinned[0].index());
+    Ok(Parts {
+        bind,
+        skin,
+        skeleton,
+        animations: animations(doc, &buffers, &node_names, path)?,
+        node_names,
+    })
+}
+
+/// The error for `item` of the file at `path`.
+fn invalid_in(path: &Path) -> impl Fn(String, String) -> GltfError + '_ {
+    move |item, problem| GltfError::Invalid {
+        path: path.to_path_buf(),
+        item,
+        problem,
+    }
+}
+
+/// The nodes with both a mesh and a skin, in node order, and the skin they all share.
+fn skinned_nodes<'d>(
+    doc: &'d gltf::Document,
+    path: &Path,
+) -> Result<(Vec<gltf::Node<'d>>, gltf::Skin<'d>), GltfError> {
     let skinned: Vec<gltf::Node> = doc
         .nodes()
         .filter(|n| n.mesh().is_some() && n.skin().is_some())
@@ -80,16 +122,13 @@ pub fn read(path: &Path) -> Result<Parts, GltfError> {
             nodes,
         });
     }
+    Ok((skinned, skin))
+}
 
-    let node_names = node_names(doc);
-    let parents = parents(doc).map_err(|(node, problem)| {
-        invalid(
-            item("node", node, doc.nodes().nth(node).and_then(|n| n.name())),
-            problem,
-        )
-    })?;
-    let rest = doc
-        .nodes()
+/// Every node's rest transform, which must be finite with a nonzero rotation.
+fn rest_transforms(doc: &gltf::Document, path: &Path) -> Result<Vec<Trs>, GltfError> {
+    let invalid = invalid_in(path);
+    doc.nodes()
         .map(|n| {
             let (t, r, s) = n.transform().decomposed();
             let rotation = DQuat::from_array(r.map(f64::from));
@@ -109,16 +148,22 @@ pub fn read(path: &Path) -> Result<Parts, GltfError> {
                 ))
             }
         })
-        .collect::<Result<Vec<_>, _>>()?;
+        .collect()
+}
 
+/// The skin's inverse bind matrices, one per joint (`joint_count` of them).
+fn inverse_binds(
+    skin: &gltf::Skin,
+    buffers: &[gltf::buffer::Data],
+    joint_count: usize,
+    path: &Path,
+) -> Result<Vec<DMat4>, GltfError> {
+    let invalid = invalid_in(path);
+    let get = |b: gltf::Buffer| buffers.get(b.index()).map(|d| d.0.as_slice());
     let skin_item = item("skin", skin.index(), skin.name());
-    let joints: Vec<usize> = skin.joints().map(|n| n.index()).collect();
-    if joints.is_empty() {
-        return Err(invalid(skin_item, "has no joints".into()));
-    }
-    let inverse_bind: Vec<DMat4> = match skin.inverse_bind_matrices() {
+    Ok(match skin.inverse_bind_matrices() {
         // glTF: without the accessor every inverse bind matrix is the identity.
-        None => vec![DMat4::IDENTITY; joints.len()],
+        None => vec![DMat4::IDENTITY; joint_count],
         Some(accessor) => {
             let matrices: Vec<DMat4> = skin
                 .reader(get)
@@ -126,30 +171,41 @@ pub fn read(path: &Path) -> Result<Parts, GltfError> {
                 .ok_or_else(|| unreadable(&invalid, &accessor))?
                 .map(|m| DMat4::from_cols_array_2d(&m.map(|c| c.map(f64::from))))
                 .collect();
-            if matrices.len() < joints.len() || !matrices.iter().all(|m| m.is_finite()) {
+            if matrices.len() < joint_count || !matrices.iter().all(|m| m.is_finite()) {
                 return Err(invalid(
                     format!("{skin_item} accessor {}", accessor.index()),
                     format!(
                         "needs {} finite inverse bind matrices, has {} (or some are not finite)",
-                        joints.len(),
+                        joint_count,
                         matrices.len()
                     ),
                 ));
             }
-            matrices[..joints.len()].to_vec()
+            matrices[..joint_count].to_vec()
         }
-    };
+    })
+}
 
+/// Every primitive of the skinned nodes merged in order into the bind mesh (vertices in
+/// accessor order), with each vertex's joint influences.
+fn merge_primitives(
+    skinned: &[gltf::Node],
+    buffers: &[gltf::buffer::Data],
+    joint_count: usize,
+    path: &Path,
+) -> Result<(Mesh, Influences), GltfError> {
+    let invalid = invalid_in(path);
+    let get = |b: gltf::Buffer| buffers.get(b.index()).map(|d| d.0.as_slice());
     let mut positions = Vec::new();
     let mut normals = Vec::new();
     let mut triangles = Vec::new();
-    let mut influences: Vec<Vec<(u32, f32)>> = Vec::new();
-    for node in &skinned {
+    let mut influences: Influences = Vec::new();
+    for node in skinned {
         let mesh = node
             .mesh()
             .unwrap_or_else(|| unreachable!("filtered on mesh"));
         for primitive in mesh.primitives() {
-            let part = read_primitive(&primitive, get, joints.len()).map_err(|problem| {
+            let part = read_primitive(&primitive, get, joint_count).map_err(|problem| {
                 invalid(
                     format!(
                         "{} primitive {}",
@@ -169,12 +225,25 @@ pub fn read(path: &Path) -> Result<Parts, GltfError> {
             influences.extend(part.influences);
         }
     }
-    let skin = Skin::from_influences(&influences).map_err(|source| GltfError::Skin {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let skeleton = Skeleton::new(parents, rest, joints, inverse_bind, first.index());
+    Ok((
+        Mesh {
+            positions,
+            normals,
+            triangles,
+        },
+        influences,
+    ))
+}
 
+/// The animations as curves per node; a repeated name gets `#<index>` appended.
+fn animations(
+    doc: &gltf::Document,
+    buffers: &[gltf::buffer::Data],
+    node_names: &[String],
+    path: &Path,
+) -> Result<Vec<Animation>, GltfError> {
+    let invalid = invalid_in(path);
+    let get = |b: gltf::Buffer| buffers.get(b.index()).map(|d| d.0.as_slice());
     let mut animations: Vec<Animation> = Vec::new();
     for animation in doc.animations() {
         let mut name = animation
@@ -200,18 +269,7 @@ pub fn read(path: &Path) -> Result<Parts, GltfError> {
         }
         animations.push(Animation { name, tracks });
     }
-
-    Ok(Parts {
-        bind: Mesh {
-            positions,
-            normals,
-            triangles,
-        },
-        skin,
-        skeleton,
-        node_names,
-        animations,
-    })
+    Ok(animations)
 }
 
 /// The error for an accessor whose bytes lie outside its buffer view or buffer.
@@ -283,7 +341,7 @@ struct Part {
     positions: Vec<[f32; 3]>,
     normals: Option<Vec<[f32; 3]>>,
     triangles: Vec<[u32; 3]>,
-    influences: Vec<Vec<(u32, f32)>>,
+    influences: Influences,
 }
 
 fn read_primitive<'a, 's, F>(
@@ -295,54 +353,21 @@ where
     F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
 {
     let reader = primitive.reader(get);
-    let unreadable = |semantic: Semantic| {
-        let index = primitive.get(&semantic).map_or(0, |a| a.index());
-        format!("accessor {index} ({semantic:?}): its data lies outside its buffer view or buffer")
-    };
     let positions: Vec<[f32; 3]> = match primitive.get(&Semantic::Positions) {
         None => return Err("has no POSITION attribute".into()),
         Some(_) => reader
             .read_positions()
-            .ok_or_else(|| unreadable(Semantic::Positions))?
+            .ok_or_else(|| unreadable_attribute(primitive, Semantic::Positions))?
             .collect(),
     };
     let n = positions.len();
-    let check_count = |semantic: Semantic, got: usize| {
-        if got == n {
-            Ok(())
-        } else {
-            Err(format!(
-                "{semantic:?} has {got} elements but POSITION has {n}"
-            ))
-        }
-    };
     if let Some(v) = positions
         .iter()
         .position(|p| !p.iter().all(|c| c.is_finite()))
     {
         return Err(format!("POSITION {v} is not finite"));
     }
-    let normals = match primitive.get(&Semantic::Normals) {
-        None => None,
-        Some(_) => {
-            let raw: Vec<[f32; 3]> = reader
-                .read_normals()
-                .ok_or_else(|| unreadable(Semantic::Normals))?
-                .collect();
-            check_count(Semantic::Normals, raw.len())?;
-            let unit = raw
-                .iter()
-                .enumerate()
-                .map(|(v, &normal)| {
-                    glam::Vec3::from(normal)
-                        .try_normalize()
-                        .map(|n| n.to_array())
-                        .ok_or_else(|| format!("NORMAL {v} ({normal:?}) has no direction"))
-                })
-                .collect::<Result<Vec<_>, _>>()?;
-            Some(unit)
-        }
-    };
+    let normals = read_normals(primitive, &reader, n)?;
     let indices: Vec<u32> = match primitive.indices() {
         None => (0..n as u32).collect(),
         Some(_) => reader
@@ -355,7 +380,73 @@ where
         return Err(format!("index {i} is out of range for {n} vertices"));
     }
     let triangles = triangulate(primitive.mode(), &indices)?;
+    let influences = read_influences(primitive, &reader, n, joint_count)?;
+    Ok(Part {
+        positions,
+        normals,
+        triangles,
+        influences,
+    })
+}
 
+/// The message for an attribute whose accessor lies outside its buffer view or buffer.
+fn unreadable_attribute(primitive: &gltf::Primitive, semantic: Semantic) -> String {
+    let index = primitive.get(&semantic).map_or(0, |a| a.index());
+    format!("accessor {index} ({semantic:?}): its data lies outside its buffer view or buffer")
+}
+
+/// Errors unless an attribute has one element per position (`n`).
+fn check_count(semantic: Semantic, got: usize, n: usize) -> Result<(), String> {
+    if got == n {
+        Ok(())
+    } else {
+        Err(format!(
+            "{semantic:?} has {got} elements but POSITION has {n}"
+        ))
+    }
+}
+
+/// The primitive's `NORMAL`s renormalised, if it has them (`n` positions).
+fn read_normals<'a, 's, F>(
+    primitive: &'a gltf::Primitive<'a>,
+    reader: &gltf::mesh::Reader<'a, 's, F>,
+    n: usize,
+) -> Result<Option<Vec<[f32; 3]>>, String>
+where
+    F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
+{
+    if primitive.get(&Semantic::Normals).is_none() {
+        return Ok(None);
+    }
+    let raw: Vec<[f32; 3]> = reader
+        .read_normals()
+        .ok_or_else(|| unreadable_attribute(primitive, Semantic::Normals))?
+        .collect();
+    check_count(Semantic::Normals, raw.len(), n)?;
+    let unit = raw
+        .iter()
+        .enumerate()
+        .map(|(v, &normal)| {
+            glam::Vec3::from(normal)
+                .try_normalize()
+                .map(|n| n.to_array())
+                .ok_or_else(|| format!("NORMAL {v} ({normal:?}) has no direction"))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(Some(unit))
+}
+
+/// Every vertex's `(joint, weight)` influences over all `JOINTS_n`/`WEIGHTS_n` sets (`n`
+/// vertices, joints below `joint_count` wherever the weight is nonzero).
+fn read_influences<'a, 's, F>(
+    primitive: &'a gltf::Primitive<'a>,
+    reader: &gltf::mesh::Reader<'a, 's, F>,
+    n: usize,
+    joint_count: usize,
+) -> Result<Influences, String>
+where
+    F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
+{
     let mut influences = vec![Vec::new(); n];
     for set in 0.. {
         if primitive.get(&Semantic::Joints(set)).is_none() {
@@ -368,7 +459,7 @@ where
         }
         let joints: Vec<[u16; 4]> = reader
             .read_joints(set)
-            .ok_or_else(|| unreadable(Semantic::Joints(set)))?
+            .ok_or_else(|| unreadable_attribute(primitive, Semantic::Joints(set)))?
             .into_u16()
             .collect();
         if primitive.get(&Semantic::Weights(set)).is_none() {
@@ -376,11 +467,11 @@ where
         }
         let weights: Vec<[f32; 4]> = reader
             .read_weights(set)
-            .ok_or_else(|| unreadable(Semantic::Weights(set)))?
+            .ok_or_else(|| unreadable_attribute(primitive, Semantic::Weights(set)))?
             .into_f32()
             .collect();
-        check_count(Semantic::Joints(set), joints.len())?;
-        check_count(Semantic::Weights(set), weights.len())?;
+        check_count(Semantic::Joints(set), joints.len(), n)?;
+        check_count(Semantic::Weights(set), weights.len(), n)?;
         for (v, (j, w)) in joints.iter().zip(&weights).enumerate() {
             for (&joint, &weight) in j.iter().zip(w) {
                 if weight != 0.0 && usize::from(joint) >= joint_count {
@@ -392,12 +483,7 @@ where
             }
         }
     }
-    Ok(Part {
-        positions,
-        normals,
-        triangles,
-        influences,
-    })
+    Ok(influences)
 }
 
 /// Triangles of a primitive from its index list. Strips and fans are unrolled (strip

@@ -34,7 +34,7 @@ use crate::rig::character::body::{
     CROWN, HAT_ORIGIN, HEAD_CENTRE, NOSE_ORIGIN, RING_STEP, hat, head, nose,
 };
 use crate::rig::lathe::{self, Band, Lathe, Part, band, capsule_profile};
-use crate::rig::mocap::Mocap;
+use crate::rig::mocap::{Joint, Mocap};
 
 /// Pipe-model constant (see the module docs).
 const PIPE: f64 = 0.057;
@@ -86,83 +86,14 @@ pub(super) fn build(
     with_hat: bool,
 ) -> Option<Built> {
     let joints = mocap.joints();
-    let at = |j: usize| to_mesh * rest[j];
-    // Every bone end, zero-length ones included, to measure the height.
-    let mut bones: Vec<Bone> = Vec::new();
-    let mut points: Vec<DVec3> = (0..joints.len()).map(at).collect();
-    for (j, joint) in joints.iter().enumerate() {
-        for &e in &joint.end_sites {
-            points.push(at(j) + to_mesh * e);
-        }
-    }
-    let (low, high) = points
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
-            (l.min(p.z), h.max(p.z))
-        });
-    let height = high - low;
-    if height <= 0.0 || !height.is_finite() {
-        return None;
-    }
+    let at: Vec<DVec3> = rest.iter().map(|&p| to_mesh * p).collect();
+    let height = rest_height(mocap, &at, to_mesh)?;
     let eps = ZERO_LENGTH * height;
-    for (c, joint) in joints.iter().enumerate() {
-        if let Some(j) = joint.parent {
-            bones.push(Bone {
-                joint: j,
-                child: Some(c),
-                start: at(j),
-                end: at(c),
-                radius: 0.0,
-            });
-        }
-        for &e in &joint.end_sites {
-            bones.push(Bone {
-                joint: c,
-                child: None,
-                start: at(c),
-                end: at(c) + to_mesh * e,
-                radius: 0.0,
-            });
-        }
-    }
-    bones.retain(|b| b.length() > eps);
+    let mut bones = bones(mocap, &at, to_mesh, eps);
     if bones.is_empty() {
         return None;
     }
-    // Pipe model: length carried below each joint, children before parents (reverse file
-    // order, as parents precede children).
-    let mut below = vec![0.0; joints.len()];
-    for j in (0..joints.len()).rev() {
-        below[j] += bones
-            .iter()
-            .filter(|b| b.joint == j)
-            .map(|b| b.length() + b.child.map_or(0.0, |c| below[c]))
-            .sum::<f64>();
-        if let Some(p) = joints[j].parent {
-            // Zero-length bones carry their child's load to the parent.
-            if at(j).distance(at(p)) <= eps {
-                below[p] += below[j];
-            }
-        }
-    }
-    for b in &mut bones {
-        let carried = b.length() + b.child.map_or(0.0, |c| below[c]);
-        b.radius = (PIPE * (height * carried).sqrt()).max(MIN_RADIUS * height);
-    }
-    let thickest_from = |j: usize| {
-        bones
-            .iter()
-            .filter(|b| b.joint == j)
-            .map(|b| b.radius)
-            .fold(None, |m: Option<f64>, r| Some(m.map_or(r, |m| m.max(r))))
-    };
-    let half_width = |j: usize| {
-        let touching = bones.iter().filter(|b| b.joint == j || b.child == Some(j));
-        let (r, len) = touching.fold((0.0_f64, f64::INFINITY), |(r, len), b| {
-            (r.max(b.radius), len.min(b.length()))
-        });
-        (BLEND * r).min(0.5 * len)
-    };
+    pipe_radii(&mut bones, joints, &at, height, eps);
     let scale = height / CROWN;
     let step = COARSER * RING_STEP * scale;
     let head_bone = bones
@@ -171,44 +102,12 @@ pub(super) fn build(
         .max_by(|(_, a), (_, b)| a.end.z.total_cmp(&b.end.z))
         .map(|(i, _)| i)?;
 
-    let mut parts: Vec<(String, Part)> = Vec::new();
-    for (i, bone) in bones.iter().enumerate() {
-        if i == head_bone {
-            continue;
-        }
-        let length = bone.length();
-        let axis = (bone.end - bone.start) / length;
-        let r0 = bone.radius;
-        let r1 = bone
-            .child
-            .and_then(thickest_from)
-            .unwrap_or(TIP * r0)
-            .min(r0);
-        let mut bands: Vec<Band> = vec![band(0.0, half_width(bone.joint), bone.joint)];
-        if let Some(c) = bone.child {
-            bands.push(band(length, half_width(c), c));
-        }
-        let segments = ((std::f64::consts::TAU * r0 / (AROUND * step)) / 4.0).ceil() as usize * 4;
-        parts.push((
-            format!(
-                "{}-{}",
-                joints[bone.joint].name,
-                bone.child.map_or("end", |c| joints[c].name.as_str())
-            ),
-            Part {
-                lathe: Lathe {
-                    origin: bone.start,
-                    axis,
-                    side: axis.any_orthonormal_vector(),
-                    scale: (1.0, 1.0),
-                    segments: segments.clamp(12, 48),
-                    profile: capsule_profile(step, length, (r0, r0), (r1, r1)),
-                },
-                base: joints[bone.joint].parent.unwrap_or(bone.joint),
-                bands,
-            },
-        ));
-    }
+    let mut parts: Vec<(String, Part)> = bones
+        .iter()
+        .enumerate()
+        .filter(|&(i, _)| i != head_bone)
+        .map(|(_, bone)| bone_part(bone, &bones, joints, step))
+        .collect();
     let bone = &bones[head_bone];
     let centre = 0.5 * (bone.start + bone.end);
     let from_head = |p: DVec3| centre + (p - HEAD_CENTRE) * scale;
@@ -226,4 +125,126 @@ pub(super) fn build(
         names,
         height,
     })
+}
+
+/// The skeleton's rest height along the mesh's up axis, lowest to highest joint or End Site
+/// (`at`: the joints' rest positions in the mesh frame); `None` if it is not a positive number.
+fn rest_height(mocap: &Mocap, at: &[DVec3], to_mesh: DQuat) -> Option<f64> {
+    // Every bone end, zero-length ones included.
+    let mut points: Vec<DVec3> = at.to_vec();
+    for (j, joint) in mocap.joints().iter().enumerate() {
+        for &e in &joint.end_sites {
+            points.push(at[j] + to_mesh * e);
+        }
+    }
+    let (low, high) = points
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
+            (l.min(p.z), h.max(p.z))
+        });
+    let height = high - low;
+    (height > 0.0 && height.is_finite()).then_some(height)
+}
+
+/// The bones longer than `eps`, to each child joint and to each End Site, in file order, with
+/// no radius yet.
+fn bones(mocap: &Mocap, at: &[DVec3], to_mesh: DQuat, eps: f64) -> Vec<Bone> {
+    let mut bones: Vec<Bone> = Vec::new();
+    for (c, joint) in mocap.joints().iter().enumerate() {
+        if let Some(j) = joint.parent {
+            bones.push(Bone {
+                joint: j,
+                child: Some(c),
+                start: at[j],
+                end: at[c],
+                radius: 0.0,
+            });
+        }
+        for &e in &joint.end_sites {
+            bones.push(Bone {
+                joint: c,
+                child: None,
+                start: at[c],
+                end: at[c] + to_mesh * e,
+                radius: 0.0,
+            });
+        }
+    }
+    bones.retain(|b| b.length() > eps);
+    bones
+}
+
+/// Gives every bone its pipe-model radius (see the module docs).
+fn pipe_radii(bones: &mut [Bone], joints: &[Joint], at: &[DVec3], height: f64, eps: f64) {
+    // Length carried below each joint, children before parents (reverse file order, as
+    // parents precede children).
+    let mut below = vec![0.0; joints.len()];
+    for j in (0..joints.len()).rev() {
+        below[j] += bones
+            .iter()
+            .filter(|b| b.joint == j)
+            .map(|b| b.length() + b.child.map_or(0.0, |c| below[c]))
+            .sum::<f64>();
+        if let Some(p) = joints[j].parent {
+            // Zero-length bones carry their child's load to the parent.
+            if at[j].distance(at[p]) <= eps {
+                below[p] += below[j];
+            }
+        }
+    }
+    for b in bones.iter_mut() {
+        let carried = b.length() + b.child.map_or(0.0, |c| below[c]);
+        b.radius = (PIPE * (height * carried).sqrt()).max(MIN_RADIUS * height);
+    }
+}
+
+/// The tapered capsule around `bone`, sampled every `step`, blending into the joints at its
+/// ends over the half-widths the bones there allow.
+fn bone_part(bone: &Bone, bones: &[Bone], joints: &[Joint], step: f64) -> (String, Part) {
+    let thickest_from = |j: usize| {
+        bones
+            .iter()
+            .filter(|b| b.joint == j)
+            .map(|b| b.radius)
+            .fold(None, |m: Option<f64>, r| Some(m.map_or(r, |m| m.max(r))))
+    };
+    let half_width = |j: usize| {
+        let touching = bones.iter().filter(|b| b.joint == j || b.child == Some(j));
+        let (r, len) = touching.fold((0.0_f64, f64::INFINITY), |(r, len), b| {
+            (r.max(b.radius), len.min(b.length()))
+        });
+        (BLEND * r).min(0.5 * len)
+    };
+    let length = bone.length();
+    let axis = (bone.end - bone.start) / length;
+    let r0 = bone.radius;
+    let r1 = bone
+        .child
+        .and_then(thickest_from)
+        .unwrap_or(TIP * r0)
+        .min(r0);
+    let mut bands: Vec<Band> = vec![band(0.0, half_width(bone.joint), bone.joint)];
+    if let Some(c) = bone.child {
+        bands.push(band(length, half_width(c), c));
+    }
+    let segments = ((std::f64::consts::TAU * r0 / (AROUND * step)) / 4.0).ceil() as usize * 4;
+    (
+        format!(
+            "{}-{}",
+            joints[bone.joint].name,
+            bone.child.map_or("end", |c| joints[c].name.as_str())
+        ),
+        Part {
+            lathe: Lathe {
+                origin: bone.start,
+                axis,
+                side: axis.any_orthonormal_vector(),
+                scale: (1.0, 1.0),
+                segments: segments.clamp(12, 48),
+                profile: capsule_profile(step, length, (r0, r0), (r1, r1)),
+            },
+            base: joints[bone.joint].parent.unwrap_or(bone.joint),
+            bands,
+        },
+    )
 }

@@ -275,13 +275,7 @@ fn hierarchy(lex: &mut Lexer) -> Result<Vec<Joint>, Failure> {
     loop {
         let Some((line, token)) = lex.next() else {
             return Err(match stack.last() {
-                Some(open) => (
-                    open.brace_line,
-                    Problem::UnclosedBrace {
-                        joint: open.label(&joints),
-                        opened: open.brace_line,
-                    },
-                ),
+                Some(open) => unclosed(open, &joints),
                 None => (lex.line, Problem::MissingMotion),
             });
         };
@@ -289,15 +283,7 @@ fn hierarchy(lex: &mut Lexer) -> Result<Vec<Joint>, Failure> {
         match (token, top) {
             ("MOTION", None) if joints.is_empty() => return Err((line, Problem::NoRoot)),
             ("MOTION", None) => return Ok(joints),
-            ("MOTION", Some(open)) => {
-                return Err((
-                    open.brace_line,
-                    Problem::UnclosedBrace {
-                        joint: open.label(&joints),
-                        opened: open.brace_line,
-                    },
-                ));
-            }
+            ("MOTION", Some(open)) => return Err(unclosed(open, &joints)),
             ("ROOT", None) => {
                 stack.push(open_joint(lex, line, None, &mut joints, &mut declared)?);
             }
@@ -323,81 +309,13 @@ fn hierarchy(lex: &mut Lexer) -> Result<Vec<Joint>, Failure> {
                     channels_seen: false,
                 });
             }
-            ("OFFSET", Some(open)) => {
-                if open.offset.is_some() {
-                    let joint = open.label(&joints);
-                    return Err((
-                        line,
-                        Problem::Repeated {
-                            what: "OFFSET",
-                            joint,
-                        },
-                    ));
-                }
-                let mut v = [0.0; 3];
-                for c in &mut v {
-                    *c = lex.number("an OFFSET coordinate")?;
-                }
-                open.offset = Some(DVec3::from(v));
-            }
+            ("OFFSET", Some(open)) => read_offset(lex, line, open, &joints)?,
             ("CHANNELS", Some(open)) if !open.end_site => {
-                let joint = &mut joints[open.joint];
-                if open.channels_seen {
-                    return Err((
-                        line,
-                        Problem::Repeated {
-                            what: "CHANNELS",
-                            joint: joint.name.clone(),
-                        },
-                    ));
-                }
-                open.channels_seen = true;
-                let (line, count) = lex.expect_any("a channel count")?;
-                let count = match count.parse::<usize>() {
-                    Ok(n) if n <= 6 => n,
-                    _ => {
-                        return Err((
-                            line,
-                            Problem::BadChannelCount {
-                                found: count.into(),
-                            },
-                        ));
-                    }
-                };
-                joint.first_channel = channel_count;
-                for _ in 0..count {
-                    let (line, name) = lex.expect_any("a channel name")?;
-                    let c = channel(name)
-                        .ok_or_else(|| (line, Problem::UnknownChannel { name: name.into() }))?;
-                    if joint.channels.contains(&c) {
-                        return Err((
-                            line,
-                            Problem::RepeatedChannel {
-                                joint: joint.name.clone(),
-                                channel: c,
-                            },
-                        ));
-                    }
-                    joint.channels.push(c);
-                }
-                channel_count += count;
+                read_channels(lex, line, open, &mut joints, &mut channel_count)?;
             }
             ("}", Some(_)) => {
                 let open = stack.pop().unwrap_or_else(|| unreachable!("matched Some"));
-                let offset = open.offset.ok_or_else(|| {
-                    (
-                        line,
-                        Problem::MissingOffset {
-                            joint: open.label(&joints),
-                        },
-                    )
-                })?;
-                let joint = &mut joints[open.joint];
-                if open.end_site {
-                    joint.end_sites.push(offset);
-                } else {
-                    joint.offset = offset;
-                }
+                close(open, line, &mut joints)?;
             }
             ("}", None) => return Err((line, Problem::StrayBrace)),
             (found, top) => {
@@ -416,6 +334,112 @@ fn hierarchy(lex: &mut Lexer) -> Result<Vec<Joint>, Failure> {
             }
         }
     }
+}
+
+/// The failure for a `{` still open where the hierarchy ends.
+fn unclosed(open: &Open, joints: &[Joint]) -> Failure {
+    (
+        open.brace_line,
+        Problem::UnclosedBrace {
+            joint: open.label(joints),
+            opened: open.brace_line,
+        },
+    )
+}
+
+/// Reads the three coordinates after `OFFSET` (on `line`) into the open block.
+fn read_offset(
+    lex: &mut Lexer,
+    line: usize,
+    open: &mut Open,
+    joints: &[Joint],
+) -> Result<(), Failure> {
+    if open.offset.is_some() {
+        return Err((
+            line,
+            Problem::Repeated {
+                what: "OFFSET",
+                joint: open.label(joints),
+            },
+        ));
+    }
+    let mut v = [0.0; 3];
+    for c in &mut v {
+        *c = lex.number("an OFFSET coordinate")?;
+    }
+    open.offset = Some(DVec3::from(v));
+    Ok(())
+}
+
+/// Reads the count and names after `CHANNELS` (on `line`) into the open joint; its channels
+/// start at `channel_count`, which grows by their number.
+fn read_channels(
+    lex: &mut Lexer,
+    line: usize,
+    open: &mut Open,
+    joints: &mut [Joint],
+    channel_count: &mut usize,
+) -> Result<(), Failure> {
+    let joint = &mut joints[open.joint];
+    if open.channels_seen {
+        return Err((
+            line,
+            Problem::Repeated {
+                what: "CHANNELS",
+                joint: joint.name.clone(),
+            },
+        ));
+    }
+    open.channels_seen = true;
+    let (line, count) = lex.expect_any("a channel count")?;
+    let count = match count.parse::<usize>() {
+        Ok(n) if n <= 6 => n,
+        _ => {
+            return Err((
+                line,
+                Problem::BadChannelCount {
+                    found: count.into(),
+                },
+            ));
+        }
+    };
+    joint.first_channel = *channel_count;
+    for _ in 0..count {
+        let (line, name) = lex.expect_any("a channel name")?;
+        let c =
+            channel(name).ok_or_else(|| (line, Problem::UnknownChannel { name: name.into() }))?;
+        if joint.channels.contains(&c) {
+            return Err((
+                line,
+                Problem::RepeatedChannel {
+                    joint: joint.name.clone(),
+                    channel: c,
+                },
+            ));
+        }
+        joint.channels.push(c);
+    }
+    *channel_count += count;
+    Ok(())
+}
+
+/// Closes a block at its `}` (on `line`): its offset becomes the joint's, or an End Site's.
+fn close(open: Open, line: usize, joints: &mut [Joint]) -> Result<(), Failure> {
+    let offset = open.offset.ok_or_else(|| {
+        (
+            line,
+            Problem::MissingOffset {
+                joint: open.label(joints),
+            },
+        )
+    })?;
+    let joint = &mut joints[open.joint];
+    if open.end_site {
+        joint.end_sites.push(offset);
+    } else {
+        joint.offset = offset;
+    }
+    Ok(())
 }
 
 /// Reads `name {` after `ROOT` or `JOINT` and adds the joint. The name is the rest of the line,
