@@ -2,7 +2,7 @@
 //!
 //! Per-vertex outputs (transfer, model rows) are matched to the artist's mesh by index, so the
 //! `i`-th vertex of the returned [`Mesh`] must be the `i`-th `v` line of the file. `tobj` (the
-//! general-purpose reader the design mentions) re-indexes vertices by first use in the faces
+//! general-purpose OBJ crate) re-indexes vertices by first use in the faces
 //! when it unifies attribute indices, which silently breaks that contract; this reader is
 //! deliberately small instead. Only geometry is read: `v`, `vn` and `f` statements (corner forms
 //! `v`, `v/vt`, `v/vt/vn`, `v//vn`, negative relative indices, polygons fan-triangulated).

@@ -1,5 +1,5 @@
 //! Closed surfaces of revolution ("lathes") with smooth skinning weights along their axis: the
-//! geometry the built-in character and the BVH mannequin are both made of, so both deform the
+//! geometry the built-in character and the motion-capture mannequin are both made of, so both deform the
 //! same way across joints.
 //!
 //! Every part is one closed surface (two poles joined by rings), so each edge is shared by

@@ -1,6 +1,17 @@
-//! What every training source provides: a skinned character driven by a pose vector, and
-//! named clips of pose vectors. The built-in character, glTF skins and BVH-driven mannequins
-//! all implement [`Rig`], so baking, fitting, bone frames and reports are written once.
+//! Characters: what every training source provides is a skinned character driven by a pose
+//! vector, and named clips of pose vectors. The built-in character, glTF skins and mannequins
+//! driven by motion capture all implement [`Rig`], so baking, fitting, bone frames and reports
+//! are written once.
+//!
+//! - the pieces every rig is made of: [`mesh`] (the triangle mesh), [`skin`](mod@skin)
+//!   (linear blend skinning), [`rotation_vector`] (the log and exp maps behind glTF and
+//!   mannequin pose vectors), and the lathe surfaces of the built-in character and the
+//!   mannequin;
+//! - the rigs: [`character`] (built in), [`gltf`] (glTF 2.0 skins and animations), [`mocap`]
+//!   (BVH motion-capture files) and [`mannequin`] (the rig a motion-capture skeleton drives);
+//! - what a model needs of a rig: [`pose_layout`] (which pose entries it takes),
+//!   [`bone_frames`] (transfer in each vertex's bone frame) and [`transfer_rotation`]
+//!   (rotating each vertex's SH transfer).
 
 pub mod bone_frames;
 pub mod character;

@@ -1,5 +1,5 @@
 //! Rotation vectors (the log map of unit quaternions) and back: the three numbers per joint
-//! that make up the pose vector of a glTF rig or a BVH mannequin.
+//! that make up the pose vector of a glTF rig or a motion-capture mannequin.
 //!
 //! A rotation vector `r = θ·axis` is linear enough in the joint motion for the pose-driven
 //! linear model (a hinge moves one component, small rotations add), has no redundant fourth

@@ -1,6 +1,7 @@
 //! Linear blend skinning: a bind mesh, per-vertex joint influences and one matrix per joint
-//! give a posed mesh. Shared by the built-in character and (later) glTF skins, so it makes no
-//! assumption about how many influences a vertex has or where the matrices came from.
+//! give a posed mesh. Shared by the built-in character, glTF skins and the motion-capture
+//! mannequin, so it makes no assumption about how many influences a vertex has or where the
+//! matrices came from.
 //!
 //! Each joint matrix maps a bind-pose position to its posed position for a vertex rigidly
 //! attached to that joint (for glTF: `world(joint) · inverse_bind(joint)`). A vertex's posed

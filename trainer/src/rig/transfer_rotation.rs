@@ -1,6 +1,7 @@
-//! Rotations for moving transfer between the world and a vertex's bone frame, by the core's
+//! Rotating per-vertex SH transfer: the rotation nearest a blended joint matrix (polar
+//! decomposition), and every vertex's SH vector turned by its own rotation with the core's
 //! Euler-angle SH rotation ([`aprt_core::euler::EulerRotation`]), as the bake and the runtime
-//! rotate.
+//! rotate. Bone frames and the skinned-bind baseline move transfer this way.
 
 use aprt_core::euler::EulerRotation;
 use glam::DMat3;

@@ -1,9 +1,10 @@
 //! Fitting stage of the trainer: from poses and baked transfer to a [`LinearModel`].
 //!
-//! Pipeline (DESIGN.md, "Pose-driven linear PRT"): pose PCA (`z = P (a − μ)`) → shared vertex
-//! basis over all `p·n²` coefficient rows (randomized SVD) → basis coordinates of each pose's
-//! rows → one ridge regression of all `n²·k_v` outputs on z with a single α chosen by
-//! closed-form cross validation → weights packed in the runtime layout.
+//! Pipeline (Nowrouzezahrai et al., *Compact and Efficient Generation of Radiance Transfer for
+//! Dynamically Articulated Characters*): pose PCA (`z = P (a − μ)`) → shared vertex basis over
+//! all `p·n²` coefficient rows (randomized SVD) → basis coordinates of each pose's rows → one
+//! ridge regression of all `n²·k_v` outputs on z with a single α chosen by closed-form cross
+//! validation → weights packed in the runtime layout.
 
 mod dims;
 mod pose_pca;

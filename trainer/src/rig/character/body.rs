@@ -1,8 +1,8 @@
-//! The built-in character's surface: closed lathes (see [`crate::rig::lathe`]) per body part, each
-//! with smooth skinning weights that blend across the joints it spans. Neighbouring parts use
-//! the same joint positions and half-widths, so where they overlap they deform alike.
+//! The built-in character's surface: closed lathes (see [`crate::rig::lathe`]) per body part,
+//! each with smooth skinning weights that blend across the joints it spans. Neighbouring parts
+//! use the same joint positions and half-widths, so where they overlap they deform alike.
 //!
-//! The head, nose and hat are also lent to the BVH mannequin (scaled to its skeleton), so both
+//! The head, nose and hat are also lent to the motion-capture mannequin (scaled to its skeleton), so both
 //! characters wear the same brim, the large occluder PRT must capture.
 
 use glam::DVec3;
