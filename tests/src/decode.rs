@@ -63,7 +63,7 @@ pub fn decode(blob: &[u8]) -> Option<LinearModel> {
     Some(LinearModel {
         order: h.order as usize,
         vertices: v,
-        joints: h.pose_len as usize,
+        pose_len: h.pose_len as usize,
         pose_mean: section(SectionKind::PoseMean)?,
         pose_projection: section(SectionKind::PoseProjection)?,
         weights,

@@ -125,7 +125,7 @@ pub fn noise(seed: u64, n: usize) -> Vec<f64> {
 pub fn random_model(
     order: usize,
     vertices: usize,
-    joints: usize,
+    pose_len: usize,
     pose_dims: usize,
     coef_dims: Option<usize>,
 ) -> LinearModel {
@@ -133,9 +133,9 @@ pub fn random_model(
     LinearModel {
         order,
         vertices,
-        joints,
-        pose_mean: noise(1, joints),
-        pose_projection: noise(2, pose_dims * joints),
+        pose_len,
+        pose_mean: noise(1, pose_len),
+        pose_projection: noise(2, pose_dims * pose_len),
         weights: noise(3, n2 * (pose_dims + 1) * coef_dims.unwrap_or(vertices)),
         basis: match coef_dims {
             Some(k) => VertexBasis::Stored {
@@ -146,6 +146,6 @@ pub fn random_model(
         },
         alpha: 0.5,
         bones: None,
-        angle_names: (0..joints).map(|i| format!("joint{i}")).collect(),
+        angle_names: (0..pose_len).map(|i| format!("joint{i}")).collect(),
     }
 }

@@ -23,7 +23,7 @@ pub fn f16_rounding(x: f64) -> f64 {
 pub fn magnitude(model: &LinearModel, angles: &[f64], big: impl Fn(f64) -> f64) -> Vec<f64> {
     let abs = |xs: &[f64]| xs.iter().map(|x| x.abs()).collect::<Vec<_>>();
     let m = LinearModel {
-        pose_mean: vec![0.0; model.joints],
+        pose_mean: vec![0.0; model.pose_len],
         pose_projection: abs(&model.pose_projection),
         weights: model.weights.iter().map(|x| big(x.abs())).collect(),
         basis: match &model.basis {
@@ -55,7 +55,7 @@ fn steps(model: &LinearModel) -> usize {
         VertexBasis::Stored { coef_dims, .. } => coef_dims,
         VertexBasis::Identity => 0,
     };
-    model.joints + (model.pose_dims() + 1) * (n2 + 1) + kv + 2 * model.order + 16
+    model.pose_len + (model.pose_dims() + 1) * (n2 + 1) + kv + 2 * model.order + 16
 }
 
 /// Relative error bound of the f32 evaluation: ε = 2u per rounding step, doubled for margin.
@@ -82,7 +82,7 @@ fn largest(model: &LinearModel, angles: &[f32], lighting: &[f32]) -> f64 {
         .zip(&model.pose_mean)
         .fold(0.0f64, |m, (a, mu)| m.max((*a as f64).abs() + mu.abs()));
     let light = lighting.iter().map(|l| (*l as f64).abs()).sum::<f64>();
-    let p = model.joints as f64 * max_abs(&model.pose_projection);
+    let p = model.pose_len as f64 * max_abs(&model.pose_projection);
     let w = (model.pose_dims() + 1) as f64 * max_abs(&model.weights);
     let l = n2 as f64 * light;
     [p * a, w, kv * u, l].iter().map(|f| f.max(1.0)).product()

@@ -69,11 +69,11 @@ impl<'a> Arbitrary<'a> for ModelSpec {
         // Now and then a dimension at the format's limit; otherwise small, fast shapes.
         let edge = u.ratio(1, 16)?;
         let order = u.int_in_range(1..=MAX_ORDER)?;
-        let joints = match edge {
+        let pose_len = match edge {
             true => *u.choose(&[MAX_POSE_LEN, MAX_POSE_DIMS, MAX_POSE_DIMS + 1])?,
             false => u.int_in_range(1..=12)?,
         };
-        let pose_dims = u.int_in_range(0..=joints.min(if edge { MAX_POSE_DIMS } else { 6 }))?;
+        let pose_dims = u.int_in_range(0..=pose_len.min(if edge { MAX_POSE_DIMS } else { 6 }))?;
         let vertices = u.int_in_range(1..=if edge { 300 } else { 40 })?;
         let coef_dims = match u.arbitrary::<bool>()? {
             true => None,
@@ -109,15 +109,15 @@ impl<'a> Arbitrary<'a> for ModelSpec {
             model: LinearModel {
                 order,
                 vertices,
-                joints,
-                pose_mean: values(u, joints)?,
-                pose_projection: values(u, pose_dims * joints)?,
+                pose_len,
+                pose_mean: values(u, pose_len)?,
+                pose_projection: values(u, pose_dims * pose_len)?,
                 weights: values(u, n2 * (pose_dims + 1) * kv)?,
                 basis,
                 alpha: u.int_in_range(0..=1000u16)? as f64 / 64.0,
                 bones,
                 angle_names: if u.arbitrary()? {
-                    (0..joints).map(|i| format!("joint{i}.x")).collect()
+                    (0..pose_len).map(|i| format!("joint{i}.x")).collect()
                 } else {
                     Vec::new()
                 },

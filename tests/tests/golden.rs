@@ -58,7 +58,12 @@ fn golden_blobs_read_as_written() {
                 info.pose_len(),
                 info.pose_dims()
             ),
-            (model.order, model.vertices, model.joints, model.pose_dims()),
+            (
+                model.order,
+                model.vertices,
+                model.pose_len,
+                model.pose_dims()
+            ),
             "{name}"
         );
         assert_eq!(info.coef_dims(), model.coef_dims(), "{name}");

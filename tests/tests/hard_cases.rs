@@ -9,7 +9,7 @@ fn constant_model(values: &[f64]) -> LinearModel {
     LinearModel {
         order: 1,
         vertices: values.len(),
-        joints: 1,
+        pose_len: 1,
         pose_mean: vec![0.0],
         pose_projection: Vec::new(),
         weights: values.to_vec(),
@@ -84,7 +84,7 @@ fn a_joint_the_projection_ignores_cannot_overflow_the_pose() {
     let model = LinearModel {
         order: 1,
         vertices: 1,
-        joints: 2,
+        pose_len: 2,
         pose_mean: vec![-f64::from(f32::MAX), 0.0],
         pose_projection: vec![0.0, 1.0],
         weights: vec![0.25, 2.0],

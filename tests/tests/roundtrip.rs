@@ -43,7 +43,7 @@ fn check_model(reference: &LinearModel, precision: Precision, tolerance: f64) {
     let names: Vec<&str> = model.angle_names().iter().collect();
     assert_eq!(names, reference.angle_names);
     let n2 = reference.order * reference.order;
-    let angles64 = noise(9, reference.joints);
+    let angles64 = noise(9, reference.pose_len);
     let angles: Vec<f32> = angles64.iter().map(|&x| x as f32).collect();
     let light: Vec<f32> = noise(10, n2).iter().map(|&x| x as f32).collect();
 
@@ -275,7 +275,7 @@ mod random_shapes {
         #![proptest_config(ProptestConfig { cases: 400, ..ProptestConfig::default() })]
 
         /// The fuzz target `round_trip` under proptest: random shapes (order, vertices,
-        /// joints, pose and basis dimensions, basis kind, bone frames, precision, values)
+        /// pose length, pose and basis dimensions, basis kind, bone frames, precision, values)
         /// written, read back exactly or within half precision, and evaluated like the f64
         /// reference. Raw probe bytes make angles and lighting of any magnitude (NaN and
         /// overflow included, where only "no panic" is asked); the same probe with moderate

@@ -10,6 +10,7 @@
 
 use std::time::Instant;
 
+use aprt_trainer::cli::Terminal;
 use aprt_trainer::{
     Alpha, BakeSettings, Character, CoefDims, Dims, FitOptions, Rig, bake_poses, fit,
 };
@@ -32,10 +33,10 @@ fn main() {
         bounces: 0,
         albedo: 0.0,
     };
-    let world = bake_poses(&meshes, &settings, true).expect("the character bakes");
+    let world = bake_poses(&meshes, &settings, &Terminal).expect("the character bakes");
     let transfers = aprt_trainer::bone_frames::to_bone_frames(&character, &clip.frames, &world)
         .expect("clip poses are valid");
-    let angles = DMatrix::from_fn(clip.frames.len(), character.joint_angle_count(), |i, j| {
+    let angles = DMatrix::from_fn(clip.frames.len(), character.pose_len(), |i, j| {
         clip.frames[i][j]
     });
     let vertices = character.bind_mesh().vertex_count();

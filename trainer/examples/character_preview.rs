@@ -42,7 +42,7 @@ fn main() -> anyhow::Result<()> {
         "{} vertices, {} triangles, {} joint angles",
         character.bind_mesh().vertex_count(),
         character.bind_mesh().triangles.len(),
-        character.joint_angle_count()
+        character.pose_len()
     );
     let front = View {
         yaw: 0.0,

@@ -1,52 +1,46 @@
 //! aprt-trainer: bakes SH precomputed radiance transfer for posed characters, fits the
 //! pose-driven linear model, and writes model blobs that `aprt-core` evaluates.
+//!
+//! One folder per stage:
+//!
+//! - [`rig`]: characters posed by a pose vector (the [`Rig`] trait, meshes, skinning, the
+//!   built-in character, glTF skins, the motion-capture mannequin) and the frames transfer is
+//!   learned in;
+//! - [`io`]: OBJ, angle CSV and `.npy` files, atomic writes, and where poses come from;
+//! - [`bake`]: the transfer simulation, with checkpoints for long bakes;
+//! - [`model`]: the linear model, its fit, the blob writer and evaluation through `aprt-core`;
+//! - [`report`]: experiments against baselines, pictures, plots, the demo and the results
+//!   document;
+//! - [`cli`]: the `aprt` command line.
 
-pub mod angles;
-pub mod atomic;
 pub mod bake;
-pub mod bone_frames;
-pub mod bvh;
-pub mod character;
-pub mod checkpoint;
 pub mod cli;
-pub mod demo;
-pub mod evaluate;
-pub mod experiment;
-pub mod export;
-pub mod figures;
-pub mod fit;
-pub mod gltf_rig;
-pub(crate) mod lathe;
-pub mod mannequin;
-pub mod mesh;
+pub mod io;
 pub mod model;
-pub mod npy;
-pub mod obj;
-pub mod plots;
-pub mod pose_layout;
-pub mod render;
-pub mod results;
+pub mod progress;
+pub mod report;
 pub mod rig;
-pub mod rotation;
-pub mod runtime;
-pub mod sh_rotate;
-pub mod skin;
-pub mod source;
+
+// Module paths the tests, benches and fuzz harnesses use.
+pub use model::{export, runtime};
+pub use report::evaluate;
+pub use rig::bone_frames;
 
 pub use bake::{
     Accel, BakeError, BakeSettings, bake_pose, bake_pose_with, bake_poses, bake_vertices,
 };
-pub use bvh::{Bvh, BvhError};
-pub use character::{Character, CharacterError, JointAngle};
-pub use export::{ExportError, Precision, encode_model};
-pub use fit::{Alpha, CoefDims, Dims, Fit, FitError, FitOptions, FitReport, fit};
-pub use gltf_rig::{GltfError, GltfRig, HeldChannel};
-pub use mannequin::{BvhOptions, BvhRig, BvhRigError, Retargeted};
-pub use mesh::Mesh;
-pub use model::{BoneFrames, LinearModel, VertexBasis};
-pub use obj::{LineError, ObjError, read_obj};
-pub use render::{
+pub use io::obj::{LineError, ObjError, read_obj};
+pub use model::export::{ExportError, Precision, encode_model};
+pub use model::fit::{Alpha, CoefDims, Dims, Fit, FitError, FitOptions, FitReport, fit};
+pub use model::{BoneFrames, LinearModel, ModelFrame, VertexBasis};
+pub use progress::{BakeProgress, Reporter, Silent};
+pub use report::render::{
     Colormap, RenderError, View, lambert, render_scalar, save_png_atomic, side_by_side,
 };
-pub use rig::{Clip, Rig};
-pub use skin::{Skin, SkinError, skin};
+pub use rig::character::{Character, CharacterError, JointAngle};
+pub use rig::gltf::{GltfError, GltfRig, HeldChannel};
+pub use rig::mannequin::{MocapOptions, MocapRig, MocapRigError, Retargeted};
+pub use rig::mesh::Mesh;
+pub use rig::mocap::{Mocap, MocapError};
+pub use rig::skin::{Skin, SkinError, skin};
+pub use rig::{Clip, Rig, RigError};

@@ -6,7 +6,7 @@ use aprt_trainer::bone_frames::{dominant_bones, to_bone_frames, to_world_frames}
 use aprt_trainer::evaluate::{mean_transfer, nearest_pose, relative_error};
 use aprt_trainer::runtime::predict_transfer;
 use aprt_trainer::{
-    BakeSettings, Character, FitOptions, Precision, Rig, bake_poses, encode_model, fit,
+    BakeSettings, Character, FitOptions, Precision, Rig, Silent, bake_poses, encode_model, fit,
 };
 use nalgebra::DMatrix;
 
@@ -21,7 +21,7 @@ fn default_model_beats_mean_and_nearest_baselines_on_novel_poses() {
     };
     let bake = |frames: &[Vec<f64>]| {
         let meshes: Vec<_> = frames.iter().map(|a| character.pose(a).unwrap()).collect();
-        bake_poses(&meshes, &settings, false).unwrap()
+        bake_poses(&meshes, &settings, &Silent).unwrap()
     };
     let train: Vec<Vec<f64>> = character
         .training_clip()

@@ -37,6 +37,8 @@
 //! order and every vertex writes only its own output, so the result is bit-identical for any
 //! thread count (no float reduction crosses threads).
 
+pub mod checkpoint;
+pub mod clip;
 mod directions;
 #[cfg(test)]
 mod tests;
@@ -47,12 +49,12 @@ pub use tracer::Accel;
 
 use aprt_core::{MAX_COEFFS, MAX_ORDER, ShError, ShRotation, coeff_count, eval_basis};
 use glam::DVec3;
-use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use std::ops::Range;
 use tracer::{Hit, Tracer, TraversalStack};
 
-use crate::mesh::{Mesh, area_weighted_normals};
+use crate::progress::{BakeProgress, Reporter, Silent};
+use crate::rig::mesh::{Mesh, area_weighted_normals};
 
 /// Ray origins are offset along the normal by this fraction of the bounding-box diagonal.
 pub const ORIGIN_OFFSET: f64 = 1e-4;
@@ -186,53 +188,43 @@ pub fn bake_pose_with(
     settings: &BakeSettings,
     accel: Accel,
 ) -> Result<Vec<f32>, BakeError> {
-    bake_pose_inner(mesh, settings, accel, &ProgressBar::hidden())
+    bake_pose_inner(mesh, settings, accel, &Silent)
 }
 
-/// Bakes several poses one after the other (each pose parallel over its vertices), optionally
-/// with a progress bar over all poses' vertices on stderr for long bakes.
+/// Bakes several poses one after the other (each pose parallel over its vertices), with one
+/// progress display over all poses' vertices from `reporter` (the command line's is a bar on
+/// stderr; [`Silent`] shows nothing).
 pub fn bake_poses(
     meshes: &[Mesh],
     settings: &BakeSettings,
-    progress: bool,
+    reporter: &dyn Reporter,
 ) -> Result<Vec<Vec<f32>>, BakeError> {
     settings.validate()?;
     let total: usize = meshes.iter().map(Mesh::vertex_count).sum();
-    let bar = progress_bar(total, progress);
+    let progress = reporter.bake_progress(total);
     let mut out = Vec::with_capacity(meshes.len());
     for (p, mesh) in meshes.iter().enumerate() {
-        bar.set_message(format!("pose {}/{}", p + 1, meshes.len()));
-        out.push(bake_pose_inner(mesh, settings, Accel::default(), &bar)?);
+        progress.pose(p, meshes.len());
+        out.push(bake_pose_inner(
+            mesh,
+            settings,
+            Accel::default(),
+            progress.as_ref(),
+        )?);
     }
-    bar.finish_and_clear();
+    progress.finish();
     Ok(out)
 }
 
-/// A progress bar over `vertices` vertices on stderr, or a hidden one when `visible` is false.
-/// Shared by [`bake_poses`] and the pose-by-pose bakes (checkpointing) so every long bake
-/// reports its progress the same way.
-pub fn progress_bar(vertices: usize, visible: bool) -> ProgressBar {
-    if !visible {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::new(vertices as u64);
-    if let Ok(style) = ProgressStyle::with_template(
-        "baking {msg} [{elapsed_precise}] {wide_bar} {pos}/{len} vertices ({eta} left)",
-    ) {
-        bar.set_style(style);
-    }
-    bar
-}
-
-/// [`bake_pose`] advancing a caller's progress bar by one per vertex, for callers that bake
-/// poses one at a time (checkpointing) yet show one bar over all of them. Bit-identical to
+/// [`bake_pose`] advancing a caller's progress by one per vertex, for callers that bake poses
+/// one at a time (checkpointing) yet show one display over all of them. Bit-identical to
 /// [`bake_pose`] and to the same pose in [`bake_poses`].
 pub fn bake_pose_progress(
     mesh: &Mesh,
     settings: &BakeSettings,
-    bar: &ProgressBar,
+    progress: &dyn BakeProgress,
 ) -> Result<Vec<f32>, BakeError> {
-    bake_pose_inner(mesh, settings, Accel::default(), bar)
+    bake_pose_inner(mesh, settings, Accel::default(), progress)
 }
 
 /// Direct (shadowed, no bounce) transfer of the vertices in `vertices` only, vertex-major like
@@ -257,7 +249,7 @@ pub fn bake_vertices(
     }
     let prepared = Prepared::new(mesh, settings)?;
     let tracer = Tracer::new(&mesh.positions, &mesh.triangles, accel);
-    let (direct, _) = prepared.direct(&tracer, vertices, false, &ProgressBar::hidden())?;
+    let (direct, _) = prepared.direct(&tracer, vertices, Hits::Skip, &Silent)?;
     Ok(direct.into_iter().map(|x| x as f32).collect())
 }
 
@@ -265,7 +257,7 @@ fn bake_pose_inner(
     mesh: &Mesh,
     settings: &BakeSettings,
     accel: Accel,
-    bar: &ProgressBar,
+    progress: &dyn BakeProgress,
 ) -> Result<Vec<f32>, BakeError> {
     let prepared = Prepared::new(mesh, settings)?;
     let v = mesh.vertex_count();
@@ -273,14 +265,27 @@ fn bake_pose_inner(
         return Ok(Vec::new());
     }
     let tracer = Tracer::new(&mesh.positions, &mesh.triangles, accel);
-    let record_hits = settings.bounces > 0;
-    let (direct, hits) = prepared.direct(&tracer, 0..v, record_hits, bar)?;
-    let total = if record_hits {
-        prepared.add_bounces(direct, &hits, &mesh.triangles)
+    let hits = if settings.bounces > 0 {
+        Hits::Record
+    } else {
+        Hits::Skip
+    };
+    let (direct, recorded) = prepared.direct(&tracer, 0..v, hits, progress)?;
+    let total = if hits == Hits::Record {
+        prepared.add_bounces(direct, &recorded, &mesh.triangles)
     } else {
         direct
     };
     Ok(total.into_iter().map(|x| x as f32).collect())
+}
+
+/// Whether the direct pass keeps the hits of the occluded rays, which the bounce passes need.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Hits {
+    /// Keep each vertex's front-facing hits (closest-hit rays).
+    Record,
+    /// Only ask whether each ray is blocked (any-hit rays, faster).
+    Skip,
 }
 
 /// Validated inputs and the per-bake constants shared by every vertex.
@@ -351,18 +356,18 @@ impl<'a> Prepared<'a> {
         })
     }
 
-    /// Direct transfer of `vertices` (vertex-major f64), and when `record_hits`, for each vertex
-    /// the front-facing hits of its occluded rays (for the bounce passes).
+    /// Direct transfer of `vertices` (vertex-major f64), and with [`Hits::Record`], for each
+    /// vertex the front-facing hits of its occluded rays (for the bounce passes).
     fn direct(
         &self,
         tracer: &Tracer,
         vertices: Range<usize>,
-        record_hits: bool,
-        bar: &ProgressBar,
+        hits_wanted: Hits,
+        progress: &dyn BakeProgress,
     ) -> Result<(Vec<f64>, Vec<Vec<Hit>>), BakeError> {
         let n2 = self.n2;
         let mut out = vec![0.0f64; vertices.len() * n2];
-        let mut hits: Vec<Vec<Hit>> = if record_hits {
+        let mut hits: Vec<Vec<Hit>> = if hits_wanted == Hits::Record {
             vec![Vec::new(); vertices.len()]
         } else {
             Vec::new()
@@ -406,7 +411,7 @@ impl<'a> Prepared<'a> {
                 for (acc, &w) in t.iter_mut().zip(&world) {
                     *acc = f64::from(w);
                 }
-                bar.inc(1);
+                progress.vertex_done();
                 Ok(())
             };
         let init = || Scratch {
@@ -414,7 +419,7 @@ impl<'a> Prepared<'a> {
             stack: TraversalStack::default(),
         };
         let start = vertices.start;
-        if record_hits {
+        if hits_wanted == Hits::Record {
             out.par_chunks_mut(n2)
                 .zip(hits.par_iter_mut())
                 .enumerate()

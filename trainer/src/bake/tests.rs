@@ -442,7 +442,12 @@ fn poses_helper_matches_single_pose_bakes() {
     let a = floor_and_wall();
     let (b, _) = floor_under_square(&[DVec3::ZERO], 1.0, 1.0);
     let s = settings(2, 32);
-    let all = bake_poses(&[a.clone(), b.clone(), Mesh::default()], &s, false).unwrap();
+    let all = bake_poses(
+        &[a.clone(), b.clone(), Mesh::default()],
+        &s,
+        &crate::progress::Silent,
+    )
+    .unwrap();
     assert_eq!(
         all,
         vec![
@@ -645,7 +650,7 @@ fn cube_over_floor(scale: f64, shift: f64) -> Mesh {
     for p in &mut mesh.positions {
         *p = p.map(|x| (f64::from(x) * scale) as f32);
     }
-    mesh.normals = crate::mesh::area_weighted_normals(&mesh.positions, &mesh.triangles);
+    mesh.normals = crate::rig::mesh::area_weighted_normals(&mesh.positions, &mesh.triangles);
     mesh
 }
 

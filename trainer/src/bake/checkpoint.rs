@@ -1,0 +1,593 @@
+//! Nothing lost: a long bake checkpoints every finished pose, and a resumed bake is
+//! bit-identical to an uninterrupted one.
+//!
+//! A checkpoint is a directory holding `manifest.json` (bake settings, vertex and triangle
+//! counts, and a CRC-32 fingerprint of every pose's mesh) and one `pose-NNNNNN.bin` per finished
+//! pose. Every file is written with [`write_atomic`], so a kill at any moment leaves whole
+//! files only and loses at most the pose being baked. Resuming re-fingerprints the inputs and
+//! refuses a checkpoint made from other meshes or other settings, because mixing transfers
+//! baked under different conditions would silently corrupt the model. Model options (fit,
+//! precision) are not part of the manifest: the baked transfer does not depend on them, so a
+//! resume may change them.
+//!
+//! The bake itself is unchanged: each missing pose goes through
+//! [`crate::bake::bake_pose_progress`], the same code path as [`crate::bake::bake_poses`], and
+//! stored poses are read back as the exact f32 bits that were written.
+
+use std::path::{Path, PathBuf};
+
+use crate::bake::{BakeError, BakeSettings, bake_pose_progress};
+use crate::io::atomic::write_atomic;
+use crate::progress::Reporter;
+use crate::rig::mesh::Mesh;
+
+/// Version of the manifest and pose-file layout; a checkpoint of another version is refused.
+const FORMAT: u32 = 1;
+const MANIFEST: &str = "manifest.json";
+const POSE_MAGIC: &[u8; 8] = b"APRTPOSE";
+/// Magic, payload CRC-32, value count.
+const POSE_HEADER: usize = 8 + 4 + 8;
+
+/// Why a checkpointed bake stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum CheckpointError {
+    /// A checkpoint file or directory could not be read, written or removed.
+    #[error("checkpoint {}", path.display())]
+    Io {
+        /// The file or directory.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A checkpoint exists and `--resume` was not given.
+    #[error(
+        "{} holds the checkpoint of an unfinished bake: pass --resume to continue it, or delete the directory to start over",
+        dir.display()
+    )]
+    Exists {
+        /// The checkpoint directory.
+        dir: PathBuf,
+    },
+    /// The directory exists, is not empty and has no manifest: not ours to fill or delete.
+    #[error(
+        "{} is not empty and holds no {MANIFEST}: not a checkpoint directory",
+        dir.display()
+    )]
+    NotACheckpoint {
+        /// The directory.
+        dir: PathBuf,
+    },
+    /// The manifest cannot be parsed.
+    #[error("{}: unreadable manifest: {reason}", path.display())]
+    BadManifest {
+        /// The manifest file.
+        path: PathBuf,
+        /// The parser's message.
+        reason: String,
+    },
+    /// The checkpoint was made from other inputs or settings.
+    #[error(
+        "cannot resume from {}: {what} (checkpoint: {was}, now: {now}); rerun with the original inputs and settings, or delete the directory to start over",
+        dir.display()
+    )]
+    Mismatch {
+        /// The checkpoint directory.
+        dir: PathBuf,
+        /// What differs.
+        what: String,
+        /// Its value in the checkpoint.
+        was: String,
+        /// Its value now.
+        now: String,
+    },
+    /// A pose could not be baked.
+    #[error("{name}: baking")]
+    Bake {
+        /// The pose's name.
+        name: String,
+        /// The bake's error.
+        #[source]
+        source: BakeError,
+    },
+}
+
+/// What [`Checkpoint::open`] does with a checkpoint that is already there.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OnExisting {
+    /// Continue its bake, if it was made from the same meshes and settings (`--resume`).
+    Resume,
+    /// Refuse it rather than overwrite it: it may hold hours of work.
+    Refuse,
+}
+
+/// What a checkpoint was made from; a resume must match it field for field.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+struct Manifest {
+    format: u32,
+    order: usize,
+    rays: usize,
+    bounces: usize,
+    albedo: f32,
+    vertices: usize,
+    triangles: usize,
+    /// CRC-32 of each pose's positions, normals and triangles, as hex.
+    poses: Vec<String>,
+}
+
+impl Manifest {
+    fn new(settings: &BakeSettings, meshes: &[Mesh]) -> Manifest {
+        let first = meshes.first();
+        Manifest {
+            format: FORMAT,
+            order: settings.order,
+            rays: settings.rays,
+            bounces: settings.bounces,
+            albedo: settings.albedo,
+            vertices: first.map_or(0, Mesh::vertex_count),
+            triangles: first.map_or(0, |m| m.triangles.len()),
+            poses: meshes.iter().map(fingerprint).collect(),
+        }
+    }
+
+    /// The first field that differs, as (what, was, now).
+    fn difference(&self, now: &Manifest) -> Option<(String, String, String)> {
+        let fields: [(&str, String, String); 7] = [
+            ("format", self.format.to_string(), now.format.to_string()),
+            ("SH order", self.order.to_string(), now.order.to_string()),
+            ("rays", self.rays.to_string(), now.rays.to_string()),
+            ("bounces", self.bounces.to_string(), now.bounces.to_string()),
+            ("albedo", self.albedo.to_string(), now.albedo.to_string()),
+            (
+                "vertices",
+                self.vertices.to_string(),
+                now.vertices.to_string(),
+            ),
+            (
+                "triangles",
+                self.triangles.to_string(),
+                now.triangles.to_string(),
+            ),
+        ];
+        if let Some((what, was, now)) = fields.into_iter().find(|(_, a, b)| a != b) {
+            return Some((what.to_owned(), was, now));
+        }
+        if self.poses.len() != now.poses.len() {
+            return Some((
+                "pose count".to_owned(),
+                self.poses.len().to_string(),
+                now.poses.len().to_string(),
+            ));
+        }
+        let i = (0..self.poses.len()).find(|&i| self.poses[i] != now.poses[i])?;
+        Some((
+            format!("the mesh of pose {i} differs"),
+            format!("fingerprint {}", self.poses[i]),
+            format!("fingerprint {}", now.poses[i]),
+        ))
+    }
+}
+
+/// CRC-32 of everything the bake reads from a mesh.
+fn fingerprint(mesh: &Mesh) -> String {
+    let mut h = crc32fast::Hasher::new();
+    for x in mesh.positions.iter().chain(&mesh.normals).flatten() {
+        h.update(&x.to_le_bytes());
+    }
+    for i in mesh.triangles.iter().flatten() {
+        h.update(&i.to_le_bytes());
+    }
+    format!("{:08x}", h.finalize())
+}
+
+/// An open checkpoint directory whose manifest matches the current inputs.
+#[derive(Debug)]
+pub struct Checkpoint {
+    dir: PathBuf,
+    settings: BakeSettings,
+    manifest: Manifest,
+    /// Whether any pose file is in the directory (from an earlier run or this one).
+    holds_poses: bool,
+}
+
+impl Checkpoint {
+    /// The default checkpoint directory of a model written to `output`: `OUTPUT.bake` beside it.
+    pub fn default_dir(output: &Path) -> PathBuf {
+        let mut name = output.as_os_str().to_owned();
+        name.push(".bake");
+        PathBuf::from(name)
+    }
+
+    /// Opens the checkpoint in `dir` for baking `meshes` with `settings`.
+    ///
+    /// A missing (or empty) directory starts a new checkpoint whatever `existing` says, so
+    /// scripts may always pass `--resume`. An existing checkpoint is continued only with
+    /// [`OnExisting::Resume`], and only if it was made from the same meshes and settings; with
+    /// [`OnExisting::Refuse`] it is an error rather than overwritten, because it may hold hours
+    /// of work.
+    pub fn open(
+        dir: &Path,
+        existing: OnExisting,
+        settings: &BakeSettings,
+        meshes: &[Mesh],
+    ) -> Result<Self, CheckpointError> {
+        settings
+            .validate()
+            .map_err(|source| CheckpointError::Bake {
+                name: "settings".to_owned(),
+                source,
+            })?;
+        let manifest = Manifest::new(settings, meshes);
+        let io = |path: &Path| {
+            let path = path.to_owned();
+            move |source| CheckpointError::Io { path, source }
+        };
+        let manifest_path = dir.join(MANIFEST);
+        let mut holds_poses = false;
+        if manifest_path.exists() {
+            if existing == OnExisting::Refuse {
+                return Err(CheckpointError::Exists { dir: dir.into() });
+            }
+            let text = std::fs::read_to_string(&manifest_path).map_err(io(&manifest_path))?;
+            let stored: Manifest =
+                serde_json::from_str(&text).map_err(|e| CheckpointError::BadManifest {
+                    path: manifest_path.clone(),
+                    reason: e.to_string(),
+                })?;
+            if let Some((what, was, now)) = stored.difference(&manifest) {
+                return Err(CheckpointError::Mismatch {
+                    dir: dir.into(),
+                    what,
+                    was,
+                    now,
+                });
+            }
+            holds_poses = true;
+        } else {
+            match std::fs::read_dir(dir) {
+                Ok(mut entries) => {
+                    if entries.next().is_some() {
+                        return Err(CheckpointError::NotACheckpoint { dir: dir.into() });
+                    }
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                    std::fs::create_dir_all(dir).map_err(io(dir))?;
+                }
+                Err(e) => return Err(io(dir)(e)),
+            }
+            let json = serde_json::to_vec_pretty(&manifest).expect("manifest serialises");
+            write_atomic(&manifest_path, &json).map_err(io(&manifest_path))?;
+        }
+        Ok(Checkpoint {
+            dir: dir.into(),
+            settings: *settings,
+            manifest,
+            holds_poses,
+        })
+    }
+
+    fn pose_path(&self, pose: usize) -> PathBuf {
+        self.dir.join(format!("pose-{pose:06}.bin"))
+    }
+
+    /// Pose `pose`'s stored transfer, if a whole, uncorrupted file of `len` values is there.
+    /// A damaged file (only possible through disk faults: writes are atomic) is reported to
+    /// `reporter` and baked again.
+    fn load(
+        &self,
+        pose: usize,
+        len: usize,
+        reporter: &dyn Reporter,
+    ) -> Result<Option<Vec<f32>>, CheckpointError> {
+        let path = self.pose_path(pose);
+        let bytes = match std::fs::read(&path) {
+            Ok(b) => b,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+            Err(source) => return Err(CheckpointError::Io { path, source }),
+        };
+        let payload = bytes.get(POSE_HEADER..).unwrap_or_default();
+        let whole = bytes.len() == POSE_HEADER + 4 * len
+            && &bytes[..8] == POSE_MAGIC
+            && bytes[8..12] == crc32fast::hash(payload).to_le_bytes()
+            && bytes[12..20] == (len as u64).to_le_bytes();
+        if !whole {
+            reporter.note(&format!(
+                "aprt: {} is damaged; baking it again",
+                path.display()
+            ));
+            return Ok(None);
+        }
+        Ok(Some(
+            payload
+                .chunks_exact(4)
+                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                .collect(),
+        ))
+    }
+
+    fn store(&self, pose: usize, transfer: &[f32]) -> Result<(), CheckpointError> {
+        let payload: Vec<u8> = transfer.iter().flat_map(|x| x.to_le_bytes()).collect();
+        let mut bytes = Vec::with_capacity(POSE_HEADER + payload.len());
+        bytes.extend_from_slice(POSE_MAGIC);
+        bytes.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
+        bytes.extend_from_slice(&(transfer.len() as u64).to_le_bytes());
+        bytes.extend_from_slice(&payload);
+        let path = self.pose_path(pose);
+        write_atomic(&path, &bytes).map_err(|source| CheckpointError::Io { path, source })
+    }
+
+    /// The transfer of every pose of `meshes` (the meshes the checkpoint was opened for,
+    /// checked again by fingerprint): stored poses are read back, missing ones baked one after
+    /// the other and stored as soon as each is done. Equal, bit for bit, to
+    /// [`crate::bake::bake_poses`] on the same meshes. A pose that fails to bake is named
+    /// `name(i)` in the error. Progress, damaged pose files and the number of poses resumed go
+    /// to `reporter`.
+    ///
+    /// If the bake fails before any pose is stored, the checkpoint is removed again: it holds
+    /// nothing worth resuming, and a failed run should leave no trace.
+    pub fn bake(
+        &mut self,
+        meshes: &[Mesh],
+        name: impl Fn(usize) -> String,
+        reporter: &dyn Reporter,
+    ) -> Result<Vec<Vec<f32>>, CheckpointError> {
+        let result = self.bake_inner(meshes, name, reporter);
+        if result.is_err() && !self.holds_poses {
+            // Best effort: the original error is the one worth reporting.
+            let _ = self.remove();
+        }
+        result
+    }
+
+    fn bake_inner(
+        &mut self,
+        meshes: &[Mesh],
+        name: impl Fn(usize) -> String,
+        reporter: &dyn Reporter,
+    ) -> Result<Vec<Vec<f32>>, CheckpointError> {
+        let count = meshes.len();
+        self.check_count(count)?;
+        let mut out = Vec::with_capacity(count);
+        let (mut progress, mut resumed) = (None, 0);
+        for (i, mesh) in meshes.iter().enumerate() {
+            self.check_mesh(i, mesh)?;
+            let len = mesh.vertex_count() * self.settings.order * self.settings.order;
+            if let Some(stored) = self.load(i, len, reporter)? {
+                resumed += 1;
+                out.push(stored);
+                continue;
+            }
+            let progress = progress
+                .get_or_insert_with(|| reporter.bake_progress(mesh.vertex_count() * (count - i)));
+            progress.pose(i, count);
+            let transfer =
+                bake_pose_progress(mesh, &self.settings, progress.as_ref()).map_err(|source| {
+                    CheckpointError::Bake {
+                        name: name(i),
+                        source,
+                    }
+                })?;
+            self.store(i, &transfer)?;
+            self.holds_poses = true;
+            out.push(transfer);
+        }
+        if let Some(progress) = progress {
+            progress.finish();
+        }
+        if resumed > 0 {
+            reporter.note(&format!(
+                "resumed {resumed} of {count} poses from {}",
+                self.dir.display()
+            ));
+        }
+        Ok(out)
+    }
+
+    /// The meshes given to [`Checkpoint::bake`] must be the ones the checkpoint was opened for.
+    fn check_count(&self, count: usize) -> Result<(), CheckpointError> {
+        let stored = self.manifest.poses.len();
+        if count == stored {
+            return Ok(());
+        }
+        Err(CheckpointError::Mismatch {
+            dir: self.dir.clone(),
+            what: "pose count".to_owned(),
+            was: stored.to_string(),
+            now: count.to_string(),
+        })
+    }
+
+    fn check_mesh(&self, pose: usize, mesh: &Mesh) -> Result<(), CheckpointError> {
+        let now = fingerprint(mesh);
+        if now == self.manifest.poses[pose] {
+            return Ok(());
+        }
+        Err(CheckpointError::Mismatch {
+            dir: self.dir.clone(),
+            what: format!("the mesh of pose {pose} differs"),
+            was: format!("fingerprint {}", self.manifest.poses[pose]),
+            now: format!("fingerprint {now}"),
+        })
+    }
+
+    /// Deletes the checkpoint once its poses are safely in the model. Only the files a
+    /// checkpoint holds are removed (the manifest, pose files, temporaries of interrupted
+    /// writes), then the directory if that left it empty: a directory named with
+    /// `--checkpoint` may hold other files, and those are the user's.
+    pub fn remove(&self) -> Result<(), CheckpointError> {
+        let io = |path: &Path| {
+            let path = path.to_owned();
+            move |source| CheckpointError::Io { path, source }
+        };
+        for entry in std::fs::read_dir(&self.dir).map_err(io(&self.dir))? {
+            let path = entry.map_err(io(&self.dir))?.path();
+            let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+            let ours = name == MANIFEST
+                || (name.starts_with("pose-") && name.ends_with(".bin"))
+                || name.starts_with(".tmp");
+            if ours {
+                std::fs::remove_file(&path).map_err(io(&path))?;
+            }
+        }
+        match std::fs::remove_dir(&self.dir) {
+            Ok(()) => Ok(()),
+            Err(e) if e.kind() == std::io::ErrorKind::DirectoryNotEmpty => Ok(()),
+            Err(e) => Err(io(&self.dir)(e)),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bake::bake_poses;
+    use crate::progress::Silent;
+
+    fn meshes(n: usize) -> Vec<Mesh> {
+        (0..n)
+            .map(|i| {
+                let h = 0.5 + 0.1 * i as f32;
+                Mesh::with_area_weighted_normals(
+                    vec![
+                        [-1.0, -1.0, 0.0],
+                        [1.0, -1.0, 0.0],
+                        [1.0, 1.0, 0.0],
+                        [-1.0, 1.0, 0.0],
+                        [-0.3, -0.3, h],
+                        [0.3, -0.3, h],
+                        [0.0, 0.3, h],
+                    ],
+                    vec![[0, 1, 2], [0, 2, 3], [4, 6, 5]],
+                )
+            })
+            .collect()
+    }
+
+    fn pose_name(i: usize) -> String {
+        format!("pose {i}")
+    }
+
+    const SETTINGS: BakeSettings = BakeSettings {
+        order: 3,
+        rays: 64,
+        bounces: 1,
+        albedo: 0.5,
+    };
+
+    #[test]
+    fn resumed_bake_equals_the_uninterrupted_one() {
+        let dir = tempfile::tempdir().unwrap();
+        let ck = dir.path().join("m.aprt.bake");
+        let poses = meshes(4);
+        let reference = bake_poses(&poses, &SETTINGS, &Silent).unwrap();
+
+        // As if interrupted: pose 1's file is missing.
+        let mut first = Checkpoint::open(&ck, OnExisting::Refuse, &SETTINGS, &poses).unwrap();
+        assert_eq!(first.bake(&poses, pose_name, &Silent).unwrap(), reference);
+        std::fs::remove_file(ck.join("pose-000001.bin")).unwrap();
+        // A damaged pose file is baked again, not trusted.
+        std::fs::write(ck.join("pose-000000.bin"), b"APRTPOSE").unwrap();
+
+        assert!(matches!(
+            Checkpoint::open(&ck, OnExisting::Refuse, &SETTINGS, &poses),
+            Err(CheckpointError::Exists { .. })
+        ));
+        let mut resumed = Checkpoint::open(&ck, OnExisting::Resume, &SETTINGS, &poses).unwrap();
+        assert_eq!(resumed.bake(&poses, pose_name, &Silent).unwrap(), reference);
+        // Every pose is now stored; a second resume bakes nothing and reads the same bits.
+        let mut again = Checkpoint::open(&ck, OnExisting::Resume, &SETTINGS, &poses).unwrap();
+        assert_eq!(again.bake(&poses, pose_name, &Silent).unwrap(), reference);
+        again.remove().unwrap();
+        assert!(!ck.exists());
+    }
+
+    #[test]
+    fn other_inputs_or_settings_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let ck = dir.path().join("ck");
+        let poses = meshes(3);
+        Checkpoint::open(&ck, OnExisting::Refuse, &SETTINGS, &poses).unwrap();
+        let refused = |settings: BakeSettings, poses: &[Mesh], what: &str| {
+            let err = Checkpoint::open(&ck, OnExisting::Resume, &settings, poses).unwrap_err();
+            let message = err.to_string();
+            assert!(
+                matches!(err, CheckpointError::Mismatch { .. }) && message.contains(what),
+                "{message}"
+            );
+        };
+        refused(
+            BakeSettings {
+                rays: 65,
+                ..SETTINGS
+            },
+            &poses,
+            "rays (checkpoint: 64, now: 65)",
+        );
+        refused(
+            BakeSettings {
+                order: 2,
+                ..SETTINGS
+            },
+            &poses,
+            "SH order",
+        );
+        refused(
+            BakeSettings {
+                albedo: 0.6,
+                ..SETTINGS
+            },
+            &poses,
+            "albedo",
+        );
+        refused(SETTINGS, &poses[..2], "pose count");
+        let mut moved = poses.clone();
+        moved[2].positions[4][2] += 1e-6;
+        refused(SETTINGS, &moved, "the mesh of pose 2 differs");
+        // The matching inputs still resume, and baking other inputs through it is refused.
+        let mut c = Checkpoint::open(&ck, OnExisting::Resume, &SETTINGS, &poses).unwrap();
+        assert!(matches!(
+            c.bake(&moved[..], pose_name, &Silent),
+            Err(CheckpointError::Mismatch { .. })
+        ));
+        assert!(c.bake(&poses[..2], pose_name, &Silent).is_err());
+    }
+
+    #[test]
+    fn foreign_directories_are_neither_filled_nor_deleted() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("notes.txt"), "mine").unwrap();
+        let poses = meshes(1);
+        assert!(matches!(
+            Checkpoint::open(dir.path(), OnExisting::Resume, &SETTINGS, &poses),
+            Err(CheckpointError::NotACheckpoint { .. })
+        ));
+        // An empty directory named by the user is used, and on removal only our files go.
+        let ck = dir.path().join("empty");
+        std::fs::create_dir(&ck).unwrap();
+        let mut c = Checkpoint::open(&ck, OnExisting::Refuse, &SETTINGS, &poses).unwrap();
+        c.bake(&poses, pose_name, &Silent).unwrap();
+        std::fs::write(ck.join("keep.txt"), "mine").unwrap();
+        c.remove().unwrap();
+        let left: Vec<_> = std::fs::read_dir(&ck)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(left, ["keep.txt"]);
+    }
+
+    #[test]
+    fn a_bake_that_fails_before_storing_anything_leaves_no_checkpoint() {
+        let dir = tempfile::tempdir().unwrap();
+        let ck = dir.path().join("ck");
+        let mut poses = meshes(2);
+        poses[0].positions[0] = [2e12, 0.0, 0.0];
+        let mut c = Checkpoint::open(&ck, OnExisting::Refuse, &SETTINGS, &poses).unwrap();
+        let err = c.bake(&poses, pose_name, &Silent).unwrap_err();
+        let message = format!("{:#}", anyhow::Error::from(err));
+        assert!(
+            message.starts_with("pose 0: baking: mesh extent"),
+            "{message}"
+        );
+        assert!(!ck.exists());
+    }
+}

@@ -1,0 +1,93 @@
+//! The ground truth of a clip: a rig posed at every frame and baked, with what fitting and
+//! measuring a model need beside the transfer (the model's pose vector of each frame and every
+//! bone's rotation). The demo, the results document and `aprt train` all bake clips this way.
+
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use glam::DMat3;
+
+use crate::bake::{BakeSettings, bake_poses};
+use crate::progress::Reporter;
+use crate::rig::Rig;
+use crate::rig::bone_frames::all_rotations;
+use crate::rig::mesh::Mesh;
+use crate::rig::pose_layout::PoseLayout;
+use crate::rig::transfer_rotation::row_major;
+
+/// Ground truth of one clip: its poses, meshes and baked transfer.
+pub struct BakedClip {
+    /// Clip name.
+    pub name: String,
+    /// The rig's full pose vector of each frame.
+    pub poses: Vec<Vec<f64>>,
+    /// The model's pose vector of each frame (the layout's entries).
+    pub angles: Vec<Vec<f64>>,
+    /// The posed meshes.
+    pub meshes: Vec<Mesh>,
+    /// World-frame transfer of each frame, `v × n²` vertex-major.
+    pub transfer: Vec<Vec<f32>>,
+    /// Per frame, every bone's world rotation.
+    pub rotations: Vec<Vec<DMat3>>,
+}
+
+/// Poses and bakes `poses` of `rig`; returns the clip and the bake's seconds per frame. The
+/// bake's progress and its speed go to `reporter`.
+pub fn bake_clip(
+    rig: &dyn Rig,
+    layout: &PoseLayout,
+    name: &str,
+    poses: Vec<Vec<f64>>,
+    settings: &BakeSettings,
+    reporter: &dyn Reporter,
+) -> Result<(BakedClip, f64)> {
+    let meshes = pose_all(rig, name, &poses)?;
+    let start = Instant::now();
+    let transfer =
+        bake_poses(&meshes, settings, reporter).with_context(|| format!("baking clip {name}"))?;
+    let per_frame = start.elapsed().as_secs_f64() / poses.len().max(1) as f64;
+    reporter.note(&format!(
+        "  {name}: {} frames, {per_frame:.2} s/frame",
+        poses.len()
+    ));
+    Ok((
+        BakedClip::new(rig, layout, name, poses, meshes, transfer)?,
+        per_frame,
+    ))
+}
+
+/// Every pose of a clip skinned.
+pub fn pose_all(rig: &dyn Rig, name: &str, poses: &[Vec<f64>]) -> Result<Vec<Mesh>> {
+    poses
+        .iter()
+        .map(|p| rig.pose(p))
+        .collect::<Result<Vec<_>, _>>()
+        .with_context(|| format!("posing clip {name}"))
+}
+
+impl BakedClip {
+    /// A clip whose meshes were baked elsewhere (for example through a checkpoint).
+    pub fn new(
+        rig: &dyn Rig,
+        layout: &PoseLayout,
+        name: &str,
+        poses: Vec<Vec<f64>>,
+        meshes: Vec<Mesh>,
+        transfer: Vec<Vec<f32>>,
+    ) -> Result<BakedClip> {
+        let rotations = all_rotations(rig, &poses)?;
+        Ok(BakedClip {
+            name: name.to_owned(),
+            angles: poses.iter().map(|p| layout.reduce(p)).collect(),
+            poses,
+            meshes,
+            transfer,
+            rotations,
+        })
+    }
+
+    /// Frame `f`'s bone rotations as aprt-core takes them (row-major f32).
+    pub fn core_rotations(&self, f: usize) -> Vec<[[f32; 3]; 3]> {
+        self.rotations[f].iter().map(|r| row_major(*r)).collect()
+    }
+}

@@ -1,0 +1,247 @@
+//! The command line's arguments, and the library settings each asks for.
+
+use std::path::PathBuf;
+
+use anyhow::{Result, bail};
+use clap::Args;
+
+use crate::bake::BakeSettings;
+use crate::cli::source::SourceArgs;
+#[cfg(doc)]
+use crate::model::export::ExportError;
+use crate::model::export::Precision;
+use crate::model::fit::{Alpha, CoefDims, Dims, FitOptions};
+use crate::report::demo::DemoSettings;
+
+/// `aprt results`.
+#[derive(Debug, Args)]
+pub struct ResultsArgs {
+    /// The assets directory (with gltf/ and bvh/); default $APRT_ASSETS or ../shared/assets.
+    #[arg(long)]
+    pub assets: Option<PathBuf>,
+    /// Output directory for README.md and the PNG figures.
+    #[arg(long, default_value = "docs/results")]
+    pub out: PathBuf,
+    /// SH order of the ground truth and the models.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u8).range(1..=6))]
+    pub order: u8,
+    /// Directions per vertex for the ground-truth bakes.
+    #[arg(long, default_value_t = 128)]
+    pub rays: usize,
+}
+
+/// `aprt demo`.
+#[derive(Debug, Args)]
+pub struct DemoArgs {
+    /// Output directory for model.aprt, report.md, report.json and the PNG renders.
+    #[arg(long, default_value = "aprt-demo")]
+    pub out: PathBuf,
+    /// SH order of the demo model.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u8).range(1..=6))]
+    pub order: u8,
+    /// Directions per vertex for the ground-truth bakes.
+    #[arg(long, default_value_t = 128)]
+    pub rays: usize,
+    /// Use every k-th frame of the clips (1 = all 250 training frames; larger is faster).
+    #[arg(long, default_value_t = 2)]
+    pub stride: usize,
+}
+
+/// Simulation settings shared by the commands that bake.
+#[derive(Debug, Clone, Args)]
+pub struct BakeArgs {
+    /// SH order n (n² coefficients per vertex).
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u8).range(1..=6))]
+    pub order: u8,
+    /// Directions per vertex (low-discrepancy, cosine-weighted).
+    #[arg(long, default_value_t = 256)]
+    pub rays: usize,
+    /// Inter-reflection bounces (0 = direct shadowed transfer only).
+    #[arg(long, default_value_t = 0)]
+    pub bounces: usize,
+    /// Albedo of the inter-reflecting surfaces, used when --bounces > 0.
+    #[arg(long, default_value_t = 0.5)]
+    pub albedo: f32,
+}
+
+/// `aprt transfer`.
+#[derive(Debug, Args)]
+pub struct TransferArgs {
+    /// The mesh.
+    pub mesh: PathBuf,
+    /// Simulation settings.
+    #[command(flatten)]
+    pub bake: BakeArgs,
+    /// Output .npy file.
+    #[arg(long)]
+    pub npy: PathBuf,
+}
+
+/// Model-shape options shared by every training source.
+#[derive(Debug, Clone, Args)]
+pub struct FitArgs {
+    /// Keep this many pose PCA dimensions k_a.
+    #[arg(long, conflicts_with = "pose_variance")]
+    pub pose_dims: Option<usize>,
+    /// Keep the pose PCA dimensions that explain this fraction of the pose variance.
+    #[arg(long)]
+    pub pose_variance: Option<f64>,
+    /// Keep this many vertex-basis vectors k_v.
+    #[arg(long, conflicts_with_all = ["coef_variance", "full"])]
+    pub coef_dims: Option<usize>,
+    /// Keep the vertex-basis vectors that capture this fraction of the transfer energy.
+    #[arg(long, conflicts_with = "full")]
+    pub coef_variance: Option<f64>,
+    /// No vertex reduction: the paper's full linear model (large).
+    #[arg(long)]
+    pub full: bool,
+    /// Tikhonov parameter: `auto` (cross-validated, the default), `loo`, `loso`, or a number.
+    #[arg(long, default_value = "auto", allow_negative_numbers = true)]
+    pub alpha: String,
+    /// Precision of the large sections.
+    #[arg(long, value_enum, default_value_t = PrecisionArg::F32)]
+    pub precision: PrecisionArg,
+}
+
+/// `aprt train`.
+#[derive(Debug, Args)]
+pub struct TrainArgs {
+    /// The training poses.
+    #[command(flatten)]
+    pub source: SourceArgs,
+    /// Output model file.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// For characters: learn transfer in world space instead of each vertex's bone frame
+    /// (bone frames generalise better; world frame needs no bone rotations at runtime).
+    #[arg(long)]
+    pub world_frame: bool,
+    /// Simulation settings.
+    #[command(flatten)]
+    pub bake: BakeArgs,
+    /// Model shape.
+    #[command(flatten)]
+    pub fit: FitArgs,
+    /// Checkpoint directory: every baked pose is saved there until the model is written
+    /// (default: OUTPUT.bake beside the model).
+    #[arg(long)]
+    pub checkpoint: Option<PathBuf>,
+    /// Continue an interrupted bake from its checkpoint (same inputs and bake settings).
+    #[arg(long)]
+    pub resume: bool,
+}
+
+/// `aprt simulate`.
+#[derive(Debug, Args)]
+pub struct SimulateArgs {
+    /// The poses.
+    #[command(flatten)]
+    pub source: SourceArgs,
+    /// Simulation settings.
+    #[command(flatten)]
+    pub bake: BakeArgs,
+    /// Output .npy file, float32 (frames, vertices, n²).
+    #[arg(long)]
+    pub npy: PathBuf,
+}
+
+/// `aprt eval`.
+#[derive(Debug, Args)]
+pub struct EvalArgs {
+    /// The model.
+    pub model: PathBuf,
+    /// The poses: a clip of the model's character, or --angles alone.
+    #[command(flatten)]
+    pub source: SourceArgs,
+    /// Output .npy file, float32 (frames, vertices, n²), world-frame transfer.
+    #[arg(long)]
+    pub npy: PathBuf,
+}
+
+/// `aprt inspect`.
+#[derive(Debug, Args)]
+pub struct InspectArgs {
+    /// The model.
+    pub model: PathBuf,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Precision of a model's large sections (weights and per-vertex rows), as `--precision`
+/// names it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum PrecisionArg {
+    /// 4 bytes per value.
+    F32,
+    /// 2 bytes per value, about 3 significant digits: IEEE half, rounded to nearest, so the
+    /// stored value is within 2⁻¹¹ relative of the f64 one above 6.1e-5 and within 2⁻²⁵ ≈ 3e-8
+    /// absolute below (subnormals; smaller values become 0). Values beyond ±65504 are refused
+    /// with [`ExportError::NotRepresentable`], never clamped.
+    F16,
+}
+
+impl From<PrecisionArg> for Precision {
+    fn from(arg: PrecisionArg) -> Precision {
+        match arg {
+            PrecisionArg::F32 => Precision::F32,
+            PrecisionArg::F16 => Precision::F16,
+        }
+    }
+}
+
+impl DemoArgs {
+    /// The demo settings these flags ask for.
+    pub fn settings(&self) -> DemoSettings {
+        DemoSettings {
+            out: self.out.clone(),
+            order: self.order as usize,
+            rays: self.rays,
+            stride: self.stride,
+        }
+    }
+}
+
+impl BakeArgs {
+    /// The bake settings these flags ask for.
+    pub fn settings(&self) -> BakeSettings {
+        BakeSettings {
+            order: self.order as usize,
+            rays: self.rays,
+            bounces: self.bounces,
+            albedo: self.albedo,
+        }
+    }
+}
+
+impl FitArgs {
+    /// The fit options these flags ask for; unset flags keep the defaults.
+    pub fn options(&self) -> Result<FitOptions> {
+        let mut options = FitOptions::default();
+        if let Some(k) = self.pose_dims {
+            options.pose_dims = Dims::Count(k);
+        }
+        if let Some(f) = self.pose_variance {
+            options.pose_dims = Dims::Variance(f);
+        }
+        if let Some(k) = self.coef_dims {
+            options.coef_dims = CoefDims::Count(k);
+        }
+        if let Some(f) = self.coef_variance {
+            options.coef_dims = CoefDims::Variance(f);
+        }
+        if self.full {
+            options.coef_dims = CoefDims::Full;
+        }
+        options.alpha = match self.alpha.as_str() {
+            "auto" => options.alpha,
+            "loo" => Alpha::Loo,
+            "loso" => Alpha::Loso { segment: None },
+            other => match other.parse::<f64>() {
+                Ok(x) if x.is_finite() && x >= 0.0 => Alpha::Fixed(x),
+                _ => bail!("--alpha {other}: expected auto, loo, loso or a non-negative number"),
+            },
+        };
+        Ok(options)
+    }
+}

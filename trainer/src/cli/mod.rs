@@ -1,0 +1,209 @@
+//! The `aprt` command line: argument types (in `args` and `source`) and dispatch. Each
+//! command turns its flags into library settings, calls the library stage that does the work,
+//! and prints what it wrote; the library reports progress through [`Terminal`].
+
+mod args;
+mod source;
+mod terminal;
+
+use std::path::Path;
+
+use anyhow::{Context, Result, bail};
+use clap::{Parser, Subcommand};
+
+pub use args::{
+    BakeArgs, DemoArgs, EvalArgs, FitArgs, InspectArgs, PrecisionArg, ResultsArgs, SimulateArgs,
+    TrainArgs, TransferArgs,
+};
+pub use source::SourceArgs;
+pub use terminal::Terminal;
+
+use crate::bake::checkpoint::{Checkpoint, OnExisting};
+use crate::io::atomic::write_atomic;
+use crate::model::ModelFrame;
+use crate::model::predict::{predict_clip, predict_world};
+use crate::model::train::TrainSettings;
+
+/// Pose-driven precomputed radiance transfer for skinned characters.
+#[derive(Debug, Parser)]
+#[command(name = "aprt", version, about, long_about = None)]
+pub struct Cli {
+    /// The command to run.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The `aprt` commands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Bake, fit, evaluate and report on the built-in character, end to end.
+    Demo(DemoArgs),
+    /// Bake the static transfer of one OBJ mesh into a (vertices, n²) float32 .npy.
+    Transfer(TransferArgs),
+    /// Train a model on a character's clip, or on an OBJ sequence with a joint-angle CSV.
+    Train(TrainArgs),
+    /// Bake the ground-truth transfer of every frame into a (frames, vertices, n²) .npy.
+    Simulate(SimulateArgs),
+    /// Predict transfer through aprt-core into a (frames, vertices, n²) .npy, for a clip of the
+    /// model's character or rows of joint angles.
+    Eval(EvalArgs),
+    /// Validate a model blob and print its header, dimensions and section sizes.
+    Inspect(InspectArgs),
+    /// Regenerate the results document on the real glTF characters and BVH motion capture.
+    Results(ResultsArgs),
+}
+
+/// Runs one command.
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Demo(args) => demo(&args),
+        Command::Transfer(args) => transfer(&args),
+        Command::Train(args) => train(&args),
+        Command::Simulate(args) => simulate(&args),
+        Command::Eval(args) => eval(&args),
+        Command::Inspect(args) => inspect(&args),
+        Command::Results(args) => results(&args),
+    }
+}
+
+fn demo(args: &DemoArgs) -> Result<()> {
+    let markdown = crate::report::demo::run(&args.settings(), &Terminal)?;
+    print!("{markdown}");
+    eprintln!(
+        "wrote {}/{{model.aprt, report.md, report.json, novel_pose.png, baselines.png}}",
+        args.out.display()
+    );
+    Ok(())
+}
+
+fn read_file(path: &Path) -> Result<Vec<u8>> {
+    std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))
+}
+
+fn write_npy(path: &Path, shape: &[usize], data: &[f32]) -> Result<()> {
+    write_atomic(path, &crate::io::npy::encode_f32(shape, data))
+        .with_context(|| format!("cannot write {}", path.display()))
+}
+
+fn inspect(args: &InspectArgs) -> Result<()> {
+    let blob = read_file(&args.model)?;
+    let info = crate::model::runtime::describe(&blob)
+        .with_context(|| format!("{}: invalid model", args.model.display()))?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&info)?);
+    } else {
+        print!("{info}");
+    }
+    Ok(())
+}
+
+fn eval(args: &EvalArgs) -> Result<()> {
+    let blob = read_file(&args.model)?;
+    let info = crate::model::runtime::describe(&blob)
+        .with_context(|| format!("{}: invalid model", args.model.display()))?;
+    let model_name = args.model.display().to_string();
+    let transfer = if args.source.names_rig() {
+        let (rig, clip) = args.source.rig(&Terminal)?;
+        if info.angle_names.is_empty() {
+            bail!("{model_name} records no pose-entry names, so a clip cannot be mapped onto it; use --angles");
+        }
+        predict_clip(&blob, &info, &model_name, rig.as_ref(), &clip)
+    } else {
+        let Some(csv) = &args.source.angles else {
+            bail!("give the poses: --angles FILE, or a clip of the model's character");
+        };
+        let poses = crate::io::angles::read_angles(csv, Some(info.pose_len))?;
+        if crate::model::runtime::bone_frames(&blob)?.is_some() {
+            bail!("{model_name} learns transfer in bone frames: give its character's clip (not --angles) so the bones' rotations are known");
+        }
+        predict_world(&blob, &poses, &[])
+    }
+    .with_context(|| format!("evaluating {model_name}"))?;
+    let flat: Vec<f32> = transfer.concat();
+    write_npy(
+        &args.npy,
+        &[transfer.len(), info.vertices, info.order * info.order],
+        &flat,
+    )
+}
+
+fn transfer(args: &TransferArgs) -> Result<()> {
+    let mesh = crate::io::obj::read_obj(&args.mesh)?;
+    let settings = args.bake.settings();
+    let transfer = crate::bake::bake_poses(std::slice::from_ref(&mesh), &settings, &Terminal)
+        .with_context(|| format!("baking {}", args.mesh.display()))?;
+    let n2 = settings.order * settings.order;
+    write_npy(&args.npy, &[mesh.vertex_count(), n2], &transfer[0])
+}
+
+fn results(args: &ResultsArgs) -> Result<()> {
+    use crate::report::results::{ResultsSettings, asset_studies, default_assets, write_document};
+    let assets = args.assets.clone().unwrap_or_else(default_assets);
+    let studies = asset_studies(&assets)
+        .with_context(|| format!("loading the assets in {}", assets.display()))?;
+    let settings = ResultsSettings {
+        bake: crate::bake::BakeSettings {
+            order: args.order as usize,
+            rays: args.rays,
+            bounces: 0,
+            albedo: 0.0,
+        },
+        alphas: (-6..=3).map(|e| 10f64.powi(e)).collect(),
+    };
+    let command = format!(
+        "cargo run --release -p aprt-trainer --bin aprt -- results --out {} --order {} --rays {}",
+        args.out.display(),
+        args.order,
+        args.rays
+    );
+    let path = write_document(&studies, &settings, &args.out, &command, &Terminal)?;
+    eprintln!("wrote {}", path.display());
+    Ok(())
+}
+
+fn simulate(args: &SimulateArgs) -> Result<()> {
+    let settings = args.bake.settings();
+    let meshes = args.source.meshes(&Terminal)?;
+    let transfer = crate::bake::bake_poses(&meshes, &settings, &Terminal)?;
+    let n2 = settings.order * settings.order;
+    write_npy(
+        &args.npy,
+        &[meshes.len(), meshes[0].vertex_count(), n2],
+        &transfer.concat(),
+    )
+}
+
+fn train(args: &TrainArgs) -> Result<()> {
+    let settings = TrainSettings {
+        fit: args.fit.options()?,
+        bake: args.bake.settings(),
+        precision: args.fit.precision.into(),
+        frame: if args.world_frame {
+            ModelFrame::World
+        } else {
+            ModelFrame::Bone
+        },
+        checkpoint: args
+            .checkpoint
+            .clone()
+            .unwrap_or_else(|| Checkpoint::default_dir(&args.output)),
+        existing: if args.resume {
+            OnExisting::Resume
+        } else {
+            OnExisting::Refuse
+        },
+    };
+    let poses = args.source.poses(&Terminal)?;
+    let trained = crate::model::train::train(poses, &args.output, &settings, &Terminal)?;
+    let info = &trained.info;
+    eprintln!(
+        "wrote {}: {} poses, k_a {}, k_v {}, alpha {:.3e}, {} bytes",
+        args.output.display(),
+        trained.poses,
+        info.pose_dims,
+        info.coef_dims,
+        info.alpha,
+        info.bytes
+    );
+    Ok(())
+}

@@ -1,0 +1,250 @@
+//! Where poses come from: an OBJ sequence with a joint-angle CSV, or a rig (the built-in
+//! character, a glTF skin, a mannequin driven by motion capture) and one of its clips. The
+//! command line's source options (`cli::source`) name one of these; loading happens here.
+
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+
+use crate::progress::Reporter;
+use crate::rig::character::Character;
+use crate::rig::gltf::GltfRig;
+use crate::rig::mannequin::{MocapOptions, MocapRig};
+use crate::rig::mesh::Mesh;
+use crate::rig::mocap::Mocap;
+use crate::rig::{Clip, Rig};
+
+/// Poses from a source, ready to bake or evaluate.
+pub enum Poses {
+    /// Meshes read from files, with one row of angles each.
+    Meshes {
+        /// The files, sorted by name.
+        files: Vec<PathBuf>,
+        /// The meshes, in file order.
+        meshes: Vec<Mesh>,
+        /// One row of joint angles per mesh.
+        angles: Vec<Vec<f64>>,
+    },
+    /// A rig and the frames of one of its clips.
+    Rig {
+        /// The character.
+        rig: Box<dyn Rig>,
+        /// The clip.
+        clip: Clip,
+    },
+}
+
+impl Poses {
+    /// An OBJ sequence (every `.obj` file of `dir`, sorted by name, all with the same mesh)
+    /// with one row of `angles` per file.
+    pub fn from_obj_sequence(dir: &Path, angles: &Path) -> Result<Poses> {
+        let files = obj_sequence(dir)?;
+        let rows = crate::io::angles::read_angles(angles, None)?;
+        if rows.len() != files.len() {
+            bail!(
+                "{} has {} rows of angles but {} holds {} OBJ files: one row per pose is needed",
+                angles.display(),
+                rows.len(),
+                dir.display(),
+                files.len()
+            );
+        }
+        Ok(Poses::Meshes {
+            meshes: read_same_meshes(&files)?,
+            files,
+            angles: rows,
+        })
+    }
+}
+
+/// The meshes of an OBJ sequence, without angles: every `.obj` file of `dir`, sorted by name,
+/// all with the same mesh.
+pub fn obj_sequence_meshes(dir: &Path) -> Result<Vec<Mesh>> {
+    read_same_meshes(&obj_sequence(dir)?)
+}
+
+/// A character to load, and how to sample its clip.
+#[derive(Clone, Debug)]
+pub enum RigSource {
+    /// The built-in procedural character.
+    Builtin,
+    /// A glTF 2.0 character (`.gltf` or `.glb`) with a skin, its animations sampled at `fps`.
+    Gltf {
+        /// The file.
+        path: PathBuf,
+        /// Frames per second.
+        fps: f64,
+    },
+    /// BVH motion capture driving a mannequin built from the file's own skeleton, or from
+    /// `skeleton`'s with the motion retargeted onto it by joint name.
+    Mocap {
+        /// The motion-capture file.
+        path: PathBuf,
+        /// The file whose skeleton the mannequin is built from, if not `path`'s.
+        skeleton: Option<PathBuf>,
+        /// Frames of the motion (half-open, at the file's rate); all when `None`.
+        frames: Option<Range<usize>>,
+        /// How the mannequin is built and the motion resampled.
+        options: MocapOptions,
+    },
+}
+
+impl RigSource {
+    /// Loads the character and its clip. A file that does not exist is an error listing the
+    /// files of its kind beside it. `clip_name` picks the clip of a character with named clips
+    /// (the built-in character's, a glTF file's animations) once it is loaded; a mannequin's
+    /// clip is its motion, so it is not asked. Notes on what the clip leaves out (glTF channels
+    /// held at rest, mannequin joints the motion does not animate) go to `reporter`.
+    pub fn load<'a>(
+        &self,
+        clip_name: impl FnOnce(&dyn Rig) -> Result<&'a str>,
+        reporter: &dyn Reporter,
+    ) -> Result<(Box<dyn Rig>, Clip)> {
+        match self {
+            RigSource::Builtin => {
+                let character = Character::builtin();
+                let clip = character.clip(clip_name(&character)?)?;
+                Ok((Box::new(character), clip))
+            }
+            RigSource::Gltf { path, fps } => {
+                must_exist(path, &["gltf", "glb"])?;
+                let rig = GltfRig::load(path, *fps)?;
+                let clip = rig.clip(clip_name(&rig)?)?;
+                for held in rig
+                    .held_channels()
+                    .iter()
+                    .filter(|h| h.animation == clip.name)
+                {
+                    reporter.note(&format!("note: {}: {held}", path.display()));
+                }
+                Ok((Box::new(rig), clip))
+            }
+            RigSource::Mocap {
+                path,
+                skeleton,
+                frames,
+                options,
+            } => {
+                must_exist(path, &["bvh"])?;
+                if let Some(skeleton) = skeleton {
+                    must_exist(skeleton, &["bvh"])?;
+                }
+                mannequin(path, skeleton.as_deref(), frames.clone(), options, reporter)
+            }
+        }
+    }
+}
+
+/// The mannequin (of `skeleton`, or of `path`'s own skeleton) and `path`'s motion.
+fn mannequin(
+    path: &Path,
+    skeleton: Option<&Path>,
+    frames: Option<Range<usize>>,
+    options: &MocapOptions,
+    reporter: &dyn Reporter,
+) -> Result<(Box<dyn Rig>, Clip)> {
+    let Some(skeleton) = skeleton else {
+        let rig = MocapRig::from_file(path, options)?;
+        let frames = frames.unwrap_or(0..rig.mocap().frame_count());
+        let clip = rig.clip_range(frames)?;
+        return Ok((Box::new(rig), clip));
+    };
+    let rig = MocapRig::from_file(skeleton, options)?;
+    let motion = Mocap::read(path)?;
+    let frames = frames.unwrap_or(0..motion.frame_count());
+    let name = path
+        .file_stem()
+        .map_or_else(|| "motion".into(), |s| s.to_string_lossy().into_owned());
+    let retargeted = rig.retarget(&motion, &name, frames)?;
+    if !retargeted.missing.is_empty() {
+        reporter.note(&format!(
+            "joints of the mannequin that {} does not animate (kept at rest): {}",
+            path.display(),
+            retargeted.missing.join(", ")
+        ));
+    }
+    Ok((Box::new(rig), retargeted.clip))
+}
+
+/// Errors when `path` does not exist, listing the files with one of `extensions` that its
+/// directory does hold.
+fn must_exist(path: &Path, extensions: &[&str]) -> Result<()> {
+    if path.exists() {
+        return Ok(());
+    }
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let mut found: Vec<String> = std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| {
+            p.extension()
+                .and_then(|e| e.to_str())
+                .is_some_and(|e| extensions.iter().any(|x| e.eq_ignore_ascii_case(x)))
+        })
+        .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+        .collect();
+    found.sort();
+    let available = if found.is_empty() {
+        "none".to_owned()
+    } else {
+        found.join(", ")
+    };
+    bail!(
+        "{}: no such file; .{} files in {}: {available}",
+        path.display(),
+        extensions.join("/."),
+        dir.display()
+    )
+}
+
+/// The OBJ files of a sequence directory, sorted by file name.
+fn obj_sequence(dir: &Path) -> Result<Vec<PathBuf>> {
+    let entries = std::fs::read_dir(dir)
+        .with_context(|| format!("cannot read directory {}", dir.display()))?;
+    let mut files = Vec::new();
+    for entry in entries {
+        let path = entry
+            .with_context(|| format!("cannot list {}", dir.display()))?
+            .path();
+        if path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+        {
+            files.push(path);
+        }
+    }
+    files.sort();
+    if files.is_empty() {
+        bail!("{}: no .obj files", dir.display());
+    }
+    Ok(files)
+}
+
+/// Reads every file; all must share the first one's vertex count and triangles.
+fn read_same_meshes(files: &[PathBuf]) -> Result<Vec<Mesh>> {
+    let mut meshes: Vec<Mesh> = Vec::with_capacity(files.len());
+    for file in files {
+        let mesh = crate::io::obj::read_obj(file)?;
+        if let Some(first) = meshes.first()
+            && (mesh.vertex_count() != first.vertex_count() || mesh.triangles != first.triangles)
+        {
+            bail!(
+                "{}: {} vertices and {} triangles, but {} has {} and {}; every pose must share the same mesh",
+                file.display(),
+                mesh.vertex_count(),
+                mesh.triangles.len(),
+                files[0].display(),
+                first.vertex_count(),
+                first.triangles.len()
+            );
+        }
+        meshes.push(mesh);
+    }
+    Ok(meshes)
+}

@@ -1,0 +1,422 @@
+//! Model blob writer: quantises a [`LinearModel`] into the layout of `aprt_core::format`.
+
+use aprt_core::format::{
+    Header, MAGIC, MAX_HEADER_LEN, MAX_SECTIONS, PREAMBLE_LEN, SectionEntry, align_up, crc32,
+    padded_vertices,
+};
+use aprt_core::{
+    Basis, Encoding, FORMAT_VERSION, Frame, MAX_BONES, MAX_COEF_DIMS, MAX_LIT, MAX_ORDER,
+    MAX_POSE_DIMS, MAX_POSE_LEN, MAX_VERTICES, SectionKind, VERTEX_BLOCK,
+};
+
+use crate::model::{BoneFrames, LinearModel, VertexBasis};
+
+/// Storage precision of the large sections (weights and per-vertex rows); pose sections are
+/// always f32.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize)]
+pub enum Precision {
+    /// 4 bytes per value.
+    #[default]
+    F32,
+    /// 2 bytes per value, about 3 significant digits: IEEE half, rounded to nearest, so the
+    /// stored value is within 2⁻¹¹ relative of the f64 one above 6.1e-5 and within 2⁻²⁵ ≈ 3e-8
+    /// absolute below (subnormals; smaller values become 0). Values beyond ±65504 are refused
+    /// with [`ExportError::NotRepresentable`], never clamped.
+    F16,
+}
+
+/// Why a model cannot be written.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum ExportError {
+    /// A dimension exceeds what `aprt-core` accepts.
+    #[error("{what} = {value} exceeds the runtime limit {max}")]
+    TooLarge {
+        /// Which dimension.
+        what: &'static str,
+        /// Its value.
+        value: usize,
+        /// The limit.
+        max: usize,
+    },
+    /// A value is NaN or infinite, or overflows the chosen precision.
+    #[error(
+        "section {section:?}: value {value} at index {index} is not representable (NaN, infinite, or beyond the precision's range: ±3.4e38 for f32, ±65504 for f16)"
+    )]
+    NotRepresentable {
+        /// The section.
+        section: SectionKind,
+        /// Element index.
+        index: usize,
+        /// The value.
+        value: f64,
+    },
+    /// The arrays do not match the model's dimensions.
+    #[error("section {section:?} has {found} values, the dimensions need {expected}")]
+    Shape {
+        /// The section.
+        section: SectionKind,
+        /// Required count.
+        expected: usize,
+        /// Given count.
+        found: usize,
+    },
+    /// The pose-entry names cannot be recorded.
+    #[error("angle names: {problem}")]
+    AngleNames {
+        /// What is wrong.
+        problem: String,
+    },
+}
+
+fn limit(what: &'static str, value: usize, min: usize, max: usize) -> Result<(), ExportError> {
+    if value < min || value > max {
+        return Err(ExportError::TooLarge { what, value, max });
+    }
+    Ok(())
+}
+
+/// Encodes `values` as one section's bytes, rejecting what the reader would reject.
+fn encode(
+    section: SectionKind,
+    values: &[f64],
+    expected: usize,
+    encoding: Encoding,
+) -> Result<Vec<u8>, ExportError> {
+    check_len(section, values.len(), expected)?;
+    let mut out = Vec::with_capacity(values.len() * encoding.size());
+    for (index, &value) in values.iter().enumerate() {
+        let bad = || ExportError::NotRepresentable {
+            section,
+            index,
+            value,
+        };
+        match encoding {
+            Encoding::F32 => {
+                let x = value as f32;
+                if !x.is_finite() {
+                    return Err(bad());
+                }
+                out.extend_from_slice(&x.to_le_bytes());
+            }
+            Encoding::F16 => {
+                let x = half::f16::from_f64(value);
+                if !x.is_finite() {
+                    return Err(bad());
+                }
+                out.extend_from_slice(&x.to_le_bytes());
+            }
+        }
+    }
+    Ok(out)
+}
+
+fn check_len(section: SectionKind, found: usize, expected: usize) -> Result<(), ExportError> {
+    if found != expected {
+        return Err(ExportError::Shape {
+            section,
+            expected,
+            found,
+        });
+    }
+    Ok(())
+}
+
+/// Per-vertex values `get(j, r)` (`r < width`) in the core's blocked layout: blocks of
+/// `VERTEX_BLOCK` vertices, value-major within a block, the last block zero-padded; for
+/// bone-frame models each block starts with a row of the vertices' bone indices.
+fn blocked(
+    vertices: usize,
+    width: usize,
+    bones: Option<&BoneFrames>,
+    get: impl Fn(usize, usize) -> f64,
+) -> Vec<f64> {
+    let lead = usize::from(bones.is_some());
+    let mut out = Vec::with_capacity(padded_vertices(vertices) * (lead + width));
+    for b in 0..padded_vertices(vertices) / VERTEX_BLOCK {
+        if let Some(frames) = bones {
+            for lane in 0..VERTEX_BLOCK {
+                let j = b * VERTEX_BLOCK + lane;
+                out.push(frames.vertex_bone.get(j).map_or(0.0, |&x| x as f64));
+            }
+        }
+        for r in 0..width {
+            for lane in 0..VERTEX_BLOCK {
+                let j = b * VERTEX_BLOCK + lane;
+                out.push(if j < vertices { get(j, r) } else { 0.0 });
+            }
+        }
+    }
+    out
+}
+
+/// Serialises `model` into a complete blob.
+pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>, ExportError> {
+    let (n2, v, a, ka) = (
+        model.order * model.order,
+        model.vertices,
+        model.pose_len,
+        model.pose_dims(),
+    );
+    limit("order", model.order, 1, MAX_ORDER)?;
+    limit("vertices", v, 1, MAX_VERTICES)?;
+    limit("joints", a, 1, MAX_POSE_LEN)?;
+    limit("pose dims", ka, 0, MAX_POSE_DIMS.min(a))?;
+    let frame = match &model.bones {
+        None => Frame::World,
+        Some(b) => {
+            limit("bones", b.count, 1, MAX_BONES)?;
+            check_len(SectionKind::VertexBasis, b.vertex_bone.len(), v)?;
+            if let Some(&bad) = b.vertex_bone.iter().find(|&&x| x as usize >= b.count) {
+                return Err(ExportError::TooLarge {
+                    what: "vertex bone",
+                    value: bad as usize,
+                    max: b.count - 1,
+                });
+            }
+            // The runtime lights every bone's row width of weights per frame.
+            let width = match model.basis {
+                VertexBasis::Stored { coef_dims, .. } => coef_dims,
+                VertexBasis::Identity => n2 * (1 + ka),
+            };
+            limit("bones × lit row width", b.count * width, 1, MAX_LIT)?;
+            Frame::Bones {
+                count: b.count as u16,
+            }
+        }
+    };
+    let big = match precision {
+        Precision::F32 => Encoding::F32,
+        Precision::F16 => Encoding::F16,
+    };
+    let mut sections: Vec<(SectionKind, Encoding, Vec<u8>)> = vec![
+        (
+            SectionKind::PoseMean,
+            Encoding::F32,
+            encode(SectionKind::PoseMean, &model.pose_mean, a, Encoding::F32)?,
+        ),
+        (
+            SectionKind::PoseProjection,
+            Encoding::F32,
+            encode(
+                SectionKind::PoseProjection,
+                &model.pose_projection,
+                ka * a,
+                Encoding::F32,
+            )?,
+        ),
+    ];
+    let basis = match &model.basis {
+        VertexBasis::Stored { coef_dims, data } => {
+            let kv = *coef_dims;
+            limit("coef dims", kv, 1, MAX_COEF_DIMS)?;
+            let w = encode(
+                SectionKind::Weights,
+                &model.weights,
+                n2 * (ka + 1) * kv,
+                big,
+            )?;
+            sections.push((SectionKind::Weights, big, w));
+            check_len(SectionKind::VertexBasis, data.len(), v * kv)?;
+            let u = blocked(v, kv, model.bones.as_ref(), |j, k| data[j * kv + k]);
+            let u = encode(SectionKind::VertexBasis, &u, u.len(), big)?;
+            sections.push((SectionKind::VertexBasis, big, u));
+            Basis::Stored
+        }
+        VertexBasis::Identity => {
+            let width = n2 * (ka + 1);
+            check_len(SectionKind::VertexWeights, model.weights.len(), width * v)?;
+            let rows = blocked(v, width, model.bones.as_ref(), |j, r| {
+                model.weights[r * v + j]
+            });
+            let rows = encode(SectionKind::VertexWeights, &rows, rows.len(), big)?;
+            sections.push((SectionKind::VertexWeights, big, rows));
+            Basis::Identity
+        }
+    };
+    let mut table: Vec<SectionBytes> = sections
+        .into_iter()
+        .map(|(kind, encoding, bytes)| SectionBytes {
+            tag: kind.tag(),
+            required: true,
+            encoding,
+            bytes,
+        })
+        .collect();
+    if !model.angle_names.is_empty() {
+        table.push(angle_names_section(&model.angle_names, a)?);
+    }
+    assemble(model, basis, frame, &table)
+}
+
+/// One section ready to lay out.
+struct SectionBytes {
+    tag: u16,
+    required: bool,
+    encoding: Encoding,
+    bytes: Vec<u8>,
+}
+
+/// The optional section of pose-entry names: one per line, so a name may not hold a newline.
+fn angle_names_section(names: &[String], pose_len: usize) -> Result<SectionBytes, ExportError> {
+    if names.len() != pose_len {
+        return Err(ExportError::AngleNames {
+            problem: format!("{} names for {pose_len} pose entries", names.len()),
+        });
+    }
+    if let Some(bad) = names.iter().find(|n| n.is_empty() || n.contains('\n')) {
+        return Err(ExportError::AngleNames {
+            problem: format!("{bad:?} is empty or holds a newline"),
+        });
+    }
+    let bytes = names
+        .iter()
+        .flat_map(|n| n.bytes().chain([b'\n']))
+        .collect();
+    Ok(SectionBytes {
+        tag: SectionKind::AngleNames.tag(),
+        required: false,
+        encoding: Encoding::F32,
+        bytes,
+    })
+}
+
+/// Lays out preamble, header and aligned sections. The header holds the section offsets,
+/// which depend on the header's own (varint) length: iterate until the length is stable.
+fn assemble(
+    model: &LinearModel,
+    basis: Basis,
+    frame: Frame,
+    sections: &[SectionBytes],
+) -> Result<Vec<u8>, ExportError> {
+    let mut header_len = 0usize;
+    for _ in 0..8 {
+        let mut table = heapless::Vec::<SectionEntry, MAX_SECTIONS>::new();
+        let mut offset = align_up((PREAMBLE_LEN + header_len) as u64).unwrap_or(u64::MAX);
+        for section in sections {
+            let entry = SectionEntry {
+                kind: section.tag,
+                required: section.required,
+                encoding: section.encoding as u8,
+                offset,
+                len: section.bytes.len() as u64,
+                crc32: crc32(&section.bytes),
+            };
+            table.push(entry).expect("fewer sections than MAX_SECTIONS");
+            offset = align_up(offset + section.bytes.len() as u64).unwrap_or(u64::MAX);
+        }
+        let header = Header {
+            order: model.order as u8,
+            vertices: model.vertices as u32,
+            pose_len: model.pose_len as u16,
+            pose_dims: model.pose_dims() as u16,
+            coef_dims: model.coef_dims() as u32,
+            basis,
+            frame,
+            alpha: model.alpha as f32,
+            sections: table.clone(),
+        };
+        let encoded = postcard::to_allocvec(&header).expect("header serialises into a Vec");
+        if encoded.len() != header_len {
+            header_len = encoded.len();
+            continue;
+        }
+        assert!(
+            header_len <= MAX_HEADER_LEN as usize,
+            "header of {header_len} bytes"
+        );
+        let mut blob = Vec::new();
+        blob.extend_from_slice(&MAGIC);
+        blob.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        blob.extend_from_slice(&(header_len as u32).to_le_bytes());
+        blob.extend_from_slice(&crc32(&encoded).to_le_bytes());
+        blob.extend_from_slice(&encoded);
+        for (entry, section) in table.iter().zip(sections) {
+            blob.resize(entry.offset as usize, 0);
+            blob.extend_from_slice(&section.bytes);
+        }
+        return Ok(blob);
+    }
+    unreachable!("header length converges: offsets only grow with it")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tiny(basis: VertexBasis, kv: usize) -> LinearModel {
+        let (n2, ka, v) = (4, 2, 3);
+        LinearModel {
+            order: 2,
+            vertices: v,
+            pose_len: 3,
+            pose_mean: vec![0.1, -0.2, 0.3],
+            pose_projection: vec![1.0, 0.0, 0.5, 0.0, 1.0, -0.5],
+            weights: (0..n2 * (ka + 1) * kv)
+                .map(|i| (i as f64 * 0.37).sin())
+                .collect(),
+            basis,
+            alpha: 0.25,
+            bones: None,
+            angle_names: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn blob_parses_back_with_the_same_dimensions() {
+        let stored = tiny(
+            VertexBasis::Stored {
+                coef_dims: 2,
+                data: vec![0.5; 6],
+            },
+            2,
+        );
+        for model in [stored, tiny(VertexBasis::Identity, 3)] {
+            for precision in [Precision::F32, Precision::F16] {
+                let blob = encode_model(&model, precision).unwrap();
+                let parsed = aprt_core::Model::parse(&blob).unwrap();
+                let info = parsed.info();
+                assert_eq!(info.order(), 2);
+                assert_eq!(info.vertices(), 3);
+                assert_eq!(info.pose_dims(), 2);
+                assert_eq!(info.coef_dims(), model.coef_dims());
+            }
+        }
+    }
+
+    #[test]
+    fn rejects_nan_and_f16_overflow() {
+        let mut m = tiny(VertexBasis::Identity, 3);
+        m.weights[5] = f64::NAN;
+        assert!(matches!(
+            encode_model(&m, Precision::F32),
+            Err(ExportError::NotRepresentable {
+                section: SectionKind::VertexWeights,
+                ..
+            })
+        ));
+        m.weights[5] = 1e6;
+        assert!(encode_model(&m, Precision::F32).is_ok());
+        assert!(matches!(
+            encode_model(&m, Precision::F16),
+            Err(ExportError::NotRepresentable { .. })
+        ));
+    }
+
+    #[test]
+    fn rejects_shapes_the_runtime_cannot_hold() {
+        let m = tiny(
+            VertexBasis::Stored {
+                coef_dims: MAX_COEF_DIMS + 1,
+                data: vec![],
+            },
+            1,
+        );
+        assert!(matches!(
+            encode_model(&m, Precision::F32),
+            Err(ExportError::TooLarge {
+                what: "coef dims",
+                ..
+            })
+        ));
+    }
+}

@@ -1,0 +1,130 @@
+//! The fitted pose-driven linear PRT model in trainer precision (f64), before quantisation.
+//!
+//! Runtime semantics, shared with `aprt-core`'s evaluator:
+//! `z = P (a − μ)` (k_a values), `z' = [1, z]`, per SH coefficient `c`:
+//! `w^c_k = Σ_i z'_i W[c][i][k]`, and per vertex `j`: `t_jc = Σ_k w^c_k U[j][k]` with a stored
+//! vertex basis, or `t_jc = w^c_j` with the identity basis (the full linear model, `k_v = v`).
+//!
+//! [`fit`] learns it from poses and baked transfer, [`export`] quantises it into a blob, and
+//! [`runtime`] evaluates a written blob through `aprt-core`.
+
+pub mod export;
+pub mod fit;
+pub mod predict;
+pub mod runtime;
+pub mod train;
+
+/// The vertex side of the model.
+#[derive(Clone, Debug, PartialEq)]
+pub enum VertexBasis {
+    /// No reduction: the weights are per-vertex transfer directly (`k_v = v`).
+    Identity,
+    /// `coef_dims` orthonormal basis vectors over vertices, stored vertex-major: `data[j * coef_dims + k]`.
+    Stored {
+        /// k_v, the number of basis vectors.
+        coef_dims: usize,
+        /// `v × k_v` values, vertex-major.
+        data: Vec<f64>,
+    },
+}
+
+/// The frame a model learns each vertex's transfer in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ModelFrame {
+    /// The frame of the vertex's most influential bone: rigid limb motion needs no learning, at
+    /// the cost of rotating the lighting into every bone at runtime.
+    Bone,
+    /// World space: no bone rotations at runtime.
+    World,
+}
+
+/// For bone-frame models: which bone's frame each vertex's transfer is expressed in.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BoneFrames {
+    /// Number of bones.
+    pub count: usize,
+    /// The bone of each vertex.
+    pub vertex_bone: Vec<u16>,
+}
+
+/// A fitted model: everything the blob stores, in f64.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LinearModel {
+    /// SH order n (n² coefficients per vertex).
+    pub order: usize,
+    /// Number of mesh vertices v.
+    pub vertices: usize,
+    /// Length a of the pose vector: entries per pose (joint angles, rotation-vector components).
+    pub pose_len: usize,
+    /// Mean pose μ (a values).
+    pub pose_mean: Vec<f64>,
+    /// Pose projection P, `k_a × a` row-major.
+    pub pose_projection: Vec<f64>,
+    /// `n² × (1 + k_a) × k_v` weights; entry `[c][0][k]` is the unpenalised intercept.
+    pub weights: Vec<f64>,
+    /// The vertex basis.
+    pub basis: VertexBasis,
+    /// The Tikhonov parameter the fit used.
+    pub alpha: f64,
+    /// `None`: transfer in world space; otherwise in each vertex's bone frame, and
+    /// [`LinearModel::predict`] gives bone-frame transfer.
+    pub bones: Option<BoneFrames>,
+    /// Names of the `pose_len` pose entries, so tools can map a clip onto the model's pose
+    /// vector; empty when the source had none (an unnamed angle CSV).
+    pub angle_names: Vec<String>,
+}
+
+impl LinearModel {
+    /// k_a, the pose dimensions after projection.
+    pub fn pose_dims(&self) -> usize {
+        self.pose_projection
+            .len()
+            .checked_div(self.pose_len)
+            .unwrap_or(0)
+    }
+
+    /// k_v, the number of vertex basis vectors (`v` for the identity basis).
+    pub fn coef_dims(&self) -> usize {
+        match &self.basis {
+            VertexBasis::Identity => self.vertices,
+            VertexBasis::Stored { coef_dims, .. } => *coef_dims,
+        }
+    }
+
+    /// Reference prediction in f64: per-vertex transfer, `v × n²` vertex-major.
+    pub fn predict(&self, angles: &[f64]) -> Vec<f64> {
+        let (a, ka, kv, n2) = (
+            self.pose_len,
+            self.pose_dims(),
+            self.coef_dims(),
+            self.order * self.order,
+        );
+        let mut z = vec![1.0; ka + 1];
+        for (i, zi) in z[1..].iter_mut().enumerate() {
+            *zi = (0..a)
+                .map(|j| self.pose_projection[i * a + j] * (angles[j] - self.pose_mean[j]))
+                .sum();
+        }
+        let mut w = vec![0.0; n2 * kv];
+        for c in 0..n2 {
+            for (i, zi) in z.iter().enumerate() {
+                let row = &self.weights[(c * (ka + 1) + i) * kv..][..kv];
+                for (wk, x) in w[c * kv..(c + 1) * kv].iter_mut().zip(row) {
+                    *wk += zi * x;
+                }
+            }
+        }
+        let mut t = vec![0.0; self.vertices * n2];
+        for j in 0..self.vertices {
+            for c in 0..n2 {
+                t[j * n2 + c] = match &self.basis {
+                    VertexBasis::Identity => w[c * kv + j],
+                    VertexBasis::Stored { data, .. } => {
+                        (0..kv).map(|k| w[c * kv + k] * data[j * kv + k]).sum()
+                    }
+                };
+            }
+        }
+        t
+    }
+}

@@ -1,0 +1,423 @@
+//! One experiment of the paper (its Tables 1 and 2) on any rig: bake a training clip and novel
+//! clips, fit several model shapes, and measure each through aprt-core against three
+//! baselines. `aprt demo` runs it on the built-in character, `aprt results` on real assets.
+
+use std::fmt::Write as _;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use aprt_core::{LitWeights, Model, ModelInfo, PoseWeights, Rotation, ShRotation};
+
+use crate::bake::clip::BakedClip;
+use crate::bake::{BakeSettings, bake_poses};
+use crate::model::ModelFrame;
+use crate::model::export::{ExportError, Precision, encode_model};
+use crate::model::fit::{Alpha, CoefDims, Dims, Fit, FitOptions};
+use crate::model::predict::predict_world;
+use crate::model::train::fit_clip;
+use crate::progress::{Reporter, Silent};
+use crate::report::evaluate::{mean_transfer, nearest_pose, relative_error, skinned_transfer};
+use crate::rig::Rig;
+use crate::rig::pose_layout::PoseLayout;
+
+/// One model shape the experiment fits.
+#[derive(Clone, Debug)]
+pub struct ModelConfig {
+    /// Row name in the table.
+    pub name: String,
+    /// Fit options.
+    pub options: FitOptions,
+    /// The frame the model learns transfer in.
+    pub frame: ModelFrame,
+}
+
+/// The name of the default model's configuration, the first of [`standard_configs`].
+pub const DEFAULT_CONFIG: &str = "default: bone frame, LOSO α";
+
+/// The model shapes of the paper's tables and the choices behind the default: the default
+/// itself first, the same shape with LOO α and in the world frame, the full linear model with
+/// and without regularisation, and two PCA settings.
+pub fn standard_configs() -> Vec<ModelConfig> {
+    let default = FitOptions::default();
+    let config = |name: &str, options: FitOptions, frame: ModelFrame| ModelConfig {
+        name: name.into(),
+        options,
+        frame,
+    };
+    let full = FitOptions {
+        pose_dims: Dims::All,
+        coef_dims: CoefDims::Full,
+        ..default
+    };
+    vec![
+        config(DEFAULT_CONFIG, default, ModelFrame::Bone),
+        config(
+            "default shape, LOO α",
+            FitOptions {
+                alpha: Alpha::Loo,
+                ..default
+            },
+            ModelFrame::Bone,
+        ),
+        config("default shape, world frame", default, ModelFrame::World),
+        config("full linear", full, ModelFrame::Bone),
+        config(
+            "full linear, least squares (α = 0)",
+            FitOptions {
+                alpha: Alpha::Fixed(0.0),
+                ..full
+            },
+            ModelFrame::Bone,
+        ),
+        config(
+            "PCA(8, 22)",
+            FitOptions {
+                pose_dims: Dims::Count(8),
+                coef_dims: CoefDims::Count(22),
+                ..default
+            },
+            ModelFrame::Bone,
+        ),
+        config(
+            "PCA(4, 12)",
+            FitOptions {
+                pose_dims: Dims::Count(4),
+                coef_dims: CoefDims::Count(12),
+                ..default
+            },
+            ModelFrame::Bone,
+        ),
+    ]
+}
+
+/// One row of the table.
+#[derive(Debug, serde::Serialize)]
+pub struct Row {
+    /// Model or baseline name.
+    pub name: String,
+    /// Bytes the method needs at runtime.
+    pub bytes: usize,
+    /// `bytes` as a percentage of one frame of f32 PRT.
+    pub percent_of_frame: f64,
+    /// Relative transfer error on the training frames.
+    pub train_error: f64,
+    /// Relative transfer error per novel clip, in clip order.
+    pub test_errors: Vec<f64>,
+    /// Microseconds per frame through aprt-core: pose step, lighting, shading of every vertex.
+    pub shade_us: Option<f64>,
+    /// Microseconds per frame through aprt-core for the full per-vertex transfer.
+    pub transfer_us: Option<f64>,
+    /// Multiply-adds per frame to shade every vertex in RGB, in millions.
+    pub megaops: Option<f64>,
+    /// Seconds to fit (α selection, both PCAs, solve).
+    pub fit_s: Option<f64>,
+    /// k_a and k_v and α, for models.
+    pub shape: Option<(usize, usize, f64)>,
+}
+
+/// A model the experiment fitted, with its blob.
+pub struct Fitted {
+    /// Its configuration.
+    pub config: ModelConfig,
+    /// The fit and its report.
+    pub fit: Fit,
+    /// The f32 blob.
+    pub blob: Vec<u8>,
+}
+
+/// Everything an experiment measured.
+pub struct Experiment {
+    /// The models, in configuration order.
+    pub models: Vec<Fitted>,
+    /// The table: the models, then the baselines.
+    pub rows: Vec<Row>,
+    /// Configurations whose model the runtime cannot hold, and why.
+    pub skipped: Vec<(String, String)>,
+    /// Bytes of one frame of f32 PRT.
+    pub frame_bytes: usize,
+}
+
+impl Experiment {
+    /// The model of configuration `name`, or why there is none (skipped as too large for the
+    /// runtime, or no such configuration).
+    pub fn model(&self, name: &str) -> Result<&Fitted> {
+        if let Some(m) = self.models.iter().find(|m| m.config.name == name) {
+            return Ok(m);
+        }
+        match self.skipped.iter().find(|(n, _)| n == name) {
+            Some((_, reason)) => bail!("the model {name} was skipped: {reason}"),
+            None => bail!("no model configuration is called {name}"),
+        }
+    }
+}
+
+/// Fits every configuration on `train` (skipping, with the reason, any whose model exceeds the
+/// runtime's limits), then measures each model and the baselines on
+/// `train` and `tests` (at least one). `lighting` is the SH lighting the timings shade with.
+/// Which configuration is being fitted, and which are skipped, goes to `reporter`.
+#[allow(clippy::too_many_arguments)]
+pub fn run(
+    rig: &dyn Rig,
+    layout: &PoseLayout,
+    train: &BakedClip,
+    tests: &[BakedClip],
+    configs: &[ModelConfig],
+    settings: &BakeSettings,
+    lighting: &[f32],
+    reporter: &dyn Reporter,
+) -> Result<Experiment> {
+    let order = settings.order;
+    let vertices = rig.bind_mesh().vertex_count();
+    let frame_bytes = vertices * order * order * 4;
+    let timing_clip = tests.first().unwrap_or(train);
+    let mut models = Vec::new();
+    let mut rows = Vec::new();
+    let mut skipped = Vec::new();
+    for config in configs {
+        reporter.note(&format!("fitting {}", config.name));
+        let fitted = fit_clip(rig, layout, train, order, &config.options, config.frame)
+            .with_context(|| format!("fitting {}", config.name))?;
+        let s = &fitted.report.seconds;
+        let fit_s =
+            s.validate + s.pose_pca + s.vertex_basis + s.projection + s.cross_validation + s.solve;
+        let blob = match encode_model(&fitted.model, Precision::F32) {
+            Ok(blob) => blob,
+            Err(err @ ExportError::TooLarge { .. }) => {
+                reporter.note(&format!("skipping {}: {err}", config.name));
+                skipped.push((config.name.clone(), err.to_string()));
+                continue;
+            }
+            Err(err) => return Err(err).with_context(|| format!("writing {}", config.name)),
+        };
+        let model = *Model::parse(&blob)?.info();
+        let error = |clip: &BakedClip| -> Result<f64> {
+            let predicted = predict_world(&blob, &clip.angles, &clip.rotations)?;
+            Ok(relative_error(&predicted, &clip.transfer))
+        };
+        let train_error = error(train)?;
+        let test_errors = tests.iter().map(error).collect::<Result<Vec<_>>>()?;
+        let rotations = if config.frame == ModelFrame::Bone {
+            timing_clip.core_rotations(0)
+        } else {
+            Vec::new()
+        };
+        let (shade_us, transfer_us) =
+            time_core(&blob, &timing_clip.angles[0], &rotations, lighting)?;
+        rows.push(Row {
+            name: config.name.clone(),
+            bytes: blob.len(),
+            percent_of_frame: 100.0 * blob.len() as f64 / frame_bytes as f64,
+            train_error,
+            test_errors,
+            shade_us: Some(shade_us),
+            transfer_us: Some(transfer_us),
+            megaops: Some(megaops(&model)),
+            fit_s: Some(fit_s),
+            shape: Some((model.pose_dims(), model.coef_dims(), fitted.model.alpha)),
+        });
+        models.push(Fitted {
+            config: config.clone(),
+            fit: fitted,
+            blob,
+        });
+    }
+    rows.extend(baselines(rig, train, tests, settings, frame_bytes)?);
+    Ok(Experiment {
+        models,
+        rows,
+        skipped,
+        frame_bytes,
+    })
+}
+
+/// The three baselines: the mean training transfer, the nearest training pose, and the bind
+/// pose's transfer carried by the skinning.
+fn baselines(
+    rig: &dyn Rig,
+    train: &BakedClip,
+    tests: &[BakedClip],
+    settings: &BakeSettings,
+    frame_bytes: usize,
+) -> Result<Vec<Row>> {
+    let mean = mean_transfer(&train.transfer);
+    let mean_of =
+        |set: &BakedClip| -> Result<Vec<Vec<f32>>> { Ok(vec![mean.clone(); set.transfer.len()]) };
+    let nearest_of = |set: &BakedClip| -> Result<Vec<Vec<f32>>> {
+        Ok(set
+            .angles
+            .iter()
+            .map(|a| train.transfer[nearest_pose(&train.angles, a)].clone())
+            .collect())
+    };
+    let bind_transfer =
+        bake_poses(std::slice::from_ref(rig.bind_mesh()), settings, &Silent)?.remove(0);
+    let rotation = ShRotation::new(settings.order)?;
+    let skin = rig.skin();
+    let skinned_of = |set: &BakedClip| -> Result<Vec<Vec<f32>>> {
+        set.poses
+            .iter()
+            .map(|p| {
+                Ok(skinned_transfer(
+                    &rotation,
+                    &bind_transfer,
+                    |j| skin.influences(j).collect(),
+                    &rig.joint_matrices(p)?,
+                ))
+            })
+            .collect()
+    };
+    let row = |name: &str,
+               bytes: usize,
+               predict: &dyn Fn(&BakedClip) -> Result<Vec<Vec<f32>>>|
+     -> Result<Row> {
+        Ok(Row {
+            name: name.into(),
+            bytes,
+            percent_of_frame: 100.0 * bytes as f64 / frame_bytes as f64,
+            train_error: relative_error(&predict(train)?, &train.transfer),
+            test_errors: tests
+                .iter()
+                .map(|t| Ok(relative_error(&predict(t)?, &t.transfer)))
+                .collect::<Result<Vec<_>>>()?,
+            shade_us: None,
+            transfer_us: None,
+            megaops: None,
+            fit_s: None,
+            shape: None,
+        })
+    };
+    Ok(vec![
+        row("baseline: mean training transfer", frame_bytes, &mean_of)?,
+        row(
+            "baseline: nearest training pose",
+            frame_bytes * train.transfer.len(),
+            &nearest_of,
+        )?,
+        row("baseline: bind transfer, skinned", frame_bytes, &skinned_of)?,
+    ])
+}
+
+/// Median seconds of `f` over 31 calls (robust to a busy machine).
+fn median_seconds(mut f: impl FnMut()) -> f64 {
+    let mut samples: Vec<f64> = (0..31)
+        .map(|_| {
+            let t = Instant::now();
+            f();
+            t.elapsed().as_secs_f64()
+        })
+        .collect();
+    samples.sort_by(f64::total_cmp);
+    samples[15]
+}
+
+/// Per-frame cost through aprt-core on one pose: (shade µs, transfer µs).
+fn time_core(
+    blob: &[u8],
+    angles: &[f64],
+    rotations: &[Rotation],
+    lighting: &[f32],
+) -> Result<(f64, f64)> {
+    let model = Model::parse(blob)?;
+    let info = model.info();
+    let a: Vec<f32> = angles.iter().map(|&x| x as f32).collect();
+    let mut pose = Box::new(PoseWeights::new());
+    let mut lit = Box::new(LitWeights::new());
+    let mut shading = vec![0.0f32; info.vertices()];
+    let mut transfer = vec![0.0f32; info.vertices() * info.coeffs()];
+    let mut result = Ok(());
+    let shade = median_seconds(|| {
+        result = result
+            .and(model.set_pose(&a, &mut pose))
+            .and(model.light(&pose, lighting, rotations, &mut lit))
+            .and(model.shade(&lit, 0, &mut shading));
+    });
+    let full = median_seconds(|| {
+        result = result
+            .and(model.set_pose(&a, &mut pose))
+            .and(model.transfer(&pose, 0, &mut transfer));
+    });
+    result?;
+    Ok((shade * 1e6, full * 1e6))
+}
+
+/// Multiply-adds per frame for RGB shading of every vertex.
+fn megaops(model: &ModelInfo) -> f64 {
+    let (n2, ka, kv, v, a) = (
+        model.coeffs() as f64,
+        model.pose_dims() as f64,
+        model.coef_dims() as f64,
+        model.vertices() as f64,
+        model.pose_len() as f64,
+    );
+    let ops = match model.basis() {
+        aprt_core::Basis::Stored => ka * a + n2 * (ka + 1.0) * kv + 3.0 * (n2 * kv + kv * v),
+        aprt_core::Basis::Identity => ka * a + 3.0 * n2 * (ka + 1.0) * (1.0 + v),
+    };
+    ops / 1e6
+}
+
+/// What the table's columns mean, for the documents that print it.
+pub const TABLE_LEGEND: &str = "Errors are relative transfer errors ‖pred − truth‖ / ‖truth‖ over all frames, vertices and coefficients. Times are one core through aprt-core; megaops count multiply-adds for RGB shading of every vertex.";
+
+/// The table as markdown: one column per test clip.
+pub fn table_markdown(rows: &[Row], test_clips: &[String]) -> String {
+    let mut s = String::new();
+    let tests: Vec<String> = test_clips.iter().map(|n| format!("test `{n}`")).collect();
+    let _ = writeln!(
+        s,
+        "| method | k_a | k_v | α | bytes | % of frame | train err | {} | shade µs/frame | transfer µs/frame | megaops/frame | fit s |",
+        tests.join(" | ")
+    );
+    let _ = writeln!(s, "|{}", "---|".repeat(11 + tests.len()));
+    for r in rows {
+        let opt =
+            |x: Option<f64>, digits: usize| x.map_or("–".into(), |x| format!("{x:.digits$}"));
+        let (ka, kv, alpha) = r
+            .shape
+            .map_or(("–".into(), "–".into(), "–".into()), |(a, v, al)| {
+                (a.to_string(), v.to_string(), format!("{al:.3e}"))
+            });
+        let _ = writeln!(
+            s,
+            "| {} | {ka} | {kv} | {alpha} | {} | {:.1} | {:.2}% | {} | {} | {} | {} | {} |",
+            r.name,
+            r.bytes,
+            r.percent_of_frame,
+            100.0 * r.train_error,
+            r.test_errors
+                .iter()
+                .map(|e| format!("{:.2}%", 100.0 * e))
+                .collect::<Vec<_>>()
+                .join(" | "),
+            opt(r.shade_us, 0),
+            opt(r.transfer_us, 0),
+            opt(r.megaops, 2),
+            opt(r.fit_s, 2),
+        );
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_skipped_or_unknown_model_is_an_error_that_says_why() {
+        let result = Experiment {
+            models: Vec::new(),
+            rows: Vec::new(),
+            skipped: vec![(DEFAULT_CONFIG.into(), "2 GiB is too large".into())],
+            frame_bytes: 0,
+        };
+        let message = |name: &str| result.model(name).err().unwrap().to_string();
+        assert_eq!(
+            message(DEFAULT_CONFIG),
+            format!("the model {DEFAULT_CONFIG} was skipped: 2 GiB is too large")
+        );
+        assert_eq!(
+            message("PCA(8, 22)"),
+            "no model configuration is called PCA(8, 22)"
+        );
+    }
+}

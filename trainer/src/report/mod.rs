@@ -1,0 +1,11 @@
+//! Measuring and showing models: the paper's experiment (tables against baselines), accuracy
+//! measures, renders and plots, and the two documents built from them (`aprt demo`'s report and
+//! `aprt results`).
+
+pub mod demo;
+pub mod evaluate;
+pub mod experiment;
+pub mod figures;
+pub mod plots;
+pub mod render;
+pub mod results;

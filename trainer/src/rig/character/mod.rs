@@ -1,0 +1,180 @@
+//! The built-in procedural character: a deterministic, articulated, smoothly skinned figure
+//! with a wide-brimmed hat, and the clips used to train and test on it.
+//!
+//! It exists so every stage can run and be tested without external assets, on a character
+//! that stresses what PRT must capture: large pose-dependent self-shadowing (the hat's brim
+//! over the shoulders, arms against the torso) and smooth deformation across joints.
+//!
+//! Frame: z up, feet on z = 0, facing −y (the character's left is +x). Units are metres and
+//! joint angles are radians.
+
+pub(crate) mod body;
+mod clips;
+mod skeleton;
+
+use std::ops::Range;
+
+use glam::Mat4;
+
+use crate::rig::mesh::Mesh;
+use crate::rig::skin::{Skin, SkinError};
+use crate::rig::{Clip, PoseError, Rig, RigError, check_pose};
+use skeleton::{Dof, Skeleton};
+
+/// Why a pose or clip request failed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum CharacterError {
+    /// A pose that cannot pose the character.
+    #[error(transparent)]
+    Pose(#[from] PoseError),
+    /// No clip has the requested name.
+    #[error("no clip named {name:?}; available: {available}")]
+    UnknownClip {
+        /// The name asked for.
+        name: String,
+        /// Comma-separated names of the clips that exist.
+        available: String,
+    },
+    /// Skinning failed (an internal inconsistency; the built-in skin always matches).
+    #[error(transparent)]
+    Skin(#[from] SkinError),
+}
+
+/// One named joint angle: its bind-pose value and the range poses and clips stay within.
+/// Angles outside the limits are still posed (they are a sampling range, not a constraint).
+/// Poses are not collision-checked: near the limits, limbs can pass through the body or the
+/// hat's brim, as with any joint-limit-only rig.
+#[derive(Clone, Debug, PartialEq)]
+pub struct JointAngle {
+    /// Stable name, e.g. `l_elbow_flex`; see the skeleton docs for sign conventions.
+    pub name: &'static str,
+    /// Value in the bind pose, radians.
+    pub rest: f64,
+    /// Lower limit, radians.
+    pub min: f64,
+    /// Upper limit, radians.
+    pub max: f64,
+}
+
+/// The built-in character: bind mesh, skin, skeleton and joint angles.
+#[derive(Clone, Debug)]
+pub struct Character {
+    bind: Mesh,
+    skin: Skin,
+    skeleton: Skeleton,
+    dofs: Vec<Dof>,
+    angles: Vec<JointAngle>,
+    parts: Vec<(&'static str, Range<usize>)>,
+}
+
+impl Character {
+    /// Builds the character. Deterministic: every call gives bit-identical results on every
+    /// platform (the geometry is computed in f64 and rounded once to f32).
+    pub fn builtin() -> Character {
+        let skeleton = Skeleton::new();
+        let dofs = skeleton::dofs();
+        let (body, names) = body::build(&skeleton);
+        let bind = Mesh::with_area_weighted_normals(body.positions, body.triangles);
+        let skin = Skin::from_influences(&body.influences).unwrap_or_else(|e| {
+            unreachable!("built-in weights are positive partitions of unity: {e}")
+        });
+        let angles = dofs
+            .iter()
+            .map(|d| JointAngle {
+                name: d.name,
+                rest: d.rest,
+                min: d.min,
+                max: d.max,
+            })
+            .collect();
+        Character {
+            bind,
+            skin,
+            skeleton,
+            dofs,
+            angles,
+            parts: names.into_iter().zip(body.parts).collect(),
+        }
+    }
+
+    /// Number of joint angles a pose has.
+    pub fn pose_len(&self) -> usize {
+        self.angles.len()
+    }
+
+    /// The joint angles, in pose order.
+    pub fn joint_angles(&self) -> &[JointAngle] {
+        &self.angles
+    }
+
+    /// `(min, max)` of each joint angle, in pose order.
+    pub fn limits(&self) -> Vec<(f64, f64)> {
+        self.angles.iter().map(|a| (a.min, a.max)).collect()
+    }
+
+    /// The bind pose: the angles for which `pose` returns the bind mesh.
+    pub fn rest_pose(&self) -> Vec<f64> {
+        self.angles.iter().map(|a| a.rest).collect()
+    }
+
+    /// The training clip ("training", 250 frames at 30 fps) that spans the pose space.
+    pub fn training_clip(&self) -> Clip {
+        clips::training(&self.angles)
+    }
+
+    /// The novel test clips ("wave", "walk", "reach"): motions unlike the training clip,
+    /// inside the limits.
+    pub fn novel_clips(&self) -> Vec<Clip> {
+        clips::novel(&self.angles)
+    }
+
+    /// Names and triangle ranges of the closed parts the mesh is made of, in mesh order.
+    pub fn parts(&self) -> impl Iterator<Item = (&'static str, Range<usize>)> + '_ {
+        self.parts.iter().cloned()
+    }
+}
+
+/// The built-in character as a [`Rig`]. Its errors are [`RigError::Character`].
+impl Rig for Character {
+    fn angle_names(&self) -> Vec<String> {
+        self.angles.iter().map(|a| a.name.to_owned()).collect()
+    }
+
+    fn bind_mesh(&self) -> &Mesh {
+        &self.bind
+    }
+
+    fn skin(&self) -> &Skin {
+        &self.skin
+    }
+
+    /// Skinning matrices (bind space → posed space) for each joint at the joint angles `pose`.
+    fn joint_matrices(&self, pose: &[f64]) -> Result<Vec<Mat4>, RigError> {
+        check_pose(pose, self.angles.len(), |i| self.angles[i].name.to_owned())
+            .map_err(CharacterError::Pose)?;
+        Ok(skeleton::joint_matrices(&self.skeleton, &self.dofs, pose))
+    }
+
+    /// The training clip first, then the novel clips.
+    fn clip_names(&self) -> Vec<String> {
+        std::iter::once(self.training_clip())
+            .chain(self.novel_clips())
+            .map(|c| c.name)
+            .collect()
+    }
+
+    fn clip(&self, name: &str) -> Result<Clip, RigError> {
+        std::iter::once(self.training_clip())
+            .chain(self.novel_clips())
+            .find(|c| c.name == name)
+            .ok_or_else(|| {
+                RigError::from(CharacterError::UnknownClip {
+                    name: name.into(),
+                    available: self.clip_names().join(", "),
+                })
+            })
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,463 @@
+//! A mannequin built automatically from a BVH skeleton and driven by motion capture: the
+//! [`Rig`] that trains on real motion (the paper trained on CMU mocap).
+//!
+//! **Frame and units.** BVH is y-up; the mannequin stands z-up like every other aprt
+//! character, through the fixed change of axes `(x, y, z)_file → (x, −z, y)` (a +90° turn about
+//! x), so a CMU actor, who faces +z in the file's rest pose, faces −y as the built-in character
+//! does. Lengths stay in the file's units (CMU/cgspeed files are about 27 units tall): transfer
+//! is scale invariant, so there is nothing to gain from converting.
+//!
+//! **Pose vector.** For each joint with rotation channels, in file order, its local rotation
+//! relative to the rest pose (all channels zero) as a rotation vector (axis × angle in
+//! radians, the log map), expressed in the file's axes: entries `<joint>.x`, `.y`, `.z`. The
+//! root's rotation is included: transfer in the world frame depends on which way the body
+//! faces, while bone-frame models absorb it. Every rotating joint is listed even if a clip
+//! never moves it (callers drop constant joints with their own report). Position channels:
+//! on a non-root joint they change the skeleton's shape and are always entries
+//! (`<joint>.tx`, `.ty`, `.tz`, file units, added to the offset); on the root they only move
+//! the whole body, and PRT transfer is invariant under translation, so they are entries only
+//! when [`MocapOptions::root_translation`] asks for them (to render the actor walking).
+//! [`Rig::joint_matrices`] rebuilds the skeleton from the pose vector alone.
+//!
+//! **Clips.** A clip's frames are pose vectors sampled from the file's frames, optionally
+//! resampled to another rate (the paper used subsampled mocap: 120 fps capture moves little
+//! between frames, so 30 fps gives as many distinct poses per baked frame at a quarter of the
+//! cost). A rotation vector is only defined up to whole turns about its axis; clips choose,
+//! frame by frame, the representative nearest the previous frame so that entries stay
+//! continuous through half turns (the root turning round), which the linear fit needs.
+//! Motion from another file drives the mannequin by joint name ([`MocapRig::retarget`]).
+
+mod body;
+
+use std::ops::Range;
+use std::path::Path;
+
+use glam::{DAffine3, DQuat, DVec3, Mat4};
+
+use crate::rig::mesh::Mesh;
+use crate::rig::mocap::{Mocap, MocapError};
+use crate::rig::rotation_vector;
+use crate::rig::skin::Skin;
+use crate::rig::{Clip, MAX_FRAMES, PoseError, Rig, RigError, check_pose};
+
+/// How to build a [`MocapRig`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct MocapOptions {
+    /// Keep the root's position channels as pose entries (see the module docs). Off by
+    /// default: transfer does not depend on where the body is.
+    pub root_translation: bool,
+    /// Put the wide-brimmed hat on the head: a large occluder that shadows the shoulders.
+    pub hat: bool,
+    /// Resample clips to this rate (frames per second); `None` keeps the file's rate.
+    pub fps: Option<f64>,
+}
+
+impl Default for MocapOptions {
+    fn default() -> Self {
+        MocapOptions {
+            root_translation: false,
+            hat: true,
+            fps: None,
+        }
+    }
+}
+
+/// Why a mannequin, a pose or a clip could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum MocapRigError {
+    /// The BVH file could not be read or parsed.
+    #[error(transparent)]
+    Mocap(#[from] MocapError),
+    /// The skeleton has no bone of nonzero length to put a surface around.
+    #[error("the skeleton of {clip:?} has no bone of nonzero length")]
+    NoBones {
+        /// The clip (file stem).
+        clip: String,
+    },
+    /// A requested frame range is empty or runs past the end of the motion.
+    #[error("frames {start}..{end} of {clip:?}: the motion has {count} frames (0..{count})")]
+    FrameRange {
+        /// The motion's name.
+        clip: String,
+        /// First frame asked for.
+        start: usize,
+        /// One past the last frame asked for.
+        end: usize,
+        /// Frames available.
+        count: usize,
+    },
+    /// A resampling rate so high that the clip would exceed [`MAX_FRAMES`].
+    #[error("{clip:?} resampled at {fps} fps would have more than {MAX_FRAMES} frames")]
+    TooManyFrames {
+        /// The clip.
+        clip: String,
+        /// The requested frame rate.
+        fps: f64,
+    },
+    /// A resampling rate that is not a positive finite number.
+    #[error("frame rate {fps} is not a positive finite number")]
+    BadFps {
+        /// The rate asked for.
+        fps: f64,
+    },
+    /// A pose that cannot pose the mannequin.
+    #[error(transparent)]
+    Pose(#[from] PoseError),
+    /// Retargeting found no joint name shared by the two skeletons.
+    #[error("no joint of {source_clip:?} has the name of a joint of this mannequin")]
+    NoCommonJoint {
+        /// The motion being retargeted.
+        source_clip: String,
+    },
+    /// No clip has the requested name.
+    #[error("no clip named {name:?}; available: {available}")]
+    UnknownClip {
+        /// The name asked for.
+        name: String,
+        /// The clip that exists.
+        available: String,
+    },
+}
+
+/// One block of three pose entries.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Entry {
+    /// Position channels of joint `.0`, added to its offset.
+    Translation(usize),
+    /// Rotation vector of joint `.0`.
+    Rotation(usize),
+}
+
+/// Motion from another file mapped onto a mannequin by joint name.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Retargeted {
+    /// The clip, in the mannequin's pose layout.
+    pub clip: Clip,
+    /// Joints of the mannequin with pose entries that the source lacks: held at rest.
+    pub missing: Vec<String>,
+    /// Joints of the source that the mannequin lacks: ignored.
+    pub extra: Vec<String>,
+}
+
+/// A skinned mannequin around a BVH skeleton, with the file's motion as its clip. As a [`Rig`]
+/// its errors are [`RigError::Mocap`].
+#[derive(Clone, Debug)]
+pub struct MocapRig {
+    clip_name: String,
+    mocap: Mocap,
+    options: MocapOptions,
+    entries: Vec<Entry>,
+    rest: Vec<DVec3>,
+    height: f64,
+    bind: Mesh,
+    skin: Skin,
+    parts: Vec<(String, Range<usize>)>,
+}
+
+/// The file-to-mesh change of axes: y-up to z-up (see the module docs).
+fn to_mesh_frame() -> DQuat {
+    DQuat::from_rotation_x(std::f64::consts::FRAC_PI_2)
+}
+
+impl MocapRig {
+    /// Reads a BVH file and builds its mannequin; the clip is named after the file stem.
+    pub fn from_file(path: &Path, options: &MocapOptions) -> Result<MocapRig, MocapRigError> {
+        let mocap = Mocap::read(path)?;
+        let name = path
+            .file_stem()
+            .map_or_else(|| "motion".into(), |s| s.to_string_lossy().into_owned());
+        MocapRig::from_mocap(mocap, &name, options)
+    }
+
+    /// Builds the mannequin of a parsed file; `clip_name` names its motion.
+    pub fn from_mocap(
+        mocap: Mocap,
+        clip_name: &str,
+        options: &MocapOptions,
+    ) -> Result<MocapRig, MocapRigError> {
+        if let Some(fps) = options.fps {
+            check_fps(fps)?;
+        }
+        let rest = mocap.rest_positions();
+        let body = body::build(&mocap, &rest, to_mesh_frame(), options.hat).ok_or_else(|| {
+            MocapRigError::NoBones {
+                clip: clip_name.into(),
+            }
+        })?;
+        let bind = Mesh::with_area_weighted_normals(body.body.positions, body.body.triangles);
+        let skin = Skin::from_influences(&body.body.influences).unwrap_or_else(|e| {
+            unreachable!("lathe weights are positive partitions of unity: {e}")
+        });
+        let mut entries = Vec::new();
+        for (j, joint) in mocap.joints().iter().enumerate() {
+            if joint.translates() && (joint.parent.is_some() || options.root_translation) {
+                entries.push(Entry::Translation(j));
+            }
+            if joint.rotates() {
+                entries.push(Entry::Rotation(j));
+            }
+        }
+        Ok(MocapRig {
+            clip_name: clip_name.into(),
+            mocap,
+            options: options.clone(),
+            entries,
+            rest,
+            height: body.height,
+            bind,
+            skin,
+            parts: body.names.into_iter().zip(body.body.parts).collect(),
+        })
+    }
+
+    /// The parsed file.
+    pub fn mocap(&self) -> &Mocap {
+        &self.mocap
+    }
+
+    /// The skeleton's rest height in the file's units (lowest to highest joint or End Site
+    /// along the up axis): the measure the mannequin's proportions are fractions of.
+    pub fn height(&self) -> f64 {
+        self.height
+    }
+
+    /// Number of pose entries.
+    pub fn pose_len(&self) -> usize {
+        3 * self.entries.len()
+    }
+
+    /// Names and triangle ranges of the closed parts the mesh is made of, in mesh order.
+    pub fn parts(&self) -> impl Iterator<Item = (&str, Range<usize>)> + '_ {
+        self.parts.iter().map(|(n, r)| (n.as_str(), r.clone()))
+    }
+
+    /// The pose vector of the file's frame `f` (root translation per the options). Rotation
+    /// vectors have angles in `[0, π]`; clips unwrap them (see the module docs).
+    ///
+    /// # Panics
+    /// If `f >= self.mocap().frame_count()`.
+    pub fn frame_pose(&self, f: usize) -> Vec<f64> {
+        let identity: Vec<Option<usize>> = (0..self.mocap.joints().len()).map(Some).collect();
+        self.pose_of(&self.mocap, &identity, f as f64)
+    }
+
+    /// Frames `frames` of the file (indices at the file's rate), resampled to
+    /// [`MocapOptions::fps`] if set. Errors if the range is empty or runs past the end, saying
+    /// how many frames there are.
+    pub fn clip_range(&self, frames: Range<usize>) -> Result<Clip, MocapRigError> {
+        let identity: Vec<Option<usize>> = (0..self.mocap.joints().len()).map(Some).collect();
+        self.sample(&self.mocap, &self.clip_name, &identity, frames)
+    }
+
+    /// Drives the mannequin with `source`'s motion (frames `frames` of it, resampled like
+    /// [`MocapRig::clip_range`]) by copying the local rotations, and position channels where
+    /// the mannequin has them as entries, of same-named joints. Joints of the mannequin the
+    /// source lacks stay at rest; both lists are reported. Rotations are copied as they are,
+    /// which is right when both skeletons share a rest pose convention (as CMU's do); root
+    /// translation is copied in the source's units.
+    pub fn retarget(
+        &self,
+        source: &Mocap,
+        name: &str,
+        frames: Range<usize>,
+    ) -> Result<Retargeted, MocapRigError> {
+        let map: Vec<Option<usize>> = self
+            .mocap
+            .joints()
+            .iter()
+            .map(|j| source.joint_index(&j.name))
+            .collect();
+        if map.iter().all(Option::is_none) {
+            return Err(MocapRigError::NoCommonJoint {
+                source_clip: name.into(),
+            });
+        }
+        let joint = |e: &Entry| match *e {
+            Entry::Translation(j) | Entry::Rotation(j) => j,
+        };
+        let mut missing: Vec<String> = Vec::new();
+        for j in self.entries.iter().map(joint) {
+            let name = &self.mocap.joints()[j].name;
+            if map[j].is_none() && missing.last() != Some(name) {
+                missing.push(name.clone());
+            }
+        }
+        let extra = source
+            .joints()
+            .iter()
+            .filter(|j| self.mocap.joint_index(&j.name).is_none())
+            .map(|j| j.name.clone())
+            .collect();
+        Ok(Retargeted {
+            clip: self.sample(source, name, &map, frames)?,
+            missing,
+            extra,
+        })
+    }
+
+    /// Samples `source` over `frames` at the target rate through the joint `map` (mannequin
+    /// joint → source joint).
+    fn sample(
+        &self,
+        source: &Mocap,
+        name: &str,
+        map: &[Option<usize>],
+        frames: Range<usize>,
+    ) -> Result<Clip, MocapRigError> {
+        let count = source.frame_count();
+        if frames.start >= frames.end || frames.end > count {
+            return Err(MocapRigError::FrameRange {
+                clip: name.into(),
+                start: frames.start,
+                end: frames.end,
+                count,
+            });
+        }
+        let fps = self.options.fps.unwrap_or(source.fps());
+        // Output frame k sits at source frame start + k·step; the last is at or before
+        // frames.end − 1. A tiny tolerance keeps exact ratios (120 → 30) from losing the
+        // last frame to rounding.
+        let step = frame_step(source.fps() / fps);
+        let last = (frames.end - 1 - frames.start) as f64;
+        let n = (last / step + 1e-9).floor() + 1.0;
+        if n > MAX_FRAMES as f64 {
+            return Err(MocapRigError::TooManyFrames {
+                clip: name.into(),
+                fps,
+            });
+        }
+        let n = n as usize;
+        let mut out: Vec<Vec<f64>> = (0..n)
+            .map(|k| {
+                self.pose_of(
+                    source,
+                    map,
+                    frames.start as f64 + (k as f64 * step).min(last),
+                )
+            })
+            .collect();
+        let rotations = (self.entries.iter().enumerate())
+            .filter_map(|(i, e)| matches!(e, Entry::Rotation(_)).then_some(i));
+        crate::rig::rotation_vector::continue_turns(&mut out, rotations);
+        Ok(Clip {
+            name: name.into(),
+            fps,
+            frames: out,
+        })
+    }
+
+    /// The pose at fractional source frame `at`: rotations slerped and translations
+    /// interpolated linearly between the two frames around it.
+    fn pose_of(&self, source: &Mocap, map: &[Option<usize>], at: f64) -> Vec<f64> {
+        let a = at.floor() as usize;
+        let t = at - a as f64;
+        let b = (a + 1).min(source.frame_count() - 1);
+        let local = |k: usize| {
+            let joint = &source.joints()[k];
+            let (qa, pa) = joint.local(source.frame(a));
+            if t == 0.0 {
+                return (qa, pa - joint.offset);
+            }
+            let (qb, pb) = joint.local(source.frame(b));
+            (qa.slerp(qb, t), pa.lerp(pb, t) - joint.offset)
+        };
+        let mut pose = Vec::with_capacity(self.pose_len());
+        for e in &self.entries {
+            let v = match *e {
+                Entry::Translation(j) => map[j].map_or(DVec3::ZERO, |k| local(k).1),
+                Entry::Rotation(j) => {
+                    map[j].map_or(DVec3::ZERO, |k| rotation_vector::log(local(k).0))
+                }
+            };
+            pose.extend(v.to_array());
+        }
+        pose
+    }
+}
+
+/// Source frames per output frame. `Frame Time` is printed to a few digits (CMU: `.0083333`
+/// for 1/120 s), so a ratio within 0.01 % of a whole number is that number: 120 → 30 fps then
+/// takes every fourth frame exactly instead of blending neighbours by a 0.002 % weight.
+fn frame_step(ratio: f64) -> f64 {
+    let whole = ratio.round();
+    if whole >= 1.0 && (ratio - whole).abs() <= 1e-4 * ratio {
+        whole
+    } else {
+        ratio
+    }
+}
+
+fn check_fps(fps: f64) -> Result<(), MocapRigError> {
+    if fps.is_finite() && fps > 0.0 {
+        Ok(())
+    } else {
+        Err(MocapRigError::BadFps { fps })
+    }
+}
+
+impl Rig for MocapRig {
+    fn angle_names(&self) -> Vec<String> {
+        let mut names = Vec::with_capacity(self.pose_len());
+        for e in &self.entries {
+            let (j, axes) = match *e {
+                Entry::Translation(j) => (j, ["tx", "ty", "tz"]),
+                Entry::Rotation(j) => (j, ["x", "y", "z"]),
+            };
+            let joint = &self.mocap.joints()[j].name;
+            names.extend(axes.map(|a| format!("{joint}.{a}")));
+        }
+        names
+    }
+
+    fn bind_mesh(&self) -> &Mesh {
+        &self.bind
+    }
+
+    fn skin(&self) -> &Skin {
+        &self.skin
+    }
+
+    /// Rebuilds the skeleton from the pose vector alone (see the module docs).
+    fn joint_matrices(&self, pose: &[f64]) -> Result<Vec<Mat4>, RigError> {
+        check_pose(pose, self.pose_len(), |i| self.angle_names().swap_remove(i))
+            .map_err(MocapRigError::Pose)?;
+        let joints = self.mocap.joints();
+        let mut rotation = vec![DQuat::IDENTITY; joints.len()];
+        let mut translation: Vec<DVec3> = joints.iter().map(|j| j.offset).collect();
+        for (e, v) in self.entries.iter().zip(pose.chunks_exact(3)) {
+            let v = DVec3::from_slice(v);
+            match *e {
+                Entry::Translation(j) => translation[j] += v,
+                Entry::Rotation(j) => rotation[j] = crate::rig::rotation_vector::exp(v),
+            }
+        }
+        let axes = DAffine3::from_quat(to_mesh_frame());
+        let world = self.mocap.chain(|j| (rotation[j], translation[j]));
+        Ok(world
+            .iter()
+            .zip(&self.rest)
+            .map(|(w, &rest)| {
+                let m = axes * *w * DAffine3::from_translation(-rest) * axes.inverse();
+                glam::DMat4::from(m).as_mat4()
+            })
+            .collect())
+    }
+
+    fn clip_names(&self) -> Vec<String> {
+        vec![self.clip_name.clone()]
+    }
+
+    fn clip(&self, name: &str) -> Result<Clip, RigError> {
+        if name != self.clip_name {
+            return Err(MocapRigError::UnknownClip {
+                name: name.into(),
+                available: self.clip_name.clone(),
+            }
+            .into());
+        }
+        Ok(self.clip_range(0..self.mocap.frame_count())?)
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,146 @@
+//! Characters: what every training source provides is a skinned character driven by a pose
+//! vector, and named clips of pose vectors. The built-in character, glTF skins and mannequins
+//! driven by motion capture all implement [`Rig`], so baking, fitting, bone frames and reports
+//! are written once.
+//!
+//! - the pieces every rig is made of: [`mesh`] (the triangle mesh), [`skin`](mod@skin)
+//!   (linear blend skinning), [`rotation_vector`] (the log and exp maps behind glTF and
+//!   mannequin pose vectors), and the lathe surfaces of the built-in character and the
+//!   mannequin;
+//! - the rigs: [`character`] (built in), [`gltf`] (glTF 2.0 skins and animations), [`mocap`]
+//!   (BVH motion-capture files) and [`mannequin`] (the rig a motion-capture skeleton drives);
+//! - what a model needs of a rig: [`pose_layout`] (which pose entries it takes),
+//!   [`bone_frames`] (transfer in each vertex's bone frame) and [`transfer_rotation`]
+//!   (rotating each vertex's SH transfer).
+
+pub mod bone_frames;
+pub mod character;
+pub mod gltf;
+pub(crate) mod lathe;
+pub mod mannequin;
+pub mod mesh;
+pub mod mocap;
+pub mod pose_layout;
+pub mod rotation_vector;
+pub mod skin;
+pub mod transfer_rotation;
+
+use glam::Mat4;
+
+use character::CharacterError;
+use gltf::GltfError;
+use mannequin::MocapRigError;
+use mesh::Mesh;
+use skin::{Skin, SkinError, skin};
+
+/// Most frames one sampled clip may have (an hour at 240 fps): a guard against a malformed
+/// end time or frame rate turning into an unbounded allocation.
+pub const MAX_FRAMES: usize = 240 * 3600;
+
+/// Why a pose vector cannot pose a rig.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum PoseError {
+    /// Not one value per pose-vector entry.
+    #[error("a pose needs {expected} values, got {got}")]
+    Length {
+        /// Entries the rig has.
+        expected: usize,
+        /// Values given.
+        got: usize,
+    },
+    /// An entry that is NaN or infinite.
+    #[error("pose value {index} ({name}) is {value}, not a finite number")]
+    NonFinite {
+        /// Index of the entry.
+        index: usize,
+        /// Its name.
+        name: String,
+        /// The value given.
+        value: f64,
+    },
+}
+
+/// Checks a pose vector against a rig of `expected` entries; `name(i)` names entry `i`.
+pub fn check_pose(
+    pose: &[f64],
+    expected: usize,
+    name: impl FnOnce(usize) -> String,
+) -> Result<(), PoseError> {
+    if pose.len() != expected {
+        return Err(PoseError::Length {
+            expected,
+            got: pose.len(),
+        });
+    }
+    match pose.iter().position(|v| !v.is_finite()) {
+        Some(index) => Err(PoseError::NonFinite {
+            index,
+            name: name(index),
+            value: pose[index],
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Why a rig could not be posed or could not give a clip: the typed error of the rig that was
+/// asked, unchanged (its message and its source chain are the rig's own), so code that holds a
+/// `dyn Rig` still reports which file, entry or clip was wrong.
+#[derive(Debug, thiserror::Error)]
+pub enum RigError {
+    /// From the built-in character.
+    #[error(transparent)]
+    Character(#[from] CharacterError),
+    /// From a glTF character.
+    #[error(transparent)]
+    Gltf(#[from] GltfError),
+    /// From a motion-capture mannequin.
+    #[error(transparent)]
+    Mocap(#[from] MocapRigError),
+    /// Linear blend skinning of the posed joints failed.
+    #[error(transparent)]
+    Skin(#[from] SkinError),
+}
+
+/// A sequence of poses sampled at a fixed rate. Each frame has one value per pose-vector
+/// entry, in the rig's [`Rig::angle_names`] order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Clip {
+    /// Name used to select the clip ([`Rig::clip`]).
+    pub name: String,
+    /// Frames per second.
+    pub fps: f64,
+    /// The poses.
+    pub frames: Vec<Vec<f64>>,
+}
+
+/// A skinned character posed by a vector of joint parameters.
+pub trait Rig: Sync {
+    /// Names of the pose vector's entries, in order (for example `l_elbow_flex` or
+    /// `LeftArm.y`); a model blob records the ones it was trained on.
+    fn angle_names(&self) -> Vec<String>;
+
+    /// The mesh in the bind pose, with its normals.
+    fn bind_mesh(&self) -> &Mesh;
+
+    /// Per-vertex joint influences over the joints [`Rig::joint_matrices`] returns.
+    fn skin(&self) -> &Skin;
+
+    /// Skinning matrices (bind space → posed space), one per joint, for a pose vector.
+    /// Errors name the entry that is wrong (count, NaN).
+    fn joint_matrices(&self, pose: &[f64]) -> Result<Vec<Mat4>, RigError>;
+
+    /// The mesh posed by linear blend skinning.
+    fn pose(&self, pose: &[f64]) -> Result<Mesh, RigError> {
+        Ok(skin(
+            self.bind_mesh(),
+            self.skin(),
+            &self.joint_matrices(pose)?,
+        )?)
+    }
+
+    /// Names of every clip [`Rig::clip`] accepts.
+    fn clip_names(&self) -> Vec<String>;
+
+    /// The clip called `name`; the error lists the names that exist.
+    fn clip(&self, name: &str) -> Result<Clip, RigError>;
+}
