@@ -44,68 +44,42 @@ impl BlobSource for Streamed<'_> {
     }
 }
 
-/// The per-frame calls of a resident and a streamed model, so one test drives both.
-pub trait Eval {
-    /// `info()`.
-    fn info(&self) -> &ModelInfo;
-    /// `set_pose`.
-    fn set_pose(&mut self, angles: &[f32], pose: &mut PoseWeights) -> Result<(), Error>;
-    /// `light`.
-    fn light(
-        &mut self,
-        pose: &PoseWeights,
-        lighting: &[f32],
-        bones: &[Rotation],
-        lit: &mut LitWeights,
-    ) -> Result<(), Error>;
-    /// `shade`.
-    fn shade(&mut self, lit: &LitWeights, first: usize, out: &mut [f32]) -> Result<(), Error>;
-    /// `transfer`.
-    fn transfer(&mut self, pose: &PoseWeights, first: usize, out: &mut [f32]) -> Result<(), Error>;
-    /// `vertex_bones`.
-    fn vertex_bones(&mut self, first: usize, out: &mut [u16]) -> Result<(), Error>;
-}
-
-macro_rules! forward_eval {
-    () => {
-        fn info(&self) -> &ModelInfo {
-            Self::info(self)
+/// Declares [`Eval`] with the calls listed, and implements it for both models by calling
+/// their inherent methods of the same names.
+macro_rules! eval_trait {
+    ($($(#[$doc:meta])* fn $name:ident($($arg:ident: $ty:ty),*);)*) => {
+        /// The per-frame calls of a resident and a streamed model, so one test drives both.
+        pub trait Eval {
+            /// `info()`.
+            fn info(&self) -> &ModelInfo;
+            $($(#[$doc])* fn $name(&mut self, $($arg: $ty),*) -> Result<(), Error>;)*
         }
-        fn set_pose(&mut self, angles: &[f32], pose: &mut PoseWeights) -> Result<(), Error> {
-            Self::set_pose(self, angles, pose)
-        }
-        fn light(
-            &mut self,
-            pose: &PoseWeights,
-            lighting: &[f32],
-            bones: &[Rotation],
-            lit: &mut LitWeights,
-        ) -> Result<(), Error> {
-            Self::light(self, pose, lighting, bones, lit)
-        }
-        fn shade(&mut self, lit: &LitWeights, first: usize, out: &mut [f32]) -> Result<(), Error> {
-            Self::shade(self, lit, first, out)
-        }
-        fn transfer(
-            &mut self,
-            pose: &PoseWeights,
-            first: usize,
-            out: &mut [f32],
-        ) -> Result<(), Error> {
-            Self::transfer(self, pose, first, out)
-        }
-        fn vertex_bones(&mut self, first: usize, out: &mut [u16]) -> Result<(), Error> {
-            Self::vertex_bones(self, first, out)
+        eval_trait!(@impl [] Model<'_>; $($name($($arg: $ty),*);)*);
+        eval_trait!(@impl [S: BlobSource] StreamedModel<'_, S>; $($name($($arg: $ty),*);)*);
+    };
+    (@impl [$($generics:tt)*] $model:ty; $($name:ident($($arg:ident: $ty:ty),*);)*) => {
+        impl<$($generics)*> Eval for $model {
+            fn info(&self) -> &ModelInfo {
+                Self::info(self)
+            }
+            $(fn $name(&mut self, $($arg: $ty),*) -> Result<(), Error> {
+                Self::$name(self, $($arg),*)
+            })*
         }
     };
 }
 
-impl Eval for Model<'_> {
-    forward_eval!();
-}
-
-impl<S: BlobSource> Eval for StreamedModel<'_, S> {
-    forward_eval!();
+eval_trait! {
+    /// `set_pose`.
+    fn set_pose(angles: &[f32], pose: &mut PoseWeights);
+    /// `light`.
+    fn light(pose: &PoseWeights, lighting: &[f32], bones: &[Rotation], lit: &mut LitWeights);
+    /// `shade`.
+    fn shade(lit: &LitWeights, first: usize, out: &mut [f32]);
+    /// `transfer`.
+    fn transfer(pose: &PoseWeights, first: usize, out: &mut [f32]);
+    /// `vertex_bones`.
+    fn vertex_bones(first: usize, out: &mut [u16]);
 }
 
 /// Deterministic pseudo-random values in [-1, 1) (xorshift64).

@@ -131,22 +131,6 @@ mod tests {
     use super::*;
     use aprt_core::project_directional;
 
-    fn axis_angle(axis: [f32; 3], angle: f32) -> [[f32; 3]; 3] {
-        let n = f32::sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
-        let [x, y, z] = [axis[0] / n, axis[1] / n, axis[2] / n];
-        let (s, c) = (f32::sin(angle), f32::cos(angle));
-        let t = 1.0 - c;
-        [
-            [t * x * x + c, t * x * y - s * z, t * x * z + s * y],
-            [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
-            [t * x * z - s * y, t * y * z + s * x, t * z * z + c],
-        ]
-    }
-
-    fn apply(r: &[[f32; 3]; 3], d: [f32; 3]) -> [f32; 3] {
-        core::array::from_fn(|i| r[i][0] * d[0] + r[i][1] * d[1] + r[i][2] * d[2])
-    }
-
     #[test]
     fn gauss_legendre_integrates_polynomials_exactly() {
         for n in 1..=MAX_ORDER {
@@ -171,13 +155,16 @@ mod tests {
     /// `rotate(y(d)) = y(R d)`: an identity independent of the quadrature.
     #[test]
     fn rotation_moves_a_projected_direction() {
-        let r = axis_angle([0.3, -0.5, 0.8], 1.1);
+        // A generic rotation (rows orthonormal, determinant 1).
+        let r = [[0.36, 0.48, -0.8], [-0.8, 0.6, 0.0], [0.48, 0.64, 0.6]];
+        let times =
+            |d: [f32; 3]| std::array::from_fn(|i| r[i][0] * d[0] + r[i][1] * d[1] + r[i][2] * d[2]);
         for order in 1..=MAX_ORDER {
             let rot = QuadratureRotation::new(order).unwrap();
             for d in [[0.0, 0.0, 1.0], [0.2, 0.9, -0.3], [-1.0, 0.0, 0.0]] {
                 let (mut src, mut expect, mut got) = ([0.0f32; 36], [0.0f32; 36], [0.0f32; 36]);
                 project_directional(order, d, 1.0, &mut src).unwrap();
-                project_directional(order, apply(&r, d), 1.0, &mut expect).unwrap();
+                project_directional(order, times(d), 1.0, &mut expect).unwrap();
                 rot.rotate(&r, &src, &mut got).unwrap();
                 for c in 0..order * order {
                     assert!(

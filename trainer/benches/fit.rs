@@ -34,8 +34,13 @@ fn main() {
         albedo: 0.0,
     };
     let world = bake_poses(&meshes, &settings, &Terminal).expect("the character bakes");
-    let transfers = aprt_trainer::bone_frames::to_bone_frames(&character, &clip.frames, &world)
-        .expect("clip poses are valid");
+    let transfers = aprt_trainer::bone_frames::change_rig_frames(
+        &character,
+        &clip.frames,
+        &world,
+        aprt_trainer::bone_frames::FrameChange::WorldToBone,
+    )
+    .expect("clip poses are valid");
     let angles = DMatrix::from_fn(clip.frames.len(), character.pose_len(), |i, j| {
         clip.frames[i][j]
     });

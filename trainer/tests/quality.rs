@@ -2,7 +2,7 @@
 //! 32 rays, every 10th training frame) so it runs in seconds: it must beat the mean-transfer
 //! and nearest-training-pose baselines by a wide margin, through the blob and aprt-core.
 
-use aprt_trainer::bone_frames::{dominant_bones, to_bone_frames, to_world_frames};
+use aprt_trainer::bone_frames::{FrameChange, change_rig_frames, dominant_bones};
 use aprt_trainer::evaluate::{mean_transfer, nearest_pose, relative_error};
 use aprt_trainer::runtime::predict_transfer;
 use aprt_trainer::{
@@ -39,12 +39,18 @@ fn default_model_beats_mean_and_nearest_baselines_on_novel_poses() {
     let (train_truth, test_truth) = (bake(&train), bake(&test));
 
     let angles = DMatrix::from_fn(train.len(), train[0].len(), |i, j| train[i][j]);
-    let local = to_bone_frames(&character, &train, &train_truth).unwrap();
+    let local =
+        change_rig_frames(&character, &train, &train_truth, FrameChange::WorldToBone).unwrap();
     let mut fitted = fit(&angles, &local, settings.order, &FitOptions::default()).unwrap();
     fitted.model.bones = Some(dominant_bones(&character));
     let blob = encode_model(&fitted.model, Precision::F32).unwrap();
-    let predicted =
-        to_world_frames(&character, &test, &predict_transfer(&blob, &test).unwrap()).unwrap();
+    let predicted = change_rig_frames(
+        &character,
+        &test,
+        &predict_transfer(&blob, &test).unwrap(),
+        FrameChange::BoneToWorld,
+    )
+    .unwrap();
     let model_error = relative_error(&predicted, &test_truth);
 
     let mean = mean_transfer(&train_truth);

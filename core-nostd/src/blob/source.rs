@@ -49,23 +49,48 @@ impl BlobSource for &[u8] {
     }
 }
 
-/// How the reader and the evaluator get at blob bytes.
+/// How the reader and the evaluator get at blob bytes: in place, or through a buffer. Each
+/// kind says how much one fetch can return; the chunking is written once, in `chunks`.
 pub(crate) trait Reader {
     /// Total length in bytes.
     fn len(&self) -> u64;
 
-    /// Fills `buf` with the bytes at `offset`.
+    /// Fills `buf` with the bytes at `offset`, which lie in the blob (whatever the buffer).
     fn read_at(&mut self, offset: u64, buf: &mut [u8]) -> Result<(), Error>;
 
+    /// Most bytes one [`Reader::fetch`] returns.
+    fn capacity(&self) -> usize;
+
+    /// The `len` bytes at `offset`, which lie in the blob; `len` is at most the capacity.
+    fn fetch(&mut self, offset: u64, len: usize) -> Result<&[u8], Error>;
+
     /// Delivers `count` items of `item_bytes` each, starting at byte `offset`, to `visit` in
-    /// chunks of whole items, as `(index of the chunk's first item, bytes)`.
+    /// chunks of whole items, as `(index of the chunk's first item, bytes)`: one chunk in
+    /// place for a resident blob, as many as the buffer holds at a time otherwise.
     fn chunks(
         &mut self,
         offset: u64,
         item_bytes: usize,
         count: usize,
-        visit: impl FnMut(usize, &[u8]) -> Result<(), Error>,
-    ) -> Result<(), Error>;
+        mut visit: impl FnMut(usize, &[u8]) -> Result<(), Error>,
+    ) -> Result<(), Error> {
+        span_end(offset, item_bytes, count, self.len())?;
+        if count == 0 {
+            return Ok(());
+        }
+        let per_chunk = self.capacity().checked_div(item_bytes).unwrap_or(count);
+        if per_chunk == 0 {
+            return Err(Error::BufferTooSmall { needed: item_bytes });
+        }
+        let mut first = 0;
+        while first < count {
+            let n = per_chunk.min(count - first);
+            let at = offset + (first * item_bytes) as u64;
+            visit(first, self.fetch(at, n * item_bytes)?)?;
+            first += n;
+        }
+        Ok(())
+    }
 }
 
 /// The end of `count` items of `item_bytes` from `offset`, checked against a blob of `len`.
@@ -80,19 +105,9 @@ fn span_end(offset: u64, item_bytes: usize, count: usize, len: u64) -> Result<u6
     Ok(end)
 }
 
-/// A resident blob: one chunk, in place.
+/// A resident blob, read in place.
 #[derive(Clone, Copy)]
 pub(crate) struct Resident<'a>(pub(crate) &'a [u8]);
-
-impl Resident<'_> {
-    fn range(&self, offset: u64, end: u64) -> Result<&[u8], Error> {
-        usize::try_from(offset)
-            .ok()
-            .zip(usize::try_from(end).ok())
-            .and_then(|(a, b)| self.0.get(a..b))
-            .ok_or(Error::Truncated { needed: end })
-    }
-}
 
 impl Reader for Resident<'_> {
     fn len(&self) -> u64 {
@@ -100,27 +115,24 @@ impl Reader for Resident<'_> {
     }
 
     fn read_at(&mut self, offset: u64, buf: &mut [u8]) -> Result<(), Error> {
-        let end = span_end(offset, 1, buf.len(), self.len())?;
-        buf.copy_from_slice(self.range(offset, end)?);
+        buf.copy_from_slice(self.fetch(offset, buf.len())?);
         Ok(())
     }
 
-    fn chunks(
-        &mut self,
-        offset: u64,
-        item_bytes: usize,
-        count: usize,
-        mut visit: impl FnMut(usize, &[u8]) -> Result<(), Error>,
-    ) -> Result<(), Error> {
-        let end = span_end(offset, item_bytes, count, self.len())?;
-        if count == 0 {
-            return Ok(());
-        }
-        visit(0, self.range(offset, end)?)
+    fn capacity(&self) -> usize {
+        usize::MAX
+    }
+
+    fn fetch(&mut self, offset: u64, len: usize) -> Result<&[u8], Error> {
+        let end = span_end(offset, 1, len, self.len())?;
+        usize::try_from(offset)
+            .ok()
+            .and_then(|a| self.0.get(a..a + len))
+            .ok_or(Error::Truncated { needed: end })
     }
 }
 
-/// A [`BlobSource`] read through a caller's buffer, as many whole items at a time as fit.
+/// A [`BlobSource`] read through a caller's buffer.
 pub(crate) struct Streaming<'r, S: ?Sized> {
     pub(crate) src: &'r mut S,
     pub(crate) scratch: &'r mut [u8],
@@ -136,30 +148,16 @@ impl<S: BlobSource + ?Sized> Reader for Streaming<'_, S> {
         self.src.read_at(offset, buf).map_err(|_| Error::Source)
     }
 
-    fn chunks(
-        &mut self,
-        offset: u64,
-        item_bytes: usize,
-        count: usize,
-        mut visit: impl FnMut(usize, &[u8]) -> Result<(), Error>,
-    ) -> Result<(), Error> {
-        span_end(offset, item_bytes, count, self.len())?;
-        if count == 0 {
-            return Ok(());
-        }
-        let per_chunk = self.scratch.len().checked_div(item_bytes).unwrap_or(0);
-        if per_chunk == 0 {
-            return Err(Error::BufferTooSmall { needed: item_bytes });
-        }
-        let mut first = 0;
-        while first < count {
-            let n = per_chunk.min(count - first);
-            let buf = &mut self.scratch[..n * item_bytes];
-            let at = offset + (first * item_bytes) as u64;
-            self.src.read_at(at, buf).map_err(|_| Error::Source)?;
-            visit(first, buf)?;
-            first += n;
-        }
-        Ok(())
+    fn capacity(&self) -> usize {
+        self.scratch.len()
+    }
+
+    fn fetch(&mut self, offset: u64, len: usize) -> Result<&[u8], Error> {
+        let buf = self
+            .scratch
+            .get_mut(..len)
+            .ok_or(Error::BufferTooSmall { needed: len })?;
+        self.src.read_at(offset, buf).map_err(|_| Error::Source)?;
+        Ok(buf)
     }
 }

@@ -50,27 +50,9 @@ pub enum FrameChange {
     BoneToWorld,
 }
 
-/// World-frame transfer of each pose re-expressed in each vertex's bone frame: the targets a
-/// bone-frame model is fitted to.
-pub fn to_bone_frames(
-    rig: &dyn Rig,
-    poses: &[Vec<f64>],
-    world: &[Vec<f32>],
-) -> Result<Vec<Vec<f32>>> {
-    change_rig_frames(rig, poses, world, FrameChange::WorldToBone)
-}
-
-/// Bone-frame transfer of each pose (as a bone-frame model predicts it) back in world space.
-pub fn to_world_frames(
-    rig: &dyn Rig,
-    poses: &[Vec<f64>],
-    local: &[Vec<f32>],
-) -> Result<Vec<Vec<f32>>> {
-    change_rig_frames(rig, poses, local, FrameChange::BoneToWorld)
-}
-
-/// [`change_frames`] with the bone rotations of `rig` in each of `poses`, and its bones.
-fn change_rig_frames(
+/// Transfer of each of `poses` of `rig` moved between world space and each vertex's bone
+/// frame: [`change_frames`] with the rig's bone rotations in each pose, and its bones.
+pub fn change_rig_frames(
     rig: &dyn Rig,
     poses: &[Vec<f64>],
     transfer: &[Vec<f32>],
