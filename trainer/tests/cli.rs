@@ -118,6 +118,12 @@ fn train_inspect_eval_and_stream_agree() {
     // The core from a slice and streamed through a buffer of one block: the same bits.
     let blob = std::fs::read(&model_path).unwrap();
     let model = Model::parse(&blob).unwrap();
+    // What inspect says an engine must provide is what the core asks for.
+    let core = model.info();
+    assert_eq!(info["scratch_bytes"], core.scratch_bytes());
+    assert_eq!(info["pose_weights"], core.pose_weights_len());
+    assert_eq!(info["lit_weights"], core.lit_weights_len());
+    assert_eq!(info["bones"], 0, "an OBJ sequence trains a world-frame model");
     let mut scratch = vec![0u8; model.info().scratch_bytes()];
     // A slice as a BlobSource copies on every read, as flash or a file would.
     let mut streamed = StreamedModel::open(&blob[..], &mut scratch).unwrap();
