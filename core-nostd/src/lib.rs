@@ -36,7 +36,7 @@
 //! # Ok::<(), Box<dyn core::error::Error>>(())
 //! ```
 //!
-//! The `format` feature adds [`format`]: the byte layout, for blob writers and tools.
+//! The `format` feature adds `aprt_core::format`: the byte layout, for blob writers and tools.
 #![no_std]
 #![forbid(unsafe_code)]
 

@@ -123,7 +123,10 @@ fn train_inspect_eval_and_stream_agree() {
     assert_eq!(info["scratch_bytes"], core.scratch_bytes());
     assert_eq!(info["pose_weights"], core.pose_weights_len());
     assert_eq!(info["lit_weights"], core.lit_weights_len());
-    assert_eq!(info["bones"], 0, "an OBJ sequence trains a world-frame model");
+    assert_eq!(
+        info["bones"], 0,
+        "an OBJ sequence trains a world-frame model"
+    );
     let mut scratch = vec![0u8; model.info().scratch_bytes()];
     // A slice as a BlobSource copies on every read, as flash or a file would.
     let mut streamed = StreamedModel::open(&blob[..], &mut scratch).unwrap();
