@@ -195,6 +195,11 @@ const CASES: &[Case] = &[
         ],
         &["overflow.csv: row 3, column 2", "'1e400' is not finite"],
     ),
+    // Regression: nalgebra's SVD panicked on the overflowing squares of 1e308.
+    case(
+        &["--obj-seq", "{fx}/ok/seq", "--angles", "{fx}/csv/huge.csv"],
+        &["huge.csv: row 2, column 1", "'1e308' is beyond ±3.4e38"],
+    ),
     case(
         &[
             "--obj-seq",

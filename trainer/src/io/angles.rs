@@ -99,6 +99,12 @@ pub fn parse_angles(
                 reason,
             };
             match value {
+                // Larger angles overflow the fit's squares and the runtime's f32 pose vector.
+                Ok(x) if x.abs() > f64::from(f32::MAX) && x.is_finite() => {
+                    return Err(bad(format!(
+                        "'{cell}' is beyond ±3.4e38, the largest angle the runtime's f32 pose vector holds"
+                    )));
+                }
                 Ok(x) if x.is_finite() => row.push(x),
                 Ok(_) => return Err(bad(format!("'{cell}' is not finite"))),
                 Err(_) => return Err(bad(format!("'{cell}' is not a number"))),
@@ -158,6 +164,13 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert_eq!(err, "a.csv: row 2, column 2: 'NaN' is not finite");
+        let err = parse_angles(Path::new("a.csv"), "0,1\n-1e308,1\n", None)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("a.csv: row 2, column 1: '-1e308' is beyond ±3.4e38"),
+            "{err}"
+        );
         let err = parse_angles(Path::new("a.csv"), "0,1\n2\n", None)
             .unwrap_err()
             .to_string();

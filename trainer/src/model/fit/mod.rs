@@ -120,6 +120,18 @@ pub enum FitError {
         /// Joint index.
         joint: usize,
     },
+    /// A joint angle is beyond what the runtime's f32 pose vector can hold.
+    #[error(
+        "pose {pose}: joint angle {joint} is {value:e}, beyond ±3.4e38, the largest angle the runtime's f32 pose vector holds"
+    )]
+    AngleOutOfRange {
+        /// Pose index.
+        pose: usize,
+        /// Joint index.
+        joint: usize,
+        /// The angle.
+        value: f64,
+    },
     /// A transfer value is NaN or infinite.
     #[error("pose {pose}: transfer value {index} is not finite")]
     NonFiniteTransfer {
@@ -351,6 +363,12 @@ fn validate(
         }
         if let Some(joint) = angles.row(pose).iter().position(|x| !x.is_finite()) {
             return Err(FitError::NonFiniteAngle { pose, joint });
+        }
+        // Squares of larger angles overflow in the solvers, and the runtime could not take them.
+        let largest = f64::from(f32::MAX);
+        if let Some(joint) = angles.row(pose).iter().position(|x| x.abs() > largest) {
+            let value = angles[(pose, joint)];
+            return Err(FitError::AngleOutOfRange { pose, joint, value });
         }
     }
     match options.alpha {

@@ -466,3 +466,71 @@ fn huge_offsets_and_tiny_spreads_of_angles_match_the_plain_problem() {
         assert!(tiny < 1e-4, "{alpha:?}: {tiny}");
     }
 }
+
+/// Regression (found by a hostile CSV row of 1e308): squares of such angles overflow, and
+/// nalgebra's SVD panicked with "Singular value was NaN". Angles beyond what the runtime's f32
+/// pose vector holds are refused before any solver sees them; ±f32::MAX itself fits.
+#[test]
+fn angles_beyond_f32_are_refused_before_any_solver() {
+    let angles = uniform(6, 3, 90);
+    let transfers = smooth_transfer(&angles, 4 * 4, 0.2, 91);
+    for value in [1e308, -1e308, f64::from(f32::MAX) * 1.000_001] {
+        let mut huge = angles.clone();
+        huge[(2, 1)] = value;
+        assert_eq!(
+            fit(&huge, &transfers, 2, &FitOptions::default()).unwrap_err(),
+            FitError::AngleOutOfRange {
+                pose: 2,
+                joint: 1,
+                value
+            }
+        );
+    }
+    let mut largest = angles.clone();
+    largest[(2, 1)] = f64::from(f32::MAX);
+    largest[(4, 0)] = -f64::from(f32::MAX);
+    let fitted = fit(&largest, &transfers, 2, &FitOptions::default()).unwrap();
+    assert!(fitted.model.weights.iter().all(|w| w.is_finite()));
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig { cases: 200, ..Default::default() })]
+
+    /// The fit never panics on finite input inside the runtime's range: angles and transfer
+    /// drawn from every magnitude f32 holds (zero, subnormal, tiny, unit, huge, ±f32::MAX),
+    /// with constant and duplicated columns and more angles than poses, under every α rule.
+    /// It returns a model whose every number is finite, or a typed error.
+    #[test]
+    fn the_fit_never_panics_on_finite_input(
+        poses in 1usize..7,
+        joints in 1usize..6,
+        exponents in proptest::collection::vec(-45i32..39, 64),
+        signs in proptest::collection::vec(proptest::bool::ANY, 64),
+        constant_column in proptest::bool::ANY,
+        alpha in 0usize..4,
+    ) {
+        let magnitude = |i: usize| match exponents[i % 64] {
+            -45 => 0.0,
+            38 => f64::from(f32::MAX),
+            e => 10f64.powi(e),
+        } * if signs[i % 64] { -1.0 } else { 1.0 };
+        let angles = DMatrix::from_fn(poses, joints, |i, j| {
+            if constant_column && j == 0 { 1.5 } else { magnitude(i * joints + j) }
+        });
+        let transfers: Vec<Vec<f32>> = (0..poses)
+            .map(|i| (0..8).map(|k| magnitude(31 * i + k + 7) as f32).collect())
+            .collect();
+        let options = FitOptions {
+            alpha: [Alpha::Fixed(0.0), Alpha::Fixed(1e30), Alpha::Loo, Alpha::Loso { segment: None }][alpha],
+            ..FitOptions::default()
+        };
+        if let Ok(fitted) = fit(&angles, &transfers, 2, &options) {
+            let m = &fitted.model;
+            proptest::prop_assert!(
+                m.weights.iter().chain(&m.pose_mean).chain(&m.pose_projection).all(|x| x.is_finite())
+                    && m.alpha.is_finite(),
+                "non-finite model from finite input"
+            );
+        }
+    }
+}
