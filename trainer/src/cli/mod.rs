@@ -23,6 +23,8 @@ use crate::io::atomic::write_atomic;
 use crate::model::ModelFrame;
 use crate::model::predict::{predict_clip, predict_world};
 use crate::model::train::TrainSettings;
+use crate::progress::Reporter;
+use crate::rig::mesh::degenerate_note;
 
 /// Pose-driven precomputed radiance transfer for skinned characters.
 #[derive(Debug, Parser)]
@@ -129,6 +131,9 @@ fn eval(args: &EvalArgs) -> Result<()> {
 
 fn transfer(args: &TransferArgs) -> Result<()> {
     let mesh = crate::io::obj::read_obj(&args.mesh)?;
+    if let Some(note) = degenerate_note(&args.mesh.display().to_string(), &mesh) {
+        Terminal.note(&note);
+    }
     let settings = args.bake.settings();
     let transfer = crate::bake::bake_poses(std::slice::from_ref(&mesh), &settings, &Terminal)
         .with_context(|| format!("baking {}", args.mesh.display()))?;

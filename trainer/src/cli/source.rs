@@ -118,7 +118,7 @@ impl SourceArgs {
         let Some(dir) = &self.obj_seq else {
             bail!("give a character (--builtin, --gltf or --bvh) or --obj-seq DIR");
         };
-        obj_sequence_meshes(dir)
+        obj_sequence_meshes(dir, reporter)
     }
 
     /// The poses the options name: a rig's clip, or an OBJ sequence with its angles.
@@ -132,7 +132,7 @@ impl SourceArgs {
                 "give a character (--builtin, --gltf or --bvh) or --obj-seq DIR with --angles FILE"
             );
         };
-        Poses::from_obj_sequence(dir, csv)
+        Poses::from_obj_sequence(dir, csv, reporter)
     }
 }
 

@@ -27,6 +27,44 @@ impl Mesh {
     pub fn vertex_count(&self) -> usize {
         self.positions.len()
     }
+
+    /// How many triangles have no area at f32 precision: a repeated corner, or three corners
+    /// on one line up to the rounding of their coordinates (a height over the longest edge
+    /// within four f32 epsilons of the larger of that edge and the corners' largest
+    /// coordinate, so rounding to f32 alone could account for it). Such a triangle casts no
+    /// shadow and adds nothing to the area-weighted normals. Triangles naming a vertex that
+    /// does not exist are not counted (the bake refuses them).
+    pub fn degenerate_triangles(&self) -> usize {
+        let corner = |i: u32| {
+            self.positions
+                .get(i as usize)
+                .map(|&p| glam::Vec3::from(p).as_dvec3())
+        };
+        self.triangles
+            .iter()
+            .filter(|t| {
+                let (Some(a), Some(b), Some(c)) = (corner(t[0]), corner(t[1]), corner(t[2])) else {
+                    return false;
+                };
+                let twice_area = (b - a).cross(c - a).length();
+                let longest = (b - a).length().max((c - a).length()).max((c - b).length());
+                let magnitude = a.abs().max(b.abs()).max(c.abs()).max_element();
+                twice_area <= 4.0 * f64::from(f32::EPSILON) * longest * longest.max(magnitude)
+            })
+            .count()
+    }
+}
+
+/// The note for `mesh` (called `name` in it) when it has degenerate triangles
+/// ([`Mesh::degenerate_triangles`]); `None` when it has none.
+pub fn degenerate_note(name: &str, mesh: &Mesh) -> Option<String> {
+    let count = mesh.degenerate_triangles();
+    (count > 0).then(|| {
+        format!(
+            "note: {name}: {count} of {} triangles have zero area (a repeated corner or three corners on a line); they cast no shadow and add nothing to the vertex normals",
+            mesh.triangles.len()
+        )
+    })
 }
 
 /// Area-weighted vertex normals: the sum of the (unnormalised) cross products of the adjacent
@@ -73,6 +111,47 @@ mod tests {
             (glam::Vec3::from(n[0]) - expect).length() < 1e-6,
             "{:?}",
             n[0]
+        );
+    }
+
+    /// Triangles with a repeated corner, collinear corners (exactly, and after rounding to f32
+    /// far from the origin), a sliver that is thin but real, and an ordinary one.
+    #[test]
+    fn zero_area_triangles_are_counted() {
+        let positions = vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [0.1, 0.2, 0.3],
+            [0.2, 0.4, 0.6],
+            [1000.1, 1000.2, 1000.3],
+            [1000.2, 1000.4, 1000.6],
+            [1000.3, 1000.6, 1000.9],
+            [1.0, 1e-4, 0.0],
+        ];
+        let count = |triangles: Vec<[u32; 3]>| {
+            Mesh::with_area_weighted_normals(positions.clone(), triangles).degenerate_triangles()
+        };
+        assert_eq!(count(vec![[0, 1, 2]]), 0);
+        assert_eq!(count(vec![[0, 0, 2]]), 1, "repeated corner");
+        assert_eq!(count(vec![[0, 1, 3]]), 1, "collinear");
+        assert_eq!(count(vec![[0, 4, 5]]), 1, "collinear in f32");
+        assert_eq!(count(vec![[6, 7, 8]]), 1, "collinear in f32, far out");
+        assert_eq!(count(vec![[0, 3, 9]]), 0, "a sliver 1e-4 high is real");
+        assert_eq!(count(vec![[0, 1, 2], [0, 0, 0], [1, 3, 0]]), 2);
+        let mesh = Mesh::with_area_weighted_normals(positions.clone(), vec![[0, 1, 2], [0, 1, 3]]);
+        let note = degenerate_note("m.obj", &mesh).unwrap();
+        assert!(
+            note.contains("m.obj: 1 of 2 triangles have zero area"),
+            "{note}"
+        );
+        assert_eq!(
+            degenerate_note(
+                "m.obj",
+                &Mesh::with_area_weighted_normals(positions, vec![[0, 1, 2]])
+            ),
+            None
         );
     }
 
