@@ -55,8 +55,9 @@ pub enum Command {
     Results(ResultsArgs),
 }
 
-/// Runs one command.
+/// Runs one command. An interrupted run (SIGINT, SIGTERM, SIGHUP) leaves no temporary file.
 pub fn run(cli: Cli) -> Result<()> {
+    crate::io::atomic::clean_up_on_signals().context("cannot install the signal handler")?;
     match cli.command {
         Command::Demo(args) => demo(&args),
         Command::Transfer(args) => transfer(&args),
