@@ -12,7 +12,7 @@ mod run;
 
 use std::path::{Path, PathBuf};
 
-use run::aprt;
+use run::{aprt, refuse};
 
 /// Cheap bake settings: these tests are about files, not transfer.
 const CHEAP: &[&str] = &["--order", "1", "--rays", "4"];
@@ -45,7 +45,6 @@ fn succeed_noting(args: &[String]) -> String {
     stderr
 }
 
-#[cfg_attr(not(target_os = "linux"), allow(dead_code))]
 /// Every entry under `dir` (recursively) with its bytes (files), its target (symlinks) or its
 /// kind, sorted by path.
 fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
@@ -149,6 +148,313 @@ fn zero_area_faces_are_counted_in_one_note() {
         &[fx("ok/seq/pose_0.obj"), "--npy".into(), s(&npy)],
     ));
     assert!(!stderr.contains("zero area"), "{stderr}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Outputs that are inputs.
+
+/// A scratch directory holding copies of the fixtures a command reads: `same.obj` (a mesh),
+/// `seq/` (three poses), `angles.csv`, `motion.bvh`, `other.bvh`, `victim.gltf` naming an
+/// external `victim.bin`, and a model `m.aprt` trained on `seq/` (world frame).
+fn workspace() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    let copy = |from: &str, to: &str| std::fs::copy(fx(from), p.join(to)).unwrap();
+    std::fs::create_dir(p.join("seq")).unwrap();
+    std::fs::create_dir(p.join("sub")).unwrap();
+    for i in 0..3 {
+        copy(
+            &format!("ok/seq/pose_{i}.obj"),
+            &format!("seq/pose_{i}.obj"),
+        );
+    }
+    copy("ok/seq/pose_0.obj", "same.obj");
+    copy("ok/angles.csv", "angles.csv");
+    copy("bvh/ok.bvh", "motion.bvh");
+    copy("bvh/ok.bvh", "other.bvh");
+    std::fs::write(
+        p.join("victim.gltf"),
+        r#"{"asset":{"version":"2.0"},"buffers":[{"uri":"victim.bin","byteLength":4}]}"#,
+    )
+    .unwrap();
+    std::fs::write(p.join("victim.bin"), [0u8; 4]).unwrap();
+    let args = [
+        "--obj-seq".into(),
+        s(&p.join("seq")),
+        "--angles".into(),
+        s(&p.join("angles.csv")),
+        "-o".into(),
+        s(&p.join("m.aprt")),
+    ];
+    succeed_noting(&cheap("train", &args));
+    dir
+}
+
+/// Runs `args` (with `{w}` standing for the workspace) and asserts the refusal and that the
+/// workspace is exactly as it was: every input unchanged, no output, temporary or checkpoint.
+fn refuse_untouched(work: &Path, args: &[&str], expect: &[&str]) {
+    let before = snapshot(work);
+    let args: Vec<String> = args
+        .iter()
+        .map(|a| a.replace("{w}", work.to_str().unwrap()))
+        .collect();
+    refuse(&args, expect);
+    assert_eq!(snapshot(work), before, "{args:?} changed the files");
+}
+
+/// Each command with an output path that is one of its inputs: the mesh, a pose of the OBJ
+/// sequence, the angles CSV, the model, the BVH motion, the mannequin's BVH, the glTF file and
+/// its external buffer, the sequence directory as the checkpoint, and an output the same as
+/// another. Expected: refused before any work, naming the output and the input; nothing
+/// changes. (Each once replaced the input, with exit 0.)
+#[test]
+fn an_output_that_is_an_input_is_refused_before_any_work() {
+    let work = workspace();
+    let w = work.path();
+    let bake = ["--order", "1", "--rays", "4"];
+    let with = |head: &[&'static str], tail: &[&'static str]| -> Vec<&'static str> {
+        let mut all = head.to_vec();
+        all.extend(bake);
+        all.extend(tail);
+        all
+    };
+    let seq_args = ["--obj-seq", "{w}/seq", "--angles", "{w}/angles.csv"];
+    let cases: Vec<(Vec<&str>, Vec<&str>)> = vec![
+        (
+            with(&["transfer", "{w}/same.obj"], &["--npy", "{w}/same.obj"]),
+            vec![
+                "--npy",
+                "same.obj: that is the mesh",
+                "would destroy the input",
+            ],
+        ),
+        (
+            vec![
+                "eval",
+                "{w}/m.aprt",
+                "--angles",
+                "{w}/angles.csv",
+                "--npy",
+                "{w}/m.aprt",
+            ],
+            vec!["--npy", "m.aprt: that is the model"],
+        ),
+        (
+            vec![
+                "eval",
+                "{w}/m.aprt",
+                "--angles",
+                "{w}/angles.csv",
+                "--npy",
+                "{w}/angles.csv",
+            ],
+            vec!["--npy", "angles.csv: that is the angles CSV"],
+        ),
+        (
+            with(
+                &["simulate", "--obj-seq", "{w}/seq"],
+                &["--npy", "{w}/seq/pose_0.obj"],
+            ),
+            vec!["--npy", "pose_0.obj: that is a pose of the OBJ sequence"],
+        ),
+        (
+            [&["train"][..], &bake, &seq_args, &["-o", "{w}/angles.csv"]].concat(),
+            vec!["-o", "angles.csv: that is the angles CSV"],
+        ),
+        (
+            [
+                &["train"][..],
+                &bake,
+                &seq_args,
+                &["-o", "{w}/m2.aprt", "--checkpoint", "{w}/seq"],
+            ]
+            .concat(),
+            vec!["--checkpoint", "seq: that is the OBJ sequence directory"],
+        ),
+        (
+            [
+                &["train"][..],
+                &bake,
+                &seq_args,
+                &["-o", "{w}/m2.aprt", "--checkpoint", "{w}/m2.aprt"],
+            ]
+            .concat(),
+            vec!["-o", "--checkpoint", "m2.aprt are the same path"],
+        ),
+        (
+            with(
+                &["simulate", "--bvh", "{w}/motion.bvh"],
+                &["--npy", "{w}/motion.bvh"],
+            ),
+            vec!["--npy", "motion.bvh: that is the BVH motion"],
+        ),
+        (
+            with(
+                &[
+                    "simulate",
+                    "--bvh",
+                    "{w}/motion.bvh",
+                    "--mannequin",
+                    "{w}/other.bvh",
+                ],
+                &["--npy", "{w}/other.bvh"],
+            ),
+            vec!["--npy", "other.bvh: that is the mannequin's BVH"],
+        ),
+        (
+            with(
+                &["train", "--gltf", "{w}/victim.gltf", "--clip", "a"],
+                &["-o", "{w}/victim.gltf"],
+            ),
+            vec!["-o", "victim.gltf: that is the glTF file"],
+        ),
+        (
+            with(
+                &["train", "--gltf", "{w}/victim.gltf", "--clip", "a"],
+                &["-o", "{w}/victim.bin"],
+            ),
+            vec!["-o", "victim.bin: that is a buffer of victim.gltf"],
+        ),
+        (
+            with(
+                &["simulate", "--gltf", "{w}/victim.gltf", "--clip", "a"],
+                &["--npy", "{w}/victim.bin"],
+            ),
+            vec!["--npy", "victim.bin: that is a buffer of victim.gltf"],
+        ),
+    ];
+    for (args, expect) in &cases {
+        refuse_untouched(w, args, expect);
+    }
+}
+
+/// The same file under other names: a `..` detour, a symlink, a hard link, and a symlinked
+/// directory. Expected: refused like the plain path (compared by canonical path and by device
+/// and inode).
+#[cfg(unix)]
+#[test]
+fn an_input_under_another_name_is_still_an_input() {
+    let work = workspace();
+    let w = work.path();
+    std::os::unix::fs::symlink("same.obj", w.join("link.npy")).unwrap();
+    std::os::unix::fs::symlink("seq", w.join("seq-link")).unwrap();
+    std::fs::hard_link(w.join("same.obj"), w.join("hard.npy")).unwrap();
+    for output in [
+        "{w}/sub/../same.obj",
+        "{w}/link.npy",
+        "{w}/hard.npy",
+        "{w}/./sub/../same.obj",
+    ] {
+        let args = [
+            "transfer",
+            "--order",
+            "1",
+            "--rays",
+            "4",
+            "{w}/same.obj",
+            "--npy",
+            output,
+        ];
+        refuse_untouched(w, &args, &["--npy", "that is the mesh", "same.obj"]);
+    }
+    let args = [
+        "simulate",
+        "--order",
+        "1",
+        "--rays",
+        "4",
+        "--obj-seq",
+        "{w}/seq",
+        "--npy",
+        "{w}/seq-link/pose_1.obj",
+    ];
+    refuse_untouched(
+        w,
+        &args,
+        &["pose_1.obj: that is a pose of the OBJ sequence"],
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// Outputs that are not files.
+
+/// `mkfifo path`.
+#[cfg(unix)]
+fn mkfifo(path: &Path) {
+    let status = std::process::Command::new("mkfifo")
+        .arg(path)
+        .status()
+        .unwrap();
+    assert!(status.success(), "mkfifo {}", path.display());
+}
+
+/// A FIFO, a symlink to a FIFO and a directory given as the output. Expected: refused before
+/// the bake, saying what the path is; the FIFO stays a FIFO (renaming over it replaced it
+/// with a file).
+#[cfg(unix)]
+#[test]
+fn a_fifo_or_a_directory_as_the_output_is_refused() {
+    let work = workspace();
+    let w = work.path();
+    mkfifo(&w.join("pipe"));
+    std::os::unix::fs::symlink("pipe", w.join("pipe-link")).unwrap();
+    let transfer = |npy: &'static str| {
+        [
+            "transfer",
+            "--order",
+            "1",
+            "--rays",
+            "4",
+            "{w}/same.obj",
+            "--npy",
+            npy,
+        ]
+    };
+    refuse_untouched(
+        w,
+        &transfer("{w}/pipe"),
+        &["--npy", "pipe is a named pipe (FIFO), not a regular file"],
+    );
+    refuse_untouched(
+        w,
+        &transfer("{w}/pipe-link"),
+        &["--npy", "pipe-link", "pipe is a named pipe (FIFO)"],
+    );
+    refuse_untouched(
+        w,
+        &transfer("{w}/sub"),
+        &["--npy", "sub is a directory, not a regular file"],
+    );
+    let args = [
+        "train",
+        "--order",
+        "1",
+        "--rays",
+        "4",
+        "--obj-seq",
+        "{w}/seq",
+        "--angles",
+        "{w}/angles.csv",
+        "-o",
+        "{w}/pipe",
+    ];
+    refuse_untouched(w, &args, &["-o", "pipe is a named pipe (FIFO)"]);
+    let args = [
+        "train",
+        "--order",
+        "1",
+        "--rays",
+        "4",
+        "--obj-seq",
+        "{w}/seq",
+        "--angles",
+        "{w}/angles.csv",
+        "-o",
+        "{w}/m2.aprt",
+        "--checkpoint",
+        "{w}/same.obj",
+    ];
+    refuse_untouched(w, &args, &["--checkpoint", "same.obj"]);
 }
 
 /// A symlink given as the output, to an existing file and to one not yet made. Expected: the

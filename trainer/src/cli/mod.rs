@@ -20,6 +20,7 @@ pub use terminal::Terminal;
 
 use crate::bake::checkpoint::{Checkpoint, OnExisting};
 use crate::io::atomic::write_atomic;
+use crate::io::outputs::{Input, Output, check};
 use crate::model::ModelFrame;
 use crate::model::predict::{predict_clip, predict_world};
 use crate::model::train::TrainSettings;
@@ -70,6 +71,7 @@ pub fn run(cli: Cli) -> Result<()> {
 }
 
 fn demo(args: &DemoArgs) -> Result<()> {
+    check(&[Output::directory(&args.out, "--out")], &[])?;
     let markdown = crate::report::demo::run(&args.settings(), &Terminal)?;
     print!("{markdown}");
     eprintln!(
@@ -101,6 +103,9 @@ fn inspect(args: &InspectArgs) -> Result<()> {
 }
 
 fn eval(args: &EvalArgs) -> Result<()> {
+    let mut inputs = vec![Input::new(&args.model, "the model")];
+    inputs.extend(args.source.inputs());
+    check(&[Output::file(&args.npy, "--npy")], &inputs)?;
     let blob = read_file(&args.model)?;
     let info = crate::model::runtime::describe(&blob)
         .with_context(|| format!("{}: invalid model", args.model.display()))?;
@@ -131,6 +136,10 @@ fn eval(args: &EvalArgs) -> Result<()> {
 }
 
 fn transfer(args: &TransferArgs) -> Result<()> {
+    check(
+        &[Output::file(&args.npy, "--npy")],
+        &[Input::new(&args.mesh, "the mesh")],
+    )?;
     let mesh = crate::io::obj::read_obj(&args.mesh)?;
     if let Some(note) = degenerate_note(&args.mesh.display().to_string(), &mesh) {
         Terminal.note(&note);
@@ -145,6 +154,10 @@ fn transfer(args: &TransferArgs) -> Result<()> {
 fn results(args: &ResultsArgs) -> Result<()> {
     use crate::report::results::{ResultsSettings, asset_studies, default_assets, write_document};
     let assets = args.assets.clone().unwrap_or_else(default_assets);
+    check(
+        &[Output::directory(&args.out, "--out")],
+        &[Input::new(&assets, "the assets directory")],
+    )?;
     let studies = asset_studies(&assets)
         .with_context(|| format!("loading the assets in {}", assets.display()))?;
     let settings = ResultsSettings {
@@ -168,6 +181,7 @@ fn results(args: &ResultsArgs) -> Result<()> {
 }
 
 fn simulate(args: &SimulateArgs) -> Result<()> {
+    check(&[Output::file(&args.npy, "--npy")], &args.source.inputs())?;
     let settings = args.bake.settings();
     let meshes = args.source.meshes(&Terminal)?;
     let transfer = crate::bake::bake_poses(&meshes, &settings, &Terminal)?;
@@ -180,6 +194,17 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
 }
 
 fn train(args: &TrainArgs) -> Result<()> {
+    let checkpoint = match &args.checkpoint {
+        Some(dir) => Output::directory(dir, "--checkpoint"),
+        None => Output::directory(
+            Checkpoint::default_dir(&args.output),
+            "the checkpoint directory (-o's path + .bake)",
+        ),
+    };
+    check(
+        &[Output::file(&args.output, "-o"), checkpoint.clone()],
+        &args.source.inputs(),
+    )?;
     let settings = TrainSettings {
         fit: args.fit.options()?,
         bake: args.bake.settings(),
@@ -189,10 +214,7 @@ fn train(args: &TrainArgs) -> Result<()> {
         } else {
             ModelFrame::Bone
         },
-        checkpoint: args
-            .checkpoint
-            .clone()
-            .unwrap_or_else(|| Checkpoint::default_dir(&args.output)),
+        checkpoint: checkpoint.path,
         existing: if args.resume {
             OnExisting::Resume
         } else {

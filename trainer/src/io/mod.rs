@@ -1,10 +1,11 @@
-//! Files in and out: OBJ meshes, joint-angle CSVs, NumPy `.npy` arrays, atomic writes, and
-//! where the command line's poses come from.
+//! Files in and out: OBJ meshes, joint-angle CSVs, NumPy `.npy` arrays, atomic writes, the
+//! check that no output is an input, and where the command line's poses come from.
 
 pub mod angles;
 pub mod atomic;
 pub mod npy;
 pub mod obj;
+pub mod outputs;
 pub mod source;
 
 /// `text` without the UTF-8 byte-order mark some editors write at the start of a text file
