@@ -326,6 +326,28 @@ fn an_output_that_is_an_input_is_refused_before_any_work() {
     for (args, expect) in &cases {
         refuse_untouched(w, args, expect);
     }
+    // The checkpoint of an interrupted run, and the model pointed at its manifest.
+    let ck = w.join("ck");
+    std::fs::create_dir(&ck).unwrap();
+    std::fs::write(ck.join("manifest.json"), b"{}").unwrap();
+    let args = [
+        &["train"][..],
+        &bake,
+        &seq_args,
+        &[
+            "-o",
+            "{w}/ck/manifest.json",
+            "--checkpoint",
+            "{w}/ck",
+            "--resume",
+        ],
+    ]
+    .concat();
+    refuse_untouched(
+        w,
+        &args,
+        &["-o", "manifest.json: that is a file of the checkpoint"],
+    );
 }
 
 /// The same file under other names: a `..` detour, a symlink, a hard link, and a symlinked

@@ -201,9 +201,17 @@ fn train(args: &TrainArgs) -> Result<()> {
             "the checkpoint directory (-o's path + .bake)",
         ),
     };
+    // A checkpoint being resumed is read too: the model must not land on one of its files.
+    let mut inputs = args.source.inputs();
+    let stored = std::fs::read_dir(&checkpoint.path).into_iter().flatten();
+    inputs.extend(
+        stored
+            .flatten()
+            .map(|e| Input::new(e.path(), "a file of the checkpoint")),
+    );
     check(
         &[Output::file(&args.output, "-o"), checkpoint.clone()],
-        &args.source.inputs(),
+        &inputs,
     )?;
     let settings = TrainSettings {
         fit: args.fit.options()?,
