@@ -190,169 +190,103 @@ fn workspace() -> tempfile::TempDir {
     dir
 }
 
-/// Runs `args` (with `{w}` standing for the workspace) and asserts the refusal and that the
+/// Runs the command line `line` (words split at spaces, `{w}` standing for the workspace,
+/// `{train}` for a cheap `train` of its OBJ sequence) and asserts the refusal and that the
 /// workspace is exactly as it was: every input unchanged, no output, temporary or checkpoint.
-fn refuse_untouched(work: &Path, args: &[&str], expect: &[&str]) {
+fn refuse_untouched(work: &Path, line: &str, expect: &[&str]) {
     let before = snapshot(work);
-    let args: Vec<String> = args
-        .iter()
-        .map(|a| a.replace("{w}", work.to_str().unwrap()))
-        .collect();
+    let line = line
+        .replace(
+            "{train}",
+            "train {cheap} --obj-seq {w}/seq --angles {w}/angles.csv",
+        )
+        .replace("{cheap}", &CHEAP.join(" "))
+        .replace("{w}", work.to_str().unwrap());
+    let args: Vec<&str> = line.split_whitespace().collect();
     refuse(&args, expect);
-    assert_eq!(snapshot(work), before, "{args:?} changed the files");
+    assert_eq!(snapshot(work), before, "{line} changed the files");
 }
 
-/// Each command with an output path that is one of its inputs: the mesh, a pose of the OBJ
-/// sequence, the angles CSV, the model, the BVH motion, the mannequin's BVH, the glTF file and
-/// its external buffer, the sequence directory as the checkpoint, and an output the same as
-/// another. Expected: refused before any work, naming the output and the input; nothing
-/// changes. (Each once replaced the input, with exit 0.)
+/// Each command with an output path that is one of its inputs: the mesh, the model, the
+/// angles CSV, a pose of the OBJ sequence, the BVH motion, the mannequin's BVH, the glTF file
+/// and its external buffer, the sequence directory as the checkpoint, a file of the checkpoint
+/// being resumed, and an output the same as another. Expected: refused before any work,
+/// naming the output and the input; nothing changes. (Each once replaced the input, with
+/// exit 0.)
 #[test]
 fn an_output_that_is_an_input_is_refused_before_any_work() {
     let work = workspace();
     let w = work.path();
-    let bake = ["--order", "1", "--rays", "4"];
-    let with = |head: &[&'static str], tail: &[&'static str]| -> Vec<&'static str> {
-        let mut all = head.to_vec();
-        all.extend(bake);
-        all.extend(tail);
-        all
-    };
-    let seq_args = ["--obj-seq", "{w}/seq", "--angles", "{w}/angles.csv"];
-    let cases: Vec<(Vec<&str>, Vec<&str>)> = vec![
+    let gltf = "{cheap} --gltf {w}/victim.gltf --clip a";
+    let cases: [(&str, &[&str]); 13] = [
         (
-            with(&["transfer", "{w}/same.obj"], &["--npy", "{w}/same.obj"]),
-            vec![
+            "transfer {cheap} {w}/same.obj --npy {w}/same.obj",
+            &[
                 "--npy",
                 "same.obj: that is the mesh",
                 "would destroy the input",
             ],
         ),
         (
-            vec![
-                "eval",
-                "{w}/m.aprt",
-                "--angles",
-                "{w}/angles.csv",
-                "--npy",
-                "{w}/m.aprt",
-            ],
-            vec!["--npy", "m.aprt: that is the model"],
+            "eval {w}/m.aprt --angles {w}/angles.csv --npy {w}/m.aprt",
+            &["--npy", "m.aprt: that is the model"],
         ),
         (
-            vec![
-                "eval",
-                "{w}/m.aprt",
-                "--angles",
-                "{w}/angles.csv",
-                "--npy",
-                "{w}/angles.csv",
-            ],
-            vec!["--npy", "angles.csv: that is the angles CSV"],
+            "eval {w}/m.aprt --angles {w}/angles.csv --npy {w}/angles.csv",
+            &["--npy", "angles.csv: that is the angles CSV"],
         ),
         (
-            with(
-                &["simulate", "--obj-seq", "{w}/seq"],
-                &["--npy", "{w}/seq/pose_0.obj"],
-            ),
-            vec!["--npy", "pose_0.obj: that is a pose of the OBJ sequence"],
+            "simulate {cheap} --obj-seq {w}/seq --npy {w}/seq/pose_0.obj",
+            &["--npy", "pose_0.obj: that is a pose of the OBJ sequence"],
         ),
         (
-            [&["train"][..], &bake, &seq_args, &["-o", "{w}/angles.csv"]].concat(),
-            vec!["-o", "angles.csv: that is the angles CSV"],
+            "{train} -o {w}/angles.csv",
+            &["-o", "angles.csv: that is the angles CSV"],
         ),
         (
-            [
-                &["train"][..],
-                &bake,
-                &seq_args,
-                &["-o", "{w}/m2.aprt", "--checkpoint", "{w}/seq"],
-            ]
-            .concat(),
-            vec!["--checkpoint", "seq: that is the OBJ sequence directory"],
+            "{train} -o {w}/m2.aprt --checkpoint {w}/seq",
+            &["--checkpoint", "seq: that is the OBJ sequence directory"],
         ),
         (
-            [
-                &["train"][..],
-                &bake,
-                &seq_args,
-                &["-o", "{w}/m2.aprt", "--checkpoint", "{w}/m2.aprt"],
-            ]
-            .concat(),
-            vec!["-o", "--checkpoint", "m2.aprt are the same path"],
+            "{train} -o {w}/m2.aprt --checkpoint {w}/m2.aprt",
+            &["-o", "--checkpoint", "m2.aprt are the same path"],
         ),
         (
-            with(
-                &["simulate", "--bvh", "{w}/motion.bvh"],
-                &["--npy", "{w}/motion.bvh"],
-            ),
-            vec!["--npy", "motion.bvh: that is the BVH motion"],
+            "simulate {cheap} --bvh {w}/motion.bvh --npy {w}/motion.bvh",
+            &["--npy", "motion.bvh: that is the BVH motion"],
         ),
         (
-            with(
-                &[
-                    "simulate",
-                    "--bvh",
-                    "{w}/motion.bvh",
-                    "--mannequin",
-                    "{w}/other.bvh",
-                ],
-                &["--npy", "{w}/other.bvh"],
-            ),
-            vec!["--npy", "other.bvh: that is the mannequin's BVH"],
+            "simulate {cheap} --bvh {w}/motion.bvh --mannequin {w}/other.bvh --npy {w}/other.bvh",
+            &["--npy", "other.bvh: that is the mannequin's BVH"],
         ),
         (
-            with(
-                &["train", "--gltf", "{w}/victim.gltf", "--clip", "a"],
-                &["-o", "{w}/victim.gltf"],
-            ),
-            vec!["-o", "victim.gltf: that is the glTF file"],
+            &format!("train {gltf} -o {{w}}/victim.gltf"),
+            &["-o", "victim.gltf: that is the glTF file"],
         ),
         (
-            with(
-                &["train", "--gltf", "{w}/victim.gltf", "--clip", "a"],
-                &["-o", "{w}/victim.bin"],
-            ),
-            vec!["-o", "victim.bin: that is a buffer of victim.gltf"],
+            &format!("train {gltf} -o {{w}}/victim.bin"),
+            &["-o", "victim.bin: that is a buffer of victim.gltf"],
         ),
         (
-            with(
-                &["simulate", "--gltf", "{w}/victim.gltf", "--clip", "a"],
-                &["--npy", "{w}/victim.bin"],
-            ),
-            vec!["--npy", "victim.bin: that is a buffer of victim.gltf"],
+            &format!("simulate {gltf} --npy {{w}}/victim.bin"),
+            &["--npy", "victim.bin: that is a buffer of victim.gltf"],
+        ),
+        (
+            "{train} -o {w}/ck/manifest.json --checkpoint {w}/ck --resume",
+            &["-o", "manifest.json: that is a file of the checkpoint"],
         ),
     ];
-    for (args, expect) in &cases {
-        refuse_untouched(w, args, expect);
+    // The checkpoint of an interrupted run, for the last case.
+    std::fs::create_dir(w.join("ck")).unwrap();
+    std::fs::write(w.join("ck/manifest.json"), b"{}").unwrap();
+    for (line, expect) in cases {
+        refuse_untouched(w, line, expect);
     }
-    // The checkpoint of an interrupted run, and the model pointed at its manifest.
-    let ck = w.join("ck");
-    std::fs::create_dir(&ck).unwrap();
-    std::fs::write(ck.join("manifest.json"), b"{}").unwrap();
-    let args = [
-        &["train"][..],
-        &bake,
-        &seq_args,
-        &[
-            "-o",
-            "{w}/ck/manifest.json",
-            "--checkpoint",
-            "{w}/ck",
-            "--resume",
-        ],
-    ]
-    .concat();
-    refuse_untouched(
-        w,
-        &args,
-        &["-o", "manifest.json: that is a file of the checkpoint"],
-    );
 }
 
-/// The same file under other names: a `..` detour, a symlink, a hard link, and a symlinked
-/// directory. Expected: refused like the plain path (compared by canonical path and by device
-/// and inode).
+/// The same file under other names: a `..` detour, a symlink, a hard link, and a path through
+/// a symlinked directory. Expected: refused like the plain path (compared by canonical path
+/// and by device and inode).
 #[cfg(unix)]
 #[test]
 fn an_input_under_another_name_is_still_an_input() {
@@ -362,37 +296,17 @@ fn an_input_under_another_name_is_still_an_input() {
     std::os::unix::fs::symlink("seq", w.join("seq-link")).unwrap();
     std::fs::hard_link(w.join("same.obj"), w.join("hard.npy")).unwrap();
     for output in [
-        "{w}/sub/../same.obj",
-        "{w}/link.npy",
-        "{w}/hard.npy",
-        "{w}/./sub/../same.obj",
+        "sub/../same.obj",
+        "link.npy",
+        "hard.npy",
+        "./sub/../same.obj",
     ] {
-        let args = [
-            "transfer",
-            "--order",
-            "1",
-            "--rays",
-            "4",
-            "{w}/same.obj",
-            "--npy",
-            output,
-        ];
-        refuse_untouched(w, &args, &["--npy", "that is the mesh", "same.obj"]);
+        let line = format!("transfer {{cheap}} {{w}}/same.obj --npy {{w}}/{output}");
+        refuse_untouched(w, &line, &["--npy", "that is the mesh", "same.obj"]);
     }
-    let args = [
-        "simulate",
-        "--order",
-        "1",
-        "--rays",
-        "4",
-        "--obj-seq",
-        "{w}/seq",
-        "--npy",
-        "{w}/seq-link/pose_1.obj",
-    ];
     refuse_untouched(
         w,
-        &args,
+        "simulate {cheap} --obj-seq {w}/seq --npy {w}/seq-link/pose_1.obj",
         &["pose_1.obj: that is a pose of the OBJ sequence"],
     );
 }
@@ -410,9 +324,9 @@ fn mkfifo(path: &Path) {
     assert!(status.success(), "mkfifo {}", path.display());
 }
 
-/// A FIFO, a symlink to a FIFO and a directory given as the output. Expected: refused before
-/// the bake, saying what the path is; the FIFO stays a FIFO (renaming over it replaced it
-/// with a file).
+/// A FIFO, a symlink to a FIFO and a directory given as the output, and a file as the
+/// checkpoint directory. Expected: refused before the bake, saying what the path is; the FIFO
+/// stays a FIFO (renaming over it replaced it with a file).
 #[cfg(unix)]
 #[test]
 fn a_fifo_or_a_directory_as_the_output_is_refused() {
@@ -420,63 +334,27 @@ fn a_fifo_or_a_directory_as_the_output_is_refused() {
     let w = work.path();
     mkfifo(&w.join("pipe"));
     std::os::unix::fs::symlink("pipe", w.join("pipe-link")).unwrap();
-    let transfer = |npy: &'static str| {
-        [
-            "transfer",
-            "--order",
-            "1",
-            "--rays",
-            "4",
-            "{w}/same.obj",
-            "--npy",
-            npy,
-        ]
-    };
-    refuse_untouched(
-        w,
-        &transfer("{w}/pipe"),
-        &["--npy", "pipe is a named pipe (FIFO), not a regular file"],
-    );
-    refuse_untouched(
-        w,
-        &transfer("{w}/pipe-link"),
-        &["--npy", "pipe-link", "pipe is a named pipe (FIFO)"],
-    );
-    refuse_untouched(
-        w,
-        &transfer("{w}/sub"),
-        &["--npy", "sub is a directory, not a regular file"],
-    );
-    let args = [
-        "train",
-        "--order",
-        "1",
-        "--rays",
-        "4",
-        "--obj-seq",
-        "{w}/seq",
-        "--angles",
-        "{w}/angles.csv",
-        "-o",
-        "{w}/pipe",
+    let transfer = "transfer {cheap} {w}/same.obj --npy";
+    let fifo = "pipe is a named pipe (FIFO), not a regular file";
+    let cases: [(String, &[&str]); 5] = [
+        (format!("{transfer} {{w}}/pipe"), &["--npy", fifo]),
+        (
+            format!("{transfer} {{w}}/pipe-link"),
+            &["--npy", "pipe-link", fifo],
+        ),
+        (
+            format!("{transfer} {{w}}/sub"),
+            &["--npy", "sub is a directory, not a regular file"],
+        ),
+        ("{train} -o {w}/pipe".into(), &["-o", fifo]),
+        (
+            "{train} -o {w}/m2.aprt --checkpoint {w}/same.obj".into(),
+            &["--checkpoint", "same.obj: exists and is not a directory"],
+        ),
     ];
-    refuse_untouched(w, &args, &["-o", "pipe is a named pipe (FIFO)"]);
-    let args = [
-        "train",
-        "--order",
-        "1",
-        "--rays",
-        "4",
-        "--obj-seq",
-        "{w}/seq",
-        "--angles",
-        "{w}/angles.csv",
-        "-o",
-        "{w}/m2.aprt",
-        "--checkpoint",
-        "{w}/same.obj",
-    ];
-    refuse_untouched(w, &args, &["--checkpoint", "same.obj"]);
+    for (line, expect) in cases {
+        refuse_untouched(w, &line, expect);
+    }
 }
 
 /// A symlink given as the output, to an existing file and to one not yet made. Expected: the
@@ -600,6 +478,23 @@ fn stopped_in_the_write(bvh: &Path, npy: &Path, log: &Path) -> Option<std::proce
     Some(child)
 }
 
+/// [`stopped_in_the_write`], tried up to three times, the old output put back each time;
+/// returns the stopped child with the old output still in place.
+#[cfg(target_os = "linux")]
+fn caught_in_the_write(bvh: &Path, npy: &Path, log: &Path) -> std::process::Child {
+    for _ in 0..3 {
+        std::fs::write(npy, b"the old output").unwrap();
+        if let Some(child) = stopped_in_the_write(bvh, npy, log) {
+            assert_eq!(std::fs::read(npy).unwrap(), b"the old output");
+            return child;
+        }
+    }
+    panic!(
+        "the write of {} was never caught in progress",
+        npy.display()
+    );
+}
+
 /// A 192 MB write stopped halfway, then SIGTERM; and again with SIGKILL, then another run
 /// writing the same output. Expected: SIGTERM removes the temporary and leaves the old output
 /// as it was, the process ending as killed by SIGTERM; SIGKILL leaves the temporary (partial,
@@ -617,7 +512,6 @@ fn an_interrupted_write_leaves_no_temporary_and_the_old_output_whole() {
     let out = w.join("out");
     std::fs::create_dir(&out).unwrap();
     let npy = out.join("t.npy");
-    std::fs::write(&npy, b"the old output").unwrap();
     std::fs::write(out.join(".tmpAbc123"), b"the user's").unwrap();
     std::fs::write(out.join("notes.txt"), b"the user's").unwrap();
     let log = w.join("stderr.txt");
@@ -629,45 +523,27 @@ fn an_interrupted_write_leaves_no_temporary_and_the_old_output_whole() {
     let before = others(&out);
 
     // SIGTERM: the handler removes the temporary before the process ends.
-    let mut caught = false;
-    for _ in 0..3 {
-        let Some(mut child) = stopped_in_the_write(&bvh, &npy, &log) else {
-            continue;
-        };
-        caught = true;
-        assert_eq!(std::fs::read(&npy).unwrap(), b"the old output");
-        signal(child.id(), "TERM");
-        signal(child.id(), "CONT");
-        let status = child.wait().unwrap();
-        assert_eq!(status.signal(), Some(15), "{status:?}");
-        let stderr = std::fs::read_to_string(&log).unwrap();
-        assert!(!stderr.contains("panicked"), "{stderr}");
-        assert_eq!(temporaries(&out, "t.npy"), Vec::<PathBuf>::new());
-        assert_eq!(std::fs::read(&npy).unwrap(), b"the old output");
-        assert_eq!(others(&out), before);
-        break;
-    }
-    assert!(caught, "the write was never caught in progress");
+    let mut child = caught_in_the_write(&bvh, &npy, &log);
+    signal(child.id(), "TERM");
+    signal(child.id(), "CONT");
+    let status = child.wait().unwrap();
+    assert_eq!(status.signal(), Some(15), "{status:?}");
+    let stderr = std::fs::read_to_string(&log).unwrap();
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(temporaries(&out, "t.npy"), Vec::<PathBuf>::new());
+    assert_eq!(std::fs::read(&npy).unwrap(), b"the old output");
+    assert_eq!(others(&out), before);
 
-    // SIGKILL: the partial temporary stays until the next write to the same output.
-    std::fs::write(&npy, b"the old output").unwrap();
-    let mut caught = false;
-    for _ in 0..3 {
-        let Some(mut child) = stopped_in_the_write(&bvh, &npy, &log) else {
-            continue;
-        };
-        caught = true;
-        signal(child.id(), "KILL");
-        child.wait().unwrap();
-        let left = temporaries(&out, "t.npy");
-        assert_eq!(left.len(), 1, "{left:?}");
-        assert_eq!(std::fs::read(&npy).unwrap(), b"the old output");
-        let args = ["--bvh".into(), fx("bvh/ok.bvh"), "--npy".into(), s(&npy)];
-        succeed_noting(&cheap("simulate", &args));
-        assert_eq!(temporaries(&out, "t.npy"), Vec::<PathBuf>::new());
-        assert_eq!(run::read_npy(&npy).0[0], 3);
-        assert_eq!(others(&out), before);
-        break;
-    }
-    assert!(caught, "the write was never caught in progress");
+    // SIGKILL: the temporary stays until the next write to the same output.
+    let mut child = caught_in_the_write(&bvh, &npy, &log);
+    signal(child.id(), "KILL");
+    child.wait().unwrap();
+    let left = temporaries(&out, "t.npy");
+    assert_eq!(left.len(), 1, "{left:?}");
+    assert_eq!(std::fs::read(&npy).unwrap(), b"the old output");
+    let args = ["--bvh".into(), fx("bvh/ok.bvh"), "--npy".into(), s(&npy)];
+    succeed_noting(&cheap("simulate", &args));
+    assert_eq!(temporaries(&out, "t.npy"), Vec::<PathBuf>::new());
+    assert_eq!(run::read_npy(&npy).0[0], 3);
+    assert_eq!(others(&out), before);
 }

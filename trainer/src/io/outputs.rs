@@ -310,6 +310,10 @@ fn referenced_file(base: &Path, uri: &str) -> Option<PathBuf> {
 mod tests {
     use super::*;
 
+    fn paths(inputs: Vec<Input>) -> Vec<PathBuf> {
+        inputs.into_iter().map(|i| i.path).collect()
+    }
+
     #[test]
     fn an_output_that_is_an_input_is_refused_however_it_is_spelled() {
         let dir = tempfile::tempdir().unwrap();
@@ -363,9 +367,8 @@ mod tests {
                "images":[{"uri":"tex/skin.png"}]}"#,
         )
         .unwrap();
-        let files: Vec<PathBuf> = gltf_inputs(&gltf).into_iter().map(|i| i.path).collect();
         assert_eq!(
-            files,
+            paths(gltf_inputs(&gltf)),
             [
                 gltf.clone(),
                 dir.path().join("my data.bin"),
@@ -382,8 +385,10 @@ mod tests {
         glb.extend_from_slice(json);
         let path = dir.path().join("c.glb");
         std::fs::write(&path, glb).unwrap();
-        let files: Vec<PathBuf> = gltf_inputs(&path).into_iter().map(|i| i.path).collect();
-        assert_eq!(files, [path.clone(), dir.path().join("ext.bin")]);
+        assert_eq!(
+            paths(gltf_inputs(&path)),
+            [path.clone(), dir.path().join("ext.bin")]
+        );
         // Unreadable or not JSON: the file alone.
         std::fs::write(&path, b"glTF\x02\0\0\0").unwrap();
         assert_eq!(gltf_inputs(&path).len(), 1);
