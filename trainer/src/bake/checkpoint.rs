@@ -424,7 +424,8 @@ impl Checkpoint {
             let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
             let ours = name == MANIFEST
                 || (name.starts_with("pose-") && name.ends_with(".bin"))
-                || name.starts_with(".tmp");
+                || crate::io::atomic::temporary_owner(name).is_some()
+                || name.starts_with(".tmp"); // temporaries of earlier versions
             if ours {
                 std::fs::remove_file(&path).map_err(io(&path))?;
             }

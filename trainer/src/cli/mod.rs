@@ -20,9 +20,12 @@ pub use terminal::Terminal;
 
 use crate::bake::checkpoint::{Checkpoint, OnExisting};
 use crate::io::atomic::write_atomic;
+use crate::io::outputs::{Input, Output, check};
 use crate::model::ModelFrame;
 use crate::model::predict::{predict_clip, predict_world};
 use crate::model::train::TrainSettings;
+use crate::progress::Reporter;
+use crate::rig::mesh::degenerate_note;
 
 /// Pose-driven precomputed radiance transfer for skinned characters.
 #[derive(Debug, Parser)]
@@ -53,8 +56,9 @@ pub enum Command {
     Results(ResultsArgs),
 }
 
-/// Runs one command.
+/// Runs one command. An interrupted run (SIGINT, SIGTERM, SIGHUP) leaves no temporary file.
 pub fn run(cli: Cli) -> Result<()> {
+    crate::io::atomic::clean_up_on_signals().context("cannot install the signal handler")?;
     match cli.command {
         Command::Demo(args) => demo(&args),
         Command::Transfer(args) => transfer(&args),
@@ -67,6 +71,7 @@ pub fn run(cli: Cli) -> Result<()> {
 }
 
 fn demo(args: &DemoArgs) -> Result<()> {
+    check(&[Output::directory(&args.out, "--out")], &[])?;
     let markdown = crate::report::demo::run(&args.settings(), &Terminal)?;
     print!("{markdown}");
     eprintln!(
@@ -98,6 +103,9 @@ fn inspect(args: &InspectArgs) -> Result<()> {
 }
 
 fn eval(args: &EvalArgs) -> Result<()> {
+    let mut inputs = vec![Input::new(&args.model, "the model")];
+    inputs.extend(args.source.inputs());
+    check(&[Output::file(&args.npy, "--npy")], &inputs)?;
     let blob = read_file(&args.model)?;
     let info = crate::model::runtime::describe(&blob)
         .with_context(|| format!("{}: invalid model", args.model.display()))?;
@@ -128,7 +136,14 @@ fn eval(args: &EvalArgs) -> Result<()> {
 }
 
 fn transfer(args: &TransferArgs) -> Result<()> {
+    check(
+        &[Output::file(&args.npy, "--npy")],
+        &[Input::new(&args.mesh, "the mesh")],
+    )?;
     let mesh = crate::io::obj::read_obj(&args.mesh)?;
+    if let Some(note) = degenerate_note(&args.mesh.display().to_string(), &mesh) {
+        Terminal.note(&note);
+    }
     let settings = args.bake.settings();
     let transfer = crate::bake::bake_poses(std::slice::from_ref(&mesh), &settings, &Terminal)
         .with_context(|| format!("baking {}", args.mesh.display()))?;
@@ -139,6 +154,10 @@ fn transfer(args: &TransferArgs) -> Result<()> {
 fn results(args: &ResultsArgs) -> Result<()> {
     use crate::report::results::{ResultsSettings, asset_studies, default_assets, write_document};
     let assets = args.assets.clone().unwrap_or_else(default_assets);
+    check(
+        &[Output::directory(&args.out, "--out")],
+        &[Input::new(&assets, "the assets directory")],
+    )?;
     let studies = asset_studies(&assets)
         .with_context(|| format!("loading the assets in {}", assets.display()))?;
     let settings = ResultsSettings {
@@ -162,6 +181,7 @@ fn results(args: &ResultsArgs) -> Result<()> {
 }
 
 fn simulate(args: &SimulateArgs) -> Result<()> {
+    check(&[Output::file(&args.npy, "--npy")], &args.source.inputs())?;
     let settings = args.bake.settings();
     let meshes = args.source.meshes(&Terminal)?;
     let transfer = crate::bake::bake_poses(&meshes, &settings, &Terminal)?;
@@ -174,6 +194,25 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
 }
 
 fn train(args: &TrainArgs) -> Result<()> {
+    let checkpoint = match &args.checkpoint {
+        Some(dir) => Output::directory(dir, "--checkpoint"),
+        None => Output::directory(
+            Checkpoint::default_dir(&args.output),
+            "the checkpoint directory (-o's path + .bake)",
+        ),
+    };
+    // A checkpoint being resumed is read too: the model must not land on one of its files.
+    let mut inputs = args.source.inputs();
+    let stored = std::fs::read_dir(&checkpoint.path).into_iter().flatten();
+    inputs.extend(
+        stored
+            .flatten()
+            .map(|e| Input::new(e.path(), "a file of the checkpoint")),
+    );
+    check(
+        &[Output::file(&args.output, "-o"), checkpoint.clone()],
+        &inputs,
+    )?;
     let settings = TrainSettings {
         fit: args.fit.options()?,
         bake: args.bake.settings(),
@@ -183,10 +222,7 @@ fn train(args: &TrainArgs) -> Result<()> {
         } else {
             ModelFrame::Bone
         },
-        checkpoint: args
-            .checkpoint
-            .clone()
-            .unwrap_or_else(|| Checkpoint::default_dir(&args.output)),
+        checkpoint: checkpoint.path,
         existing: if args.resume {
             OnExisting::Resume
         } else {

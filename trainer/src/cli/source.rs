@@ -7,6 +7,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 
 use crate::bake::clip::pose_all;
+use crate::io::outputs::{Input, gltf_inputs, obj_sequence_inputs};
 use crate::io::source::{Poses, RigSource, obj_sequence_meshes};
 use crate::progress::Reporter;
 use crate::rig::mannequin::MocapOptions;
@@ -61,6 +62,27 @@ pub struct SourceArgs {
 const GLTF_FPS: f64 = 30.0;
 
 impl SourceArgs {
+    /// The files and directories the options read, which no output may be.
+    pub fn inputs(&self) -> Vec<Input> {
+        let mut inputs = Vec::new();
+        if let Some(dir) = &self.obj_seq {
+            inputs.extend(obj_sequence_inputs(dir));
+        }
+        if let Some(csv) = &self.angles {
+            inputs.push(Input::new(csv, "the angles CSV"));
+        }
+        if let Some(gltf) = &self.gltf {
+            inputs.extend(gltf_inputs(gltf));
+        }
+        if let Some(bvh) = &self.bvh {
+            inputs.push(Input::new(bvh, "the BVH motion"));
+        }
+        if let Some(skeleton) = &self.mannequin {
+            inputs.push(Input::new(skeleton, "the mannequin's BVH"));
+        }
+        inputs
+    }
+
     /// Whether a rig (rather than files of meshes or angles) was named.
     pub fn names_rig(&self) -> bool {
         self.builtin || self.gltf.is_some() || self.bvh.is_some()
@@ -118,7 +140,7 @@ impl SourceArgs {
         let Some(dir) = &self.obj_seq else {
             bail!("give a character (--builtin, --gltf or --bvh) or --obj-seq DIR");
         };
-        obj_sequence_meshes(dir)
+        obj_sequence_meshes(dir, reporter)
     }
 
     /// The poses the options name: a rig's clip, or an OBJ sequence with its angles.
@@ -132,7 +154,7 @@ impl SourceArgs {
                 "give a character (--builtin, --gltf or --bvh) or --obj-seq DIR with --angles FILE"
             );
         };
-        Poses::from_obj_sequence(dir, csv)
+        Poses::from_obj_sequence(dir, csv, reporter)
     }
 }
 

@@ -71,12 +71,14 @@ pub fn read_angles(path: &Path, pose_len: Option<usize>) -> Result<Vec<Vec<f64>>
 }
 
 /// Parses angles CSV text; `path` only names the source in errors. With `pose_len`, every row
-/// must have that many cells; without, as many as the first data row.
+/// must have that many cells; without, as many as the first data row. A leading UTF-8
+/// byte-order mark is skipped.
 pub fn parse_angles(
     path: &Path,
     text: &str,
     pose_len: Option<usize>,
 ) -> Result<Vec<Vec<f64>>, AnglesError> {
+    let text = crate::io::without_bom(text);
     let mut rows: Vec<Vec<f64>> = Vec::new();
     let mut first_row = 0;
     for (i, line) in text.lines().enumerate() {
@@ -152,6 +154,14 @@ mod tests {
         )
         .unwrap();
         assert_eq!(rows, vec![vec![0.1, 0.2], vec![-1e-3, 3.0]]);
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_skipped_before_a_header_or_a_number() {
+        for text in ["\u{feff}hip,knee\n0.1,0.2\n", "\u{feff}0.1,0.2\n"] {
+            let rows = parse_angles(Path::new("a.csv"), text, Some(2)).unwrap();
+            assert_eq!(rows, vec![vec![0.1, 0.2]], "{text:?}");
+        }
     }
 
     #[test]

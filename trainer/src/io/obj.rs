@@ -116,8 +116,11 @@ struct Face {
     normals_so_far: usize,
 }
 
-/// Parses OBJ text; `path` is only used in error messages. See [`read_obj`].
+/// Parses OBJ text; `path` is only used in error messages. See [`read_obj`]. A leading UTF-8
+/// byte-order mark is skipped (left in, it would hide the first statement and shift every
+/// face index after it).
 pub fn parse_obj(text: &str, path: &Path) -> Result<Mesh, ObjError> {
+    let text = crate::io::without_bom(text);
     let at = |line: usize| {
         move |kind: LineError| ObjError::Line {
             path: path.to_owned(),
@@ -429,6 +432,17 @@ mod tests {
         assert_eq!(mesh.normals[2], geometric[2]);
         assert_eq!(mesh.normals[3], geometric[3]);
         assert!(mesh.normals.iter().flatten().all(|x| x.is_finite()));
+    }
+
+    /// A file saved with a UTF-8 byte-order mark. Expected: the mark is skipped, so the first
+    /// `v` line is still vertex 1 (it was once lost, shifting every face by one).
+    #[test]
+    fn a_byte_order_mark_does_not_hide_the_first_vertex() {
+        let plain = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\n";
+        let marked = parse(&format!("\u{feff}{plain}")).unwrap();
+        assert_eq!(marked, parse(plain).unwrap());
+        assert_eq!(marked.positions[0], [0.0, 0.0, 0.0]);
+        assert_eq!(marked.triangles, vec![[0, 1, 2]]);
     }
 
     #[test]

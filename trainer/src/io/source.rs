@@ -11,7 +11,7 @@ use crate::progress::Reporter;
 use crate::rig::character::Character;
 use crate::rig::gltf::GltfRig;
 use crate::rig::mannequin::{MocapOptions, MocapRig};
-use crate::rig::mesh::Mesh;
+use crate::rig::mesh::{Mesh, degenerate_note};
 use crate::rig::mocap::Mocap;
 use crate::rig::{Clip, Rig};
 
@@ -37,8 +37,8 @@ pub enum Poses {
 
 impl Poses {
     /// An OBJ sequence (every `.obj` file of `dir`, sorted by name, all with the same mesh)
-    /// with one row of `angles` per file.
-    pub fn from_obj_sequence(dir: &Path, angles: &Path) -> Result<Poses> {
+    /// with one row of `angles` per file. Degenerate triangles are noted to `reporter`.
+    pub fn from_obj_sequence(dir: &Path, angles: &Path, reporter: &dyn Reporter) -> Result<Poses> {
         let files = obj_sequence(dir)?;
         let rows = crate::io::angles::read_angles(angles, None)?;
         if rows.len() != files.len() {
@@ -51,7 +51,7 @@ impl Poses {
             );
         }
         Ok(Poses::Meshes {
-            meshes: read_same_meshes(&files)?,
+            meshes: read_same_meshes(&files, reporter)?,
             files,
             angles: rows,
         })
@@ -59,9 +59,9 @@ impl Poses {
 }
 
 /// The meshes of an OBJ sequence, without angles: every `.obj` file of `dir`, sorted by name,
-/// all with the same mesh.
-pub fn obj_sequence_meshes(dir: &Path) -> Result<Vec<Mesh>> {
-    read_same_meshes(&obj_sequence(dir)?)
+/// all with the same mesh. Degenerate triangles are noted to `reporter`.
+pub fn obj_sequence_meshes(dir: &Path, reporter: &dyn Reporter) -> Result<Vec<Mesh>> {
+    read_same_meshes(&obj_sequence(dir)?, reporter)
 }
 
 /// A character to load, and how to sample its clip.
@@ -95,8 +95,33 @@ impl RigSource {
     /// files of its kind beside it. `clip_name` picks the clip of a character with named clips
     /// (the built-in character's, a glTF file's animations) once it is loaded; a mannequin's
     /// clip is its motion, so it is not asked. Notes on what the clip leaves out (glTF channels
-    /// held at rest, mannequin joints the motion does not animate) go to `reporter`.
+    /// held at rest, mannequin joints the motion does not animate) and the bind mesh's degenerate
+    /// triangles go to `reporter`.
     pub fn load<'a>(
+        &self,
+        clip_name: impl FnOnce(&dyn Rig) -> Result<&'a str>,
+        reporter: &dyn Reporter,
+    ) -> Result<(Box<dyn Rig>, Clip)> {
+        let (rig, clip) = self.load_rig(clip_name, reporter)?;
+        if let Some(note) = degenerate_note(&self.mesh_name(), rig.bind_mesh()) {
+            reporter.note(&note);
+        }
+        Ok((rig, clip))
+    }
+
+    /// What the character's mesh is called in notes.
+    fn mesh_name(&self) -> String {
+        match self {
+            RigSource::Builtin => "the built-in character".to_owned(),
+            RigSource::Gltf { path, .. } => format!("{}, skinned mesh", path.display()),
+            RigSource::Mocap { path, skeleton, .. } => format!(
+                "the mannequin of {}",
+                skeleton.as_deref().unwrap_or(path).display()
+            ),
+        }
+    }
+
+    fn load_rig<'a>(
         &self,
         clip_name: impl FnOnce(&dyn Rig) -> Result<&'a str>,
         reporter: &dyn Reporter,
@@ -226,8 +251,9 @@ fn obj_sequence(dir: &Path) -> Result<Vec<PathBuf>> {
     Ok(files)
 }
 
-/// Reads every file; all must share the first one's vertex count and triangles.
-fn read_same_meshes(files: &[PathBuf]) -> Result<Vec<Mesh>> {
+/// Reads every file; all must share the first one's vertex count and triangles. The first file
+/// with degenerate triangles is noted to `reporter`, once, with how many files have them.
+fn read_same_meshes(files: &[PathBuf], reporter: &dyn Reporter) -> Result<Vec<Mesh>> {
     let mut meshes: Vec<Mesh> = Vec::with_capacity(files.len());
     for file in files {
         let mesh = crate::io::obj::read_obj(file)?;
@@ -245,6 +271,20 @@ fn read_same_meshes(files: &[PathBuf]) -> Result<Vec<Mesh>> {
             );
         }
         meshes.push(mesh);
+    }
+    let mut notes = files
+        .iter()
+        .zip(&meshes)
+        .filter_map(|(file, mesh)| degenerate_note(&file.display().to_string(), mesh));
+    if let Some(first) = notes.next() {
+        let others = notes.count();
+        match others {
+            0 => reporter.note(&first),
+            n => reporter.note(&format!(
+                "{first} (and {n} more of the {} files have such triangles)",
+                files.len()
+            )),
+        }
     }
     Ok(meshes)
 }

@@ -260,6 +260,8 @@ impl Open {
 }
 
 pub(super) fn parse(text: &str) -> Result<Mocap, Failure> {
+    // A leading byte-order mark would glue itself to `HIERARCHY`.
+    let text = crate::io::without_bom(text);
     let mut lex = Lexer::new(text);
     lex.expect("HIERARCHY")?;
     let joints = hierarchy(&mut lex)?;

@@ -64,6 +64,16 @@ fn assert_mat(a: DMat3, b: DMat3) {
     assert!(a.abs_diff_eq(b, 1e-12), "{a} vs {b}");
 }
 
+/// A file saved with a UTF-8 byte-order mark. Expected: read as without it (it was refused,
+/// glued to `HIERARCHY`).
+#[test]
+fn a_byte_order_mark_is_skipped() {
+    assert_eq!(
+        parse(&format!("\u{feff}{SMALL}")).unwrap(),
+        parse(SMALL).unwrap()
+    );
+}
+
 #[test]
 fn hierarchy_channels_and_frames_are_read() {
     let mocap = parse(SMALL).unwrap();

@@ -1,0 +1,396 @@
+//! A command's outputs, checked before any work: none may be one of its inputs (or another of
+//! its outputs), and each must be something [`crate::io::atomic::write_atomic`] can replace.
+//!
+//! Two paths are the same file when their canonical paths are equal or, on Unix, when they
+//! have the same device and inode, so a symlink, a `..` detour or a hard link to an input is
+//! caught as well as the same spelling. An output that does not exist yet cannot be an
+//! existing input; it is still compared by where it would be created with the other outputs.
+
+use std::path::{Path, PathBuf};
+
+use crate::io::atomic::{OutputError, output_target};
+
+/// A file or directory a command reads.
+#[derive(Clone, Debug)]
+pub struct Input {
+    /// The path, as the user gave it or as the input that names it resolves it.
+    pub path: PathBuf,
+    /// What it is to the command, in the user's terms: `the mesh`, `the angles CSV`, `a buffer
+    /// of scene.gltf`, …
+    pub role: String,
+}
+
+impl Input {
+    /// An input called `role`.
+    pub fn new(path: impl Into<PathBuf>, role: impl Into<String>) -> Input {
+        Input {
+            path: path.into(),
+            role: role.into(),
+        }
+    }
+}
+
+/// A path a command writes.
+#[derive(Clone, Debug)]
+pub struct Output {
+    /// The path.
+    pub path: PathBuf,
+    /// How the command line names it: `--npy`, `-o`, `--checkpoint`, …
+    pub flag: String,
+    /// Whether a file is written there (replaced whole) or a directory filled.
+    pub kind: OutputKind,
+}
+
+/// What a command writes at an [`Output`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OutputKind {
+    /// A file, written whole by rename.
+    File,
+    /// A directory the command creates or fills with files of its own.
+    Directory,
+}
+
+impl Output {
+    /// A file written at `path`, named `flag` on the command line.
+    pub fn file(path: impl Into<PathBuf>, flag: impl Into<String>) -> Output {
+        Output {
+            path: path.into(),
+            flag: flag.into(),
+            kind: OutputKind::File,
+        }
+    }
+
+    /// A directory filled at `path`, named `flag` on the command line.
+    pub fn directory(path: impl Into<PathBuf>, flag: impl Into<String>) -> Output {
+        Output {
+            path: path.into(),
+            flag: flag.into(),
+            kind: OutputKind::Directory,
+        }
+    }
+}
+
+/// Why a command's outputs were refused.
+#[derive(Debug, thiserror::Error)]
+pub enum GuardError {
+    /// An output is one of the inputs.
+    #[error(
+        "{flag} {}: that is {role} {}; writing it would destroy the input, so give another output path",
+        output.display(),
+        input.display()
+    )]
+    IsInput {
+        /// The output's flag.
+        flag: String,
+        /// The output as given.
+        output: PathBuf,
+        /// What the input is.
+        role: String,
+        /// The input as given.
+        input: PathBuf,
+    },
+    /// Two outputs are the same path.
+    #[error(
+        "{flag} {} and {other_flag} {} are the same path; each output needs its own",
+        output.display(),
+        other.display()
+    )]
+    SameOutput {
+        /// The first output's flag.
+        flag: String,
+        /// The first output.
+        output: PathBuf,
+        /// The second output's flag.
+        other_flag: String,
+        /// The second output.
+        other: PathBuf,
+    },
+    /// A file output cannot be replaced (it is a FIFO, a device, a directory, a symlink loop).
+    #[error("{flag} {}", path.display())]
+    NotWritable {
+        /// The output's flag.
+        flag: String,
+        /// The output as given.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: OutputError,
+    },
+    /// A directory output exists and is not a directory.
+    #[error("{flag} {}: exists and is not a directory", path.display())]
+    NotADirectory {
+        /// The output's flag.
+        flag: String,
+        /// The output as given.
+        path: PathBuf,
+    },
+}
+
+/// Refuses `outputs` when one of them is one of `inputs` or another output, when a file
+/// output exists and is not a regular file (after following symlinks), or when a directory
+/// output exists and is not a directory. Reads metadata only.
+pub fn check(outputs: &[Output], inputs: &[Input]) -> Result<(), GuardError> {
+    let inputs: Vec<(&Input, Identity)> = inputs
+        .iter()
+        .filter_map(|i| Identity::of(&i.path).map(|id| (i, id)))
+        .collect();
+    let mut seen: Vec<(&Output, PathBuf)> = Vec::new();
+    for output in outputs {
+        let target = match output.kind {
+            OutputKind::File => {
+                output_target(&output.path).map_err(|source| GuardError::NotWritable {
+                    flag: output.flag.clone(),
+                    path: output.path.clone(),
+                    source,
+                })?
+            }
+            OutputKind::Directory => output.path.clone(),
+        };
+        if let Some(id) = Identity::of(&target) {
+            if output.kind == OutputKind::Directory && !target.is_dir() {
+                return Err(GuardError::NotADirectory {
+                    flag: output.flag.clone(),
+                    path: output.path.clone(),
+                });
+            }
+            if let Some((input, _)) = inputs.iter().find(|(_, i)| i.same_as(&id)) {
+                return Err(GuardError::IsInput {
+                    flag: output.flag.clone(),
+                    output: output.path.clone(),
+                    role: input.role.clone(),
+                    input: input.path.clone(),
+                });
+            }
+        }
+        let place = location(&target);
+        if let Some((other, _)) = seen.iter().find(|(_, p)| *p == place) {
+            return Err(GuardError::SameOutput {
+                flag: other.flag.clone(),
+                output: other.path.clone(),
+                other_flag: output.flag.clone(),
+                other: output.path.clone(),
+            });
+        }
+        seen.push((output, place));
+    }
+    Ok(())
+}
+
+/// What makes an existing file the file it is.
+struct Identity {
+    canonical: PathBuf,
+    #[cfg(unix)]
+    device_inode: (u64, u64),
+}
+
+impl Identity {
+    /// The identity of the file `path` names (following symlinks), if it exists.
+    fn of(path: &Path) -> Option<Identity> {
+        let meta = std::fs::metadata(path).ok()?;
+        let canonical = std::fs::canonicalize(path).ok()?;
+        #[cfg(not(unix))]
+        let _ = meta;
+        Some(Identity {
+            canonical,
+            #[cfg(unix)]
+            device_inode: {
+                use std::os::unix::fs::MetadataExt;
+                (meta.dev(), meta.ino())
+            },
+        })
+    }
+
+    fn same_as(&self, other: &Identity) -> bool {
+        #[cfg(unix)]
+        if self.device_inode == other.device_inode {
+            return true;
+        }
+        self.canonical == other.canonical
+    }
+}
+
+/// Where `path` is or would be created: its canonical path if it exists, else its directory's
+/// canonical path joined with its name (or the path made absolute, if the directory is
+/// missing too).
+fn location(path: &Path) -> PathBuf {
+    if let Ok(canonical) = std::fs::canonicalize(path) {
+        return canonical;
+    }
+    let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    match (absolute.parent(), absolute.file_name()) {
+        (Some(dir), Some(name)) => std::fs::canonicalize(dir)
+            .map(|d| d.join(name))
+            .unwrap_or(absolute.clone()),
+        _ => absolute,
+    }
+}
+
+/// The inputs an OBJ sequence directory stands for: the directory and every `.obj` file in it.
+pub fn obj_sequence_inputs(dir: &Path) -> Vec<Input> {
+    let mut inputs = vec![Input::new(dir, "the OBJ sequence directory")];
+    let files = std::fs::read_dir(dir).into_iter().flatten().flatten();
+    for path in files.map(|e| e.path()) {
+        if path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+        {
+            inputs.push(Input::new(path, "a pose of the OBJ sequence"));
+        }
+    }
+    inputs
+}
+
+/// The inputs a glTF file stands for: the file and the external files it references by a
+/// relative path or `file:` URI (buffers and images), resolved as the importer resolves them.
+/// A file that cannot be read or parsed stands for itself alone (the loader reports why).
+pub fn gltf_inputs(path: &Path) -> Vec<Input> {
+    let mut inputs = vec![Input::new(path, "the glTF file")];
+    let Some(json) = gltf_json(path) else {
+        return inputs;
+    };
+    let name = path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into(),
+    );
+    let base = path.parent().unwrap_or(Path::new(""));
+    for (list, what) in [("buffers", "a buffer"), ("images", "an image")] {
+        let items = json.get(list).and_then(|v| v.as_array());
+        for uri in items
+            .into_iter()
+            .flatten()
+            .filter_map(|b| b.get("uri")?.as_str())
+        {
+            if let Some(file) = referenced_file(base, uri) {
+                inputs.push(Input::new(file, format!("{what} of {name}")));
+            }
+        }
+    }
+    inputs
+}
+
+/// The JSON of a `.gltf` file, or the JSON chunk of a `.glb` (binary glTF: a 12-byte header,
+/// then chunks of length, type and data, the JSON chunk first). Reads only that much.
+fn gltf_json(path: &Path) -> Option<serde_json::Value> {
+    use std::io::Read;
+    let mut file = std::fs::File::open(path).ok()?;
+    let mut head = [0u8; 20];
+    let n = file.read(&mut head).ok()?;
+    let text = if n >= 20 && &head[..4] == b"glTF" && &head[16..20] == b"JSON" {
+        let length = u32::from_le_bytes([head[12], head[13], head[14], head[15]]);
+        let length = usize::try_from(length).ok()?;
+        let size = file.metadata().ok()?.len();
+        if length as u64 > size {
+            return None;
+        }
+        let mut chunk = vec![0; length];
+        file.read_exact(&mut chunk).ok()?;
+        chunk
+    } else {
+        let mut all = head[..n].to_vec();
+        file.read_to_end(&mut all).ok()?;
+        all
+    };
+    serde_json::from_slice(&text).ok()
+}
+
+/// The file a glTF URI names, relative to `base`: a relative path (percent-decoded) or a
+/// `file:` URI; `None` for `data:` and other schemes.
+fn referenced_file(base: &Path, uri: &str) -> Option<PathBuf> {
+    if let Some(rest) = uri.strip_prefix("file://").or(uri.strip_prefix("file:")) {
+        return Some(PathBuf::from(rest));
+    }
+    if uri.contains(':') {
+        return None;
+    }
+    let decoded = urlencoding::decode(uri).ok()?;
+    Some(base.join(decoded.as_ref()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn paths(inputs: Vec<Input>) -> Vec<PathBuf> {
+        inputs.into_iter().map(|i| i.path).collect()
+    }
+
+    #[test]
+    fn an_output_that_is_an_input_is_refused_however_it_is_spelled() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("same.obj");
+        std::fs::write(&input, "v 0 0 0\n").unwrap();
+        std::fs::create_dir(dir.path().join("sub")).unwrap();
+        let inputs = [Input::new(&input, "the mesh")];
+        let detour = dir.path().join("sub/../same.obj");
+        let hard = dir.path().join("hard.obj");
+        std::fs::hard_link(&input, &hard).unwrap();
+        let mut spellings = vec![input.clone(), detour, hard];
+        #[cfg(unix)]
+        {
+            let link = dir.path().join("link.npy");
+            std::os::unix::fs::symlink("same.obj", &link).unwrap();
+            spellings.push(link);
+        }
+        for output in spellings {
+            let err = check(&[Output::file(&output, "--npy")], &inputs).unwrap_err();
+            let message = err.to_string();
+            assert!(matches!(err, GuardError::IsInput { .. }), "{message}");
+            assert!(
+                message.contains("that is the mesh") && message.contains("same.obj"),
+                "{message}"
+            );
+        }
+        let fresh = dir.path().join("out.npy");
+        check(&[Output::file(&fresh, "--npy")], &inputs).unwrap();
+    }
+
+    #[test]
+    fn two_outputs_at_one_place_are_refused_before_either_exists() {
+        let dir = tempfile::tempdir().unwrap();
+        let model = dir.path().join("m.aprt");
+        let outputs = [
+            Output::file(&model, "-o"),
+            Output::directory(dir.path().join(".").join("m.aprt"), "--checkpoint"),
+        ];
+        let err = check(&outputs, &[]).unwrap_err().to_string();
+        assert!(err.contains("are the same path"), "{err}");
+    }
+
+    #[test]
+    fn gltf_files_stand_for_their_external_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let gltf = dir.path().join("c.gltf");
+        std::fs::write(
+            &gltf,
+            r#"{"asset":{"version":"2.0"},"buffers":[{"uri":"my%20data.bin","byteLength":4},
+               {"uri":"data:application/octet-stream;base64,AAAA","byteLength":3}],
+               "images":[{"uri":"tex/skin.png"}]}"#,
+        )
+        .unwrap();
+        assert_eq!(
+            paths(gltf_inputs(&gltf)),
+            [
+                gltf.clone(),
+                dir.path().join("my data.bin"),
+                dir.path().join("tex/skin.png")
+            ]
+        );
+        // A GLB's JSON chunk.
+        let json = br#"{"buffers":[{"uri":"ext.bin","byteLength":1}]}"#;
+        let mut glb = b"glTF".to_vec();
+        glb.extend_from_slice(&2u32.to_le_bytes());
+        glb.extend_from_slice(&(20 + json.len() as u32).to_le_bytes());
+        glb.extend_from_slice(&(json.len() as u32).to_le_bytes());
+        glb.extend_from_slice(b"JSON");
+        glb.extend_from_slice(json);
+        let path = dir.path().join("c.glb");
+        std::fs::write(&path, glb).unwrap();
+        assert_eq!(
+            paths(gltf_inputs(&path)),
+            [path.clone(), dir.path().join("ext.bin")]
+        );
+        // Unreadable or not JSON: the file alone.
+        std::fs::write(&path, b"glTF\x02\0\0\0").unwrap();
+        assert_eq!(gltf_inputs(&path).len(), 1);
+    }
+}
