@@ -188,6 +188,8 @@ pub struct Checkpoint {
     manifest: Manifest,
     /// Whether any pose file is in the directory (from an earlier run or this one).
     holds_poses: bool,
+    /// Whether [`Checkpoint::open`] started it (no checkpoint was there).
+    created: bool,
 }
 
 impl Checkpoint {
@@ -263,7 +265,13 @@ impl Checkpoint {
             settings: *settings,
             manifest,
             holds_poses,
+            created: !holds_poses,
         })
+    }
+
+    /// Whether [`Checkpoint::open`] started this checkpoint, there being none to resume.
+    pub fn is_new(&self) -> bool {
+        self.created
     }
 
     fn pose_path(&self, pose: usize) -> PathBuf {

@@ -37,6 +37,7 @@
 //! order and every vertex writes only its own output, so the result is bit-identical for any
 //! thread count (no float reduction crosses threads).
 
+pub mod budget;
 pub mod checkpoint;
 pub mod clip;
 mod directions;

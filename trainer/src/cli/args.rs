@@ -11,6 +11,7 @@ use crate::cli::source::SourceArgs;
 use crate::model::export::ExportError;
 use crate::model::export::Precision;
 use crate::model::fit::{Alpha, CoefDims, Dims, FitOptions};
+use crate::model::train::{OptionError, check_options};
 use crate::report::demo::DemoSettings;
 
 /// `aprt results`.
@@ -191,14 +192,19 @@ impl From<PrecisionArg> for Precision {
 }
 
 impl DemoArgs {
-    /// The demo settings these flags ask for.
-    pub fn settings(&self) -> DemoSettings {
-        DemoSettings {
+    /// The demo settings these flags ask for; a stride of 0 is refused.
+    pub fn settings(&self) -> Result<DemoSettings> {
+        if self.stride == 0 {
+            bail!(
+                "--stride 0: the demo uses every k-th frame, so k must be at least 1 (1 = every frame)"
+            );
+        }
+        Ok(DemoSettings {
             out: self.out.clone(),
             order: self.order as usize,
             rays: self.rays,
             stride: self.stride,
-        }
+        })
     }
 }
 
@@ -242,6 +248,18 @@ impl FitArgs {
                 _ => bail!("--alpha {other}: expected auto, loo, loso or a non-negative number"),
             },
         };
+        check_options(&options).map_err(|e| {
+            let flag = match &e {
+                OptionError::PoseDims(k) => format!("--pose-dims {k}"),
+                OptionError::PoseFraction(f) => format!("--pose-variance {f}"),
+                OptionError::NoCoefDims | OptionError::CoefDims(_) => {
+                    format!("--coef-dims {}", self.coef_dims.unwrap_or_default())
+                }
+                OptionError::CoefFraction(f) => format!("--coef-variance {f}"),
+                OptionError::Alpha(_) => format!("--alpha {}", self.alpha),
+            };
+            anyhow::Error::from(e).context(flag)
+        })?;
         Ok(options)
     }
 }

@@ -18,6 +18,7 @@ pub use args::{
 pub use source::SourceArgs;
 pub use terminal::Terminal;
 
+use crate::bake::budget::Workload;
 use crate::bake::checkpoint::{Checkpoint, OnExisting};
 use crate::io::atomic::write_atomic;
 use crate::io::outputs::{Input, Output, check};
@@ -72,7 +73,7 @@ pub fn run(cli: Cli) -> Result<()> {
 
 fn demo(args: &DemoArgs) -> Result<()> {
     check(&[Output::directory(&args.out, "--out")], &[])?;
-    let markdown = crate::report::demo::run(&args.settings(), &Terminal)?;
+    let markdown = crate::report::demo::run(&args.settings()?, &Terminal)?;
     print!("{markdown}");
     eprintln!(
         "wrote {}/{{model.aprt, report.md, report.json, novel_pose.png, baselines.png}}",
@@ -110,13 +111,20 @@ fn eval(args: &EvalArgs) -> Result<()> {
     let info = crate::model::runtime::describe(&blob)
         .with_context(|| format!("{}: invalid model", args.model.display()))?;
     let model_name = args.model.display().to_string();
+    let n2 = info.order * info.order;
+    // The prediction, its move from bone frames to world space, the array written and its
+    // encoding.
+    let copies = 3 + usize::from(info.bones > 0);
     let transfer = if args.source.names_rig() {
         let (rig, clip) = args.source.rig(&Terminal)?;
         if info.angle_names.is_empty() {
             bail!("{model_name} records no pose-entry names, so a clip cannot be mapped onto it; use --angles");
         }
+        let work = Workload::evaluation(clip.frames.len(), info.vertices, n2, copies);
+        args.source.in_origin(work.check(&format!("clip {}", clip.name)))?;
         predict_clip(&blob, &info, &model_name, rig.as_ref(), &clip)
     } else {
+        args.source.check_flags()?;
         let Some(csv) = &args.source.angles else {
             bail!("give the poses: --angles FILE, or a clip of the model's character");
         };
@@ -124,6 +132,8 @@ fn eval(args: &EvalArgs) -> Result<()> {
         if crate::model::runtime::bone_frames(&blob)?.is_some() {
             bail!("{model_name} learns transfer in bone frames: give its character's clip (not --angles) so the bones' rotations are known");
         }
+        Workload::evaluation(poses.len(), info.vertices, n2, copies)
+            .check(&csv.display().to_string())?;
         predict_world(&blob, &poses, &[])
     }
     .with_context(|| format!("evaluating {model_name}"))?;
@@ -183,7 +193,7 @@ fn results(args: &ResultsArgs) -> Result<()> {
 fn simulate(args: &SimulateArgs) -> Result<()> {
     check(&[Output::file(&args.npy, "--npy")], &args.source.inputs())?;
     let settings = args.bake.settings();
-    let meshes = args.source.meshes(&Terminal)?;
+    let meshes = args.source.meshes(&settings, &Terminal)?;
     let transfer = crate::bake::bake_poses(&meshes, &settings, &Terminal)?;
     let n2 = settings.order * settings.order;
     write_npy(
@@ -229,7 +239,10 @@ fn train(args: &TrainArgs) -> Result<()> {
             OnExisting::Refuse
         },
     };
+    settings.bake.validate()?;
     let poses = args.source.poses(&Terminal)?;
+    args.source
+        .in_origin(crate::model::train::check(&poses, &settings))?;
     let trained = crate::model::train::train(poses, &args.output, &settings, &Terminal)?;
     let info = &trained.info;
     eprintln!(

@@ -6,6 +6,8 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 
+use crate::bake::BakeSettings;
+use crate::bake::budget::Workload;
 use crate::bake::clip::pose_all;
 use crate::io::outputs::{Input, gltf_inputs, obj_sequence_inputs};
 use crate::io::source::{Poses, RigSource, obj_sequence_meshes};
@@ -88,6 +90,76 @@ impl SourceArgs {
         self.builtin || self.gltf.is_some() || self.bvh.is_some()
     }
 
+    /// The source the options name, as a flag, for messages about flags that do not apply.
+    fn kind(&self) -> &'static str {
+        if self.builtin {
+            "--builtin"
+        } else if self.gltf.is_some() {
+            "--gltf"
+        } else if self.bvh.is_some() {
+            "--bvh"
+        } else if self.obj_seq.is_some() {
+            "--obj-seq"
+        } else if self.angles.is_some() {
+            "--angles"
+        } else {
+            "no source"
+        }
+    }
+
+    /// Refuses flags that do not apply to the source named, rather than ignoring them.
+    pub fn check_flags(&self) -> Result<()> {
+        let kind = self.kind();
+        let bvh_only = [
+            ("--frames", self.frames.is_some()),
+            ("--mannequin", self.mannequin.is_some()),
+            ("--no-hat", self.no_hat),
+            ("--root-translation", self.root_translation),
+        ];
+        if self.bvh.is_none()
+            && let Some((flag, _)) = bvh_only.iter().find(|(_, given)| *given)
+        {
+            bail!("{flag} applies to --bvh motion capture only, not to {kind}");
+        }
+        if self.clip.is_some() && !(self.builtin || self.gltf.is_some()) {
+            let instead = if self.bvh.is_some() {
+                ": a BVH file's one clip is its motion (choose frames with --frames A..B)"
+            } else {
+                ""
+            };
+            bail!(
+                "--clip names a glTF animation or a built-in clip; it does not apply to {kind}{instead}"
+            );
+        }
+        if self.fps.is_some() && !(self.gltf.is_some() || self.bvh.is_some()) {
+            bail!("--fps resamples a --gltf or --bvh clip; it does not apply to {kind}");
+        }
+        if self.angles.is_some() && self.names_rig() {
+            bail!(
+                "--angles gives the poses of an OBJ sequence or of a model; {kind} poses the character by its clip"
+            );
+        }
+        Ok(())
+    }
+
+    /// The file the character comes from, to name it in messages; `None` for files of meshes
+    /// or angles, whose own errors name them.
+    pub fn origin(&self) -> Option<String> {
+        if self.builtin {
+            return Some("the built-in character".to_owned());
+        }
+        let path = self.gltf.as_ref().or(self.bvh.as_ref())?;
+        Some(path.display().to_string())
+    }
+
+    /// `result` with the character's file named, when there is one.
+    pub fn in_origin<T, E: Into<anyhow::Error>>(&self, result: Result<T, E>) -> Result<T> {
+        result.map_err(|e| match self.origin() {
+            Some(origin) => e.into().context(origin),
+            None => e.into(),
+        })
+    }
+
     /// The character the options name, if any.
     fn rig_source(&self) -> Option<RigSource> {
         if self.builtin {
@@ -115,6 +187,7 @@ impl SourceArgs {
     /// The rig and clip the options name. Errors when they name no rig. Notes on what the rig
     /// leaves out of the clip go to `reporter`.
     pub fn rig(&self, reporter: &dyn Reporter) -> Result<(Box<dyn Rig>, Clip)> {
+        self.check_flags()?;
         let Some(source) = self.rig_source() else {
             bail!("no character given: use --builtin, --gltf or --bvh (or --obj-seq with --angles)")
         };
@@ -130,21 +203,32 @@ impl SourceArgs {
         })
     }
 
-    /// The meshes to bake, without angles: every OBJ of --obj-seq (--angles is not needed), or
-    /// the rig posed at every frame of its clip.
-    pub fn meshes(&self, reporter: &dyn Reporter) -> Result<Vec<Mesh>> {
+    /// The meshes to bake with `settings`, without angles: every OBJ of --obj-seq (--angles
+    /// is not needed), or the rig posed at every frame of its clip. A bake beyond the budget
+    /// of one run ([`crate::bake::budget`]) is refused before any frame is posed.
+    pub fn meshes(&self, settings: &BakeSettings, reporter: &dyn Reporter) -> Result<Vec<Mesh>> {
+        settings.validate()?;
+        // The bake's result, the array written and its encoding.
+        let copies = 3;
         if self.names_rig() {
             let (rig, clip) = self.rig(reporter)?;
+            let work = Workload::bake(clip.frames.len(), rig.bind_mesh(), settings, copies);
+            self.in_origin(work.check(&format!("clip {}", clip.name)))?;
             return pose_all(rig.as_ref(), &clip.name, &clip.frames);
         }
+        self.check_flags()?;
         let Some(dir) = &self.obj_seq else {
             bail!("give a character (--builtin, --gltf or --bvh) or --obj-seq DIR");
         };
-        obj_sequence_meshes(dir, reporter)
+        let meshes = obj_sequence_meshes(dir, reporter)?;
+        Workload::bake(meshes.len(), &meshes[0], settings, copies)
+            .check(&dir.display().to_string())?;
+        Ok(meshes)
     }
 
     /// The poses the options name: a rig's clip, or an OBJ sequence with its angles.
     pub fn poses(&self, reporter: &dyn Reporter) -> Result<Poses> {
+        self.check_flags()?;
         if self.names_rig() {
             let (rig, clip) = self.rig(reporter)?;
             return Ok(Poses::Rig { rig, clip });

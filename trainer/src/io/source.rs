@@ -10,7 +10,7 @@ use anyhow::{Context, Result, bail};
 use crate::progress::Reporter;
 use crate::rig::character::Character;
 use crate::rig::gltf::GltfRig;
-use crate::rig::mannequin::{MocapOptions, MocapRig};
+use crate::rig::mannequin::{MocapOptions, MocapRig, MocapRigError};
 use crate::rig::mesh::{Mesh, degenerate_note};
 use crate::rig::mocap::Mocap;
 use crate::rig::{Clip, Rig};
@@ -170,18 +170,24 @@ fn mannequin(
     reporter: &dyn Reporter,
 ) -> Result<(Box<dyn Rig>, Clip)> {
     let Some(skeleton) = skeleton else {
-        let rig = MocapRig::from_file(path, options)?;
+        let rig = build_mannequin(path, options)?;
         let frames = frames.unwrap_or(0..rig.mocap().frame_count());
         let clip = rig.clip_range(frames)?;
         return Ok((Box::new(rig), clip));
     };
-    let rig = MocapRig::from_file(skeleton, options)?;
+    let rig = build_mannequin(skeleton, options)?;
     let motion = Mocap::read(path)?;
     let frames = frames.unwrap_or(0..motion.frame_count());
     let name = path
         .file_stem()
         .map_or_else(|| "motion".into(), |s| s.to_string_lossy().into_owned());
-    let retargeted = rig.retarget(&motion, &name, frames)?;
+    let retargeted = rig.retarget(&motion, &name, frames).with_context(|| {
+        format!(
+            "retargeting {} onto the mannequin of {}",
+            path.display(),
+            skeleton.display()
+        )
+    })?;
     if !retargeted.missing.is_empty() {
         reporter.note(&format!(
             "joints of the mannequin that {} does not animate (kept at rest): {}",
@@ -189,7 +195,26 @@ fn mannequin(
             retargeted.missing.join(", ")
         ));
     }
+    if !retargeted.extra.is_empty() {
+        reporter.note(&format!(
+            "joints of {} that the mannequin of {} lacks (their motion is dropped): {} of {}: {}",
+            path.display(),
+            skeleton.display(),
+            retargeted.extra.len(),
+            motion.joints().len(),
+            retargeted.extra.join(", ")
+        ));
+    }
     Ok((Box::new(rig), retargeted.clip))
+}
+
+/// The mannequin of `path`'s skeleton; errors past parsing (a skeleton too large or without
+/// bones) name the file.
+fn build_mannequin(path: &Path, options: &MocapOptions) -> Result<MocapRig> {
+    MocapRig::from_file(path, options).map_err(|e| match e {
+        MocapRigError::Mocap(_) => e.into(),
+        other => anyhow::Error::from(other).context(path.display().to_string()),
+    })
 }
 
 /// Errors when `path` does not exist, listing the files with one of `extensions` that its

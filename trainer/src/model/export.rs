@@ -26,7 +26,7 @@ pub enum Precision {
 }
 
 /// Why a model cannot be written.
-#[derive(Debug, thiserror::Error, PartialEq)]
+#[derive(Clone, Debug, thiserror::Error, PartialEq)]
 pub enum ExportError {
     /// A dimension exceeds what `aprt-core` accepts.
     #[error("{what} = {value} exceeds the runtime limit {max}")]
@@ -60,6 +60,21 @@ pub enum ExportError {
         /// Given count.
         found: usize,
     },
+    /// A dimension is below what a model needs.
+    #[error("{what} = {value} is below the minimum {min}")]
+    TooSmall {
+        /// Which dimension.
+        what: &'static str,
+        /// Its value.
+        value: usize,
+        /// The least the runtime accepts.
+        min: usize,
+    },
+    /// The Tikhonov parameter cannot be stored: the header holds it as an f32.
+    #[error(
+        "alpha {0:e} cannot be stored: a model records alpha as an f32, so it must be finite, at least 0 and at most 3.4e38, and a positive alpha at least 1.4e-45"
+    )]
+    Alpha(f64),
     /// The pose-entry names cannot be recorded.
     #[error("angle names: {problem}")]
     AngleNames {
@@ -69,10 +84,24 @@ pub enum ExportError {
 }
 
 fn limit(what: &'static str, value: usize, min: usize, max: usize) -> Result<(), ExportError> {
-    if value < min || value > max {
+    if value < min {
+        return Err(ExportError::TooSmall { what, value, min });
+    }
+    if value > max {
         return Err(ExportError::TooLarge { what, value, max });
     }
     Ok(())
+}
+
+/// Whether `alpha` survives the header's f32: finite, non-negative, not beyond `f32::MAX`,
+/// and not a positive value that would round to 0.
+pub fn check_alpha(alpha: f64) -> Result<(), ExportError> {
+    let stored = alpha as f32;
+    if alpha.is_finite() && alpha >= 0.0 && stored.is_finite() && (stored > 0.0 || alpha == 0.0) {
+        Ok(())
+    } else {
+        Err(ExportError::Alpha(alpha))
+    }
 }
 
 /// Encodes `values` as one section's bytes, rejecting what the reader would reject.
@@ -161,6 +190,10 @@ pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>
     limit("vertices", v, 1, MAX_VERTICES)?;
     limit("joints", a, 1, MAX_POSE_LEN)?;
     limit("pose dims", ka, 0, MAX_POSE_DIMS.min(a))?;
+    check_alpha(model.alpha)?;
+    if let VertexBasis::Stored { coef_dims, .. } = model.basis {
+        limit("coef dims", coef_dims, 1, MAX_COEF_DIMS)?;
+    }
     let frame = match &model.bones {
         None => Frame::World,
         Some(b) => {
@@ -208,7 +241,6 @@ pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>
     let basis = match &model.basis {
         VertexBasis::Stored { coef_dims, data } => {
             let kv = *coef_dims;
-            limit("coef dims", kv, 1, MAX_COEF_DIMS)?;
             let w = encode(
                 SectionKind::Weights,
                 &model.weights,
@@ -418,5 +450,27 @@ mod tests {
                 ..
             })
         ));
+    }
+
+    #[test]
+    fn refuses_an_alpha_the_header_cannot_hold_and_says_a_dimension_is_too_small() {
+        let stored = VertexBasis::Stored {
+            coef_dims: 2,
+            data: vec![0.5; 6],
+        };
+        let mut m = tiny(stored, 2);
+        for alpha in [1e300, 1e-50, -1.0, f64::NAN] {
+            m.alpha = alpha;
+            let err = encode_model(&m, Precision::F32).unwrap_err();
+            assert!(matches!(err, ExportError::Alpha(_)), "{alpha}: {err}");
+        }
+        m.alpha = 0.0;
+        assert!(encode_model(&m, Precision::F32).is_ok());
+        let empty = VertexBasis::Stored {
+            coef_dims: 0,
+            data: vec![],
+        };
+        let err = encode_model(&tiny(empty, 0), Precision::F32).unwrap_err();
+        assert_eq!(err.to_string(), "coef dims = 0 is below the minimum 1");
     }
 }

@@ -6,16 +6,18 @@ use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
+use aprt_core::{MAX_BONES, MAX_COEF_DIMS, MAX_LIT, MAX_POSE_DIMS, MAX_POSE_LEN, MAX_VERTICES};
 use nalgebra::DMatrix;
 
-use crate::bake::BakeSettings;
+use crate::bake::budget::{BudgetError, Workload};
 use crate::bake::checkpoint::{Checkpoint, OnExisting};
 use crate::bake::clip::{BakedClip, pose_all};
+use crate::bake::{BakeError, BakeSettings};
 use crate::io::atomic::write_atomic;
 use crate::io::source::Poses;
 use crate::model::ModelFrame;
-use crate::model::export::{Precision, encode_model};
-use crate::model::fit::{Fit, FitOptions, fit};
+use crate::model::export::{ExportError, Precision, check_alpha, encode_model};
+use crate::model::fit::{Alpha, CoefDims, Dims, Fit, FitOptions, fit};
 use crate::model::runtime::{BlobInfo, describe};
 use crate::progress::Reporter;
 use crate::rig::Rig;
@@ -69,6 +71,201 @@ pub struct TrainSettings {
     pub existing: OnExisting,
 }
 
+/// A model option that no bake could make valid.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum OptionError {
+    /// More pose dimensions than the runtime holds.
+    #[error("{0} pose dimensions asked for, more than the {MAX_POSE_DIMS} aprt-core holds")]
+    PoseDims(usize),
+    /// A pose-variance fraction outside `(0, 1]`.
+    #[error("the fraction of the pose variance to keep must lie in (0, 1], not {0}{hint}", hint = percent_hint(*.0))]
+    PoseFraction(f64),
+    /// No vertex-basis vectors.
+    #[error(
+        "a model needs at least 1 vertex-basis vector to predict any transfer (or none at all: the full linear model, without vertex reduction)"
+    )]
+    NoCoefDims,
+    /// More vertex-basis vectors than the runtime holds.
+    #[error(
+        "{0} vertex-basis vectors asked for, more than the {MAX_COEF_DIMS} aprt-core holds (the full linear model has no vertex reduction and no such limit)"
+    )]
+    CoefDims(usize),
+    /// A transfer-energy fraction outside `(0, 1]`.
+    #[error("the fraction of the transfer energy to keep must lie in (0, 1], not {0}{hint}", hint = percent_hint(*.0))]
+    CoefFraction(f64),
+    /// A fixed α the model header cannot hold.
+    #[error(transparent)]
+    Alpha(ExportError),
+}
+
+/// For a fraction written as a percentage (`95`), the fraction meant.
+fn percent_hint(f: f64) -> String {
+    if f > 1.0 && f <= 100.0 {
+        format!(" (for {f} % write {})", f / 100.0)
+    } else {
+        String::new()
+    }
+}
+
+/// Checks the model options alone: what the runtime holds and what a fraction or α can be.
+pub fn check_options(options: &FitOptions) -> Result<(), OptionError> {
+    let fraction = |f: f64| f > 0.0 && f <= 1.0;
+    match options.pose_dims {
+        Dims::Count(k) if k > MAX_POSE_DIMS => return Err(OptionError::PoseDims(k)),
+        Dims::Variance(f) if !fraction(f) => return Err(OptionError::PoseFraction(f)),
+        _ => {}
+    }
+    match options.coef_dims {
+        CoefDims::Count(0) => return Err(OptionError::NoCoefDims),
+        CoefDims::Count(k) if k > MAX_COEF_DIMS => return Err(OptionError::CoefDims(k)),
+        CoefDims::Variance(f) if !fraction(f) => return Err(OptionError::CoefFraction(f)),
+        _ => {}
+    }
+    if let Alpha::Fixed(alpha) = options.alpha {
+        check_alpha(alpha).map_err(OptionError::Alpha)?;
+    }
+    Ok(())
+}
+
+/// Why `aprt train` refused its request before baking anything.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum RequestError {
+    /// A bake setting is out of range.
+    #[error(transparent)]
+    Bake(#[from] BakeError),
+    /// A model option is invalid.
+    #[error(transparent)]
+    Option(#[from] OptionError),
+    /// More pose entries than the runtime takes.
+    #[error(
+        "{what}: the model would take {entries} pose entries ({per}), more than the {MAX_POSE_LEN} aprt-core accepts"
+    )]
+    PoseEntries {
+        /// The clip or files.
+        what: String,
+        /// Entries the model would take.
+        entries: usize,
+        /// Where entries come from: `three per moving joint` or `one per column of angles`.
+        per: &'static str,
+    },
+    /// More vertices than a model may have.
+    #[error("{what}: {vertices} vertices, more than the {MAX_VERTICES} a model may have")]
+    Vertices {
+        /// The clip or files.
+        what: String,
+        /// Vertices of the mesh.
+        vertices: usize,
+    },
+    /// More bones than a bone-frame model may have.
+    #[error(
+        "{what}: a bone-frame model of this character needs {bones} bones, more than the {MAX_BONES} aprt-core holds; learn the model in world space instead"
+    )]
+    Bones {
+        /// The clip.
+        what: String,
+        /// Joints of the skin.
+        bones: usize,
+    },
+    /// More lighting weights per frame than the runtime holds.
+    #[error(
+        "{what}: a bone-frame model of {bones} bones with {width} lighting weights per bone needs {total} per frame, more than the {MAX_LIT} aprt-core holds; {hint}",
+        total = bones * width
+    )]
+    Lighting {
+        /// The clip.
+        what: String,
+        /// Bones of the model.
+        bones: usize,
+        /// Lighting weights per bone (k_v, or n² for the full linear model).
+        width: usize,
+        /// What would fit.
+        hint: String,
+    },
+    /// The bake would exceed the budget of one run.
+    #[error(transparent)]
+    Budget(#[from] BudgetError),
+}
+
+/// Checks everything about `poses` and `settings` that needs no bake, before anything is
+/// skinned, baked or written: the bake settings and model options, the runtime's limits on the
+/// model (pose entries, vertices, bones, lighting weights per frame) and the budget of the bake
+/// (frames, memory, rays, checkpoint files; see [`crate::bake::budget`]). [`train`] calls it
+/// first, so a refusal leaves no checkpoint behind.
+///
+/// A vertex-basis count is checked as asked: a bone-frame model of `b` bones holds at most
+/// `MAX_LIT / b` vectors. Limits that depend on the fit (the rank, the vectors a variance
+/// fraction keeps) are checked when the model is written.
+pub fn check(poses: &Poses, settings: &TrainSettings) -> Result<(), RequestError> {
+    settings.bake.validate()?;
+    check_options(&settings.fit)?;
+    let (what, frames, mesh, entries, bones) = match poses {
+        Poses::Meshes {
+            files,
+            meshes,
+            angles,
+        } => {
+            let (Some(file), Some(mesh)) = (files.first(), meshes.first()) else {
+                return Ok(()); // nothing to bake; the fit refuses it
+            };
+            let dir = file.parent().unwrap_or(Path::new("."));
+            let entries = angles.first().map(Vec::len);
+            (dir.display().to_string(), meshes.len(), mesh, entries, None)
+        }
+        Poses::Rig { rig, clip } => {
+            let entries = PoseLayout::from_training(&rig.angle_names(), &clip.frames)
+                .map(|layout| layout.names().len())
+                .ok();
+            let bones = (settings.frame == ModelFrame::Bone).then(|| rig.skin().joint_count());
+            let what = format!("clip {}", clip.name);
+            (what, clip.frames.len(), rig.bind_mesh(), entries, bones)
+        }
+    };
+    if let Some(entries) = entries.filter(|&e| e > MAX_POSE_LEN) {
+        let per = match poses {
+            Poses::Meshes { .. } => "one per column of angles",
+            Poses::Rig { .. } => "three per moving joint",
+        };
+        return Err(RequestError::PoseEntries { what, entries, per });
+    }
+    if mesh.vertex_count() > MAX_VERTICES {
+        let vertices = mesh.vertex_count();
+        return Err(RequestError::Vertices { what, vertices });
+    }
+    if let Some(bones) = bones {
+        if bones > MAX_BONES {
+            return Err(RequestError::Bones { what, bones });
+        }
+        let n2 = settings.bake.order * settings.bake.order;
+        let (width, hint) = match settings.fit.coef_dims {
+            CoefDims::Count(k) => (
+                k,
+                format!("at most {} vertex-basis vectors fit", MAX_LIT / bones),
+            ),
+            CoefDims::Full => (
+                n2,
+                "the full linear model does not fit; keep a vertex basis".to_owned(),
+            ),
+            CoefDims::Variance(_) => (0, String::new()),
+        };
+        if bones * width > MAX_LIT {
+            return Err(RequestError::Lighting {
+                what,
+                bones,
+                width,
+                hint,
+            });
+        }
+    }
+    // The bake's result, its copy in bone frames, and the full model's f64 outputs.
+    let copies = 1
+        + usize::from(bones.is_some())
+        + 2 * usize::from(settings.fit.coef_dims == CoefDims::Full);
+    Workload::bake(frames, mesh, &settings.bake, copies)
+        .with_checkpoint()
+        .check(&what)?;
+    Ok(())
+}
+
 /// What [`train`] wrote.
 #[derive(Debug)]
 pub struct Trained {
@@ -87,6 +284,7 @@ pub fn train(
     settings: &TrainSettings,
     reporter: &dyn Reporter,
 ) -> Result<Trained> {
+    check(&poses, settings)?;
     let (fitted, checkpoint, poses) = match poses {
         Poses::Meshes {
             files,
@@ -155,6 +353,12 @@ fn bake_checkpointed(
         &settings.bake,
         meshes,
     )?;
+    if settings.existing == OnExisting::Resume && checkpoint.is_new() {
+        reporter.note(&format!(
+            "note: nothing to resume: {} held no checkpoint, so every pose is baked",
+            settings.checkpoint.display()
+        ));
+    }
     let transfer = checkpoint.bake(meshes, name, reporter)?;
     Ok((transfer, checkpoint))
 }

@@ -172,18 +172,12 @@ pub(crate) fn capsule_profile(
     (r1, h1): (f64, f64),
 ) -> Vec<(f64, f64)> {
     let quarter = std::f64::consts::FRAC_PI_2;
-    let cap_samples = |r: f64, h: f64| samples(quarter * r.max(h), step);
+    let (n0, shaft, n1) = capsule_samples(step, length, (r0, h0), (r1, h1));
     let mut out = Vec::new();
-    let n0 = cap_samples(r0, h0);
     for k in 0..n0 {
         let phi = quarter * k as f64 / n0 as f64;
         out.push((-h0 * phi.cos(), r0 * phi.sin()));
     }
-    let shaft = if length > 0.0 {
-        samples(length, step)
-    } else {
-        0
-    };
     for k in 0..=shaft {
         let t = if shaft == 0 {
             0.0
@@ -192,12 +186,46 @@ pub(crate) fn capsule_profile(
         };
         out.push((length * t, r0 + (r1 - r0) * t));
     }
-    let n1 = cap_samples(r1, h1);
     for k in (0..n1).rev() {
         let phi = quarter * k as f64 / n1 as f64;
         out.push((length + h1 * phi.cos(), r1 * phi.sin()));
     }
     out
+}
+
+/// Samples of [`capsule_profile`]'s first cap, shaft (one fewer than its points) and last cap.
+fn capsule_samples(
+    step: f64,
+    length: f64,
+    (r0, h0): (f64, f64),
+    (r1, h1): (f64, f64),
+) -> (usize, usize, usize) {
+    let quarter = std::f64::consts::FRAC_PI_2;
+    let cap_samples = |r: f64, h: f64| samples(quarter * r.max(h), step);
+    let shaft = if length > 0.0 {
+        samples(length, step)
+    } else {
+        0
+    };
+    (cap_samples(r0, h0), shaft, cap_samples(r1, h1))
+}
+
+/// Vertices of a lathe of `segments` around [`capsule_profile`] of these arguments, counted
+/// without building it (saturating, for sizes no mesh could have): two poles and a ring per
+/// profile point in between.
+pub(crate) fn capsule_vertices(
+    segments: usize,
+    step: f64,
+    length: f64,
+    start: (f64, f64),
+    end: (f64, f64),
+) -> usize {
+    let (n0, shaft, n1) = capsule_samples(step, length, start, end);
+    let points = n0
+        .saturating_add(shaft)
+        .saturating_add(1)
+        .saturating_add(n1);
+    (points - 2).saturating_mul(segments).saturating_add(2)
 }
 
 /// A smooth profile through `points` (centripetal Catmull–Rom, which neither overshoots nor

@@ -33,8 +33,12 @@ use glam::{DQuat, DVec3};
 use crate::rig::character::body::{
     CROWN, HAT_ORIGIN, HEAD_CENTRE, NOSE_ORIGIN, RING_STEP, hat, head, nose,
 };
-use crate::rig::lathe::{self, Band, Lathe, Part, band, capsule_profile};
+use crate::rig::lathe::{self, Band, Lathe, Part, band, capsule_profile, capsule_vertices};
 use crate::rig::mocap::{Joint, Mocap};
+
+/// Most vertices a mannequin's bones may have: the most a model may have
+/// (`aprt_core::MAX_VERTICES`). A CMU skeleton gives about 10k.
+pub(super) const MAX_VERTICES: usize = aprt_core::MAX_VERTICES;
 
 /// Pipe-model constant (see the module docs).
 const PIPE: f64 = 0.057;
@@ -61,6 +65,15 @@ pub(super) struct Built {
     pub height: f64,
 }
 
+/// Why a skeleton gives no surface.
+pub(super) enum Refusal {
+    /// No bone has a nonzero length.
+    NoBones,
+    /// The bones' capsules would have this many vertices, more than [`MAX_VERTICES`] (bones
+    /// very long for the skeleton's height, which sets the ring spacing).
+    TooManyVertices(usize),
+}
+
 /// A bone with a surface: from `start` to `end` (mesh frame), driven by `joint`; `child` is
 /// the joint at its end, `None` for an End Site.
 struct Bone {
@@ -78,21 +91,19 @@ impl Bone {
 }
 
 /// Builds the surface for `mocap` whose rest joint positions (file frame) are `rest`;
-/// `to_mesh` turns file axes into mesh axes. `None` if no bone has a nonzero length.
+/// `to_mesh` turns file axes into mesh axes. Refused if no bone has a nonzero length, or if
+/// the bones would have more than [`MAX_VERTICES`] vertices (counted before any is made).
 pub(super) fn build(
     mocap: &Mocap,
     rest: &[DVec3],
     to_mesh: DQuat,
     with_hat: bool,
-) -> Option<Built> {
+) -> Result<Built, Refusal> {
     let joints = mocap.joints();
     let at: Vec<DVec3> = rest.iter().map(|&p| to_mesh * p).collect();
-    let height = rest_height(mocap, &at, to_mesh)?;
+    let height = rest_height(mocap, &at, to_mesh).ok_or(Refusal::NoBones)?;
     let eps = ZERO_LENGTH * height;
     let mut bones = bones(mocap, &at, to_mesh, eps);
-    if bones.is_empty() {
-        return None;
-    }
     pipe_radii(&mut bones, joints, &at, height, eps);
     let scale = height / CROWN;
     let step = COARSER * RING_STEP * scale;
@@ -100,13 +111,25 @@ pub(super) fn build(
         .iter()
         .enumerate()
         .max_by(|(_, a), (_, b)| a.end.z.total_cmp(&b.end.z))
-        .map(|(i, _)| i)?;
-
-    let mut parts: Vec<(String, Part)> = bones
+        .map(|(i, _)| i)
+        .ok_or(Refusal::NoBones)?;
+    let shaped: Vec<(&Bone, Shape)> = bones
         .iter()
         .enumerate()
         .filter(|&(i, _)| i != head_bone)
-        .map(|(_, bone)| bone_part(bone, &bones, joints, step))
+        .map(|(_, bone)| (bone, shape(bone, &bones, step)))
+        .collect();
+    let vertices = shaped
+        .iter()
+        .map(|(bone, s)| s.vertices(bone, step))
+        .fold(0usize, usize::saturating_add);
+    if vertices > MAX_VERTICES {
+        return Err(Refusal::TooManyVertices(vertices));
+    }
+
+    let mut parts: Vec<(String, Part)> = shaped
+        .into_iter()
+        .map(|(bone, shape)| bone_part(bone, shape, joints, step))
         .collect();
     let bone = &bones[head_bone];
     let centre = 0.5 * (bone.start + bone.end);
@@ -120,7 +143,7 @@ pub(super) fn build(
         parts.push(("hat".into(), hat(from_head(HAT_ORIGIN), scale, bone.joint)));
     }
     let (names, parts): (Vec<String>, Vec<Part>) = parts.into_iter().unzip();
-    Some(Built {
+    Ok(Built {
         body: lathe::build(parts),
         names,
         height,
@@ -198,9 +221,26 @@ fn pipe_radii(bones: &mut [Bone], joints: &[Joint], at: &[DVec3], height: f64, e
     }
 }
 
-/// The tapered capsule around `bone`, sampled every `step`, blending into the joints at its
-/// ends over the half-widths the bones there allow.
-fn bone_part(bone: &Bone, bones: &[Bone], joints: &[Joint], step: f64) -> (String, Part) {
+/// How a bone's capsule is shaped: radii at its ends, segments around it, and the bands that
+/// blend it into the joints at its ends.
+struct Shape {
+    r0: f64,
+    r1: f64,
+    segments: usize,
+    bands: Vec<Band>,
+}
+
+impl Shape {
+    /// Vertices of the capsule around `bone` sampled every `step`.
+    fn vertices(&self, bone: &Bone, step: f64) -> usize {
+        let (r0, r1) = (self.r0, self.r1);
+        capsule_vertices(self.segments, step, bone.length(), (r0, r0), (r1, r1))
+    }
+}
+
+/// The shape of the tapered capsule around `bone`, sampled every `step`, blending into the
+/// joints at its ends over the half-widths the bones there allow.
+fn shape(bone: &Bone, bones: &[Bone], step: f64) -> Shape {
     let thickest_from = |j: usize| {
         bones
             .iter()
@@ -215,8 +255,6 @@ fn bone_part(bone: &Bone, bones: &[Bone], joints: &[Joint], step: f64) -> (Strin
         });
         (BLEND * r).min(0.5 * len)
     };
-    let length = bone.length();
-    let axis = (bone.end - bone.start) / length;
     let r0 = bone.radius;
     let r1 = bone
         .child
@@ -225,9 +263,28 @@ fn bone_part(bone: &Bone, bones: &[Bone], joints: &[Joint], step: f64) -> (Strin
         .min(r0);
     let mut bands: Vec<Band> = vec![band(0.0, half_width(bone.joint), bone.joint)];
     if let Some(c) = bone.child {
-        bands.push(band(length, half_width(c), c));
+        bands.push(band(bone.length(), half_width(c), c));
     }
-    let segments = ((std::f64::consts::TAU * r0 / (AROUND * step)) / 4.0).ceil() as usize * 4;
+    // Multiples of 4 from 12 to 48, clamped before the cast so no radius overflows it.
+    let quarters = ((std::f64::consts::TAU * r0 / (AROUND * step)) / 4.0).ceil();
+    Shape {
+        r0,
+        r1,
+        segments: (quarters.clamp(3.0, 12.0) as usize).max(3) * 4,
+        bands,
+    }
+}
+
+/// The capsule around `bone` of shape `shape`, sampled every `step`.
+fn bone_part(bone: &Bone, shape: Shape, joints: &[Joint], step: f64) -> (String, Part) {
+    let length = bone.length();
+    let axis = (bone.end - bone.start) / length;
+    let Shape {
+        r0,
+        r1,
+        segments,
+        bands,
+    } = shape;
     (
         format!(
             "{}-{}",
@@ -240,7 +297,7 @@ fn bone_part(bone: &Bone, bones: &[Bone], joints: &[Joint], step: f64) -> (Strin
                 axis,
                 side: axis.any_orthonormal_vector(),
                 scale: (1.0, 1.0),
-                segments: segments.clamp(12, 48),
+                segments,
                 profile: capsule_profile(step, length, (r0, r0), (r1, r1)),
             },
             base: joints[bone.joint].parent.unwrap_or(bone.joint),

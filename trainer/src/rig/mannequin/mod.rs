@@ -34,11 +34,17 @@ use std::path::Path;
 
 use glam::{DAffine3, DQuat, DVec3, Mat4};
 
+use crate::bake::budget::MAX_FRAMES;
 use crate::rig::mesh::Mesh;
 use crate::rig::mocap::{Mocap, MocapError};
 use crate::rig::rotation_vector;
 use crate::rig::skin::Skin;
-use crate::rig::{Clip, MAX_FRAMES, PoseError, Rig, RigError, check_pose};
+use crate::rig::{Clip, PoseError, Rig, RigError, check_pose};
+
+/// Most joints a mannequin is built for: the most bones a model may have
+/// (`aprt_core::MAX_BONES`). Checked right after parsing, before any surface is made, so a
+/// file of thousands of joints is refused at once instead of growing a mesh of gigabytes.
+pub const MAX_JOINTS: usize = aprt_core::MAX_BONES;
 
 /// How to build a [`MocapRig`].
 #[derive(Clone, Debug, PartialEq)]
@@ -86,13 +92,39 @@ pub enum MocapRigError {
         /// Frames available.
         count: usize,
     },
-    /// A resampling rate so high that the clip would exceed [`MAX_FRAMES`].
-    #[error("{clip:?} resampled at {fps} fps would have more than {MAX_FRAMES} frames")]
+    /// A skeleton with more joints than a mannequin is built for.
+    #[error(
+        "the skeleton of {clip:?} has {joints} joints; a mannequin is built for at most {MAX_JOINTS} (aprt-core's bone limit; a CMU skeleton has 31)"
+    )]
+    TooManyJoints {
+        /// The clip (file stem).
+        clip: String,
+        /// Joints of the skeleton.
+        joints: usize,
+    },
+    /// A skeleton whose mannequin would have more vertices than a model may have.
+    #[error(
+        "the mannequin of {clip:?} would have {vertices} vertices, more than the {} a model may have (its bones are very long for its height, which sets the ring spacing)",
+        body::MAX_VERTICES
+    )]
+    TooManyVertices {
+        /// The clip (file stem).
+        clip: String,
+        /// Vertices its bones would have.
+        vertices: usize,
+    },
+    /// A clip (at the rate asked for) of more frames than one run bakes or evaluates,
+    /// refused before any frame is sampled.
+    #[error(
+        "{clip:?} at {fps} fps would have {frames:.0} frames, more than the {MAX_FRAMES} one run bakes or evaluates: take fewer frames or a lower frame rate"
+    )]
     TooManyFrames {
         /// The clip.
         clip: String,
-        /// The requested frame rate.
+        /// The frame rate.
         fps: f64,
+        /// Frames the clip would have.
+        frames: f64,
     },
     /// A resampling rate that is not a positive finite number.
     #[error("frame rate {fps} is not a positive finite number")]
@@ -178,10 +210,21 @@ impl MocapRig {
         if let Some(fps) = options.fps {
             check_fps(fps)?;
         }
-        let rest = mocap.rest_positions();
-        let body = body::build(&mocap, &rest, to_mesh_frame(), options.hat).ok_or_else(|| {
-            MocapRigError::NoBones {
+        let joints = mocap.joints().len();
+        if joints > MAX_JOINTS {
+            return Err(MocapRigError::TooManyJoints {
                 clip: clip_name.into(),
+                joints,
+            });
+        }
+        let rest = mocap.rest_positions();
+        let body = body::build(&mocap, &rest, to_mesh_frame(), options.hat).map_err(|refusal| {
+            let clip = clip_name.into();
+            match refusal {
+                body::Refusal::NoBones => MocapRigError::NoBones { clip },
+                body::Refusal::TooManyVertices(vertices) => {
+                    MocapRigError::TooManyVertices { clip, vertices }
+                }
             }
         })?;
         let bind = Mesh::with_area_weighted_normals(body.body.positions, body.body.triangles);
@@ -324,6 +367,7 @@ impl MocapRig {
             return Err(MocapRigError::TooManyFrames {
                 clip: name.into(),
                 fps,
+                frames: n,
             });
         }
         let n = n as usize;

@@ -130,7 +130,7 @@ fn pose_errors_name_the_entry() {
     assert!(
         matches!(
             fast.clip("figure"),
-            Err(e) if e.to_string().contains("would have more than 864000 frames")
+            Err(e) if e.to_string().contains("frames, more than the 10000 one run bakes or evaluates")
         ),
         "an unbounded resampling must be refused"
     );
@@ -209,4 +209,53 @@ fn skeletons_without_bones_and_motions_without_shared_joints_are_refused() {
         r.retarget(&mocap, "point", 0..1).unwrap_err().to_string(),
         "no joint of \"point\" has the name of a joint of this mannequin"
     );
+}
+
+/// A BVH skeleton: `joints` (name, parent, offset) with three rotation channels each, one
+/// End Site on the last, and one frame of zeros.
+fn skeleton_text(joints: &[(String, Option<usize>, [f64; 3])]) -> String {
+    let mut text = String::from("HIERARCHY\n");
+    let mut open: Vec<usize> = Vec::new();
+    for (j, (name, parent, [x, y, z])) in joints.iter().enumerate() {
+        while open.last().is_some_and(|&o| Some(o) != *parent) {
+            text += "}\n";
+            open.pop();
+        }
+        let kind = if parent.is_none() { "ROOT" } else { "JOINT" };
+        text += &format!("{kind} {name}\n{{\nOFFSET {x} {y} {z}\n");
+        text += "CHANNELS 3 Zrotation Xrotation Yrotation\n";
+        open.push(j);
+    }
+    text += "End Site\n{\nOFFSET 0 1 0\n}\n";
+    text += &"}\n".repeat(open.len());
+    text += &format!(
+        "MOTION\nFrames: 1\nFrame Time: 0.1\n{}\n",
+        vec!["0"; 3 * joints.len()].join(" ")
+    );
+    text
+}
+
+#[test]
+fn skeletons_a_model_cannot_hold_are_refused_before_any_surface_is_made() {
+    let chain: Vec<_> = (0..=MAX_JOINTS)
+        .map(|j| (format!("j{j}"), j.checked_sub(1), [0.0, 1.0, 0.0]))
+        .collect();
+    let mocap = Mocap::parse(&skeleton_text(&chain), Path::new("chain.bvh")).unwrap();
+    let err = MocapRig::from_mocap(mocap, "chain", &MocapOptions::default()).unwrap_err();
+    assert!(
+        matches!(err, MocapRigError::TooManyJoints { joints: 257, .. }),
+        "{err}"
+    );
+    // One bone 10⁵ units long under a skeleton 0.01 units tall: rings every 1.7e-4 units.
+    let long = [
+        ("root".to_owned(), None, [0.0; 3]),
+        ("arm".to_owned(), Some(0), [1e5, 0.0, 0.0]),
+    ];
+    let text = skeleton_text(&long).replace("OFFSET 0 1 0", "OFFSET 0 0.01 0");
+    let mocap = Mocap::parse(&text, Path::new("long.bvh")).unwrap();
+    let err = MocapRig::from_mocap(mocap, "long", &MocapOptions::default()).unwrap_err();
+    match err {
+        MocapRigError::TooManyVertices { vertices, .. } => assert!(vertices > 1 << 30),
+        other => panic!("{other}"),
+    }
 }
