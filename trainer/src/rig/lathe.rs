@@ -157,9 +157,15 @@ fn emit(part: &Part, body: &mut Body) {
     }
 }
 
-/// Number of samples to cover `length` at `step`, at least one.
+/// Most rings one stretch of a profile gets: a bone thousands of times longer than the
+/// character is tall (a hostile BVH offset) would otherwise allocate without bound. Real
+/// bones get a few dozen.
+const MAX_SAMPLES: usize = 4096;
+
+/// Number of samples to cover `length` at `step`, from one to [`MAX_SAMPLES`] (one for a
+/// ratio that is not a number).
 fn samples(length: f64, step: f64) -> usize {
-    ((length / step).ceil() as usize).max(1)
+    ((length / step).ceil() as usize).clamp(1, MAX_SAMPLES)
 }
 
 /// Profile of a tapered capsule of axial length `length` with elliptical end caps: radius

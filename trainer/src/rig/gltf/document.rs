@@ -307,28 +307,10 @@ fn external_file(uri: &str, base: Option<&Path>) -> Result<PathBuf, String> {
             "its uri {uri:?} has an unsupported scheme: only data: URIs and files can be read"
         ));
     }
-    let decoded = percent_decode(uri).ok_or_else(|| {
+    let decoded = urlencoding::decode(uri).map_err(|_| {
         format!("its uri {uri:?} is not a valid percent-encoded UTF-8 relative path")
     })?;
-    Ok(base.join(decoded))
-}
-
-/// `%XY` escapes decoded; `None` for a bad escape or bytes that are not UTF-8.
-fn percent_decode(text: &str) -> Option<String> {
-    let bytes = text.as_bytes();
-    let mut out = Vec::with_capacity(bytes.len());
-    let mut i = 0;
-    while i < bytes.len() {
-        if bytes[i] == b'%' {
-            let hex = std::str::from_utf8(bytes.get(i + 1..i + 3)?).ok()?;
-            out.push(u8::from_str_radix(hex, 16).ok()?);
-            i += 3;
-        } else {
-            out.push(bytes[i]);
-            i += 1;
-        }
-    }
-    String::from_utf8(out).ok()
+    Ok(base.join(decoded.as_ref()))
 }
 
 /// The bytes of a regular file, at most `limit` of them: a device or FIFO (named on the command

@@ -203,7 +203,7 @@ fn check_scales(
             let scale = rest[n].scale;
             if scale.abs().min_element() < f64::from(f32::MIN_POSITIVE) {
                 return Err((
-                    format!("node {n} ({})", node_names[n]),
+                    format!("node {n} {:?}", node_names[n]),
                     format!(
                         "has scale {:?}: a zero scale collapses the skinned mesh",
                         scale.to_array()

@@ -26,8 +26,9 @@ use super::load::item;
 /// Most vertices the merged skinned meshes may have: what a model blob can hold.
 pub const MAX_VERTICES: usize = aprt_core::MAX_VERTICES;
 /// Most indices the merged skinned meshes may have (or vertices, for non-indexed primitives):
-/// 128 MiB of `u32`, eight triangles per vertex at the vertex limit.
-pub const MAX_INDICES: usize = 3 * 8 * MAX_VERTICES;
+/// 128 MiB of `u32`, eight indices (two to three triangles) per vertex at the vertex limit;
+/// closed meshes have about six.
+pub const MAX_INDICES: usize = 8 * MAX_VERTICES;
 /// Most key times plus key values over all animation channels (256 MiB as f64 quaternions).
 pub const MAX_KEYS: usize = 1 << 23;
 

@@ -69,8 +69,9 @@ impl Doc {
                 path
             }
             Form::External => {
-                json["buffers"][0]["uri"] = "external.bin".into();
-                std::fs::write(dir.join("external.bin"), &self.bin).unwrap();
+                // Percent-encoded, as URIs are: the file is "external data.bin".
+                json["buffers"][0]["uri"] = "external%20data.bin".into();
+                std::fs::write(dir.join("external data.bin"), &self.bin).unwrap();
                 let path = dir.join("external.gltf");
                 std::fs::write(&path, json.to_string()).unwrap();
                 path
@@ -452,7 +453,7 @@ fn errors_name_the_file_and_the_item() {
     );
 
     let (dir, _) = load(&two_joint_doc(), Form::External);
-    std::fs::remove_file(dir.path().join("external.bin")).unwrap();
+    std::fs::remove_file(dir.path().join("external data.bin")).unwrap();
     let text = GltfRig::load(&dir.path().join("external.gltf"), 30.0)
         .unwrap_err()
         .to_string();
@@ -465,7 +466,7 @@ fn errors_name_the_file_and_the_item() {
     )
     .map(ToString::to_string);
     assert!(source.is_some_and(|s| s.contains("No such file")));
-    assert!(text.ends_with("external.bin"), "{text}");
+    assert!(text.ends_with("external data.bin"), "{text}");
 
     let (_dir, rig) = load(&two_joint_doc(), Form::Embedded);
     let rig = rig.unwrap();
