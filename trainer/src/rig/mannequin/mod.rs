@@ -213,7 +213,7 @@ impl MocapRig {
         }
         let rest = mocap.rest_positions();
         let extent = rest_extent(&mocap, &rest);
-        if !(extent <= MAX_EXTENT) {
+        if extent.is_nan() || extent > MAX_EXTENT {
             return Err(MocapRigError::Extent {
                 clip: clip_name.into(),
                 extent,
