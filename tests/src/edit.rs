@@ -73,7 +73,7 @@ pub fn reseal(blob: &[u8]) -> Vec<u8> {
 }
 
 /// One random edit of a blob; positions wrap around the blob's length.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, arbitrary::Arbitrary)]
 pub enum Mutation {
     /// Flip one bit.
     Flip {

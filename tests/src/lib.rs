@@ -5,6 +5,7 @@
 pub mod decode;
 pub mod edit;
 pub mod harness;
+pub mod loaders;
 pub mod quadrature;
 pub mod reference;
 pub mod samples;

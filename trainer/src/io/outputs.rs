@@ -9,6 +9,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::io::atomic::{OutputError, output_target};
+use crate::rig::gltf::external_file;
 
 /// A file or directory a command reads.
 #[derive(Clone, Debug)]
@@ -260,7 +261,7 @@ pub fn gltf_inputs(path: &Path) -> Vec<Input> {
             .flatten()
             .filter_map(|b| b.get("uri")?.as_str())
         {
-            if let Some(file) = referenced_file(base, uri) {
+            if let Ok(file) = external_file(uri, Some(base)) {
                 inputs.push(Input::new(file, format!("{what} of {name}")));
             }
         }
@@ -291,19 +292,6 @@ fn gltf_json(path: &Path) -> Option<serde_json::Value> {
         all
     };
     serde_json::from_slice(&text).ok()
-}
-
-/// The file a glTF URI names, relative to `base`: a relative path (percent-decoded) or a
-/// `file:` URI; `None` for `data:` and other schemes.
-fn referenced_file(base: &Path, uri: &str) -> Option<PathBuf> {
-    if let Some(rest) = uri.strip_prefix("file://").or(uri.strip_prefix("file:")) {
-        return Some(PathBuf::from(rest));
-    }
-    if uri.contains(':') {
-        return None;
-    }
-    let decoded = urlencoding::decode(uri).ok()?;
-    Some(base.join(decoded.as_ref()))
 }
 
 #[cfg(test)]

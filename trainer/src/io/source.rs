@@ -9,7 +9,7 @@ use anyhow::{Context, Result, bail};
 
 use crate::progress::Reporter;
 use crate::rig::character::Character;
-use crate::rig::gltf::GltfRig;
+use crate::rig::gltf::{GltfError, GltfRig};
 use crate::rig::mannequin::{MocapOptions, MocapRig, MocapRigError};
 use crate::rig::mesh::{Mesh, degenerate_note};
 use crate::rig::mocap::Mocap;
@@ -135,6 +135,9 @@ impl RigSource {
             RigSource::Gltf { path, fps } => {
                 must_exist(path, &["gltf", "glb"])?;
                 let rig = GltfRig::load(path, *fps)?;
+                if rig.clip_names().is_empty() {
+                    return Err(GltfError::NoAnimations { path: path.clone() }.into());
+                }
                 let clip = rig.clip(clip_name(&rig)?)?;
                 for held in rig
                     .held_channels()

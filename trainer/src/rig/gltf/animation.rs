@@ -66,7 +66,7 @@ impl Animation {
                 let (property, max_deviation) = match track {
                     Track::Translation(c) => ("translation", max_distance(c, rest.translation)),
                     Track::Scale(c) => ("scale", max_distance(c, rest.scale)),
-                    Track::Rotation(_) if skeleton.joints.contains(node) => return None,
+                    Track::Rotation(_) if skeleton.is_joint(*node) => return None,
                     Track::Rotation(c) => (
                         "rotation",
                         c.key_values()

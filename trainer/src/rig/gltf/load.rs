@@ -2,6 +2,7 @@
 //! mesh nodes, the node hierarchy, and the animations as curves. Every check that can fail on
 //! a malformed file happens here, once, so posing and sampling cannot fail later.
 
+use std::collections::HashMap;
 use std::path::Path;
 
 use glam::{DMat4, DQuat, DVec3};
@@ -12,6 +13,7 @@ use super::GltfError;
 use super::animation::{Animation, Track};
 use super::curve::{Curve, Interpolation};
 use super::skeleton::{Skeleton, Trs};
+use super::spec;
 use crate::rig::mesh::{Mesh, area_weighted_normals};
 use crate::rig::skin::Skin;
 
@@ -30,7 +32,7 @@ pub struct Parts {
 type Influences = Vec<Vec<(u32, f32)>>;
 
 /// `kind index "name"`, the way every error names an item.
-fn item(kind: &str, index: usize, name: Option<&str>) -> String {
+pub fn item(kind: &str, index: usize, name: Option<&str>) -> String {
     match name {
         Some(name) => format!("{kind} {index} {name:?}"),
         None => format!("{kind} {index}"),
@@ -39,17 +41,23 @@ fn item(kind: &str, index: usize, name: Option<&str>) -> String {
 
 /// Reads `path` (`.gltf` with embedded or external buffers, or `.glb`).
 pub fn read(path: &Path) -> Result<Parts, GltfError> {
-    let read_error = |source| GltfError::Read {
+    let bytes = super::document::read_regular(path, None).map_err(|source| GltfError::Read {
         path: path.to_path_buf(),
         source,
-    };
-    let gltf = gltf::Gltf::open(path).map_err(read_error)?;
-    let buffers = gltf::import_buffers(&gltf.document, path.parent(), gltf.blob.clone())
-        .map_err(read_error)?;
-    let doc = &gltf.document;
+    })?;
+    parse(&bytes, path, path.parent())
+}
+
+/// Reads the document in `bytes` (the contents of `path`, which messages name); external
+/// buffers are read relative to `base`, and refused without one.
+pub fn parse(bytes: &[u8], path: &Path, base: Option<&Path>) -> Result<Parts, GltfError> {
+    let loaded = super::document::parse(bytes, path, base)?;
+    let (doc, buffers) = (&loaded.document, &loaded.buffers[..]);
     let invalid = invalid_in(path);
 
     let (skinned, skin) = skinned_nodes(doc, path)?;
+    // Before any reader of the gltf crate touches an accessor.
+    spec::check(doc, buffers, &skinned, &skin).map_err(|(item, problem)| invalid(item, problem))?;
     let node_names = node_names(doc);
     let parents = parents(doc).map_err(|(node, problem)| {
         invalid(
@@ -63,8 +71,17 @@ pub fn read(path: &Path) -> Result<Parts, GltfError> {
     if joints.is_empty() {
         return Err(invalid(skin_item, "has no joints".into()));
     }
-    let inverse_bind = inverse_binds(&skin, &buffers, joints.len(), path)?;
-    let (bind, influences) = merge_primitives(&skinned, &buffers, joints.len(), path)?;
+    check_scales(&rest, &parents, &joints, skinned[0].index(), &node_names)
+        .map_err(|(node, problem)| invalid(node, problem))?;
+    let joint_names: Vec<&str> = joints.iter().map(|&j| node_names[j].as_str()).collect();
+    let inverse_bind = inverse_binds(&skin, buffers, &joint_names, path)?;
+    let (bind, influences) = merge_primitives(&skinned, buffers, joints.len(), path)?;
+    if bind.triangles.is_empty() {
+        return Err(invalid(
+            "skinned meshes".into(),
+            "no triangles: there is no surface to bake".into(),
+        ));
+    }
     let skin = Skin::from_influences(&influences).map_err(|source| GltfError::Skin {
         path: path.to_path_buf(),
         source,
@@ -74,7 +91,7 @@ pub fn read(path: &Path) -> Result<Parts, GltfError> {
         bind,
         skin,
         skeleton,
-        animations: animations(doc, &buffers, &node_names, path)?,
+        animations: animations(doc, buffers, &node_names, path)?,
         node_names,
     })
 }
@@ -125,7 +142,9 @@ fn skinned_nodes<'d>(
     Ok((skinned, skin))
 }
 
-/// Every node's rest transform, which must be finite with a nonzero rotation.
+/// Every node's rest transform, which must be finite with a nonzero rotation; a `matrix` must
+/// be a translation, rotation and scale, as glTF requires (a shear or projection has no TRS
+/// to animate from).
 fn rest_transforms(doc: &gltf::Document, path: &Path) -> Result<Vec<Trs>, GltfError> {
     let invalid = invalid_in(path);
     doc.nodes()
@@ -137,53 +156,116 @@ fn rest_transforms(doc: &gltf::Document, path: &Path) -> Result<Vec<Trs>, GltfEr
                 rotation: rotation.normalize(),
                 scale: DVec3::from_array(s.map(f64::from)),
             };
+            let node = || item("node", n.index(), n.name());
             let finite =
                 trs.translation.is_finite() && trs.rotation.is_finite() && trs.scale.is_finite();
-            if finite {
-                Ok(trs)
-            } else {
-                Err(invalid(
-                    item("node", n.index(), n.name()),
-                    "its transform is not finite or its rotation is zero".into(),
-                ))
+            if !finite {
+                return Err(invalid(
+                    node(),
+                    "its transform is not finite, its rotation is zero or its matrix is singular"
+                        .into(),
+                ));
             }
+            if let gltf::scene::Transform::Matrix { matrix } = n.transform() {
+                let m = DMat4::from_cols_array_2d(&matrix.map(|c| c.map(f64::from)));
+                let size = m
+                    .to_cols_array()
+                    .iter()
+                    .fold(1.0, |a: f64, v| a.max(v.abs()));
+                if !m.abs_diff_eq(trs.matrix(), 1e-4 * size) {
+                    return Err(invalid(
+                        node(),
+                        "its matrix is not a translation, rotation and scale (it shears or \
+                         projects), which glTF requires of a node's matrix"
+                            .into(),
+                    ));
+                }
+            }
+            Ok(trs)
         })
         .collect()
 }
 
-/// The skin's inverse bind matrices, one per joint (`joint_count` of them).
+/// Errors `(node, problem)` when a joint, the skinned mesh node or an ancestor of one has a
+/// zero scale: it collapses the mesh below it, and the bind pose has no inverse.
+fn check_scales(
+    rest: &[Trs],
+    parents: &[Option<usize>],
+    joints: &[usize],
+    mesh_node: usize,
+    node_names: &[String],
+) -> Result<(), (String, String)> {
+    let mut seen = vec![false; rest.len()];
+    for &start in joints.iter().chain([&mesh_node]) {
+        let mut node = Some(start);
+        while let Some(n) = node.filter(|&n| !seen[n]) {
+            seen[n] = true;
+            let scale = rest[n].scale;
+            if scale.abs().min_element() < f64::from(f32::MIN_POSITIVE) {
+                return Err((
+                    format!("node {n} {:?}", node_names[n]),
+                    format!(
+                        "has scale {:?}: a zero scale collapses the skinned mesh",
+                        scale.to_array()
+                    ),
+                ));
+            }
+            node = parents[n];
+        }
+    }
+    Ok(())
+}
+
+/// The skin's inverse bind matrices, one per joint (`joint_names` in skin order): finite,
+/// invertible, with the fourth row `[0, 0, 0, 1]` glTF requires. (The accessor's type and
+/// count were checked by [`spec::check`].)
 fn inverse_binds(
     skin: &gltf::Skin,
     buffers: &[gltf::buffer::Data],
-    joint_count: usize,
+    joint_names: &[&str],
     path: &Path,
 ) -> Result<Vec<DMat4>, GltfError> {
     let invalid = invalid_in(path);
     let get = |b: gltf::Buffer| buffers.get(b.index()).map(|d| d.0.as_slice());
-    let skin_item = item("skin", skin.index(), skin.name());
-    Ok(match skin.inverse_bind_matrices() {
+    let Some(accessor) = skin.inverse_bind_matrices() else {
         // glTF: without the accessor every inverse bind matrix is the identity.
-        None => vec![DMat4::IDENTITY; joint_count],
-        Some(accessor) => {
-            let matrices: Vec<DMat4> = skin
-                .reader(get)
-                .read_inverse_bind_matrices()
-                .ok_or_else(|| unreadable(&invalid, &accessor))?
-                .map(|m| DMat4::from_cols_array_2d(&m.map(|c| c.map(f64::from))))
-                .collect();
-            if matrices.len() < joint_count || !matrices.iter().all(|m| m.is_finite()) {
-                return Err(invalid(
-                    format!("{skin_item} accessor {}", accessor.index()),
-                    format!(
-                        "needs {} finite inverse bind matrices, has {} (or some are not finite)",
-                        joint_count,
-                        matrices.len()
-                    ),
-                ));
-            }
-            matrices[..joint_count].to_vec()
-        }
-    })
+        return Ok(vec![DMat4::IDENTITY; joint_names.len()]);
+    };
+    let matrices: Vec<DMat4> = skin
+        .reader(get)
+        .read_inverse_bind_matrices()
+        .ok_or_else(|| unreadable(&invalid, &accessor))?
+        .take(joint_names.len())
+        .map(|m| DMat4::from_cols_array_2d(&m.map(|c| c.map(f64::from))))
+        .collect();
+    for (k, (m, joint)) in matrices.iter().zip(joint_names).enumerate() {
+        let problem = if !m.is_finite() {
+            "holds a value that is not finite"
+        } else if singular(m) {
+            "is singular (its 3×3 part has no inverse): it would collapse the joint's vertices"
+        } else if !m.row(3).abs_diff_eq(glam::DVec4::W, 1e-3) {
+            "does not have the fourth row [0, 0, 0, 1] glTF requires"
+        } else {
+            continue;
+        };
+        return Err(invalid(
+            format!(
+                "{} accessor {} matrix {k} (joint {joint:?})",
+                item("skin", skin.index(), skin.name()),
+                accessor.index()
+            ),
+            format!("{problem}: {:?}", m.to_cols_array()),
+        ));
+    }
+    Ok(matrices)
+}
+
+/// Whether the linear part of `m` (finite) has, relative to its columns' lengths, no inverse.
+fn singular(m: &DMat4) -> bool {
+    let a = glam::DMat3::from_mat4(*m);
+    let lengths = a.x_axis.length() * a.y_axis.length() * a.z_axis.length();
+    // Hadamard: |det| ≤ the product of the column lengths, with equality for orthogonal ones.
+    a.determinant().abs() <= 1e-9 * lengths
 }
 
 /// Every primitive of the skinned nodes merged in order into the bind mesh (vertices in
@@ -291,10 +373,14 @@ fn node_names(doc: &gltf::Document) -> Vec<String> {
                 .map_or_else(|| format!("node{}", n.index()), str::to_owned)
         })
         .collect();
+    let mut uses: HashMap<&str, usize> = HashMap::new();
+    for name in &base {
+        *uses.entry(name).or_default() += 1;
+    }
     base.iter()
         .enumerate()
         .map(|(i, name)| {
-            if base.iter().filter(|b| *b == name).count() > 1 {
+            if uses[name.as_str()] > 1 {
                 format!("{name}#{i}")
             } else {
                 name.clone()
@@ -304,7 +390,7 @@ fn node_names(doc: &gltf::Document) -> Vec<String> {
 }
 
 /// Each node's parent; a node listed as the child of two nodes, or a cycle, is an error
-/// `(node, problem)`.
+/// `(node, problem)`. Linear in the number of nodes.
 fn parents(doc: &gltf::Document) -> Result<Vec<Option<usize>>, (usize, String)> {
     let count = doc.nodes().len();
     let mut parents = vec![None; count];
@@ -318,19 +404,23 @@ fn parents(doc: &gltf::Document) -> Result<Vec<Option<usize>>, (usize, String)> 
             }
         }
     }
+    // Walk up from each node, marking the walk with its start; meeting the mark again is a
+    // cycle, meeting a node an earlier walk finished is not.
+    const DONE: usize = usize::MAX;
+    let mut mark = vec![0; count];
     for start in 0..count {
-        let mut node = start;
-        for _ in 0..count {
-            match parents[node] {
-                Some(p) => node = p,
-                None => break,
+        let mut node = Some(start);
+        while let Some(n) = node.filter(|&n| mark[n] != DONE) {
+            if mark[n] == start + 1 {
+                return Err((n, "is its own ancestor (the node graph has a cycle)".into()));
             }
+            mark[n] = start + 1;
+            node = parents[n];
         }
-        if parents[node].is_some() {
-            return Err((
-                start,
-                "is its own ancestor (the node graph has a cycle)".into(),
-            ));
+        let mut node = Some(start);
+        while let Some(n) = node.filter(|&n| mark[n] == start + 1) {
+            mark[n] = DONE;
+            node = parents[n];
         }
     }
     Ok(parents)

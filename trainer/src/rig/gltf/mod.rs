@@ -48,9 +48,12 @@
 
 mod animation;
 pub mod curve;
+mod document;
 mod load;
 mod skeleton;
+mod spec;
 
+pub(crate) use document::external_file;
 use std::path::{Path, PathBuf};
 
 use glam::{DVec3, Mat4, Vec3};
@@ -65,13 +68,33 @@ use skeleton::{Skeleton, Trs};
 /// item (mesh, primitive, accessor, node, skin, animation channel) and what is wrong with it.
 #[derive(Debug, thiserror::Error)]
 pub enum GltfError {
-    /// The file could not be read or parsed, or a buffer could not be loaded.
+    /// The file could not be read.
     #[error("cannot read {path}", path = path.display())]
     Read {
         /// The file.
         path: PathBuf,
-        /// What the `gltf` crate reported.
-        source: gltf::Error,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The external file of a buffer could not be read.
+    #[error("{path}: {buffer}: cannot read {file}", path = path.display(), file = file.display())]
+    Buffer {
+        /// The glTF file.
+        path: PathBuf,
+        /// The buffer, e.g. `buffer 0 "mesh"`.
+        buffer: String,
+        /// The file its URI names.
+        file: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The bytes are not a glTF document: empty, truncated GLB, JSON that does not parse.
+    #[error("{path}: {problem}", path = path.display())]
+    Malformed {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, with the byte, line or column where known.
+        problem: String,
     },
     /// No node has both a mesh and a skin.
     #[error("{path}: glTF without a skin: no node has both a mesh and a skin, so it cannot be posed", path = path.display())]
@@ -119,6 +142,12 @@ pub enum GltfError {
         /// What is wrong with the pose.
         #[source]
         source: PoseError,
+    },
+    /// The file has no animations, so there is no clip to sample.
+    #[error("{path}: the file has no animations, so it has no clip to pose the character with", path = path.display())]
+    NoAnimations {
+        /// The file.
+        path: PathBuf,
     },
     /// No clip has the requested name.
     #[error("{path}: no clip named {name:?}; available: {available}", path = path.display())]
@@ -193,10 +222,20 @@ impl GltfRig {
     /// Loads `path` (`.gltf` with embedded or external buffers, or `.glb`); clips will be
     /// sampled at `fps` frames per second.
     pub fn load(path: &Path, fps: f64) -> Result<GltfRig, GltfError> {
-        if !(fps.is_finite() && fps > 0.0) {
-            return Err(GltfError::Fps { fps });
-        }
-        let parts = load::read(path)?;
+        check_fps(fps)?;
+        GltfRig::from_parts(load::read(path)?, path, fps)
+    }
+
+    /// Reads a document from `bytes` (a `.gltf`'s JSON or a `.glb`), as [`GltfRig::load`]
+    /// reads the file `path`, which messages name. Buffers must be embedded (`data:` URIs or
+    /// the GLB's BIN chunk): an external file is refused, as there is no directory to read it
+    /// from.
+    pub fn from_slice(bytes: &[u8], path: &Path, fps: f64) -> Result<GltfRig, GltfError> {
+        check_fps(fps)?;
+        GltfRig::from_parts(load::parse(bytes, path, None)?, path, fps)
+    }
+
+    fn from_parts(parts: load::Parts, path: &Path, fps: f64) -> Result<GltfRig, GltfError> {
         let joint_names: Vec<String> = parts
             .skeleton
             .joints
@@ -267,6 +306,11 @@ impl GltfRig {
 
     /// The animation called `name` and its frame times `min(i/fps, end)`, `i = 0..=⌈end·fps⌉`.
     fn frame_times(&self, name: &str) -> Result<(&Animation, Vec<f64>), GltfError> {
+        if self.animations.is_empty() {
+            return Err(GltfError::NoAnimations {
+                path: self.path.clone(),
+            });
+        }
         let animation = self
             .animations
             .iter()
@@ -306,6 +350,14 @@ impl GltfRig {
                 crate::rig::rotation_vector::log(delta).to_array()
             })
             .collect()
+    }
+}
+
+fn check_fps(fps: f64) -> Result<(), GltfError> {
+    if fps.is_finite() && fps > 0.0 {
+        Ok(())
+    } else {
+        Err(GltfError::Fps { fps })
     }
 }
 

@@ -44,10 +44,15 @@ pub struct Skeleton {
     /// Joints and their ancestors, parents before children: the nodes whose world matrix
     /// the joint matrices need.
     order: Vec<usize>,
+    /// Whether each node is in `order`.
+    moves: Vec<bool>,
+    /// Whether each node is a joint.
+    is_joint: Vec<bool>,
 }
 
 impl Skeleton {
     /// Builds the skeleton; `parents` must be a forest (the file was checked for cycles).
+    /// Linear in the number of nodes.
     pub fn new(
         parents: Vec<Option<usize>>,
         rest: Vec<Trs>,
@@ -55,24 +60,32 @@ impl Skeleton {
         inverse_bind: Vec<DMat4>,
         mesh_node: usize,
     ) -> Skeleton {
-        let mut needed = vec![false; parents.len()];
+        let count = parents.len();
+        let mut moves = vec![false; count];
+        let mut is_joint = vec![false; count];
         for &joint in &joints {
+            is_joint[joint] = true;
             let mut node = Some(joint);
-            while let Some(n) = node.filter(|&n| !needed[n]) {
-                needed[n] = true;
+            while let Some(n) = node.filter(|&n| !moves[n]) {
+                moves[n] = true;
                 node = parents[n];
             }
         }
-        let depth = |mut n: usize| {
-            let mut d = 0;
-            while let Some(p) = parents[n] {
-                n = p;
-                d += 1;
+        // Breadth first from the roots: every parent comes before its children.
+        let mut children = vec![Vec::new(); count];
+        for (n, parent) in parents.iter().enumerate() {
+            if let Some(p) = parent {
+                children[*p].push(n);
             }
-            d
-        };
-        let mut order: Vec<usize> = (0..parents.len()).filter(|&n| needed[n]).collect();
-        order.sort_by_key(|&n| depth(n));
+        }
+        let mut order: Vec<usize> = (0..count)
+            .filter(|&n| parents[n].is_none() && moves[n])
+            .collect();
+        let mut next = 0;
+        while let Some(&n) = order.get(next) {
+            order.extend(children[n].iter().filter(|&&c| moves[c]));
+            next += 1;
+        }
         let mut skeleton = Skeleton {
             parents,
             rest,
@@ -80,6 +93,8 @@ impl Skeleton {
             inverse_bind,
             world_to_mesh: DMat4::IDENTITY,
             order,
+            moves,
+            is_joint,
         };
         skeleton.world_to_mesh = skeleton.rest_world(mesh_node).inverse();
         skeleton
@@ -88,7 +103,12 @@ impl Skeleton {
     /// Whether `node` is a joint or an ancestor of one, i.e. whether its transform moves the
     /// mesh.
     pub fn moves_the_mesh(&self, node: usize) -> bool {
-        self.order.contains(&node)
+        self.moves[node]
+    }
+
+    /// Whether `node` is one of the skin's joints.
+    pub fn is_joint(&self, node: usize) -> bool {
+        self.is_joint[node]
     }
 
     /// World matrix of `node` with every node at rest.

@@ -69,8 +69,9 @@ impl Doc {
                 path
             }
             Form::External => {
-                json["buffers"][0]["uri"] = "external.bin".into();
-                std::fs::write(dir.join("external.bin"), &self.bin).unwrap();
+                // Percent-encoded, as URIs are: the file is "external data.bin".
+                json["buffers"][0]["uri"] = "external%20data.bin".into();
+                std::fs::write(dir.join("external data.bin"), &self.bin).unwrap();
                 let path = dir.join("external.gltf");
                 std::fs::write(&path, json.to_string()).unwrap();
                 path
@@ -452,11 +453,20 @@ fn errors_name_the_file_and_the_item() {
     );
 
     let (dir, _) = load(&two_joint_doc(), Form::External);
-    std::fs::remove_file(dir.path().join("external.bin")).unwrap();
+    std::fs::remove_file(dir.path().join("external data.bin")).unwrap();
     let text = GltfRig::load(&dir.path().join("external.gltf"), 30.0)
         .unwrap_err()
         .to_string();
-    assert!(text.contains("external.gltf"), "{text}");
+    assert!(
+        text.contains("external.gltf") && text.contains("buffer 0: cannot read"),
+        "{text}"
+    );
+    let source = std::error::Error::source(
+        &GltfRig::load(&dir.path().join("external.gltf"), 30.0).unwrap_err(),
+    )
+    .map(ToString::to_string);
+    assert!(source.is_some_and(|s| s.contains("No such file")));
+    assert!(text.ends_with("external data.bin"), "{text}");
 
     let (_dir, rig) = load(&two_joint_doc(), Form::Embedded);
     let rig = rig.unwrap();
@@ -511,6 +521,36 @@ fn clips_unwrap_rotations_through_half_turns() {
         let animated = rig.animated_joint_matrices("spin", i).unwrap();
         for (a, b) in rig.joint_matrices(pose).unwrap().iter().zip(&animated) {
             assert!(a.abs_diff_eq(*b, 1e-5), "frame {i}: {a:?} vs {b:?}");
+        }
+    }
+}
+
+/// The same document from bytes: embedded and binary forms load as from the file; an external
+/// buffer is refused, as there is no directory to read it from.
+#[test]
+fn from_slice_reads_embedded_and_binary_documents_and_refuses_external_buffers() {
+    let doc = two_joint_doc();
+    for form in [Form::Embedded, Form::Glb, Form::External] {
+        let dir = tempfile::tempdir().unwrap();
+        let path = doc.write(dir.path(), form);
+        let bytes = std::fs::read(&path).unwrap();
+        let from_bytes = GltfRig::from_slice(&bytes, Path::new("memory.gltf"), 4.0);
+        match form {
+            Form::External => {
+                let text = from_bytes.unwrap_err().to_string();
+                assert!(
+                    text.starts_with("memory.gltf: buffer 0: names the external file"),
+                    "{text}"
+                );
+            }
+            _ => {
+                let (from_file, rig) = (GltfRig::load(&path, 4.0).unwrap(), from_bytes.unwrap());
+                assert_eq!(rig.bind_mesh(), from_file.bind_mesh(), "{form:?}");
+                assert_eq!(
+                    rig.clip("linear").unwrap(),
+                    from_file.clip("linear").unwrap()
+                );
+            }
         }
     }
 }

@@ -34,6 +34,7 @@ use std::path::Path;
 
 use glam::{DAffine3, DQuat, DVec3, Mat4};
 
+use crate::bake::MAX_EXTENT;
 use crate::bake::budget::MAX_FRAMES;
 use crate::rig::mesh::Mesh;
 use crate::rig::mocap::{Mocap, MocapError};
@@ -79,6 +80,17 @@ pub enum MocapRigError {
     NoBones {
         /// The clip (file stem).
         clip: String,
+    },
+    /// The rest skeleton reaches farther from the origin than a bake can represent.
+    #[error(
+        "the skeleton of {clip:?} reaches {extent:e} from the origin at rest, beyond the \
+         {MAX_EXTENT:e} a bake can represent"
+    )]
+    Extent {
+        /// The clip (file stem).
+        clip: String,
+        /// The largest coordinate of a joint or End Site (infinite when the offsets overflow).
+        extent: f64,
     },
     /// A requested frame range is empty or runs past the end of the motion.
     #[error("frames {start}..{end} of {clip:?}: the motion has {count} frames (0..{count})")]
@@ -186,6 +198,27 @@ pub struct MocapRig {
     parts: Vec<(String, Range<usize>)>,
 }
 
+/// The largest coordinate of any joint or End Site at rest (NaN or infinite when the offsets
+/// overflow).
+fn rest_extent(mocap: &Mocap, rest: &[DVec3]) -> f64 {
+    let ends = mocap
+        .joints()
+        .iter()
+        .zip(rest)
+        .flat_map(|(joint, &at)| joint.end_sites.iter().map(move |&e| at + e));
+    rest.iter()
+        .copied()
+        .chain(ends)
+        .map(|p| p.abs().max_element())
+        .fold(0.0, |m: f64, x| {
+            if m.is_nan() || x.is_nan() {
+                f64::NAN
+            } else {
+                m.max(x)
+            }
+        })
+}
+
 /// The file-to-mesh change of axes: y-up to z-up (see the module docs).
 fn to_mesh_frame() -> DQuat {
     DQuat::from_rotation_x(std::f64::consts::FRAC_PI_2)
@@ -218,6 +251,13 @@ impl MocapRig {
             });
         }
         let rest = mocap.rest_positions();
+        let extent = rest_extent(&mocap, &rest);
+        if extent.is_nan() || extent > MAX_EXTENT {
+            return Err(MocapRigError::Extent {
+                clip: clip_name.into(),
+                extent,
+            });
+        }
         let body = body::build(&mocap, &rest, to_mesh_frame(), options.hat).map_err(|refusal| {
             let clip = clip_name.into();
             match refusal {

@@ -101,8 +101,10 @@ pub enum Problem {
         /// The token.
         token: String,
     },
-    /// `Frame Time` is zero or negative.
-    #[error("Frame Time must be a positive number of seconds, found {value}")]
+    /// `Frame Time` is zero or negative, or so small that its frame rate is infinite.
+    #[error(
+        "Frame Time must be a positive number of seconds with a finite frame rate, found {value:?}"
+    )]
     BadFrameTime {
         /// The value given.
         value: f64,
@@ -500,7 +502,8 @@ fn motion(lex: &mut Lexer, joints: Vec<Joint>, text_len: usize) -> Result<Mocap,
     lex.expect("Frame")?;
     let line = lex.expect("Time:")?;
     let frame_time = lex.number("the frame time")?;
-    if frame_time <= 0.0 {
+    // 1e-320 is positive, but its frame rate overflows to infinity and resampling to NaN.
+    if frame_time <= 0.0 || !(1.0 / frame_time).is_finite() {
         return Err((line, Problem::BadFrameTime { value: frame_time }));
     }
     if let Some(&extra) = lex.rest_of_line().first() {

@@ -243,7 +243,8 @@ fn errors_name_the_file_line_and_problem() {
         ),
         (
             SMALL.replace("Frame Time: 0.5", "Frame Time: 0"),
-            "test.bvh:27: Frame Time must be a positive number of seconds, found 0",
+            "test.bvh:27: Frame Time must be a positive number of seconds with a finite frame rate, \
+             found 0.0",
         ),
     ];
     for (text, message) in cases {
