@@ -314,14 +314,21 @@ fn no_animations_is_said_without_clip_too() {
     assert!(!line.contains("available:"), "{line}");
 }
 
+/// `missing-bin.gltf` with its buffer's URI replaced by `uri`, written as `name` in a new
+/// temporary directory.
+fn with_buffer_uri(name: &str, uri: &str) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let ok = std::fs::read_to_string(fixtures().join("missing-bin.gltf")).unwrap();
+    let gltf = dir.path().join(name);
+    std::fs::write(&gltf, ok.replace("missing.bin", uri)).unwrap();
+    (dir, gltf)
+}
+
 /// A buffer URI naming a device or a FIFO is refused without reading it (a FIFO would block
 /// and /dev/zero never ends).
 #[test]
 fn a_buffer_uri_naming_a_device_is_not_read() {
-    let dir = tempfile::tempdir().unwrap();
-    let ok = std::fs::read_to_string(fixtures().join("missing-bin.gltf")).unwrap();
-    let gltf = dir.path().join("device.gltf");
-    std::fs::write(&gltf, ok.replace("missing.bin", "file:///dev/zero")).unwrap();
+    let (_dir, gltf) = with_buffer_uri("device.gltf", "file:///dev/zero");
     let start = Instant::now();
     refused(
         "train",
@@ -433,10 +440,7 @@ fn bvh_fuzz_findings_are_refused() {
 /// gltf crate's own import panicked on it.
 #[test]
 fn a_buffer_uri_that_does_not_decode_is_refused() {
-    let dir = tempfile::tempdir().unwrap();
-    let ok = std::fs::read_to_string(fixtures().join("missing-bin.gltf")).unwrap();
-    let gltf = dir.path().join("escape.gltf");
-    std::fs::write(&gltf, ok.replace("missing.bin", "%FF.bin")).unwrap();
+    let (_dir, gltf) = with_buffer_uri("escape.gltf", "%FF.bin");
     refused(
         "train",
         &gltf,

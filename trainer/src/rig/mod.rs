@@ -60,6 +60,16 @@ pub enum PoseError {
     },
 }
 
+/// Refuses, with `error(fps)`, a sampling rate that is not a positive finite number of frames
+/// per second.
+pub(crate) fn check_fps<E>(fps: f64, error: impl FnOnce(f64) -> E) -> Result<(), E> {
+    if fps.is_finite() && fps > 0.0 {
+        Ok(())
+    } else {
+        Err(error(fps))
+    }
+}
+
 /// Checks a pose vector against a rig of `expected` entries; `name(i)` names entry `i`.
 pub fn check_pose(
     pose: &[f64],

@@ -60,7 +60,7 @@ use glam::{DVec3, Mat4, Vec3};
 
 use crate::rig::mesh::Mesh;
 use crate::rig::skin::{Skin, SkinError};
-use crate::rig::{Clip, MAX_FRAMES, PoseError, Rig, RigError, check_pose};
+use crate::rig::{Clip, MAX_FRAMES, PoseError, Rig, RigError, check_fps, check_pose};
 use animation::Animation;
 use skeleton::{Skeleton, Trs};
 
@@ -222,7 +222,7 @@ impl GltfRig {
     /// Loads `path` (`.gltf` with embedded or external buffers, or `.glb`); clips will be
     /// sampled at `fps` frames per second.
     pub fn load(path: &Path, fps: f64) -> Result<GltfRig, GltfError> {
-        check_fps(fps)?;
+        check_fps(fps, |fps| GltfError::Fps { fps })?;
         GltfRig::from_parts(load::read(path)?, path, fps)
     }
 
@@ -231,7 +231,7 @@ impl GltfRig {
     /// the GLB's BIN chunk): an external file is refused, as there is no directory to read it
     /// from.
     pub fn from_slice(bytes: &[u8], path: &Path, fps: f64) -> Result<GltfRig, GltfError> {
-        check_fps(fps)?;
+        check_fps(fps, |fps| GltfError::Fps { fps })?;
         GltfRig::from_parts(load::parse(bytes, path, None)?, path, fps)
     }
 
@@ -350,14 +350,6 @@ impl GltfRig {
                 crate::rig::rotation_vector::log(delta).to_array()
             })
             .collect()
-    }
-}
-
-fn check_fps(fps: f64) -> Result<(), GltfError> {
-    if fps.is_finite() && fps > 0.0 {
-        Ok(())
-    } else {
-        Err(GltfError::Fps { fps })
     }
 }
 

@@ -40,7 +40,7 @@ use crate::rig::mesh::Mesh;
 use crate::rig::mocap::{Mocap, MocapError};
 use crate::rig::rotation_vector;
 use crate::rig::skin::Skin;
-use crate::rig::{Clip, PoseError, Rig, RigError, check_pose};
+use crate::rig::{Clip, PoseError, Rig, RigError, check_fps, check_pose};
 
 /// Most joints a mannequin is built for: the most bones a model may have
 /// (`aprt_core::MAX_BONES`). Checked right after parsing, before any surface is made, so a
@@ -241,7 +241,7 @@ impl MocapRig {
         options: &MocapOptions,
     ) -> Result<MocapRig, MocapRigError> {
         if let Some(fps) = options.fps {
-            check_fps(fps)?;
+            check_fps(fps, |fps| MocapRigError::BadFps { fps })?;
         }
         let joints = mocap.joints().len();
         if joints > MAX_JOINTS {
@@ -468,14 +468,6 @@ fn frame_step(ratio: f64) -> f64 {
         whole
     } else {
         ratio
-    }
-}
-
-fn check_fps(fps: f64) -> Result<(), MocapRigError> {
-    if fps.is_finite() && fps > 0.0 {
-        Ok(())
-    } else {
-        Err(MocapRigError::BadFps { fps })
     }
 }
 
