@@ -33,10 +33,6 @@ use mannequin::MocapRigError;
 use mesh::Mesh;
 use skin::{Skin, SkinError, skin};
 
-/// Most frames one sampled clip may have (an hour at 240 fps): a guard against a malformed
-/// end time or frame rate turning into an unbounded allocation.
-pub const MAX_FRAMES: usize = 240 * 3600;
-
 /// Why a pose vector cannot pose a rig.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum PoseError {

@@ -58,9 +58,10 @@ use std::path::{Path, PathBuf};
 
 use glam::{DVec3, Mat4, Vec3};
 
+use crate::bake::budget::MAX_FRAMES;
 use crate::rig::mesh::Mesh;
 use crate::rig::skin::{Skin, SkinError};
-use crate::rig::{Clip, MAX_FRAMES, PoseError, Rig, RigError, check_fps, check_pose};
+use crate::rig::{Clip, PoseError, Rig, RigError, check_fps, check_pose};
 use animation::Animation;
 use skeleton::{Skeleton, Trs};
 
@@ -323,14 +324,18 @@ impl GltfRig {
         let end = animation.end();
         // The tolerance keeps an end that is a whole number of frames up to rounding (e.g.
         // 1.25 s at 24 fps) from gaining a near-duplicate last frame.
+        // Refused before any frame is sampled: a frame rate or end time that asks for more
+        // frames than one run bakes would otherwise allocate them first.
         let intervals = (end * self.fps - 1e-9).ceil().max(0.0);
         if intervals >= MAX_FRAMES as f64 {
             return Err(GltfError::Frames {
                 path: self.path.clone(),
                 clip: name.to_owned(),
                 problem: format!(
-                    "{end} s at {} fps is more than {MAX_FRAMES} frames",
-                    self.fps
+                    "{end:.3} s at {} fps would have {:.0} frames, more than the {MAX_FRAMES} one \
+                     run bakes or evaluates: take fewer frames or a lower frame rate",
+                    self.fps,
+                    intervals + 1.0
                 ),
             });
         }
