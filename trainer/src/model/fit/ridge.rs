@@ -14,6 +14,10 @@
 //! whatever the output width — the full model has ~400k outputs per pose.
 //! The price of the Gram form is resolution: residuals below about `√ε · ‖Y_c‖` cancel in
 //! `K` and read as zero, which only matters once the fit is already exact to ~1e-8.
+//!
+//! [`RidgeProblem::anchored`] fits through a given point `(z₀, y₀)` instead: no intercept, `Z`
+//! and `Y` taken relative to the anchor, `H = U F Uᵀ`, so a huge α tends to `y₀` (a prior such
+//! as the bind pose's transfer) and the regression only adds what the data supports.
 
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -37,8 +41,11 @@ const GRAM_COLUMNS_PER_BLOCK: usize = 4096;
 /// A ridge problem: centred data and the SVD of the centred inputs.
 #[derive(Clone, Debug)]
 pub struct RidgeProblem {
+    /// The point the data is centred on: the means, or the anchor.
     z_mean: DVector<f64>,
     y_mean: DVector<f64>,
+    /// Whether the intercept is fitted (centred on the means) or given (the anchor).
+    fitted_intercept: bool,
     /// `p × r` left singular vectors of `Z_c`.
     u: DMatrix<f64>,
     /// r singular values, descending, all above the rank tolerance.
@@ -82,11 +89,32 @@ pub struct AlphaSelection {
 impl RidgeProblem {
     /// Centres `z` (`p × k`) and `y` (`p × q`, taken by value and centred in place: for the full
     /// model it is the largest array of the fit) and factors `Z_c`.
-    pub fn new(z: &DMatrix<f64>, mut y: DMatrix<f64>) -> Self {
+    pub fn new(z: &DMatrix<f64>, y: DMatrix<f64>) -> Self {
+        let z_mean = DVector::from_fn(z.ncols(), |j, _| z.column(j).mean());
+        let y_mean = DVector::from_fn(y.ncols(), |j, _| y.column(j).mean());
+        Self::centred_on(z, y, z_mean, y_mean, true)
+    }
+
+    /// The fit through `(z0, y0)`: `ŷ(z) = y0 + Xᵀ (z − z0)` with only `X` penalised, so that
+    /// a huge α gives `y0` exactly.
+    pub fn anchored(z: &DMatrix<f64>, y: DMatrix<f64>, z0: DVector<f64>, y0: DVector<f64>) -> Self {
+        assert_eq!(
+            (z0.len(), y0.len()),
+            (z.ncols(), y.ncols()),
+            "ridge: anchor shape"
+        );
+        Self::centred_on(z, y, z0, y0, false)
+    }
+
+    fn centred_on(
+        z: &DMatrix<f64>,
+        mut y: DMatrix<f64>,
+        z_mean: DVector<f64>,
+        y_mean: DVector<f64>,
+        fitted_intercept: bool,
+    ) -> Self {
         let (p, k) = z.shape();
         assert_eq!(y.nrows(), p, "ridge: Z and Y must have one row per pose");
-        let z_mean = DVector::from_fn(k, |j, _| z.column(j).mean());
-        let y_mean = DVector::from_fn(y.ncols(), |j, _| y.column(j).mean());
         for (mut col, m) in y.column_iter_mut().zip(y_mean.iter()) {
             col.add_scalar_mut(-m);
         }
@@ -104,6 +132,7 @@ impl RidgeProblem {
             return Self {
                 z_mean,
                 y_mean,
+                fitted_intercept,
                 u,
                 s,
                 v,
@@ -126,6 +155,7 @@ impl RidgeProblem {
         Self {
             z_mean,
             y_mean,
+            fitted_intercept,
             u,
             s,
             v,
@@ -166,7 +196,7 @@ impl RidgeProblem {
                 curve: Vec::new(),
             });
         };
-        // Holding out every pose leaves nothing to fit the intercept on.
+        // Holding out every pose leaves nothing to fit on.
         if segment >= p {
             return Err(FitError::SegmentTooLong { segment, poses: p });
         }
@@ -275,13 +305,18 @@ impl<'a> GramCv<'a> {
         for start in (0..p).step_by(self.segment) {
             let len = self.segment.min(p - start);
             let (u_s, uf_s) = (u.rows(start, len), uf.rows(start, len));
-            // Residual Gram of the segment: [(I − H) K (I − H)]_SS with H = 11ᵀ/p + U F Uᵀ;
-            // the 11ᵀ/p part vanishes against the centred K.
+            // Residual Gram of the segment: [(I − H) K (I − H)]_SS with H = 11ᵀ/p + U F Uᵀ
+            // (H = U F Uᵀ when anchored); the 11ᵀ/p part vanishes against the centred K.
             let cross = uf_s * self.ku.columns(start, len);
             let g = self.k.view((start, start), (len, len)) - &cross - cross.transpose()
                 + uf_s * &self.m * uf_s.transpose();
+            let mean_part = if self.problem.fitted_intercept {
+                1.0 / p as f64
+            } else {
+                0.0
+            };
             let i_minus_h = DMatrix::identity(len, len)
-                - DMatrix::from_element(len, len, 1.0 / p as f64)
+                - DMatrix::from_element(len, len, mean_part)
                 - uf_s * u_s.transpose();
             train += g.trace();
             cv += match i_minus_h.cholesky() {
@@ -478,5 +513,80 @@ mod tests {
                 poses: 40
             })
         );
+    }
+
+    /// Independent reference for the anchored fit: `X = (DᵀD + α²I)⁻¹ Dᵀ E` with `D = Z − 1z0ᵀ`,
+    /// `E = Y − 1y0ᵀ`, by Cholesky.
+    fn anchored_reference(
+        z: &DMatrix<f64>,
+        y: &DMatrix<f64>,
+        z0: &DVector<f64>,
+        y0: &DVector<f64>,
+        alpha: f64,
+    ) -> DMatrix<f64> {
+        let d = DMatrix::from_fn(z.nrows(), z.ncols(), |i, j| z[(i, j)] - z0[j]);
+        let e = DMatrix::from_fn(y.nrows(), y.ncols(), |i, j| y[(i, j)] - y0[j]);
+        let lhs = d.transpose() * &d + DMatrix::identity(z.ncols(), z.ncols()) * alpha.powi(2);
+        lhs.cholesky().unwrap().solve(&(d.transpose() * e))
+    }
+
+    fn anchor(k: usize, q: usize) -> (DVector<f64>, DVector<f64>) {
+        (
+            DVector::from_fn(k, |j, _| 0.1 * j as f64 - 0.2),
+            DVector::from_fn(q, |j, _| 1.5 + 0.25 * j as f64),
+        )
+    }
+
+    #[test]
+    fn anchored_fit_matches_its_normal_equations_and_passes_through_the_anchor() {
+        let (z, y) = problem(16, 4, 3, 31);
+        let (z0, y0) = anchor(4, 3);
+        let ridge = RidgeProblem::anchored(&z, y.clone(), z0.clone(), y0.clone());
+        for alpha in [1e-3, 0.5, 4.0] {
+            let x = anchored_reference(&z, &y, &z0, &y0, alpha);
+            let s = ridge.solve(alpha);
+            assert!(
+                (&s.coefficients - &x).amax() <= 1e-10 * x.amax(),
+                "α = {alpha}"
+            );
+            let at_anchor = &s.intercept + s.coefficients.tr_mul(&z0);
+            assert!((at_anchor - &y0).amax() <= 1e-12 * y0.amax(), "α = {alpha}");
+        }
+    }
+
+    #[test]
+    fn anchored_fit_at_huge_alpha_is_the_anchor_exactly() {
+        let (z, y) = problem(10, 3, 4, 2);
+        let (z0, y0) = anchor(3, 4);
+        let s = RidgeProblem::anchored(&z, y, z0, y0.clone()).solve(1e150);
+        assert_eq!(s.intercept, y0);
+        assert!(s.coefficients.amax() <= 1e-140);
+    }
+
+    #[test]
+    fn anchored_closed_form_cv_equals_refits() {
+        let (z, y) = problem(19, 4, 5, 41);
+        let (z0, y0) = anchor(4, 5);
+        let ridge = RidgeProblem::anchored(&z, y.clone(), z0.clone(), y0.clone());
+        for segment in [1, 3, 6] {
+            for alpha in [1e-2, 0.3, 2.0] {
+                let mut brute = 0.0;
+                for start in (0..19).step_by(segment) {
+                    let held: Vec<usize> = (start..(start + segment).min(19)).collect();
+                    let kept: Vec<usize> = (0..19).filter(|i| !held.contains(i)).collect();
+                    let (zk, yk) = (z.select_rows(&kept), y.select_rows(&kept));
+                    let x = anchored_reference(&zk, &yk, &z0, &y0, alpha);
+                    for &i in &held {
+                        let prediction = y0.transpose() + (z.row(i) - z0.transpose()) * &x;
+                        brute += (y.row(i) - prediction).norm_squared();
+                    }
+                }
+                let closed = ridge.cv_point(alpha, segment).cv_error * (19 * 5) as f64;
+                assert!(
+                    (closed - brute).abs() <= 1e-9 * brute,
+                    "L = {segment}, α = {alpha}: {closed} vs {brute}"
+                );
+            }
+        }
     }
 }
