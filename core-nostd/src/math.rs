@@ -7,6 +7,12 @@ pub(crate) fn sqrt(x: f32) -> f32 {
     libm::sqrtf(x)
 }
 
+/// Square root in f64 (the pose bound's distance).
+#[inline]
+pub(crate) fn sqrt_f64(x: f64) -> f64 {
+    libm::sqrt(x)
+}
+
 /// Cosine.
 #[cfg(test)]
 pub(crate) fn cos(x: f32) -> f32 {

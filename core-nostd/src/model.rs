@@ -82,7 +82,14 @@ impl<'a> Model<'a> {
     }
 
     /// Computes the pose weights of one frame from the pose vector `angles`
-    /// ([`ModelInfo::pose_len`] values): `z = P(a − μ)`, then `w^c = W^c [1, z]`.
+    /// ([`ModelInfo::pose_len`] values): `z = P(b(a) − μ)`, then `w^c = W^c [1, z]`.
+    ///
+    /// `b` is the pose bound of a bounded model ([`ModelInfo::bounded`]), the identity
+    /// otherwise: each entry is clamped into the range the training poses (and the prior's pose)
+    /// spanned, and the pose is blended towards the prior's pose by `β = max(0, 1 − d)`, where
+    /// `d` is the distance outside that box in units of its falloff. Inside the box a pose is
+    /// unchanged; far outside it the model gives its prior (the rest transfer carried by the
+    /// skin, or the mean transfer) instead of extrapolating without limit.
     ///
     /// # The pose vector
     /// Entry `i` is the value named by [`Model::angle_names`]`.get(i)`, exactly as the trainer

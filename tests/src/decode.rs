@@ -4,7 +4,7 @@
 
 use aprt_core::format::{SectionEntry, padded_vertices, read_header};
 use aprt_core::{Basis, Encoding, Frame, SectionKind, VERTEX_BLOCK};
-use aprt_trainer::{BoneFrames, LinearModel, VertexBasis};
+use aprt_trainer::{BoneFrames, LinearModel, PoseBounds, VertexBasis};
 
 /// The values of one section, exactly widened to f64.
 fn values(blob: &[u8], e: &SectionEntry) -> Option<Vec<f64>> {
@@ -73,6 +73,18 @@ pub fn decode(blob: &[u8]) -> Option<LinearModel> {
             .and_then(|e| blob.get(e.offset as usize..(e.offset + e.len) as usize))
             .and_then(|bytes| std::str::from_utf8(bytes).ok())
             .map_or_else(Vec::new, |text| text.lines().map(str::to_owned).collect()),
+        bounds: match section(SectionKind::PoseBounds) {
+            Some(rows) if rows.len() == 4 * h.pose_len as usize => {
+                let mut rows = rows.chunks_exact(h.pose_len as usize).map(<[f64]>::to_vec);
+                Some(PoseBounds {
+                    lo: rows.next()?,
+                    hi: rows.next()?,
+                    scale: rows.next()?,
+                    prior: rows.next()?,
+                })
+            }
+            _ => None,
+        },
         bones: match h.frame {
             Frame::World => None,
             Frame::Bones { count } => Some(BoneFrames {

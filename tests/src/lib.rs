@@ -122,5 +122,6 @@ pub fn random_model(
         alpha: 0.5,
         bones: None,
         angle_names: (0..pose_len).map(|i| format!("joint{i}")).collect(),
+        bounds: None,
     }
 }

@@ -33,9 +33,14 @@ pub fn magnitude(model: &LinearModel, angles: &[f64], big: impl Fn(f64) -> f64) 
                 data: data.iter().map(|x| big(x.abs())).collect(),
             },
         },
+        // The magnitudes of the bounded pose: the bound itself is not a sum of products.
+        bounds: None,
         ..model.clone()
     };
-    let a: Vec<f64> = angles
+    let bounded = model.bounds.as_ref().map(|b| b.apply(angles));
+    let a: Vec<f64> = bounded
+        .as_deref()
+        .unwrap_or(angles)
         .iter()
         .zip(&model.pose_mean)
         .map(|(a, m)| a.abs() + m.abs())
@@ -55,7 +60,9 @@ fn steps(model: &LinearModel) -> usize {
         VertexBasis::Stored { coef_dims, .. } => coef_dims,
         VertexBasis::Identity => 0,
     };
-    model.pose_len + (model.pose_dims() + 1) * (n2 + 1) + kv + 2 * model.order + 16
+    // The bounded pose is rounded to f32 once more than the angles.
+    let bound = usize::from(model.bounds.is_some());
+    model.pose_len + bound + (model.pose_dims() + 1) * (n2 + 1) + kv + 2 * model.order + 16
 }
 
 /// Relative error bound of the f32 evaluation: ε = 2u per rounding step, doubled for margin.

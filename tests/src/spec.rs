@@ -4,7 +4,9 @@
 //! for hours is what `cargo test` checks in seconds.
 
 use aprt_core::{MAX_BONES, MAX_COEF_DIMS, MAX_LIT, MAX_ORDER, MAX_POSE_DIMS, MAX_POSE_LEN};
-use aprt_trainer::{BoneFrames, ExportError, LinearModel, Precision, VertexBasis, encode_model};
+use aprt_trainer::{
+    BoneFrames, ExportError, LinearModel, PoseBounds, Precision, VertexBasis, encode_model,
+};
 use arbitrary::{Arbitrary, Unstructured};
 
 use crate::decode::decode;
@@ -105,6 +107,21 @@ impl<'a> Arbitrary<'a> for ModelSpec {
                 Some(BoneFrames { count, vertex_bone })
             }
         };
+        let bounds = if u.arbitrary()? {
+            // f32 values: the section is stored in f32.
+            let n: Vec<f64> = noise(u.arbitrary::<u64>()?, 3 * pose_len)
+                .iter()
+                .map(|&x| x as f32 as f64)
+                .collect();
+            Some(PoseBounds {
+                lo: n[..pose_len].iter().map(|x| -x.abs()).collect(),
+                hi: n[pose_len..2 * pose_len].iter().map(|x| x.abs()).collect(),
+                scale: n[2 * pose_len..].iter().map(|x| 4.0 * x.abs()).collect(),
+                prior: vec![0.0; pose_len],
+            })
+        } else {
+            None
+        };
         Ok(ModelSpec {
             model: LinearModel {
                 order,
@@ -116,6 +133,7 @@ impl<'a> Arbitrary<'a> for ModelSpec {
                 basis,
                 alpha: u.int_in_range(0..=1000u16)? as f64 / 64.0,
                 bones,
+                bounds,
                 angle_names: if u.arbitrary()? {
                     (0..pose_len).map(|i| format!("joint{i}.x")).collect()
                 } else {

@@ -17,6 +17,7 @@ fn constant_model(values: &[f64]) -> LinearModel {
         alpha: 0.0,
         bones: None,
         angle_names: Vec::new(),
+        bounds: None,
     }
 }
 
@@ -92,6 +93,7 @@ fn a_joint_the_projection_ignores_cannot_overflow_the_pose() {
         alpha: 0.0,
         bones: None,
         angle_names: Vec::new(),
+        bounds: None,
     };
     let blob = encode_model(&model, Precision::F32).unwrap();
     let core = Model::parse(&blob).unwrap();

@@ -88,6 +88,7 @@ fn main() {
             pose_dims: Dims::All,
             coef_dims,
             alpha,
+            ..FitOptions::paper()
         };
         let clock = Instant::now();
         let fit = fit(&angles, &transfers, ORDER, &options).expect("baked data is valid");

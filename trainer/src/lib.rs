@@ -32,7 +32,7 @@ pub use bake::{
 pub use io::obj::{LineError, ObjError, read_obj};
 pub use model::export::{ExportError, Precision, encode_model};
 pub use model::fit::{Alpha, CoefDims, Dims, Fit, FitError, FitOptions, FitReport, fit};
-pub use model::{BoneFrames, LinearModel, ModelFrame, VertexBasis};
+pub use model::{BoneFrames, LinearModel, ModelFrame, PoseBounds, VertexBasis};
 pub use progress::{BakeProgress, Reporter, Silent};
 pub use report::render::{
     Colormap, RenderError, View, lambert, render_scalar, save_png_atomic, side_by_side,

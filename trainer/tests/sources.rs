@@ -77,7 +77,7 @@ fn gltf_clip_trains_evaluates_and_matches_simulate() {
             &["train"],
             &clip("Survey")[..],
             BAKE,
-            &["--full", "--alpha", "0", "-o", s(&full)],
+            &["--full", "--paper", "--alpha", "0", "-o", s(&full)],
         ]
         .concat(),
     );

@@ -133,6 +133,8 @@ pub enum Error {
     /// The angle-names section is not UTF-8, or not one non-empty `\n`-terminated line per
     /// pose entry.
     BadAngleNames,
+    /// The pose-bounds section has `lo > hi`, a prior outside `[lo, hi]` or a negative scale.
+    BadPoseBounds,
     /// The caller's buffer is too small; `needed` bytes would do.
     BufferTooSmall {
         /// Minimum size in bytes.
@@ -235,6 +237,10 @@ impl core::fmt::Display for Error {
             Error::NonFinite { section } => write!(f, "section {section} holds NaN or infinity"),
             Error::BadBoneIndex => write!(f, "vertex bone index out of range"),
             Error::BadAngleNames => write!(f, "angle names are not one UTF-8 line per pose entry"),
+            Error::BadPoseBounds => write!(
+                f,
+                "pose bounds need lo <= prior <= hi and a scale >= 0 for every entry"
+            ),
             Error::BufferTooSmall { needed } => write!(f, "buffer too small: needs {needed} bytes"),
             Error::WeightsTooSmall { needed, capacity } => write!(
                 f,

@@ -126,25 +126,32 @@ pub enum SectionKind {
     /// Tag 6, optional: the names of the pose vector's entries, UTF-8, one `\n`-terminated
     /// non-empty name per entry (`pose_len` lines), so an engine can bind its joints by name.
     AngleNames,
+    /// Tag 7, optional for the writer, required once written: the pose bound, `4 × pose_len`
+    /// f32 rows `lo`, `hi`, `scale`, `prior`. A pose is clamped into `[lo, hi]` per entry and
+    /// blended towards `prior` by `β = max(0, 1 − d)`, `d² = Σ ((a − clamp(a)) · scale)²`, so a
+    /// pose far outside the training poses gets the prior's transfer (see
+    /// [`Model::set_pose`](crate::Model::set_pose)). `lo ≤ prior ≤ hi`, `scale ≥ 0`.
+    PoseBounds,
     /// A tag this version does not know.
     Unknown(u16),
 }
 
 impl SectionKind {
     /// The kinds this version knows, in tag order.
-    const KNOWN: [SectionKind; 6] = [
+    const KNOWN: [SectionKind; 7] = [
         SectionKind::PoseMean,
         SectionKind::PoseProjection,
         SectionKind::Weights,
         SectionKind::VertexBasis,
         SectionKind::VertexWeights,
         SectionKind::AngleNames,
+        SectionKind::PoseBounds,
     ];
 
     /// The kind of a section-table tag.
     pub const fn from_tag(tag: u16) -> SectionKind {
         match tag {
-            1..=6 => Self::KNOWN[tag as usize - 1],
+            1..=7 => Self::KNOWN[tag as usize - 1],
             other => SectionKind::Unknown(other),
         }
     }
@@ -158,6 +165,7 @@ impl SectionKind {
             SectionKind::VertexBasis => 4,
             SectionKind::VertexWeights => 5,
             SectionKind::AngleNames => 6,
+            SectionKind::PoseBounds => 7,
             SectionKind::Unknown(tag) => tag,
         }
     }

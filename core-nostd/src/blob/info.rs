@@ -34,6 +34,8 @@ pub struct ModelInfo {
     /// Per-vertex rows: the vertex basis (stored) or the vertex weights (identity).
     pub(crate) rows: Span,
     pub(crate) angle_names: Option<Span>,
+    /// The pose bound, when the model has one.
+    pub(crate) pose_bounds: Option<Span>,
 }
 
 impl ModelInfo {
@@ -124,6 +126,12 @@ impl ModelInfo {
         self.block_bytes()
             .max(self.pose_len * Encoding::F32.size())
             .max(weights_row)
+    }
+
+    /// Whether poses are bounded: clamped into the training box and blended towards the
+    /// prior outside it (see [`Model::set_pose`](crate::Model::set_pose)).
+    pub fn bounded(&self) -> bool {
+        self.pose_bounds.is_some()
     }
 
     /// Bytes of the angle-names section (0 when the blob records none): the buffer

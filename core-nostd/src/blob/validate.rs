@@ -75,6 +75,7 @@ impl ModelInfo {
             Some(match (kind, h.basis) {
                 (SectionKind::PoseMean, _) => product(&[pose_len]),
                 (SectionKind::PoseProjection, _) => product(&[pose_dims, pose_len]),
+                (SectionKind::PoseBounds, _) => product(&[4, pose_len]),
                 (SectionKind::Weights, Basis::Stored) => product(&[n2, 1 + pose_dims, coef_dims]),
                 (SectionKind::VertexBasis, Basis::Stored) => product(&[padded, lead + coef_dims]),
                 (SectionKind::VertexWeights, Basis::Identity) => {
@@ -146,8 +147,10 @@ impl ModelInfo {
             weights,
             rows,
             angle_names: get(SectionKind::AngleNames),
+            pose_bounds: get(SectionKind::PoseBounds),
         };
         info.verify_bones(r)?;
+        info.verify_bounds(r)?;
         Ok(info)
     }
 

@@ -13,6 +13,7 @@
 //! same steps cost O(n² k_a) per vertex, as in the paper. The steps are written once here,
 //! over [`Reader`], for the resident and the streamed model alike.
 
+mod bounds;
 mod kernels;
 mod weights;
 
@@ -85,10 +86,13 @@ impl ModelInfo {
         self.each_row(r, self.pose_mean, a, |_, mu| {
             mu.add_scaled(1.0, mean.iter_mut())
         })?;
+        let mut bounded = [0.0f32; MAX_POSE_LEN];
+        let bounded = &mut bounded[..a];
+        self.bound_pose(r, angles, bounded)?;
         let z = &mut pose.z[..=ka];
         z[0] = 1.0;
         self.each_row(r, self.pose_projection, a, |i, p| {
-            z[1 + i] = p.dot_centred(angles, mean) as f32
+            z[1 + i] = p.dot_centred(bounded, mean) as f32
         })?;
         if let (Basis::Stored, Some(weights)) = (self.basis, self.weights) {
             let n2 = self.coeffs();

@@ -29,6 +29,9 @@ pub struct BakedClip {
     pub transfer: Vec<Vec<f32>>,
     /// Per frame, every bone's world rotation.
     pub rotations: Vec<Vec<DMat3>>,
+    /// The clips the frames come from, in order, with their frame counts (one for a single
+    /// clip): held-out segments of the fit never straddle two of them.
+    pub parts: Vec<(String, usize)>,
 }
 
 /// Poses and bakes `poses` of `rig`; returns the clip and the bake's seconds per frame. The
@@ -56,6 +59,25 @@ pub fn bake_clip(
     ))
 }
 
+/// The rig's rest pose ([`Rig::rest_pose`]), baked as a one-frame clip: the anchor and prior
+/// of bone-frame models.
+pub fn bake_rest(
+    rig: &dyn Rig,
+    layout: &PoseLayout,
+    settings: &BakeSettings,
+    reporter: &dyn Reporter,
+) -> Result<BakedClip> {
+    Ok(bake_clip(
+        rig,
+        layout,
+        "rest pose",
+        vec![rig.rest_pose()],
+        settings,
+        reporter,
+    )?
+    .0)
+}
+
 /// Every pose of a clip skinned.
 pub fn pose_all(rig: &dyn Rig, name: &str, poses: &[Vec<f64>]) -> Result<Vec<Mesh>> {
     poses
@@ -78,12 +100,41 @@ impl BakedClip {
         let rotations = all_rotations(rig, &poses)?;
         Ok(BakedClip {
             name: name.to_owned(),
+            parts: vec![(name.to_owned(), poses.len())],
             angles: poses.iter().map(|p| layout.reduce(p)).collect(),
             poses,
             meshes,
             transfer,
             rotations,
         })
+    }
+
+    /// The clips one after the other, as one training set named by their names joined with
+    /// `+`, their parts kept.
+    pub fn concat(clips: Vec<BakedClip>) -> BakedClip {
+        let name = clips
+            .iter()
+            .map(|c| c.name.as_str())
+            .collect::<Vec<_>>()
+            .join(" + ");
+        let mut all = BakedClip {
+            name,
+            poses: Vec::new(),
+            angles: Vec::new(),
+            meshes: Vec::new(),
+            transfer: Vec::new(),
+            rotations: Vec::new(),
+            parts: Vec::new(),
+        };
+        for c in clips {
+            all.poses.extend(c.poses);
+            all.angles.extend(c.angles);
+            all.meshes.extend(c.meshes);
+            all.transfer.extend(c.transfer);
+            all.rotations.extend(c.rotations);
+            all.parts.extend(c.parts);
+        }
+        all
     }
 
     /// Frame `f`'s bone rotations as aprt-core takes them (row-major f32).

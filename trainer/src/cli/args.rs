@@ -10,7 +10,7 @@ use crate::cli::source::SourceArgs;
 #[cfg(doc)]
 use crate::model::export::ExportError;
 use crate::model::export::Precision;
-use crate::model::fit::{Alpha, CoefDims, Dims, FitOptions};
+use crate::model::fit::{Alpha, CoefDims, Dims, FitOptions, Prior};
 use crate::model::train::{OptionError, check_options};
 use crate::report::demo::DemoSettings;
 
@@ -99,9 +99,33 @@ pub struct FitArgs {
     /// Tikhonov parameter: `auto` (cross-validated, the default), `loo`, `loso`, or a number.
     #[arg(long, default_value = "auto", allow_negative_numbers = true)]
     pub alpha: String,
+    /// What the model tends to as α grows: `auto` (the one of the two below with the lower
+    /// held-out error), `rest` (the rest pose's transfer carried by the skin, for bone-frame
+    /// models; others keep the mean) or `mean`.
+    #[arg(long, value_enum, default_value_t = PriorArg::Auto)]
+    pub prior: PriorArg,
+    /// Bounded extrapolation: poses are clamped into the training range and reach the prior
+    /// this many range widths outside it (`none`: the paper's unbounded linear model).
+    #[arg(long, default_value = "0.5")]
+    pub falloff: String,
+    /// The paper's model: every pose dimension, the mean as prior, no bound (other flags may
+    /// still change its shape).
+    #[arg(long, conflicts_with_all = ["prior"])]
+    pub paper: bool,
     /// Precision of the large sections.
     #[arg(long, value_enum, default_value_t = PrecisionArg::F32)]
     pub precision: PrecisionArg,
+}
+
+/// `--prior`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum PriorArg {
+    /// Whichever of the two has the lower held-out error.
+    Auto,
+    /// The rest pose's transfer, carried by the skin.
+    Rest,
+    /// The mean training transfer.
+    Mean,
 }
 
 /// `aprt train`.
@@ -223,7 +247,26 @@ impl BakeArgs {
 impl FitArgs {
     /// The fit options these flags ask for; unset flags keep the defaults.
     pub fn options(&self) -> Result<FitOptions> {
-        let mut options = FitOptions::default();
+        let mut options = if self.paper {
+            FitOptions::paper()
+        } else {
+            FitOptions::default()
+        };
+        options.prior = match (self.paper, self.prior) {
+            (true, _) => options.prior,
+            (false, PriorArg::Auto) => Prior::Auto,
+            (false, PriorArg::Rest) => Prior::Rest,
+            (false, PriorArg::Mean) => Prior::Mean,
+        };
+        options.bound = match (self.paper, self.falloff.as_str()) {
+            (true, "0.5") | (_, "none") => None,
+            (_, other) => match other.parse::<f64>() {
+                Ok(x) if x > 0.0 && !x.is_nan() => Some(x),
+                _ => {
+                    bail!("--falloff {other}: expected a positive number (inf: clamp only) or none")
+                }
+            },
+        };
         if let Some(k) = self.pose_dims {
             options.pose_dims = Dims::Count(k);
         }

@@ -245,6 +245,9 @@ fn train(args: &TrainArgs) -> Result<()> {
         .in_origin(crate::model::train::check(&poses, &settings))?;
     let trained = crate::model::train::train(poses, &args.output, &settings, &Terminal)?;
     let info = &trained.info;
+    for line in trained.selection.lines(info.pose_dims, f64::from(info.alpha)) {
+        eprintln!("{line}");
+    }
     eprintln!(
         "wrote {}: {} poses, k_a {}, k_v {}, alpha {:.3e}, {} bytes",
         args.output.display(),

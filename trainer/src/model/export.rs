@@ -277,6 +277,15 @@ pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>
     if !model.angle_names.is_empty() {
         table.push(angle_names_section(&model.angle_names, a)?);
     }
+    if let Some(bounds) = &model.bounds {
+        let kind = SectionKind::PoseBounds;
+        table.push(SectionBytes {
+            tag: kind.tag(),
+            required: true,
+            encoding: Encoding::F32,
+            bytes: encode(kind, &bounds.rows(), 4 * a, Encoding::F32)?,
+        });
+    }
     assemble(model, basis, frame, &table)
 }
 
@@ -390,6 +399,7 @@ mod tests {
             alpha: 0.25,
             bones: None,
             angle_names: Vec::new(),
+            bounds: None,
         }
     }
 

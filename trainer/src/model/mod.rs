@@ -47,6 +47,87 @@ pub struct BoneFrames {
     pub vertex_bone: Vec<u16>,
 }
 
+/// The pose bound of a model, in the runtime's form (aprt-core's `PoseBounds` section): each
+/// entry clamped into `[lo, hi]`, then the pose blended towards `prior` by
+/// `β = max(0, 1 − ‖(a − clamp(a)) · scale‖)`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PoseBounds {
+    /// Lowest value of each entry over the training poses and the prior's pose.
+    pub lo: Vec<f64>,
+    /// Highest value of each entry.
+    pub hi: Vec<f64>,
+    /// `1 / (falloff · width)` per entry (0: clamped only).
+    pub scale: Vec<f64>,
+    /// The prior's pose: the rest pose, or the mean pose.
+    pub prior: Vec<f64>,
+}
+
+impl PoseBounds {
+    /// The bound of the training poses `angles` (`p × a`) and the prior's pose, reaching the
+    /// prior `falloff` widths outside the box (infinite: clamped only). An entry's width is
+    /// its range, but at least the mean range of all entries: an entry that barely moved in
+    /// training does not make the smallest turn of its joint a distant pose.
+    pub fn of(angles: &nalgebra::DMatrix<f64>, prior: &[f64], falloff: f64) -> Self {
+        let a = angles.ncols();
+        let lo: Vec<f64> = (0..a)
+            .map(|j| angles.column(j).iter().fold(prior[j], |m, &x| m.min(x)))
+            .collect();
+        let hi: Vec<f64> = (0..a)
+            .map(|j| angles.column(j).iter().fold(prior[j], |m, &x| m.max(x)))
+            .collect();
+        let widths: Vec<f64> = lo.iter().zip(&hi).map(|(l, h)| h - l).collect();
+        let floor = widths.iter().sum::<f64>() / a.max(1) as f64;
+        let scale = widths
+            .iter()
+            .map(|&w| {
+                let w = w.max(floor);
+                if falloff.is_finite() && w > 0.0 {
+                    1.0 / (falloff * w)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        Self {
+            lo,
+            hi,
+            scale,
+            prior: prior.to_vec(),
+        }
+    }
+
+    /// The bounded pose, in f64 (the reference of aprt-core's f32 evaluation).
+    pub fn apply(&self, angles: &[f64]) -> Vec<f64> {
+        let clamped: Vec<f64> = angles
+            .iter()
+            .zip(self.lo.iter().zip(&self.hi))
+            .map(|(x, (lo, hi))| x.max(*lo).min(*hi))
+            .collect();
+        let d = angles
+            .iter()
+            .zip(&clamped)
+            .zip(&self.scale)
+            .map(|((x, c), s)| ((x - c) * s).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let beta = (1.0 - d).max(0.0);
+        clamped
+            .iter()
+            .zip(&self.prior)
+            .map(|(c, p)| p + beta * (c - p))
+            .collect()
+    }
+
+    /// The four rows as the blob stores them: lo, hi, scale, prior.
+    pub fn rows(&self) -> Vec<f64> {
+        [&self.lo, &self.hi, &self.scale, &self.prior]
+            .into_iter()
+            .flatten()
+            .copied()
+            .collect()
+    }
+}
+
 /// A fitted model: everything the blob stores, in f64.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LinearModel {
@@ -72,6 +153,8 @@ pub struct LinearModel {
     /// Names of the `pose_len` pose entries, so tools can map a clip onto the model's pose
     /// vector; empty when the source had none (an unnamed angle CSV).
     pub angle_names: Vec<String>,
+    /// The pose bound; `None`: the paper's unbounded linear model.
+    pub bounds: Option<PoseBounds>,
 }
 
 impl LinearModel {
@@ -99,6 +182,8 @@ impl LinearModel {
             self.coef_dims(),
             self.order * self.order,
         );
+        let bounded = self.bounds.as_ref().map(|b| b.apply(angles));
+        let angles = bounded.as_deref().unwrap_or(angles);
         let mut z = vec![1.0; ka + 1];
         for (i, zi) in z[1..].iter_mut().enumerate() {
             *zi = (0..a)

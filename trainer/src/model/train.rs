@@ -2,7 +2,6 @@
 //! `aprt train` end to end (bake every pose through a checkpoint, so an interrupted run
 //! resumes, fit, write the blob, then remove the checkpoint).
 
-use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
@@ -17,7 +16,10 @@ use crate::io::atomic::write_atomic;
 use crate::io::source::Poses;
 use crate::model::ModelFrame;
 use crate::model::export::{ExportError, Precision, check_alpha, encode_model};
-use crate::model::fit::{Alpha, CoefDims, Dims, Fit, FitOptions, fit};
+use crate::model::fit::{
+    Alpha, Anchor, Choice, CoefDims, Dims, Fit, FitInput, FitOptions, FitReport, HeldOutKind,
+    PriorKind, Validation, fit, fit_input,
+};
 use crate::model::runtime::{BlobInfo, describe};
 use crate::progress::Reporter;
 use crate::rig::Rig;
@@ -25,29 +27,69 @@ use crate::rig::bone_frames::{FrameChange, change_frames, dominant_bones};
 use crate::rig::mesh::Mesh;
 use crate::rig::pose_layout::PoseLayout;
 
-/// Fits a model to `train` in `frame` (each vertex's dominant-bone frame, or world space). The
-/// model records the layout's entry names.
+/// What a rig's model is fitted to: the training frames (one clip or several), the rest pose
+/// (baked, one frame: the prior of bone-frame models) and the clips held out whole to choose
+/// the model by.
+#[derive(Clone, Copy)]
+pub struct ClipSet<'a> {
+    /// The training frames.
+    pub train: &'a BakedClip,
+    /// The rest pose, baked.
+    pub rest: Option<&'a BakedClip>,
+    /// Validation clips (`--validate`).
+    pub validation: &'a [BakedClip],
+}
+
+/// Fits a model to `clips` in `frame` (each vertex's dominant-bone frame, or world space). The
+/// model records the layout's entry names. Bone-frame models are anchored at the rest pose
+/// (their prior, when it wins on held-out error, is the rest transfer carried by the skin);
+/// world-frame models keep the mean as their prior.
 pub fn fit_clip(
     rig: &dyn Rig,
     layout: &PoseLayout,
-    train: &BakedClip,
+    clips: ClipSet<'_>,
     order: usize,
     options: &FitOptions,
     frame: ModelFrame,
 ) -> Result<Fit> {
     let bones = (frame == ModelFrame::Bone).then(|| dominant_bones(rig));
-    let targets = match &bones {
-        Some(b) => Cow::Owned(change_frames(
-            &train.transfer,
-            &train.rotations,
-            b,
-            FrameChange::WorldToBone,
-        )?),
-        None => Cow::Borrowed(&train.transfer),
+    let in_frame = |clip: &'_ BakedClip| -> Result<Vec<Vec<f32>>> {
+        Ok(match &bones {
+            Some(b) => change_frames(&clip.transfer, &clip.rotations, b, FrameChange::WorldToBone)?,
+            None => clip.transfer.clone(),
+        })
     };
-    let a = layout.names().len();
-    let angles = DMatrix::from_fn(train.angles.len(), a, |i, j| train.angles[i][j]);
-    let mut fitted = fit(&angles, &targets, order, options)?;
+    let matrix = |clip: &BakedClip| {
+        DMatrix::from_fn(clip.angles.len(), layout.names().len(), |i, j| {
+            clip.angles[i][j]
+        })
+    };
+    let train = clips.train;
+    let targets = in_frame(train)?;
+    let angles = matrix(train);
+    let rest = match (clips.rest, &bones) {
+        (Some(rest), Some(_)) => Some((in_frame(rest)?.remove(0), rest.angles[0].clone())),
+        _ => None,
+    };
+    let held: Vec<(DMatrix<f64>, Vec<Vec<f32>>)> = clips
+        .validation
+        .iter()
+        .map(|v| Ok((matrix(v), in_frame(v)?)))
+        .collect::<Result<_>>()?;
+    let input = FitInput {
+        angles: &angles,
+        transfers: &targets,
+        order,
+        clips: train.parts.iter().map(|(_, n)| *n).collect(),
+        anchor: rest
+            .as_ref()
+            .map(|(transfer, angles)| Anchor { angles, transfer }),
+        validation: held
+            .iter()
+            .map(|(angles, transfers)| Validation { angles, transfers })
+            .collect(),
+    };
+    let mut fitted = fit_input(&input, options)?;
     fitted.model.bones = bones;
     fitted.model.angle_names = layout.names().to_vec();
     Ok(fitted)
@@ -266,11 +308,64 @@ pub fn check(poses: &Poses, settings: &TrainSettings) -> Result<(), RequestError
     Ok(())
 }
 
+/// The model selection of a fit, for reports and report.json: the chosen prior and k_a, what
+/// was held out, and every candidate with its held-out error.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Selection {
+    /// The chosen prior.
+    pub prior: PriorKind,
+    /// What the selection held out.
+    pub held_out: HeldOutKind,
+    /// Every (prior, k_a) candidate with its best α, in the order tried.
+    pub choices: Vec<Choice>,
+}
+
+impl Selection {
+    /// The selection a fit report records.
+    pub fn of(report: &FitReport) -> Self {
+        Self {
+            prior: report.prior,
+            held_out: report.held_out,
+            choices: report.choices.clone(),
+        }
+    }
+
+    /// One line per candidate, the chosen one marked: the held-out curve over k_a and prior.
+    pub fn lines(&self, chosen_pose_dims: usize, alpha: f64) -> Vec<String> {
+        let held = match self.held_out {
+            HeldOutKind::Segments(n) => format!("held-out runs of {n} poses"),
+            HeldOutKind::Clips(n) => format!("{n} validation clips"),
+        };
+        let mut lines = vec![format!(
+            "model selection ({held}): prior {}, k_a {chosen_pose_dims}, alpha {alpha:.3e}",
+            self.prior.name()
+        )];
+        lines.extend(self.choices.iter().map(|c| {
+            let mark = if c.prior == self.prior && c.pose_dims == chosen_pose_dims {
+                " <- chosen"
+            } else {
+                ""
+            };
+            format!(
+                "  prior {:<4} k_a {:>2}: alpha {:.3e}, held-out {:.4e}, train {:.4e}{mark}",
+                c.prior.name(),
+                c.pose_dims,
+                c.alpha,
+                c.held_out_error,
+                c.train_error
+            )
+        }));
+        lines
+    }
+}
+
 /// What [`train`] wrote.
 #[derive(Debug)]
 pub struct Trained {
     /// Poses the model was fitted to.
     pub poses: usize,
+    /// The model selection: the prior, what was held out, every candidate.
+    pub selection: Selection,
     /// The written blob, as `aprt inspect` describes it.
     pub info: BlobInfo,
 }
@@ -307,10 +402,33 @@ pub fn train(
                     layout.dropped().join(", ")
                 ));
             }
-            let meshes = pose_all(rig.as_ref(), &clip.name, &clip.frames)?;
-            let name = |i: usize| format!("clip {} frame {i}", clip.name);
-            let (transfer, checkpoint) = bake_checkpointed(&meshes, name, settings, reporter)?;
+            let mut meshes = pose_all(rig.as_ref(), &clip.name, &clip.frames)?;
+            // Bone-frame models are anchored at the rest pose: baked last, through the
+            // checkpoint like every training pose.
+            let rest_pose = rig.rest_pose();
+            let anchored = settings.frame == ModelFrame::Bone;
+            if anchored {
+                meshes.push(rig.pose(&rest_pose)?);
+            }
+            let name = |i: usize| match i.checked_sub(clip.frames.len()) {
+                Some(_) => "the rest pose".to_owned(),
+                None => format!("clip {} frame {i}", clip.name),
+            };
+            let (mut transfer, checkpoint) = bake_checkpointed(&meshes, name, settings, reporter)?;
             let frames = clip.frames.len();
+            let rest = if anchored {
+                let (mesh, t) = (meshes.pop(), transfer.pop());
+                Some(BakedClip::new(
+                    rig.as_ref(),
+                    &layout,
+                    "rest pose",
+                    vec![rest_pose],
+                    mesh.into_iter().collect(),
+                    t.into_iter().collect(),
+                )?)
+            } else {
+                None
+            };
             let baked = BakedClip::new(
                 rig.as_ref(),
                 &layout,
@@ -319,10 +437,15 @@ pub fn train(
                 meshes,
                 transfer,
             )?;
+            let clips = ClipSet {
+                train: &baked,
+                rest: rest.as_ref(),
+                validation: &[],
+            };
             let fitted = fit_clip(
                 rig.as_ref(),
                 &layout,
-                &baked,
+                clips,
                 settings.bake.order,
                 &settings.fit,
                 settings.frame,
@@ -335,6 +458,7 @@ pub fn train(
     checkpoint.remove()?;
     Ok(Trained {
         poses,
+        selection: Selection::of(&fitted.report),
         info: describe(&blob)?,
     })
 }

@@ -225,6 +225,18 @@ impl Report {
         let _ = writeln!(s, "{}\n", experiment::TABLE_LEGEND);
         let names: Vec<String> = self.test_clips.iter().map(|(n, _)| n.clone()).collect();
         s.push_str(&table_markdown(&self.rows, &names));
+        if let Some((row, selection)) = self
+            .rows
+            .first()
+            .and_then(|r| r.selection.as_ref().map(|sel| (r, sel)))
+        {
+            let (ka, _, alpha) = row.shape.unwrap_or_default();
+            let _ = writeln!(
+                s,
+                "\n## Model selection of the default\n\nHeld-out mean squared error per basis coordinate of every candidate (prior, k_a), each at its best α:\n\n```\n{}\n```",
+                selection.lines(ka, alpha).join("\n")
+            );
+        }
         let _ = writeln!(
             s,
             "\n## A novel pose\n\nFrame {frame} of `{}` under a directional light and a dim sky: ground truth | default model (through aprt-core) | 4× absolute error.\n",

@@ -8,13 +8,13 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use aprt_core::{LitWeights, Model, ModelInfo, PoseWeights, Rotation, ShRotation};
 
-use crate::bake::clip::BakedClip;
+use crate::bake::clip::{BakedClip, bake_rest};
 use crate::bake::{BakeSettings, bake_poses};
 use crate::model::ModelFrame;
 use crate::model::export::{ExportError, Precision, encode_model};
-use crate::model::fit::{Alpha, CoefDims, Dims, Fit, FitOptions};
+use crate::model::fit::{Alpha, CoefDims, Dims, Fit, FitOptions, Prior};
 use crate::model::predict::predict_world;
-use crate::model::train::fit_clip;
+use crate::model::train::{ClipSet, Selection, fit_clip};
 use crate::progress::{Reporter, Silent};
 use crate::report::evaluate::{mean_transfer, nearest_pose, relative_error, skinned_transfer};
 use crate::rig::Rig;
@@ -32,7 +32,11 @@ pub struct ModelConfig {
 }
 
 /// The name of the default model's configuration, the first of [`standard_configs`].
-pub const DEFAULT_CONFIG: &str = "default: bone frame, LOSO α";
+pub const DEFAULT_CONFIG: &str = "default: bone frame, bounded, LOSO α, k_a and prior";
+/// The default with the rest prior forced.
+pub const REST_CONFIG: &str = "default, rest prior";
+/// The paper's model in bone frames: every pose dimension, the mean as prior, unbounded.
+pub const PAPER_CONFIG: &str = "paper: bone frame, mean prior, unbounded, LOSO α";
 
 /// The model shapes of the paper's tables and the choices behind the default: the default
 /// itself first, the same shape with LOO α and in the world frame, the full linear model with
@@ -51,6 +55,15 @@ pub fn standard_configs() -> Vec<ModelConfig> {
     };
     vec![
         config(DEFAULT_CONFIG, default, ModelFrame::Bone),
+        config(PAPER_CONFIG, FitOptions::paper(), ModelFrame::Bone),
+        config(
+            REST_CONFIG,
+            FitOptions {
+                prior: Prior::Rest,
+                ..default
+            },
+            ModelFrame::Bone,
+        ),
         config(
             "default shape, LOO α",
             FitOptions {
@@ -113,6 +126,8 @@ pub struct Row {
     pub fit_s: Option<f64>,
     /// k_a and k_v and α, for models.
     pub shape: Option<(usize, usize, f64)>,
+    /// For models: the prior, what was held out and every candidate's held-out error.
+    pub selection: Option<Selection>,
 }
 
 /// A model the experiment fitted, with its blob.
@@ -135,6 +150,8 @@ pub struct Experiment {
     pub skipped: Vec<(String, String)>,
     /// Bytes of one frame of f32 PRT.
     pub frame_bytes: usize,
+    /// The rest pose, baked: the anchor of the bone-frame models.
+    pub rest: BakedClip,
 }
 
 impl Experiment {
@@ -173,9 +190,15 @@ pub fn run(
     let mut models = Vec::new();
     let mut rows = Vec::new();
     let mut skipped = Vec::new();
+    let rest = bake_rest(rig, layout, settings, &Silent)?;
+    let clips = ClipSet {
+        train,
+        rest: Some(&rest),
+        validation: &[],
+    };
     for config in configs {
         reporter.note(&format!("fitting {}", config.name));
-        let fitted = fit_clip(rig, layout, train, order, &config.options, config.frame)
+        let fitted = fit_clip(rig, layout, clips, order, &config.options, config.frame)
             .with_context(|| format!("fitting {}", config.name))?;
         let s = &fitted.report.seconds;
         let fit_s =
@@ -214,6 +237,7 @@ pub fn run(
             megaops: Some(megaops(&model)),
             fit_s: Some(fit_s),
             shape: Some((model.pose_dims(), model.coef_dims(), fitted.model.alpha)),
+            selection: Some(Selection::of(&fitted.report)),
         });
         models.push(Fitted {
             config: config.clone(),
@@ -227,6 +251,7 @@ pub fn run(
         rows,
         skipped,
         frame_bytes,
+        rest,
     })
 }
 
@@ -284,6 +309,7 @@ fn baselines(
             megaops: None,
             fit_s: None,
             shape: None,
+            selection: None,
         })
     };
     Ok(vec![
@@ -409,6 +435,7 @@ mod tests {
             rows: Vec::new(),
             skipped: vec![(DEFAULT_CONFIG.into(), "2 GiB is too large".into())],
             frame_bytes: 0,
+            rest: BakedClip::concat(Vec::new()),
         };
         let message = |name: &str| result.model(name).err().unwrap().to_string();
         assert_eq!(

@@ -17,7 +17,7 @@ use crate::model::ModelFrame;
 use crate::model::export::{Precision, encode_model};
 use crate::model::fit::{Alpha, CoefDims, FitOptions};
 use crate::model::predict::predict_world;
-use crate::model::train::fit_clip;
+use crate::model::train::{ClipSet, fit_clip};
 use crate::progress::Reporter;
 use crate::report::evaluate::relative_error;
 use crate::report::experiment::{
@@ -184,7 +184,15 @@ fn measure(study: &Study, settings: &ResultsSettings, reporter: &dyn Reporter) -
         reporter,
     )?;
     let default = experiment.model(experiment::DEFAULT_CONFIG)?;
-    let sweep = alpha_sweep(rig, &layout, &train, &tests, order, &settings.alphas)?;
+    let sweep = alpha_sweep(
+        rig,
+        &layout,
+        &train,
+        &experiment.rest,
+        &tests,
+        order,
+        &settings.alphas,
+    )?;
     let residuals = vertex_residuals(&default.blob, &tests)?;
     Ok(Measured {
         layout,
@@ -312,6 +320,7 @@ fn alpha_sweep(
     rig: &dyn Rig,
     layout: &PoseLayout,
     train: &BakedClip,
+    rest: &BakedClip,
     tests: &[BakedClip],
     order: usize,
     alphas: &[f64],
@@ -323,7 +332,12 @@ fn alpha_sweep(
                 alpha: Alpha::Fixed(alpha),
                 ..FitOptions::default()
             };
-            let fitted = fit_clip(rig, layout, train, order, &options, ModelFrame::Bone)?;
+            let clips = ClipSet {
+                train,
+                rest: Some(rest),
+                validation: &[],
+            };
+            let fitted = fit_clip(rig, layout, clips, order, &options, ModelFrame::Bone)?;
             let blob = encode_model(&fitted.model, Precision::F32)?;
             let error = |clip: &BakedClip| -> Result<f64> {
                 let predicted = predict_world(&blob, &clip.angles, &clip.rotations)?;

@@ -128,6 +128,12 @@ pub trait Rig: Sync {
     /// The mesh in the bind pose, with its normals.
     fn bind_mesh(&self) -> &Mesh;
 
+    /// The rest pose: the pose vector whose skinning is (closest to) the bind pose. Characters
+    /// whose pose entries are rotations relative to the rest (glTF, BVH) rest at all zeros.
+    fn rest_pose(&self) -> Vec<f64> {
+        vec![0.0; self.angle_names().len()]
+    }
+
     /// Per-vertex joint influences over the joints [`Rig::joint_matrices`] returns.
     fn skin(&self) -> &Skin;
 

@@ -16,6 +16,9 @@ pub enum Dims {
     /// Keep every component up to the numerical rank (and, like `Variance`, no more than the
     /// runtime holds).
     All,
+    /// Pose side only: the count is chosen by held-out error among counts up to what `All`
+    /// keeps (see [`crate::model::fit::fit_input`]); elsewhere it reads as `All`.
+    Auto,
 }
 
 impl Dims {
@@ -25,7 +28,7 @@ impl Dims {
     pub fn cap(self, runtime: usize) -> usize {
         match self {
             Dims::Count(_) => usize::MAX,
-            Dims::Variance(_) | Dims::All => runtime,
+            Dims::Variance(_) | Dims::All | Dims::Auto => runtime,
         }
     }
 }
@@ -54,7 +57,7 @@ pub fn choose(dims: Dims, energies: &[f64], total: f64, rank: usize) -> Option<u
     let cap = rank.min(energies.len());
     match dims {
         Dims::Count(k) => Some(k.min(cap)),
-        Dims::All => Some(cap),
+        Dims::All | Dims::Auto => Some(cap),
         Dims::Variance(fraction) => {
             if total <= 0.0 {
                 return Some(0);

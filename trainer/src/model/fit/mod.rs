@@ -17,15 +17,20 @@ mod tests;
 
 pub use dims::Dims;
 pub use pose_pca::PosePca;
-pub use ridge::{AlphaSelection, CvPoint, RidgeProblem, RidgeSolution};
+pub use ridge::{
+    AlphaSelection, CvPoint, HeldOut, RidgeOutputs, RidgeProblem, RidgeSolution, RidgeTarget,
+    segments,
+};
 pub use rsvd::{RowOperator, SketchOptions, TruncatedSvd, randomized_svd};
-pub use vertex_basis::{PoseRows, VertexBasisFit, fit_vertex_basis, project_rows, raw_rows};
+pub use vertex_basis::{
+    Deflated, PoseRows, VertexBasisFit, field_basis, fit_vertex_basis, project_rows, raw_rows,
+};
 
 use std::time::Instant;
 
 use nalgebra::DMatrix;
 
-use crate::model::{LinearModel, VertexBasis};
+use crate::model::{LinearModel, PoseBounds, VertexBasis};
 
 /// Size of the vertex side of the model.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -55,27 +60,109 @@ pub enum Alpha {
     Fixed(f64),
 }
 
+/// What the model tends to as α grows (and where a bounded model goes far from its poses).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Prior {
+    /// The mean training transfer at the mean pose: the paper's unpenalised intercept.
+    Mean,
+    /// The anchor (the rest pose and its transfer) when the source has one (bone-frame models
+    /// of characters), the mean otherwise: the fit passes through the anchor and only adds
+    /// what the data supports.
+    Rest,
+    /// Whichever of the two has the lower held-out error (the mean when there is no anchor).
+    Auto,
+}
+
+/// The prior a fit chose.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PriorKind {
+    /// The mean training transfer.
+    Mean,
+    /// The rest pose's transfer.
+    Rest,
+}
+
+impl PriorKind {
+    /// The name of the command line and the reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            PriorKind::Mean => "mean",
+            PriorKind::Rest => "rest",
+        }
+    }
+}
+
 /// Options of [`fit`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FitOptions {
-    /// k_a.
+    /// k_a ([`Dims::Auto`]: chosen by held-out error).
     pub pose_dims: Dims,
     /// k_v.
     pub coef_dims: CoefDims,
     /// α selection.
     pub alpha: Alpha,
+    /// The prior the model tends to.
+    pub prior: Prior,
+    /// `Some(falloff)`: poses are brought inside the box of the training poses (and the
+    /// prior's), and blended towards the prior's pose as they leave it, reaching the prior
+    /// `falloff` box widths outside (infinite: clamped only); `None`: the paper's unbounded
+    /// linear extrapolation.
+    pub bound: Option<f64>,
 }
 
+/// The falloff of the default bound, in box widths (see [`FitOptions::bound`]).
+pub const DEFAULT_FALLOFF: f64 = 0.5;
+
 impl Default for FitOptions {
-    /// All pose dimensions up to the rank, the paper's 22 vertex vectors, α by leave-segment-out
-    /// with ten segments.
+    /// The prior and k_a chosen by held-out error, the paper's 22 vertex vectors, α by
+    /// leave-segment-out with ten segments, bounded poses.
     fn default() -> Self {
         Self {
-            pose_dims: Dims::All,
+            pose_dims: Dims::Auto,
             coef_dims: CoefDims::Count(22),
             alpha: Alpha::Loso { segment: None },
+            prior: Prior::Auto,
+            bound: Some(DEFAULT_FALLOFF),
         }
     }
+}
+
+impl FitOptions {
+    /// The paper's model: every pose dimension, the mean as prior, no bound.
+    pub fn paper() -> Self {
+        Self {
+            pose_dims: Dims::All,
+            prior: Prior::Mean,
+            bound: None,
+            ..Self::default()
+        }
+    }
+}
+
+/// One candidate of the model selection and its held-out error.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Choice {
+    /// The prior.
+    pub prior: PriorKind,
+    /// k_a.
+    pub pose_dims: usize,
+    /// The best α for this prior and k_a.
+    pub alpha: f64,
+    /// Held-out mean squared error per output entry (basis coordinates) at that α.
+    pub held_out_error: f64,
+    /// In-sample error at that α.
+    pub train_error: f64,
+}
+
+/// What the selection held out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum HeldOutKind {
+    /// Contiguous runs of this many poses within each training clip.
+    Segments(usize),
+    /// This many whole validation clips.
+    Clips(usize),
 }
 
 /// Why a fit was refused.
@@ -154,6 +241,16 @@ pub enum FitError {
         /// Number of poses.
         poses: usize,
     },
+    /// The anchor's or a validation clip's shape disagrees with the training poses.
+    #[error("{what}: {found}, expected {expected}")]
+    HeldOutShape {
+        /// The anchor or validation clip.
+        what: String,
+        /// What it has.
+        found: String,
+        /// What the training poses imply.
+        expected: String,
+    },
     /// Every α of the grid left some held-out set unpredictable.
     #[error("cross validation error is infinite for every alpha")]
     NoFiniteCvError,
@@ -189,8 +286,14 @@ pub struct FitReport {
     pub cv_curve: Vec<CvPoint>,
     /// The α of the model.
     pub alpha: f64,
-    /// Poses per held-out segment, when α was cross-validated.
+    /// Poses per held-out segment, when α was cross-validated on segments.
     pub cv_segment: Option<usize>,
+    /// The prior of the model.
+    pub prior: PriorKind,
+    /// What the selection held out.
+    pub held_out: HeldOutKind,
+    /// Every candidate (prior, k_a) with its best α and held-out error, in the order tried.
+    pub choices: Vec<Choice>,
     /// Time per stage.
     pub seconds: StageSeconds,
 }
@@ -204,7 +307,58 @@ pub struct Fit {
     pub report: FitReport,
 }
 
-/// Fits the pose-driven linear model.
+/// A pose whose transfer is known and that the model tends to as α grows: for bone-frame
+/// models the rest pose, whose bone-frame transfer is the rest transfer carried by the skin.
+#[derive(Clone, Copy, Debug)]
+pub struct Anchor<'a> {
+    /// Its pose vector (a values).
+    pub angles: &'a [f64],
+    /// Its transfer, `v × n²` vertex-major, in the frame the model learns.
+    pub transfer: &'a [f32],
+}
+
+/// A clip held out whole to choose the model by (`--validate`).
+#[derive(Clone, Copy, Debug)]
+pub struct Validation<'a> {
+    /// `p_h × a` pose vectors.
+    pub angles: &'a DMatrix<f64>,
+    /// Transfer of each pose, in the frame the model learns.
+    pub transfers: &'a [Vec<f32>],
+}
+
+/// What the fit learns from: the training poses and their transfer, how they split into
+/// clips, the anchor and the held-out clips.
+#[derive(Clone, Debug)]
+pub struct FitInput<'a> {
+    /// `p × a`, one row of pose entries per pose.
+    pub angles: &'a DMatrix<f64>,
+    /// `transfers[i]` is pose i's transfer, `v × n²` vertex-major (`[j·n² + c]`).
+    pub transfers: &'a [Vec<f32>],
+    /// SH order n.
+    pub order: usize,
+    /// Poses per clip, in order (held-out segments never straddle two clips); empty: one clip.
+    pub clips: Vec<usize>,
+    /// The prior pose, if the model has one besides the mean.
+    pub anchor: Option<Anchor<'a>>,
+    /// Clips held out whole: when given, they alone choose α, k_a and the prior.
+    pub validation: Vec<Validation<'a>>,
+}
+
+impl<'a> FitInput<'a> {
+    /// Poses of one clip, no anchor, no held-out clips.
+    pub fn new(angles: &'a DMatrix<f64>, transfers: &'a [Vec<f32>], order: usize) -> Self {
+        Self {
+            angles,
+            transfers,
+            order,
+            clips: Vec::new(),
+            anchor: None,
+            validation: Vec::new(),
+        }
+    }
+}
+
+/// Fits the pose-driven linear model to one clip: [`fit_input`] with no anchor.
 ///
 /// `angles` is `p × a` (one row of joint angles per pose); `transfers[i]` is pose i's
 /// transfer, `v × n²` vertex-major (`[j·n² + c]`), for SH order `order` (`n²` coefficients).
@@ -214,8 +368,16 @@ pub fn fit(
     order: usize,
     options: &FitOptions,
 ) -> Result<Fit, FitError> {
+    fit_input(&FitInput::new(angles, transfers, order), options)
+}
+
+/// Fits the pose-driven linear model: the vertex basis over the training poses (and the
+/// anchor), then for each candidate prior and k_a the ridge, with α, k_a and the prior chosen
+/// by held-out error (segments of the clips, or the validation clips).
+pub fn fit_input(input: &FitInput<'_>, options: &FitOptions) -> Result<Fit, FitError> {
     let clock = Instant::now();
-    let vertices = validate(angles, transfers, order, options)?;
+    let (angles, transfers, order) = (input.angles, input.transfers, input.order);
+    let vertices = validate(input, options)?;
     let (p, n2) = (transfers.len(), order * order);
     let mut seconds = StageSeconds {
         validate: clock.elapsed().as_secs_f64(),
@@ -229,33 +391,172 @@ pub fn fit(
 
     let rows = PoseRows::new(transfers, n2, vertices);
     let clock = Instant::now();
-    let (basis, coef_energy, coef_total_energy) = match options.coef_dims {
-        CoefDims::Full => (None, Vec::new(), rows.frobenius_sq()),
-        CoefDims::Count(k) => split(fit_vertex_basis(&rows, Dims::Count(k))),
-        CoefDims::Variance(f) => split(fit_vertex_basis(&rows, Dims::Variance(f))),
+    // An anchored basis spans the anchor's coefficient fields exactly (when k_v leaves room
+    // for more), so the prior costs no truncation error.
+    let anchor_basis = input.anchor.filter(|_| options.prior != Prior::Mean);
+    let prior_fields = match (anchor_basis, options.coef_dims) {
+        (Some(anchor), CoefDims::Count(k)) if k > n2 => Some(field_basis(anchor.transfer, n2)),
+        (Some(anchor), CoefDims::Variance(_)) => Some(field_basis(anchor.transfer, n2)),
+        _ => None,
+    };
+    let (basis, coef_energy, coef_total_energy) = match (options.coef_dims, &prior_fields) {
+        (CoefDims::Full, _) => (None, Vec::new(), rows.frobenius_sq()),
+        (CoefDims::Count(k), None) => split(fit_vertex_basis(&rows, Dims::Count(k))),
+        (CoefDims::Variance(f), None) => split(fit_vertex_basis(&rows, Dims::Variance(f))),
+        (dims, Some(q)) => {
+            let rest = match dims {
+                CoefDims::Count(k) => Dims::Count(k - q.ncols()),
+                CoefDims::Variance(f) => Dims::Variance(f),
+                CoefDims::Full => unreachable!("the full model has no basis"),
+            };
+            let residual = fit_vertex_basis(&Deflated::new(&rows, q), rest);
+            let both =
+                DMatrix::from_fn(vertices, q.ncols() + residual.basis.ncols(), |j, k| match k
+                    .checked_sub(q.ncols())
+                {
+                    None => q[(j, k)],
+                    Some(k) => residual.basis[(j, k)],
+                });
+            (Some(both), residual.energies, residual.total_energy)
+        }
     };
     seconds.vertex_basis = clock.elapsed().as_secs_f64();
 
     let clock = Instant::now();
-    let outputs = match &basis {
-        Some(b) => project_rows(&rows, b),
-        None => raw_rows(&rows),
+    let outputs_of = |transfers: &[&[f32]]| {
+        let rows = PoseRows::from_slices(transfers.to_vec(), n2, vertices);
+        match &basis {
+            Some(b) => project_rows(&rows, b),
+            None => raw_rows(&rows),
+        }
     };
+    let train_slices: Vec<&[f32]> = transfers.iter().map(Vec::as_slice).collect();
+    let outputs = RidgeOutputs::new(outputs_of(&train_slices));
+    let anchor = input.anchor.map(|a| {
+        let z0 = pca.project(&DMatrix::from_row_slice(1, a.angles.len(), a.angles));
+        let y0 = outputs_of(&[a.transfer]);
+        (
+            z0.row(0).transpose(),
+            y0.row(0).transpose(),
+            a.angles.to_vec(),
+        )
+    });
+    let held: Vec<HeldOut> = input
+        .validation
+        .iter()
+        .map(|v| {
+            let slices: Vec<&[f32]> = v.transfers.iter().map(Vec::as_slice).collect();
+            HeldOut {
+                z: pca.project(v.angles),
+                y: outputs_of(&slices),
+            }
+        })
+        .collect();
     seconds.projection = clock.elapsed().as_secs_f64();
 
     let clock = Instant::now();
-    let problem = RidgeProblem::new(&z, outputs);
-    let (alpha, cv_curve, cv_segment) = match options.alpha {
-        Alpha::Fixed(alpha) => (alpha, Vec::new(), None),
-        Alpha::Loo => select(&problem, 1)?,
-        Alpha::Loso { segment } => select(&problem, segment.unwrap_or(p.div_ceil(10)))?,
+    let clips = if input.clips.is_empty() {
+        vec![p]
+    } else {
+        input.clips.clone()
     };
+    let segment = match options.alpha {
+        Alpha::Loo => 1,
+        Alpha::Loso { segment } => segment.unwrap_or(p.div_ceil(10)).max(1),
+        Alpha::Fixed(_) => p.div_ceil(10).max(1),
+    };
+    let runs = segments(&clips, segment);
+    let scoring = if held.is_empty() {
+        Scoring::Segments(&runs)
+    } else {
+        Scoring::Clips(&held)
+    };
+    let priors: Vec<PriorKind> = match (options.prior, &anchor) {
+        (_, None) | (Prior::Mean, _) => vec![PriorKind::Mean],
+        (Prior::Rest, Some(_)) => vec![PriorKind::Rest],
+        (Prior::Auto, Some(_)) => vec![PriorKind::Rest, PriorKind::Mean],
+    };
+    let candidates = pose_dim_candidates(options.pose_dims, pca.dims());
+    let mut choices = Vec::new();
+    let mut best: Option<(Choice, Vec<CvPoint>)> = None;
+    for &prior in &priors {
+        let target = match (prior, &anchor) {
+            (PriorKind::Rest, Some((_, y0, _))) => outputs.around_anchor(y0),
+            _ => outputs.around_mean(),
+        };
+        for &k in &candidates {
+            let zk = z.columns(0, k).into_owned();
+            let z0 = match (prior, &anchor) {
+                (PriorKind::Rest, Some((z0, _, _))) => Some(z0.rows(0, k).into_owned()),
+                _ => None,
+            };
+            let problem = RidgeProblem::new(&zk, z0.as_ref(), &target);
+            let held_k: Vec<HeldOut> = held
+                .iter()
+                .map(|h| HeldOut {
+                    z: h.z.columns(0, k).into_owned(),
+                    y: h.y.clone(),
+                })
+                .collect();
+            let scoring = match scoring {
+                Scoring::Segments(runs) => Scoring::Segments(runs),
+                Scoring::Clips(_) => Scoring::Clips(&held_k),
+            };
+            let (alpha, curve) = match options.alpha {
+                Alpha::Fixed(alpha) => (alpha, vec![scoring.point(&problem, alpha)]),
+                _ => {
+                    let selection = scoring.select(&problem)?;
+                    (selection.alpha, selection.curve)
+                }
+            };
+            let point = match curve.iter().find(|c| c.alpha == alpha) {
+                Some(point) => *point,
+                // No pose dependence (one pose, or joints that never move): the candidates
+                // are constant, nothing is held out, and they tie.
+                None if problem.rank() == 0 => CvPoint {
+                    alpha,
+                    cv_error: f64::MAX,
+                    train_error: f64::MAX,
+                },
+                None => scoring.point(&problem, alpha),
+            };
+            let choice = Choice {
+                prior,
+                pose_dims: k,
+                alpha,
+                held_out_error: point.cv_error,
+                train_error: point.train_error,
+            };
+            choices.push(choice);
+            let better = best.as_ref().is_none_or(|(b, _)| {
+                choice.held_out_error.is_finite() && choice.held_out_error < b.held_out_error
+            });
+            if better {
+                best = Some((choice, curve));
+            }
+        }
+    }
+    let (chosen, cv_curve) = best.ok_or(FitError::NoFiniteCvError)?;
+    if !chosen.held_out_error.is_finite() && !matches!(options.alpha, Alpha::Fixed(_)) {
+        return Err(FitError::NoFiniteCvError);
+    }
     seconds.cross_validation = clock.elapsed().as_secs_f64();
 
     let clock = Instant::now();
+    let ka = chosen.pose_dims;
+    let target = match (chosen.prior, &anchor) {
+        (PriorKind::Rest, Some((_, y0, _))) => outputs.around_anchor(y0),
+        _ => outputs.around_mean(),
+    };
+    let z0 = match (chosen.prior, &anchor) {
+        (PriorKind::Rest, Some((z0, _, _))) => Some(z0.rows(0, ka).into_owned()),
+        _ => None,
+    };
+    let zk = z.columns(0, ka).into_owned();
+    let problem = RidgeProblem::new(&zk, z0.as_ref(), &target);
+    let alpha = chosen.alpha;
     let solution = problem.solve(alpha);
     let kv = basis.as_ref().map_or(vertices, |b| b.ncols());
-    let ka = pca.dims();
     let mut weights = vec![0.0; n2 * (ka + 1) * kv];
     for c in 0..n2 {
         for k in 0..kv {
@@ -266,13 +567,21 @@ pub fn fit(
             }
         }
     }
+    let prior_angles = match (chosen.prior, &anchor) {
+        (PriorKind::Rest, Some((_, _, a))) => a.clone(),
+        _ => pca.mean.clone(),
+    };
+    let bounds = options
+        .bound
+        .map(|falloff| PoseBounds::of(angles, &prior_angles, falloff));
+    let projection = pca.projection.rows(0, ka).into_owned();
     let model = LinearModel {
         order,
         vertices,
         pose_len: angles.ncols(),
         pose_mean: pca.mean.clone(),
         // nalgebra is column-major; the model stores P row-major.
-        pose_projection: pca.projection.transpose().as_slice().to_vec(),
+        pose_projection: projection.transpose().as_slice().to_vec(),
         weights,
         basis: match basis {
             // v × k_v vertex-major is the row-major layout, i.e. the transpose's column-major one.
@@ -285,6 +594,7 @@ pub fn fit(
         alpha,
         bones: None,
         angle_names: Vec::new(),
+        bounds,
     };
     seconds.solve = clock.elapsed().as_secs_f64();
 
@@ -294,35 +604,63 @@ pub fn fit(
         coef_total_energy,
         cv_curve,
         alpha,
-        cv_segment,
+        cv_segment: (problem.rank() > 0 && held.is_empty()).then_some(segment),
+        prior: chosen.prior,
+        held_out: if held.is_empty() {
+            HeldOutKind::Segments(segment)
+        } else {
+            HeldOutKind::Clips(held.len())
+        },
+        choices,
         seconds,
     };
     Ok(Fit { model, report })
+}
+
+/// How a candidate is scored: held-out runs of the training clips, or whole held-out clips.
+#[derive(Clone, Copy)]
+enum Scoring<'a> {
+    Segments(&'a [std::ops::Range<usize>]),
+    Clips(&'a [HeldOut]),
+}
+
+impl Scoring<'_> {
+    fn select(&self, problem: &RidgeProblem<'_>) -> Result<AlphaSelection, FitError> {
+        match self {
+            Scoring::Segments(runs) => problem.select_alpha(runs),
+            Scoring::Clips(held) => problem.select_on(held),
+        }
+    }
+
+    fn point(&self, problem: &RidgeProblem<'_>, alpha: f64) -> CvPoint {
+        match self {
+            Scoring::Segments(runs) => problem.cv_point(alpha, runs),
+            Scoring::Clips(held) => problem.held_out_point(alpha, held),
+        }
+    }
+}
+
+/// The k_a values tried: the one asked for, or (for [`Dims::Auto`]) a doubling ladder up to
+/// the rank, so that the selection can trade pose detail for generalisation.
+fn pose_dim_candidates(dims: Dims, rank: usize) -> Vec<usize> {
+    if dims != Dims::Auto {
+        return vec![rank];
+    }
+    let mut ladder: Vec<usize> = [1, 2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64]
+        .into_iter()
+        .filter(|&k| k < rank)
+        .collect();
+    ladder.push(rank);
+    ladder
 }
 
 fn split(fit: VertexBasisFit) -> (Option<DMatrix<f64>>, Vec<f64>, f64) {
     (Some(fit.basis), fit.energies, fit.total_energy)
 }
 
-fn select(
-    problem: &RidgeProblem,
-    segment: usize,
-) -> Result<(f64, Vec<CvPoint>, Option<usize>), FitError> {
-    let selection = problem.select_alpha(segment)?;
-    Ok((
-        selection.alpha,
-        selection.curve,
-        (problem.rank() > 0).then_some(segment.max(1)),
-    ))
-}
-
 /// Checks shapes, finiteness and options; returns the vertex count.
-fn validate(
-    angles: &DMatrix<f64>,
-    transfers: &[Vec<f32>],
-    order: usize,
-    options: &FitOptions,
-) -> Result<usize, FitError> {
+fn validate(input: &FitInput<'_>, options: &FitOptions) -> Result<usize, FitError> {
+    let (angles, transfers, order) = (input.angles, input.transfers, input.order);
     let p = transfers.len();
     if p == 0 && angles.nrows() == 0 {
         return Err(FitError::NoPoses);
@@ -370,6 +708,50 @@ fn validate(
             let value = angles[(pose, joint)];
             return Err(FitError::AngleOutOfRange { pose, joint, value });
         }
+    }
+    let shape = |what: String, rows: &DMatrix<f64>, transfers: &[Vec<f32>]| {
+        let found = (
+            rows.ncols(),
+            transfers.iter().map(Vec::len).find(|&l| l != len0),
+        );
+        if rows.nrows() != transfers.len() || found.0 != angles.ncols() || found.1.is_some() {
+            return Err(FitError::HeldOutShape {
+                what,
+                found: format!(
+                    "{} poses of {} entries, {} transfers{}",
+                    rows.nrows(),
+                    found.0,
+                    transfers.len(),
+                    found
+                        .1
+                        .map_or(String::new(), |l| format!(" (one of {l} values)"))
+                ),
+                expected: format!("{} entries and {len0} transfer values", angles.ncols()),
+            });
+        }
+        if rows.iter().any(|x| !x.is_finite()) || transfers.iter().flatten().any(|x| !x.is_finite())
+        {
+            return Err(FitError::HeldOutShape {
+                what,
+                found: "a value that is not finite".into(),
+                expected: "finite pose entries and transfer".into(),
+            });
+        }
+        Ok(())
+    };
+    if let Some(anchor) = &input.anchor {
+        let a = DMatrix::from_row_slice(1, anchor.angles.len(), anchor.angles);
+        shape("the rest pose".into(), &a, &[anchor.transfer.to_vec()])?;
+    }
+    for (i, v) in input.validation.iter().enumerate() {
+        shape(format!("validation clip {i}"), v.angles, v.transfers)?;
+    }
+    if !input.clips.is_empty() && input.clips.iter().sum::<usize>() != p {
+        return Err(FitError::HeldOutShape {
+            what: "the training clips".into(),
+            found: format!("{} poses in all", input.clips.iter().sum::<usize>()),
+            expected: format!("{p} poses"),
+        });
     }
     match options.alpha {
         Alpha::Fixed(alpha) if !(alpha.is_finite() && alpha >= 0.0) => {

@@ -1,23 +1,28 @@
-//! Tikhonov ridge regression of many outputs on the pose coordinates, with an unpenalised
-//! intercept and α chosen by closed-form cross validation.
+//! Tikhonov ridge regression of many outputs on the pose coordinates, with α chosen by
+//! closed-form cross validation or by the error on held-out clips.
 //!
 //! Minimises `‖Y − 1bᵀ − Z X‖² + α²‖X‖²`. With centred `Z_c = U S Vᵀ` (thin, cut at the
 //! numerical rank) and centred `Y_c`: `X = V diag(s / (s² + α²)) Uᵀ Y_c`, `b = ȳ − Xᵀ z̄`.
 //! The SVD form is the minimum-norm solution when Z is rank-deficient, and the intercept being
 //! unpenalised means a huge α tends to the mean output (the mean transfer), not to zero.
 //!
-//! The fit is a linear smoother `Ŷ = H Y` with `H = 11ᵀ/p + U F Uᵀ`, `F = diag(s²/(s²+α²))`,
-//! so held-out residuals follow from the in-sample ones without refits: for a held-out set S,
-//! `e_S = (I − H_SS)⁻¹ r_S` (leave-one-out is the case |S| = 1). All that is needed of Y is its
-//! `p × p` Gram `K = Y_c Y_cᵀ`: the residual Gram is `(I − H) K (I − H)`, and expanding it in
-//! `K' = Uᵀ K` and `M = Uᵀ K U` makes each α cost `O(p·L·r²)` (segment length L, rank r)
-//! whatever the output width — the full model has ~400k outputs per pose.
+//! An *anchored* problem fits through a given point `(z₀, y₀)` instead: no intercept, `Z` and
+//! `Y` taken relative to the anchor (`ŷ(z) = y₀ + Xᵀ (z − z₀)`), so a huge α tends to `y₀`
+//! exactly (a prior such as the rest pose's transfer) and the regression only adds what the
+//! data supports.
+//!
+//! The fit is a linear smoother `Ŷ = H Y` with `H = 11ᵀ/p + U F Uᵀ` (`H = U F Uᵀ` when
+//! anchored), `F = diag(s²/(s²+α²))`, so held-out residuals follow from the in-sample ones
+//! without refits: for a held-out set S, `e_S = (I − H_SS)⁻¹ r_S` (leave-one-out is the case
+//! |S| = 1). All that is needed of Y is its `p × p` Gram `K = Y_c Y_cᵀ`: the residual Gram is
+//! `(I − H) K (I − H)`, and expanding it in `K' = Uᵀ K` and `M = Uᵀ K U` makes each α cost
+//! `O(p·L·r²)` (segment length L, rank r) whatever the output width — the full model has
+//! ~400k outputs per pose. The Gram belongs to the outputs ([`RidgeOutputs`]), so problems on
+//! different pose dimensions share it.
 //! The price of the Gram form is resolution: residuals below about `√ε · ‖Y_c‖` cancel in
 //! `K` and read as zero, which only matters once the fit is already exact to ~1e-8.
-//!
-//! [`RidgeProblem::anchored`] fits through a given point `(z₀, y₀)` instead: no intercept, `Z`
-//! and `Y` taken relative to the anchor, `H = U F Uᵀ`, so a huge α tends to `y₀` (a prior such
-//! as the bind pose's transfer) and the regression only adds what the data supports.
+
+use std::ops::Range;
 
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -31,29 +36,123 @@ const GRID_POINTS: usize = 60;
 /// Below this α every direction is fitted as in least squares (filter factors ≥ 1 − 1e-12 for
 /// the leading directions).
 const GRID_LOW: f64 = 1e-6;
-/// Above this α every filter factor is below 1e-6: the model is the mean.
+/// Above this α every filter factor is below 1e-6: the model is the mean (or the anchor).
 const GRID_HIGH: f64 = 1e3;
 /// Golden-section refinement stops when the log-α bracket is this narrow (0.01 % in α).
 const REFINE_LOG_WIDTH: f64 = 1e-4;
 /// Output columns per block of the Gram product, summed in a fixed order for determinism.
 const GRAM_COLUMNS_PER_BLOCK: usize = 4096;
 
-/// A ridge problem: centred data and the SVD of the centred inputs.
+/// The outputs of a ridge problem, centred on their column means, with their Gram.
 #[derive(Clone, Debug)]
-pub struct RidgeProblem {
-    /// The point the data is centred on: the means, or the anchor.
-    z_mean: DVector<f64>,
-    y_mean: DVector<f64>,
-    /// Whether the intercept is fitted (centred on the means) or given (the anchor).
-    fitted_intercept: bool,
+pub struct RidgeOutputs {
+    /// The mean output.
+    mean: DVector<f64>,
+    /// `p × q` outputs minus their mean.
+    y_centred: DMatrix<f64>,
+    /// `K = Y_c Y_cᵀ`, `p × p`.
+    gram: DMatrix<f64>,
+}
+
+impl RidgeOutputs {
+    /// `y` (`p × q`, taken by value and centred in place: for the full model it is the largest
+    /// array of the fit).
+    pub fn new(mut y: DMatrix<f64>) -> Self {
+        let mean = DVector::from_fn(y.ncols(), |j, _| y.column(j).mean());
+        for (mut col, m) in y.column_iter_mut().zip(mean.iter()) {
+            col.add_scalar_mut(-m);
+        }
+        let (p, q) = y.shape();
+        let starts: Vec<usize> = (0..q).step_by(GRAM_COLUMNS_PER_BLOCK).collect();
+        let parts: Vec<DMatrix<f64>> = starts
+            .par_iter()
+            .map(|&c| {
+                let block = y.columns(c, GRAM_COLUMNS_PER_BLOCK.min(q - c));
+                block * block.transpose()
+            })
+            .collect();
+        let gram = parts
+            .into_iter()
+            .fold(DMatrix::zeros(p, p), |acc, part| acc + part);
+        Self {
+            mean,
+            y_centred: y,
+            gram,
+        }
+    }
+
+    /// The fit with an unpenalised intercept: a huge α tends to the mean output.
+    pub fn around_mean(&self) -> RidgeTarget<'_> {
+        RidgeTarget {
+            outputs: self,
+            centre: self.mean.clone(),
+            shift: DVector::zeros(self.mean.len()),
+            gram: self.gram.clone(),
+            anchored: false,
+        }
+    }
+
+    /// The fit through an anchor whose output is `y0`: a huge α tends to `y0`. The outputs
+    /// relative to it are `Y_c + 1 dᵀ` with `d = ȳ − y0`, so their Gram follows from the
+    /// centred one without another copy of the outputs.
+    pub fn around_anchor(&self, y0: &DVector<f64>) -> RidgeTarget<'_> {
+        assert_eq!(y0.len(), self.mean.len(), "ridge: anchor output shape");
+        let shift = &self.mean - y0;
+        let p = self.gram.nrows();
+        let yd = &self.y_centred * &shift;
+        let ones = DVector::from_element(p, 1.0);
+        let gram = &self.gram
+            + &yd * ones.transpose()
+            + &ones * yd.transpose()
+            + DMatrix::from_element(p, p, shift.norm_squared());
+        RidgeTarget {
+            outputs: self,
+            centre: y0.clone(),
+            shift,
+            gram,
+            anchored: true,
+        }
+    }
+}
+
+/// Outputs relative to the point the fit is centred on: their mean, or an anchor.
+#[derive(Clone, Debug)]
+pub struct RidgeTarget<'a> {
+    outputs: &'a RidgeOutputs,
+    /// The mean output, or the anchor's.
+    centre: DVector<f64>,
+    /// `ȳ − centre`: the outputs relative to the centre are `Y_c + 1 shiftᵀ`.
+    shift: DVector<f64>,
+    /// Gram of the outputs relative to the centre.
+    gram: DMatrix<f64>,
+    /// Whether the intercept is given (the anchor) rather than fitted.
+    anchored: bool,
+}
+
+impl RidgeTarget<'_> {
+    /// `Uᵀ (Y − 1 centreᵀ)` for `u` with one row per pose.
+    fn project(&self, u: &DMatrix<f64>) -> DMatrix<f64> {
+        let ones = DVector::from_element(u.nrows(), 1.0);
+        u.tr_mul(&self.outputs.y_centred) + u.tr_mul(&ones) * self.shift.transpose()
+    }
+
+    fn shape(&self) -> (usize, usize) {
+        self.outputs.y_centred.shape()
+    }
+}
+
+/// A ridge problem: the factored inputs and the outputs they predict.
+#[derive(Clone, Debug)]
+pub struct RidgeProblem<'a> {
+    /// The point the inputs are centred on: their mean, or the anchor's.
+    z_centre: DVector<f64>,
     /// `p × r` left singular vectors of `Z_c`.
     u: DMatrix<f64>,
     /// r singular values, descending, all above the rank tolerance.
     s: DVector<f64>,
     /// `k × r` right singular vectors.
     v: DMatrix<f64>,
-    /// `p × q` centred outputs.
-    y_centred: DMatrix<f64>,
+    target: &'a RidgeTarget<'a>,
 }
 
 /// A solved ridge: `ŷ(z) = intercept + coefficientsᵀ z`.
@@ -80,63 +179,73 @@ pub struct CvPoint {
 /// The α chosen by cross validation and every α evaluated on the way, sorted by α.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AlphaSelection {
-    /// The minimiser of the CV error.
+    /// The minimiser of the held-out error.
     pub alpha: f64,
     /// Grid and refinement points, ascending in α.
     pub curve: Vec<CvPoint>,
 }
 
-impl RidgeProblem {
-    /// Centres `z` (`p × k`) and `y` (`p × q`, taken by value and centred in place: for the full
-    /// model it is the largest array of the fit) and factors `Z_c`.
-    pub fn new(z: &DMatrix<f64>, y: DMatrix<f64>) -> Self {
-        let z_mean = DVector::from_fn(z.ncols(), |j, _| z.column(j).mean());
-        let y_mean = DVector::from_fn(y.ncols(), |j, _| y.column(j).mean());
-        Self::centred_on(z, y, z_mean, y_mean, true)
-    }
+/// Poses held out whole: their pose coordinates and outputs, to score a fit on.
+#[derive(Clone, Debug)]
+pub struct HeldOut {
+    /// `p_h × k` pose coordinates.
+    pub z: DMatrix<f64>,
+    /// `p_h × q` outputs.
+    pub y: DMatrix<f64>,
+}
 
-    /// The fit through `(z0, y0)`: `ŷ(z) = y0 + Xᵀ (z − z0)` with only `X` penalised, so that
-    /// a huge α gives `y0` exactly.
-    pub fn anchored(z: &DMatrix<f64>, y: DMatrix<f64>, z0: DVector<f64>, y0: DVector<f64>) -> Self {
-        assert_eq!(
-            (z0.len(), y0.len()),
-            (z.ncols(), y.ncols()),
-            "ridge: anchor shape"
+/// Contiguous runs of at most `segment` poses inside each of the consecutive clips of
+/// `clip_lengths` poses, so that no held-out run straddles two clips.
+pub fn segments(clip_lengths: &[usize], segment: usize) -> Vec<Range<usize>> {
+    let segment = segment.max(1);
+    let mut start = 0;
+    let mut runs = Vec::new();
+    for &len in clip_lengths {
+        let end = start + len;
+        runs.extend(
+            (start..end)
+                .step_by(segment)
+                .map(|s| s..(s + segment).min(end)),
         );
-        Self::centred_on(z, y, z0, y0, false)
+        start = end;
     }
+    runs
+}
 
-    fn centred_on(
-        z: &DMatrix<f64>,
-        mut y: DMatrix<f64>,
-        z_mean: DVector<f64>,
-        y_mean: DVector<f64>,
-        fitted_intercept: bool,
-    ) -> Self {
+impl<'a> RidgeProblem<'a> {
+    /// Factors the inputs `z` (`p × k`) for `outputs`: centred on their means, or on `z0` when
+    /// the outputs are anchored (then `z0` must be given, and only then).
+    pub fn new(z: &DMatrix<f64>, z0: Option<&DVector<f64>>, target: &'a RidgeTarget<'a>) -> Self {
         let (p, k) = z.shape();
-        assert_eq!(y.nrows(), p, "ridge: Z and Y must have one row per pose");
-        for (mut col, m) in y.column_iter_mut().zip(y_mean.iter()) {
-            col.add_scalar_mut(-m);
-        }
+        assert_eq!(
+            target.shape().0,
+            p,
+            "ridge: Z and Y must have one row per pose"
+        );
+        assert_eq!(
+            z0.is_some(),
+            target.anchored,
+            "ridge: an anchored fit needs the anchor's inputs, and only it"
+        );
+        let z_centre = match z0 {
+            Some(z0) => {
+                assert_eq!(z0.len(), k, "ridge: anchor input shape");
+                z0.clone()
+            }
+            None => DVector::from_fn(k, |j, _| z.column(j).mean()),
+        };
         let mut zc = z.clone();
-        for (mut col, m) in zc.column_iter_mut().zip(z_mean.iter()) {
+        for (mut col, m) in zc.column_iter_mut().zip(z_centre.iter()) {
             col.add_scalar_mut(-m);
         }
         if p == 0 || k == 0 {
-            // No pose coordinates (e.g. a single pose): nothing to factor, the fit is the mean.
-            let (u, s, v) = (
-                DMatrix::zeros(p, 0),
-                DVector::zeros(0),
-                DMatrix::zeros(k, 0),
-            );
+            // No pose coordinates (e.g. a single pose): nothing to factor, the fit is the centre.
             return Self {
-                z_mean,
-                y_mean,
-                fitted_intercept,
-                u,
-                s,
-                v,
-                y_centred: y,
+                z_centre,
+                u: DMatrix::zeros(p, 0),
+                s: DVector::zeros(0),
+                v: DMatrix::zeros(k, 0),
+                target,
             };
         }
         let svd = zc.svd(true, true);
@@ -153,13 +262,11 @@ impl RidgeProblem {
             .transpose();
         let s = svd.singular_values.rows(0, rank).into_owned();
         Self {
-            z_mean,
-            y_mean,
-            fitted_intercept,
+            z_centre,
             u,
             s,
             v,
-            y_centred: y,
+            target,
         }
     }
 
@@ -171,40 +278,58 @@ impl RidgeProblem {
     /// Ridge solution at `alpha` (α = 0 is the minimum-norm least-squares solution).
     pub fn solve(&self, alpha: f64) -> RidgeSolution {
         let filter = self.s.map(|s| s / (s * s + alpha * alpha));
-        let mut uty = self.u.tr_mul(&self.y_centred);
+        let mut uty = self.target.project(&self.u);
         for (mut row, f) in uty.row_iter_mut().zip(filter.iter()) {
             row *= *f;
         }
         let coefficients = &self.v * uty;
-        let intercept = &self.y_mean - coefficients.tr_mul(&self.z_mean);
+        let intercept = &self.target.centre - coefficients.tr_mul(&self.z_centre);
         RidgeSolution {
             intercept,
             coefficients,
         }
     }
 
-    /// Chooses α minimising the leave-segment-out error over contiguous runs of `segment`
-    /// poses (1 = leave-one-out): a 60-point log grid relative to `s_max`, then golden-section
-    /// search on log α around the best grid point.
-    pub fn select_alpha(&self, segment: usize) -> Result<AlphaSelection, FitError> {
+    /// Chooses α minimising the leave-segment-out error over the held-out `runs` (disjoint,
+    /// covering every pose; runs of one pose are leave-one-out): see [`Self::select_by`].
+    pub fn select_alpha(&self, runs: &[Range<usize>]) -> Result<AlphaSelection, FitError> {
         let p = self.u.nrows();
-        let segment = segment.max(1);
-        // Rank 0: no pose dependence to regularise; the fit is the mean whatever α.
+        if self.rank() == 0 {
+            // No pose dependence: nothing to choose, whatever the runs.
+            return self.select_by(|_| unreachable!("rank 0 evaluates nothing"));
+        }
+        // Holding out every pose leaves nothing to fit on.
+        if let Some(run) = runs.iter().find(|r| r.len() >= p) {
+            return Err(FitError::SegmentTooLong {
+                segment: run.len(),
+                poses: p,
+            });
+        }
+        let cv = GramCv::new(self, runs);
+        self.select_by(|alpha| cv.evaluate(alpha))
+    }
+
+    /// Chooses α minimising the error on poses held out whole (`held`, not among the fitted
+    /// poses): see [`Self::select_by`].
+    pub fn select_on(&self, held: &[HeldOut]) -> Result<AlphaSelection, FitError> {
+        let score = HeldOutScore::new(self, held);
+        self.select_by(|alpha| score.evaluate(alpha))
+    }
+
+    /// A 60-point log grid of α relative to `s_max`, then golden-section search on log α
+    /// around the best grid point.
+    fn select_by(&self, evaluate: impl Fn(f64) -> CvPoint) -> Result<AlphaSelection, FitError> {
+        // Rank 0: no pose dependence to regularise; the fit is the centre whatever α.
         let Some(&s_max) = self.s.as_slice().first() else {
             return Ok(AlphaSelection {
                 alpha: 0.0,
                 curve: Vec::new(),
             });
         };
-        // Holding out every pose leaves nothing to fit on.
-        if segment >= p {
-            return Err(FitError::SegmentTooLong { segment, poses: p });
-        }
-        let cv = GramCv::new(self, segment);
         let log_lo = (GRID_LOW * s_max).ln();
         let step = ((GRID_HIGH * s_max).ln() - log_lo) / (GRID_POINTS - 1) as f64;
         let mut curve: Vec<CvPoint> = (0..GRID_POINTS)
-            .map(|i| cv.evaluate((log_lo + step * i as f64).exp()))
+            .map(|i| evaluate((log_lo + step * i as f64).exp()))
             .collect();
         let best = argmin(&curve).ok_or(FitError::NoFiniteCvError)?;
         // Golden-section search on log α inside the neighbouring grid points.
@@ -215,18 +340,18 @@ impl RidgeProblem {
         );
         let mut x1 = b - inv_phi * (b - a);
         let mut x2 = a + inv_phi * (b - a);
-        let (mut f1, mut f2) = (cv.evaluate(x1.exp()), cv.evaluate(x2.exp()));
+        let (mut f1, mut f2) = (evaluate(x1.exp()), evaluate(x2.exp()));
         curve.extend([f1, f2]);
         while b - a > REFINE_LOG_WIDTH {
             if f1.cv_error <= f2.cv_error {
                 (b, x2, f2) = (x2, x1, f1);
                 x1 = b - inv_phi * (b - a);
-                f1 = cv.evaluate(x1.exp());
+                f1 = evaluate(x1.exp());
                 curve.push(f1);
             } else {
                 (a, x1, f1) = (x1, x2, f2);
                 x2 = a + inv_phi * (b - a);
-                f2 = cv.evaluate(x2.exp());
+                f2 = evaluate(x2.exp());
                 curve.push(f2);
             }
         }
@@ -235,10 +360,14 @@ impl RidgeProblem {
         Ok(AlphaSelection { alpha, curve })
     }
 
-    /// Held-out and in-sample error at one α (see [`CvPoint`]); `segment` as in
-    /// [`Self::select_alpha`].
-    pub fn cv_point(&self, alpha: f64, segment: usize) -> CvPoint {
-        GramCv::new(self, segment.max(1)).evaluate(alpha)
+    /// Held-out and in-sample error at one α (see [`CvPoint`]) over the held-out `runs`.
+    pub fn cv_point(&self, alpha: f64, runs: &[Range<usize>]) -> CvPoint {
+        GramCv::new(self, runs).evaluate(alpha)
+    }
+
+    /// Error on poses held out whole, and in-sample error, at one α.
+    pub fn held_out_point(&self, alpha: f64, held: &[HeldOut]) -> CvPoint {
+        HeldOutScore::new(self, held).evaluate(alpha)
     }
 }
 
@@ -252,12 +381,25 @@ fn argmin(curve: &[CvPoint]) -> Option<usize> {
         .map(|(i, _)| i)
 }
 
-/// Everything cross validation needs, independent of α: the output Gram and its projections.
-struct GramCv<'a> {
-    problem: &'a RidgeProblem,
-    segment: usize,
-    /// `K = Y_c Y_cᵀ`, `p × p`.
-    k: DMatrix<f64>,
+/// Filter factors `s² / (s² + α²)`.
+fn filter(s: &DVector<f64>, alpha: f64) -> DVector<f64> {
+    s.map(|s| s * s / (s * s + alpha * alpha))
+}
+
+/// In-sample squared error at α from the Gram: `tr((I − H) K (I − H))` with the `11ᵀ/p` part
+/// vanishing against the centred K, i.e. `tr K − 2 tr(F M) + tr(F M F)` (`UᵀU = I`).
+fn train_sum(m: &DMatrix<f64>, k_trace: f64, f: &DVector<f64>) -> f64 {
+    k_trace
+        + f.iter()
+            .enumerate()
+            .map(|(i, fi)| (fi * fi - 2.0 * fi) * m[(i, i)])
+            .sum::<f64>()
+}
+
+/// Everything cross validation needs, independent of α: the output Gram's projections.
+struct GramCv<'a, 'b> {
+    problem: &'b RidgeProblem<'a>,
+    runs: &'b [Range<usize>],
     /// `K' = Uᵀ K`, `r × p`.
     ku: DMatrix<f64>,
     /// `M = Uᵀ K U`, `r × r`.
@@ -266,27 +408,14 @@ struct GramCv<'a> {
     entries: f64,
 }
 
-impl<'a> GramCv<'a> {
-    fn new(problem: &'a RidgeProblem, segment: usize) -> Self {
-        let y = &problem.y_centred;
-        let (p, q) = y.shape();
-        let starts: Vec<usize> = (0..q).step_by(GRAM_COLUMNS_PER_BLOCK).collect();
-        let parts: Vec<DMatrix<f64>> = starts
-            .par_iter()
-            .map(|&c| {
-                let block = y.columns(c, GRAM_COLUMNS_PER_BLOCK.min(q - c));
-                block * block.transpose()
-            })
-            .collect();
-        let k = parts
-            .into_iter()
-            .fold(DMatrix::zeros(p, p), |acc, part| acc + part);
-        let ku = problem.u.tr_mul(&k);
+impl<'a, 'b> GramCv<'a, 'b> {
+    fn new(problem: &'b RidgeProblem<'a>, runs: &'b [Range<usize>]) -> Self {
+        let (p, q) = problem.target.shape();
+        let ku = problem.u.tr_mul(&problem.target.gram);
         let m = &ku * &problem.u;
         Self {
             problem,
-            segment,
-            k,
+            runs,
             ku,
             m,
             entries: (p * q.max(1)) as f64,
@@ -294,42 +423,119 @@ impl<'a> GramCv<'a> {
     }
 
     fn evaluate(&self, alpha: f64) -> CvPoint {
-        let (u, s) = (&self.problem.u, &self.problem.s);
+        let (u, k) = (&self.problem.u, &self.problem.target.gram);
         let p = u.nrows();
-        let f = s.map(|s| s * s / (s * s + alpha * alpha));
+        let f = filter(&self.problem.s, alpha);
         let mut uf = u.clone();
         for (mut col, fk) in uf.column_iter_mut().zip(f.iter()) {
             col *= *fk;
         }
-        let (mut cv, mut train) = (0.0, 0.0);
-        for start in (0..p).step_by(self.segment) {
-            let len = self.segment.min(p - start);
+        let mean_part = if self.problem.target.anchored {
+            0.0
+        } else {
+            1.0 / p as f64
+        };
+        let mut cv = 0.0;
+        for run in self.runs {
+            let (start, len) = (run.start, run.len());
             let (u_s, uf_s) = (u.rows(start, len), uf.rows(start, len));
-            // Residual Gram of the segment: [(I − H) K (I − H)]_SS with H = 11ᵀ/p + U F Uᵀ
+            // Residual Gram of the run: [(I − H) K (I − H)]_SS with H = 11ᵀ/p + U F Uᵀ
             // (H = U F Uᵀ when anchored); the 11ᵀ/p part vanishes against the centred K.
             let cross = uf_s * self.ku.columns(start, len);
-            let g = self.k.view((start, start), (len, len)) - &cross - cross.transpose()
+            let g = k.view((start, start), (len, len)) - &cross - cross.transpose()
                 + uf_s * &self.m * uf_s.transpose();
-            let mean_part = if self.problem.fitted_intercept {
-                1.0 / p as f64
-            } else {
-                0.0
-            };
             let i_minus_h = DMatrix::identity(len, len)
                 - DMatrix::from_element(len, len, mean_part)
                 - uf_s * u_s.transpose();
-            train += g.trace();
             cv += match i_minus_h.cholesky() {
                 // e_S = (I − H_SS)⁻¹ r_S, so Σ‖e_S‖² = tr((I − H_SS)⁻¹ G (I − H_SS)⁻¹).
                 Some(chol) => chol.solve(&chol.solve(&g).transpose()).trace(),
                 None => f64::INFINITY,
             };
         }
+        let train = train_sum(&self.m, k.trace(), &f);
         // Cancellation in the Gram expansion can leave tiny negative values.
         CvPoint {
             alpha,
             cv_error: cv.max(0.0) / self.entries,
             train_error: train.max(0.0) / self.entries,
+        }
+    }
+}
+
+/// The error on whole held-out clips as a function of α, from α-independent products: with
+/// `A = (Z_h − 1z_cᵀ) V` and `B = Uᵀ Y_c`, the prediction error is
+/// `‖E‖² − 2 tr(F Aᵀ E Bᵀ) + tr(F AᵀA F B Bᵀ)`, `E = Y_h − 1y_cᵀ`; each α costs `O(r²)`.
+struct HeldOutScore {
+    s: DVector<f64>,
+    /// `tr EᵀE` over the held-out poses.
+    e_sq: f64,
+    /// `Aᵀ E Bᵀ`, `r × r`.
+    aeb: DMatrix<f64>,
+    /// `AᵀA`, `r × r`.
+    ata: DMatrix<f64>,
+    /// `B Bᵀ`, `r × r`.
+    bbt: DMatrix<f64>,
+    /// `M = Uᵀ K U` and `tr K`, for the in-sample error.
+    m: DMatrix<f64>,
+    k_trace: f64,
+    entries: f64,
+    train_entries: f64,
+}
+
+impl HeldOutScore {
+    fn new(problem: &RidgeProblem<'_>, held: &[HeldOut]) -> Self {
+        let r = problem.rank();
+        let target = problem.target;
+        let b = target.project(&problem.u);
+        let bbt = &b * b.transpose();
+        let (mut e_sq, mut aeb, mut ata, mut rows) =
+            (0.0, DMatrix::zeros(r, r), DMatrix::zeros(r, r), 0);
+        for h in held {
+            let mut zc = h.z.clone();
+            for (mut col, m) in zc.column_iter_mut().zip(problem.z_centre.iter()) {
+                col.add_scalar_mut(-m);
+            }
+            let mut e = h.y.clone();
+            for (mut col, m) in e.column_iter_mut().zip(target.centre.iter()) {
+                col.add_scalar_mut(-m);
+            }
+            let a = zc * &problem.v;
+            e_sq += e.norm_squared();
+            aeb += a.tr_mul(&(e * b.transpose()));
+            ata += a.tr_mul(&a);
+            rows += h.y.nrows();
+        }
+        let (p, q) = target.shape();
+        let ku = problem.u.tr_mul(&target.gram);
+        Self {
+            s: problem.s.clone(),
+            e_sq,
+            aeb,
+            ata,
+            bbt,
+            m: &ku * &problem.u,
+            k_trace: target.gram.trace(),
+            entries: (rows * q.max(1)).max(1) as f64,
+            train_entries: (p * q.max(1)).max(1) as f64,
+        }
+    }
+
+    fn evaluate(&self, alpha: f64) -> CvPoint {
+        // The prediction of a held-out pose is A diag(s/(s²+α²)) B.
+        let g = self.s.map(|s| s / (s * s + alpha * alpha));
+        let mut err = self.e_sq;
+        for i in 0..g.len() {
+            err -= 2.0 * g[i] * self.aeb[(i, i)];
+            for j in 0..g.len() {
+                err += g[i] * self.ata[(i, j)] * g[j] * self.bbt[(j, i)];
+            }
+        }
+        let train = train_sum(&self.m, self.k_trace, &filter(&self.s, alpha));
+        CvPoint {
+            alpha,
+            cv_error: err.max(0.0) / self.entries,
+            train_error: train.max(0.0) / self.train_entries,
         }
     }
 }
@@ -386,9 +592,12 @@ mod tests {
     #[test]
     fn closed_form_loo_equals_refits() {
         let (z, y) = problem(17, 4, 6, 1);
-        let ridge = RidgeProblem::new(&z, y.clone());
+        let outputs = RidgeOutputs::new(y.clone());
+        let target = outputs.around_mean();
+        let ridge = RidgeProblem::new(&z, None, &target);
         for alpha in [1e-3, 0.05, 0.4, 3.0] {
-            let closed = ridge.cv_point(alpha, 1).cv_error * (17 * 6) as f64;
+            let closed =
+                ridge.cv_point(alpha, &segments(&[z.nrows()], 1)).cv_error * (17 * 6) as f64;
             let brute = brute_force_cv(&z, &y, alpha, 1);
             assert!(
                 (closed - brute).abs() <= 1e-9 * brute,
@@ -400,10 +609,15 @@ mod tests {
     #[test]
     fn closed_form_loso_equals_refits() {
         let (z, y) = problem(23, 5, 4, 7);
-        let ridge = RidgeProblem::new(&z, y.clone());
+        let outputs = RidgeOutputs::new(y.clone());
+        let target = outputs.around_mean();
+        let ridge = RidgeProblem::new(&z, None, &target);
         for segment in [2, 5, 7] {
             for alpha in [1e-2, 0.3, 2.0] {
-                let closed = ridge.cv_point(alpha, segment).cv_error * (23 * 4) as f64;
+                let closed = ridge
+                    .cv_point(alpha, &segments(&[z.nrows()], segment))
+                    .cv_error
+                    * (23 * 4) as f64;
                 let brute = brute_force_cv(&z, &y, alpha, segment);
                 assert!(
                     (closed - brute).abs() <= 1e-9 * brute,
@@ -416,19 +630,25 @@ mod tests {
     #[test]
     fn train_error_is_the_in_sample_residual() {
         let (z, y) = problem(12, 3, 5, 3);
-        let ridge = RidgeProblem::new(&z, y.clone());
+        let outputs = RidgeOutputs::new(y.clone());
+        let target = outputs.around_mean();
+        let ridge = RidgeProblem::new(&z, None, &target);
         let alpha = 0.2;
         let (b, x) = normal_equations(&z, &y, alpha);
         let fitted = DMatrix::from_fn(12, 5, |_, j| b[j]) + &z * x;
         let direct = (&y - fitted).norm_squared() / 60.0;
-        let closed = ridge.cv_point(alpha, 3).train_error;
+        let closed = ridge
+            .cv_point(alpha, &segments(&[z.nrows()], 3))
+            .train_error;
         assert!((closed - direct).abs() <= 1e-9 * direct);
     }
 
     #[test]
     fn solution_matches_normal_equations_and_zero_alpha_is_least_squares() {
         let (z, y) = problem(15, 4, 3, 11);
-        let ridge = RidgeProblem::new(&z, y.clone());
+        let outputs = RidgeOutputs::new(y.clone());
+        let target = outputs.around_mean();
+        let ridge = RidgeProblem::new(&z, None, &target);
         for alpha in [0.0, 0.7] {
             let (b, x) = normal_equations(&z, &y, alpha);
             let s = ridge.solve(alpha);
@@ -449,7 +669,9 @@ mod tests {
             }
         });
         let y = uniform(14, 3, 6);
-        let ridge = RidgeProblem::new(&z, y.clone());
+        let outputs = RidgeOutputs::new(y.clone());
+        let target = outputs.around_mean();
+        let ridge = RidgeProblem::new(&z, None, &target);
         assert_eq!(ridge.rank(), 3);
         let mut zc = z.clone();
         let mut yc = y.clone();
@@ -479,7 +701,9 @@ mod tests {
     #[test]
     fn huge_alpha_gives_the_mean() {
         let (z, y) = problem(10, 3, 4, 2);
-        let ridge = RidgeProblem::new(&z, y.clone());
+        let outputs = RidgeOutputs::new(y.clone());
+        let target = outputs.around_mean();
+        let ridge = RidgeProblem::new(&z, None, &target);
         let s = ridge.solve(1e12);
         let mean = DVector::from_fn(4, |j, _| y.column(j).mean());
         assert!((&s.intercept - &mean).amax() <= 1e-12 * mean.amax());
@@ -489,8 +713,10 @@ mod tests {
     #[test]
     fn selection_minimises_the_curve() {
         let (z, y) = problem(40, 5, 8, 21);
-        let ridge = RidgeProblem::new(&z, y);
-        let selection = ridge.select_alpha(4).unwrap();
+        let outputs = RidgeOutputs::new(y);
+        let target = outputs.around_mean();
+        let ridge = RidgeProblem::new(&z, None, &target);
+        let selection = ridge.select_alpha(&segments(&[40], 4)).unwrap();
         assert!(selection.curve.len() > GRID_POINTS);
         assert!(selection.curve.windows(2).all(|w| w[0].alpha <= w[1].alpha));
         let best = selection
@@ -502,12 +728,14 @@ mod tests {
         // The refined α is a local minimum at the refinement resolution.
         for factor in [0.99, 1.01] {
             assert!(
-                ridge.cv_point(selection.alpha * factor, 4).cv_error
+                ridge
+                    .cv_point(selection.alpha * factor, &segments(&[40], 4))
+                    .cv_error
                     >= best.cv_error * (1.0 - 1e-12)
             );
         }
         assert_eq!(
-            ridge.select_alpha(40),
+            ridge.select_alpha(&segments(&[40], 40)),
             Err(FitError::SegmentTooLong {
                 segment: 40,
                 poses: 40
@@ -541,7 +769,9 @@ mod tests {
     fn anchored_fit_matches_its_normal_equations_and_passes_through_the_anchor() {
         let (z, y) = problem(16, 4, 3, 31);
         let (z0, y0) = anchor(4, 3);
-        let ridge = RidgeProblem::anchored(&z, y.clone(), z0.clone(), y0.clone());
+        let outputs = RidgeOutputs::new(y.clone());
+        let target = outputs.around_anchor(&y0);
+        let ridge = RidgeProblem::new(&z, Some(&z0), &target);
         for alpha in [1e-3, 0.5, 4.0] {
             let x = anchored_reference(&z, &y, &z0, &y0, alpha);
             let s = ridge.solve(alpha);
@@ -558,7 +788,9 @@ mod tests {
     fn anchored_fit_at_huge_alpha_is_the_anchor_exactly() {
         let (z, y) = problem(10, 3, 4, 2);
         let (z0, y0) = anchor(3, 4);
-        let s = RidgeProblem::anchored(&z, y, z0, y0.clone()).solve(1e150);
+        let outputs = RidgeOutputs::new(y);
+        let target = outputs.around_anchor(&y0);
+        let s = RidgeProblem::new(&z, Some(&z0), &target).solve(1e150);
         assert_eq!(s.intercept, y0);
         assert!(s.coefficients.amax() <= 1e-140);
     }
@@ -567,7 +799,9 @@ mod tests {
     fn anchored_closed_form_cv_equals_refits() {
         let (z, y) = problem(19, 4, 5, 41);
         let (z0, y0) = anchor(4, 5);
-        let ridge = RidgeProblem::anchored(&z, y.clone(), z0.clone(), y0.clone());
+        let outputs = RidgeOutputs::new(y.clone());
+        let target = outputs.around_anchor(&y0);
+        let ridge = RidgeProblem::new(&z, Some(&z0), &target);
         for segment in [1, 3, 6] {
             for alpha in [1e-2, 0.3, 2.0] {
                 let mut brute = 0.0;
@@ -581,12 +815,52 @@ mod tests {
                         brute += (y.row(i) - prediction).norm_squared();
                     }
                 }
-                let closed = ridge.cv_point(alpha, segment).cv_error * (19 * 5) as f64;
+                let closed = ridge
+                    .cv_point(alpha, &segments(&[z.nrows()], segment))
+                    .cv_error
+                    * (19 * 5) as f64;
                 assert!(
                     (closed - brute).abs() <= 1e-9 * brute,
                     "L = {segment}, α = {alpha}: {closed} vs {brute}"
                 );
             }
         }
+    }
+
+    #[test]
+    fn held_out_clip_error_equals_the_direct_prediction_error() {
+        let (z, y) = problem(20, 3, 4, 51);
+        let (zh, yh) = problem(7, 3, 4, 52);
+        let (z0, y0) = anchor(3, 4);
+        let outputs = RidgeOutputs::new(y);
+        for anchored in [false, true] {
+            let target = if anchored {
+                outputs.around_anchor(&y0)
+            } else {
+                outputs.around_mean()
+            };
+            let ridge = RidgeProblem::new(&z, anchored.then_some(&z0), &target);
+            let held = [HeldOut {
+                z: zh.clone(),
+                y: yh.clone(),
+            }];
+            for alpha in [1e-2, 0.4, 3.0] {
+                let s = ridge.solve(alpha);
+                let prediction =
+                    &zh * &s.coefficients + DMatrix::from_fn(7, 4, |_, j| s.intercept[j]);
+                let direct = (&yh - prediction).norm_squared() / 28.0;
+                let closed = ridge.held_out_point(alpha, &held).cv_error;
+                assert!(
+                    (closed - direct).abs() <= 1e-9 * direct,
+                    "anchored {anchored}, α = {alpha}: {closed} vs {direct}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn segments_stay_inside_their_clips() {
+        assert_eq!(segments(&[5, 3], 2), vec![0..2, 2..4, 4..5, 5..7, 7..8]);
+        assert_eq!(segments(&[4], 0), vec![0..1, 1..2, 2..3, 3..4]);
     }
 }

@@ -65,6 +65,7 @@ fn full(alpha: Alpha) -> FitOptions {
         pose_dims: Dims::All,
         coef_dims: CoefDims::Full,
         alpha,
+        ..FitOptions::paper()
     }
 }
 
@@ -533,4 +534,125 @@ proptest::proptest! {
             );
         }
     }
+}
+
+/// A clip of 30 poses of 4 entries, order 2 (4 coefficients), 12 vertices, with a rest pose at
+/// the origin whose transfer is not any training pose's.
+fn anchored_problem() -> (DMatrix<f64>, Vec<Vec<f32>>, Vec<f64>, Vec<f32>) {
+    let angles = uniform(30, 4, 71).add_scalar(0.8);
+    let transfers = smooth_transfer(&angles, 12 * 4, 0.2, 72);
+    let rest = vec![0.0; 4];
+    let rest_transfer = smooth_transfer(&DMatrix::from_row_slice(1, 4, &rest), 12 * 4, 0.2, 72)
+        .remove(0)
+        .iter()
+        .map(|x| x + 0.05)
+        .collect();
+    (angles, transfers, rest, rest_transfer)
+}
+
+fn anchored_fit(options: &FitOptions) -> (Fit, Vec<f64>, Vec<f32>, DMatrix<f64>) {
+    let (angles, transfers, rest, rest_transfer) = anchored_problem();
+    let mut input = FitInput::new(&angles, &transfers, 2);
+    input.anchor = Some(Anchor {
+        angles: &rest,
+        transfer: &rest_transfer,
+    });
+    let fit = fit_input(&input, options).unwrap();
+    (fit, rest, rest_transfer, angles)
+}
+
+#[test]
+fn a_rest_anchored_model_at_huge_alpha_is_its_prior_exactly() {
+    // k_v 8 > n² = 4: the basis spans the rest transfer's fields, so the prior is exact.
+    let options = FitOptions {
+        prior: Prior::Rest,
+        alpha: Alpha::Fixed(1e12),
+        coef_dims: CoefDims::Count(8),
+        pose_dims: Dims::All,
+        bound: None,
+    };
+    let (fit, _, rest_transfer, angles) = anchored_fit(&options);
+    assert_eq!(fit.report.prior, PriorKind::Rest);
+    for pose in [angles.row(3).transpose(), angles.row(17).transpose() * 10.0] {
+        let t = fit.model.predict(pose.as_slice());
+        for (a, b) in t.iter().zip(&rest_transfer) {
+            assert!((a - f64::from(*b)).abs() < 1e-9, "{a} vs {b}");
+        }
+    }
+}
+
+#[test]
+fn the_bound_leaves_training_poses_alone_and_gives_the_prior_far_outside() {
+    let options = FitOptions {
+        prior: Prior::Rest,
+        coef_dims: CoefDims::Count(8),
+        ..FitOptions::default()
+    };
+    let (fit, rest, rest_transfer, angles) = anchored_fit(&options);
+    let bounds = fit.model.bounds.clone().expect("the default is bounded");
+    let unbounded = LinearModel {
+        bounds: None,
+        ..fit.model.clone()
+    };
+    // Inside the box: unchanged, so the bound costs nothing on the training poses.
+    for i in [0, 11, 29] {
+        let pose = angles.row(i).transpose();
+        assert_eq!(bounds.apply(pose.as_slice()), pose.as_slice());
+        assert_eq!(
+            fit.model.predict(pose.as_slice()),
+            unbounded.predict(pose.as_slice())
+        );
+    }
+    // 10x the training range, and a joint turned far past its limit: the prior's pose, so the
+    // prediction is the rest transfer (the anchored fit passes through it).
+    let mut past = angles.row(5).transpose();
+    past[2] = 40.0;
+    for pose in [angles.row(7).transpose() * 10.0, past] {
+        assert_eq!(bounds.apply(pose.as_slice()), rest);
+        let t = fit.model.predict(pose.as_slice());
+        for (a, b) in t.iter().zip(&rest_transfer) {
+            assert!((a - f64::from(*b)).abs() < 1e-9, "{a} vs {b}");
+        }
+    }
+}
+
+#[test]
+fn the_bound_is_the_clamp_then_the_blend_of_its_formula() {
+    let angles = DMatrix::from_row_slice(2, 2, &[0.0, 0.0, 1.0, 2.0]);
+    let b = PoseBounds::of(&angles, &[0.0, 0.0], 0.5);
+    // Widths 1 and 2 (mean 1.5 is the floor): scales 1/(0.5·1.5) and 1/(0.5·2).
+    assert_eq!(
+        (b.lo.clone(), b.hi.clone()),
+        (vec![0.0, 0.0], vec![1.0, 2.0])
+    );
+    assert!((b.scale[0] - 1.0 / 0.75).abs() < 1e-15 && (b.scale[1] - 1.0).abs() < 1e-15);
+    // 0.3 past the first entry's limit: d = 0.3 / 0.75 = 0.4, β = 0.6, towards the origin.
+    let out = b.apply(&[1.3, 1.0]);
+    assert!(
+        (out[0] - 0.6).abs() < 1e-12 && (out[1] - 0.6).abs() < 1e-12,
+        "{out:?}"
+    );
+    // Clamped only: an infinite falloff never blends.
+    let clamp = PoseBounds::of(&angles, &[0.0, 0.0], f64::INFINITY);
+    assert_eq!(clamp.apply(&[5.0, -3.0]), vec![1.0, 0.0]);
+}
+
+#[test]
+fn the_selection_keeps_the_candidate_with_the_lowest_held_out_error() {
+    let (fit, ..) = anchored_fit(&FitOptions {
+        coef_dims: CoefDims::Count(8),
+        prior: Prior::Auto,
+        ..FitOptions::default()
+    });
+    let best = fit
+        .report
+        .choices
+        .iter()
+        .min_by(|a, b| a.held_out_error.total_cmp(&b.held_out_error))
+        .unwrap();
+    assert_eq!(fit.report.prior, best.prior);
+    assert_eq!(fit.model.pose_dims(), best.pose_dims);
+    assert_eq!(fit.report.alpha, best.alpha);
+    // Both priors and the k_a ladder up to the rank (4) were tried.
+    assert_eq!(fit.report.choices.len(), 2 * 4);
 }

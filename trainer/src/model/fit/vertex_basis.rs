@@ -34,7 +34,7 @@ const REDUCTION_GROUPS: usize = 16;
 /// The row matrix R (`p·n² × v`, row `i·n² + c` = coefficient c of pose i over vertices) read
 /// straight from the f32 vertex-major transfer, a block of poses at a time.
 pub struct PoseRows<'a> {
-    transfers: &'a [Vec<f32>],
+    transfers: Vec<&'a [f32]>,
     coefs: usize,
     vertices: usize,
 }
@@ -44,6 +44,15 @@ impl<'a> PoseRows<'a> {
     /// must have length `vertices · coefs`: [`crate::model::fit::fit`] validates this, direct callers
     /// must too (a shorter array makes the products panic on a slice bound).
     pub fn new(transfers: &'a [Vec<f32>], coefs: usize, vertices: usize) -> Self {
+        Self::from_slices(
+            transfers.iter().map(Vec::as_slice).collect(),
+            coefs,
+            vertices,
+        )
+    }
+
+    /// The rows of poses given as slices, same contract as [`Self::new`].
+    pub fn from_slices(transfers: Vec<&'a [f32]>, coefs: usize, vertices: usize) -> Self {
         Self {
             transfers,
             coefs,
@@ -154,7 +163,7 @@ pub fn fit_vertex_basis(rows: &impl RowOperator, dims: Dims) -> VertexBasisFit {
     let mut width = match dims {
         Dims::Count(k) => k + OVERSAMPLE,
         Dims::Variance(_) => INITIAL_WIDTH + OVERSAMPLE,
-        Dims::All => cap + OVERSAMPLE,
+        Dims::All | Dims::Auto => cap + OVERSAMPLE,
     }
     .min(max_width);
     loop {
@@ -202,6 +211,62 @@ pub fn fit_vertex_basis(rows: &impl RowOperator, dims: Dims) -> VertexBasisFit {
         }
         width = (2 * width).min(max_width).min(cap + OVERSAMPLE);
     }
+}
+
+/// Rows with their component in a fixed orthonormal subspace `Q` (`v × m`) removed:
+/// `R (I − Q Qᵀ)`. The basis of a prior-anchored model spans the prior's transfer exactly
+/// (its n² coefficient fields, `Q`) and spends the rest of its vectors on what the poses add.
+pub struct Deflated<'a, R> {
+    rows: &'a R,
+    q: &'a DMatrix<f64>,
+}
+
+impl<'a, R: RowOperator> Deflated<'a, R> {
+    /// `rows` without their part in the span of `q`'s orthonormal columns.
+    pub fn new(rows: &'a R, q: &'a DMatrix<f64>) -> Self {
+        Self { rows, q }
+    }
+}
+
+impl<R: RowOperator> RowOperator for Deflated<'_, R> {
+    fn nrows(&self) -> usize {
+        self.rows.nrows()
+    }
+
+    fn ncols(&self) -> usize {
+        self.rows.ncols()
+    }
+
+    fn mul(&self, x: &DMatrix<f64>) -> DMatrix<f64> {
+        self.rows.mul(&(x - self.q * self.q.tr_mul(x)))
+    }
+
+    fn tr_mul(&self, y: &DMatrix<f64>) -> DMatrix<f64> {
+        let r = self.rows.tr_mul(y);
+        &r - self.q * self.q.tr_mul(&r)
+    }
+
+    fn frobenius_sq(&self) -> f64 {
+        (self.rows.frobenius_sq() - self.rows.mul(self.q).norm_squared()).max(0.0)
+    }
+}
+
+/// An orthonormal basis of the n² coefficient fields of one pose's transfer (`v × n²`, each
+/// column one coefficient over the vertices), cut at its numerical rank.
+pub fn field_basis(transfer: &[f32], coefs: usize) -> DMatrix<f64> {
+    let v = transfer.len() / coefs.max(1);
+    let fields = DMatrix::from_fn(v, coefs, |j, c| f64::from(transfer[j * coefs + c]));
+    let svd = fields.svd(true, false);
+    let rank = dims::numerical_rank(
+        svd.singular_values.as_slice(),
+        v,
+        coefs,
+        f32::EPSILON.into(),
+    );
+    svd.u
+        .expect("SVD computed with U")
+        .columns(0, rank)
+        .into_owned()
 }
 
 /// Basis coordinates of every row, arranged as ridge outputs: `p × (n²·k_v)`, entry

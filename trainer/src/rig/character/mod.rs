@@ -112,11 +112,6 @@ impl Character {
         self.angles.iter().map(|a| (a.min, a.max)).collect()
     }
 
-    /// The bind pose: the angles for which `pose` returns the bind mesh.
-    pub fn rest_pose(&self) -> Vec<f64> {
-        self.angles.iter().map(|a| a.rest).collect()
-    }
-
     /// The training clip ("training", 250 frames at 30 fps) that spans the pose space.
     pub fn training_clip(&self) -> Clip {
         clips::training(&self.angles)
@@ -142,6 +137,11 @@ impl Rig for Character {
 
     fn bind_mesh(&self) -> &Mesh {
         &self.bind
+    }
+
+    /// The bind pose: the angles for which `pose` returns the bind mesh.
+    fn rest_pose(&self) -> Vec<f64> {
+        self.angles.iter().map(|a| a.rest).collect()
     }
 
     fn skin(&self) -> &Skin {
