@@ -291,7 +291,8 @@ impl<'a> RidgeProblem<'a> {
     }
 
     /// Chooses α minimising the leave-segment-out error over the held-out `runs` (disjoint,
-    /// covering every pose; runs of one pose are leave-one-out): see [`Self::select_by`].
+    /// covering every pose; runs of one pose are leave-one-out), on a log grid of α refined by
+    /// golden-section search.
     pub fn select_alpha(&self, runs: &[Range<usize>]) -> Result<AlphaSelection, FitError> {
         let p = self.u.nrows();
         if self.rank() == 0 {
@@ -310,7 +311,7 @@ impl<'a> RidgeProblem<'a> {
     }
 
     /// Chooses α minimising the error on poses held out whole (`held`, not among the fitted
-    /// poses): see [`Self::select_by`].
+    /// poses), on the same grid and search.
     pub fn select_on(&self, held: &[HeldOut]) -> Result<AlphaSelection, FitError> {
         let score = HeldOutScore::new(self, held);
         self.select_by(|alpha| score.evaluate(alpha))
