@@ -133,7 +133,7 @@ const NORMS: [[f32; MAX_ORDER]; MAX_ORDER] = {
 /// ```
 /// let mut y = [0.0; 4];
 /// aprt_core::eval_basis(2, [0.0, 0.0, 2.0], &mut y)?; // any length: normalised here
-/// let k = (3.0 / (4.0 * std::f32::consts::PI)).sqrt();
+/// let k = (3.0 / (4.0 * core::f32::consts::PI)).sqrt();
 /// assert!((y[2] - k).abs() < 1e-6 && y[1] == 0.0 && y[3] == 0.0); // y_10 = k z
 /// # Ok::<(), aprt_core::ShError>(())
 /// ```
@@ -181,7 +181,7 @@ pub fn eval_basis(order: usize, dir: [f32; 3], out: &mut [f32]) -> Result<(), Sh
 /// ```
 /// let mut sun = [0.0; 9];
 /// aprt_core::project_directional(3, [0.5, -0.8, 0.9], 3.0, &mut sun)?;
-/// let dc = 3.0 * 0.5 / std::f32::consts::PI.sqrt(); // 3 · y_00
+/// let dc = 3.0 * 0.5 / core::f32::consts::PI.sqrt(); // 3 · y_00
 /// assert!((sun[0] - dc).abs() < 1e-6);
 /// # Ok::<(), aprt_core::ShError>(())
 /// ```

@@ -1,7 +1,6 @@
 //! The fuzz seed corpus in `fuzz/corpus/`: its generator (ignored; run it after a format
-//! change, or a change to the glTF and BVH fixtures, with
-//! `cargo test -p aprt-tests --release --test corpus -- --ignored`) and a stable test that
-//! every checked-in seed, crash reproducers included, passes its fuzz harness.
+//! change, with `cargo test -p aprt-tests --release --test corpus -- --ignored`) and a stable
+//! test that every seed, crash reproducers included, passes its fuzz harness.
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -66,8 +65,9 @@ fn write_fuzz_corpus() {
     }
 }
 
-/// The files of `fixtures/malformed/<dir>` ending in one of `extensions`, sorted.
-fn fixtures(dir: &str, extensions: &[&str]) -> Vec<PathBuf> {
+/// The files of `fixtures/malformed/<dir>` ending in one of `extensions`, sorted: the seeds of
+/// the `gltf` and `bvh` targets, which the fuzzer reads from there (see README, Fuzzing).
+fn fixtures(dir: &str, extensions: &[&str]) -> Vec<Vec<u8>> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../fixtures/malformed")
         .join(dir);
@@ -80,24 +80,7 @@ fn fixtures(dir: &str, extensions: &[&str]) -> Vec<PathBuf> {
         })
         .collect();
     files.sort();
-    files
-}
-
-/// The glTF and BVH targets start from the fixtures, valid and malformed.
-#[test]
-#[ignore = "writes fuzz/corpus; run by hand after the glTF or BVH fixtures change"]
-fn write_loader_corpus() {
-    for (target, dir, extensions) in [
-        ("gltf", "gltf", &["gltf", "glb"][..]),
-        ("bvh", "bvh", &["bvh"][..]),
-    ] {
-        let out = corpus(target);
-        fs::create_dir_all(&out).unwrap();
-        for file in fixtures(dir, extensions) {
-            let name = file.file_name().unwrap().to_str().unwrap();
-            fs::copy(&file, out.join(format!("seed-{name}"))).unwrap();
-        }
-    }
+    files.iter().map(|p| fs::read(p).unwrap()).collect()
 }
 
 fn seeds(target: &str) -> Vec<Vec<u8>> {
@@ -139,7 +122,7 @@ fn round_trip_seeds_pass_the_harness() {
 
 #[test]
 fn gltf_seeds_pass_the_harness() {
-    let seeds = seeds("gltf");
+    let seeds = fixtures("gltf", &["gltf", "glb"]);
     assert!(seeds.len() >= 30);
     let valid = seeds.iter().filter(|s| loaders::gltf(s).is_ok()).count();
     // ok.gltf, ok.glb, and no-animations.gltf (a rig without clips, which only the CLI
@@ -149,7 +132,7 @@ fn gltf_seeds_pass_the_harness() {
 
 #[test]
 fn bvh_seeds_pass_the_harness() {
-    let seeds = seeds("bvh");
+    let seeds = fixtures("bvh", &["bvh"]);
     assert!(seeds.len() >= 6);
     assert!(seeds.iter().any(|s| loaders::bvh(s).is_ok()));
     for seed in &seeds {

@@ -37,14 +37,18 @@ pub(crate) fn check_capacity(needed: usize, capacity: usize) -> Result<(), Error
 /// [`ModelInfo::pose_weights_len`] tells what a given model needs.
 ///
 /// ```
-/// use std::sync::Mutex;
 /// use aprt_core::{Error, Model, PoseWeights};
 ///
-/// // Placed in a static at compile time: no 14 KiB on the stack.
-/// static POSE: Mutex<PoseWeights> = Mutex::new(PoseWeights::new());
+/// // `new` is a `const fn`: an engine can build the state at compile time in a static of its
+/// // own, behind whatever lock it uses, so the 14 KiB never sit on the stack.
+/// struct Character {
+///     pose: PoseWeights,
+/// }
+/// const AT_START: Character = Character { pose: PoseWeights::new() };
 ///
 /// let model = Model::parse(include_bytes!("../../../fixtures/golden/v1-world.aprt"))?;
-/// model.set_pose(&[0.0; 4], &mut POSE.lock().unwrap())?;
+/// let mut hero = AT_START;
+/// model.set_pose(&[0.0; 4], &mut hero.pose)?;
 ///
 /// // Sized for the model: 9 coefficients × 3 basis vectors.
 /// assert_eq!(model.info().pose_weights_len(), 27);

@@ -9,7 +9,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::io::atomic::{OutputError, output_target};
-use crate::rig::gltf::external_file;
+use crate::rig::gltf::{external_file, gltf_split, read_regular};
 
 /// A file or directory a command reads.
 #[derive(Clone, Debug)]
@@ -269,29 +269,12 @@ pub fn gltf_inputs(path: &Path) -> Vec<Input> {
     inputs
 }
 
-/// The JSON of a `.gltf` file, or the JSON chunk of a `.glb` (binary glTF: a 12-byte header,
-/// then chunks of length, type and data, the JSON chunk first). Reads only that much.
+/// The JSON of a `.gltf` file, or the JSON chunk of a `.glb`; `None` when it is neither (the
+/// loader will say why).
 fn gltf_json(path: &Path) -> Option<serde_json::Value> {
-    use std::io::Read;
-    let mut file = std::fs::File::open(path).ok()?;
-    let mut head = [0u8; 20];
-    let n = file.read(&mut head).ok()?;
-    let text = if n >= 20 && &head[..4] == b"glTF" && &head[16..20] == b"JSON" {
-        let length = u32::from_le_bytes([head[12], head[13], head[14], head[15]]);
-        let length = usize::try_from(length).ok()?;
-        let size = file.metadata().ok()?.len();
-        if length as u64 > size {
-            return None;
-        }
-        let mut chunk = vec![0; length];
-        file.read_exact(&mut chunk).ok()?;
-        chunk
-    } else {
-        let mut all = head[..n].to_vec();
-        file.read_to_end(&mut all).ok()?;
-        all
-    };
-    serde_json::from_slice(&text).ok()
+    let bytes = read_regular(path, None).ok()?;
+    let (text, _) = gltf_split(&bytes).ok()?;
+    serde_json::from_slice(text).ok()
 }
 
 #[cfg(test)]

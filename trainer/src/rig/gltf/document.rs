@@ -30,11 +30,7 @@ pub fn parse(bytes: &[u8], path: &Path, base: Option<&Path>) -> Result<Loaded, G
         path: path.to_path_buf(),
         problem,
     };
-    let (text, blob) = if bytes.starts_with(b"glTF") {
-        split_glb(bytes).map_err(malformed)?
-    } else {
-        (json_text(bytes).map_err(malformed)?, None)
-    };
+    let (text, blob) = split(bytes).map_err(malformed)?;
     let root: json::Root = json::deserialize::from_slice(text).map_err(|e| {
         let part = if bytes.starts_with(b"glTF") {
             "its JSON chunk is"
@@ -63,6 +59,16 @@ pub fn parse(bytes: &[u8], path: &Path, base: Option<&Path>) -> Result<Loaded, G
     check_version(document.as_json(), path)?;
     let buffers = load_buffers(&document, blob, base, path)?;
     Ok(Loaded { document, buffers })
+}
+
+/// The JSON of a document and its binary chunk: a `.glb`'s chunks (from the magic `glTF`), or a
+/// `.gltf`'s text and none.
+pub(crate) fn split(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), String> {
+    if bytes.starts_with(b"glTF") {
+        split_glb(bytes)
+    } else {
+        Ok((json_text(bytes)?, None))
+    }
 }
 
 /// The JSON chunk and the BIN chunk (if any) of a GLB file, every length checked against the

@@ -53,7 +53,7 @@ mod load;
 mod skeleton;
 mod spec;
 
-pub(crate) use document::external_file;
+pub(crate) use document::{external_file, read_regular, split as gltf_split};
 use std::path::{Path, PathBuf};
 
 use glam::{DVec3, Mat4, Vec3};
