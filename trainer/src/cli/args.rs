@@ -100,14 +100,15 @@ pub struct FitArgs {
     #[arg(long, default_value = "auto", allow_negative_numbers = true)]
     pub alpha: String,
     /// What the model tends to as α grows: `auto` (the one of the two below with the lower
-    /// held-out error), `rest` (the rest pose's transfer carried by the skin, for bone-frame
-    /// models; others keep the mean) or `mean`.
-    #[arg(long, value_enum, default_value_t = PriorArg::Auto)]
-    pub prior: PriorArg,
+    /// held-out error; the default), `rest` (the rest pose's transfer carried by the skin, for
+    /// bone-frame models; others keep the mean) or `mean`.
+    #[arg(long, value_enum)]
+    pub prior: Option<PriorArg>,
     /// Bounded extrapolation: poses are clamped into the training range and reach the prior
-    /// this many range widths outside it (`none`: the paper's unbounded linear model).
-    #[arg(long, default_value = "0.5")]
-    pub falloff: String,
+    /// this many range widths outside it (`none`: the paper's unbounded linear model; default
+    /// 0.5, or none with `--paper`).
+    #[arg(long)]
+    pub falloff: Option<String>,
     /// The paper's model: every pose dimension, the mean as prior, no bound (other flags may
     /// still change its shape).
     #[arg(long, conflicts_with_all = ["prior"])]
@@ -252,15 +253,16 @@ impl FitArgs {
         } else {
             FitOptions::default()
         };
-        options.prior = match (self.paper, self.prior) {
-            (true, _) => options.prior,
-            (false, PriorArg::Auto) => Prior::Auto,
-            (false, PriorArg::Rest) => Prior::Rest,
-            (false, PriorArg::Mean) => Prior::Mean,
+        options.prior = match self.prior {
+            None => options.prior,
+            Some(PriorArg::Auto) => Prior::Auto,
+            Some(PriorArg::Rest) => Prior::Rest,
+            Some(PriorArg::Mean) => Prior::Mean,
         };
-        options.bound = match (self.paper, self.falloff.as_str()) {
-            (true, "0.5") | (_, "none") => None,
-            (_, other) => match other.parse::<f64>() {
+        options.bound = match self.falloff.as_deref() {
+            None => options.bound,
+            Some("none") => None,
+            Some(other) => match other.parse::<f64>() {
                 Ok(x) if x > 0.0 && !x.is_nan() => Some(x),
                 _ => {
                     bail!("--falloff {other}: expected a positive number (inf: clamp only) or none")

@@ -477,31 +477,25 @@ pub fn fit_input(input: &FitInput<'_>, options: &FitOptions) -> Result<Fit, FitE
         (Prior::Auto, Some(_)) => vec![PriorKind::Rest, PriorKind::Mean],
     };
     let candidates = pose_dim_candidates(options.pose_dims, pca.dims());
+    let target_of = |prior: PriorKind| match (prior, &anchor) {
+        (PriorKind::Rest, Some((_, y0, _))) => outputs.around_anchor(y0),
+        _ => outputs.around_mean(),
+    };
+    // The leading k pose coordinates, and the anchor's when the prior is the rest pose.
+    let inputs_of = |prior: PriorKind, k: usize| {
+        let z0 = match (prior, &anchor) {
+            (PriorKind::Rest, Some((z0, _, _))) => Some(z0.rows(0, k).into_owned()),
+            _ => None,
+        };
+        (z.columns(0, k).into_owned(), z0)
+    };
     let mut choices = Vec::new();
     let mut best: Option<(Choice, Vec<CvPoint>)> = None;
     for &prior in &priors {
-        let target = match (prior, &anchor) {
-            (PriorKind::Rest, Some((_, y0, _))) => outputs.around_anchor(y0),
-            _ => outputs.around_mean(),
-        };
+        let target = target_of(prior);
         for &k in &candidates {
-            let zk = z.columns(0, k).into_owned();
-            let z0 = match (prior, &anchor) {
-                (PriorKind::Rest, Some((z0, _, _))) => Some(z0.rows(0, k).into_owned()),
-                _ => None,
-            };
+            let (zk, z0) = inputs_of(prior, k);
             let problem = RidgeProblem::new(&zk, z0.as_ref(), &target);
-            let held_k: Vec<HeldOut> = held
-                .iter()
-                .map(|h| HeldOut {
-                    z: h.z.columns(0, k).into_owned(),
-                    y: h.y.clone(),
-                })
-                .collect();
-            let scoring = match scoring {
-                Scoring::Segments(runs) => Scoring::Segments(runs),
-                Scoring::Clips(_) => Scoring::Clips(&held_k),
-            };
             let (alpha, curve) = match options.alpha {
                 Alpha::Fixed(alpha) => (alpha, vec![scoring.point(&problem, alpha)]),
                 _ => {
@@ -542,17 +536,11 @@ pub fn fit_input(input: &FitInput<'_>, options: &FitOptions) -> Result<Fit, FitE
     }
     seconds.cross_validation = clock.elapsed().as_secs_f64();
 
+    // Solved again rather than kept from the loop: the full model's solutions are large.
     let clock = Instant::now();
     let ka = chosen.pose_dims;
-    let target = match (chosen.prior, &anchor) {
-        (PriorKind::Rest, Some((_, y0, _))) => outputs.around_anchor(y0),
-        _ => outputs.around_mean(),
-    };
-    let z0 = match (chosen.prior, &anchor) {
-        (PriorKind::Rest, Some((z0, _, _))) => Some(z0.rows(0, ka).into_owned()),
-        _ => None,
-    };
-    let zk = z.columns(0, ka).into_owned();
+    let target = target_of(chosen.prior);
+    let (zk, z0) = inputs_of(chosen.prior, ka);
     let problem = RidgeProblem::new(&zk, z0.as_ref(), &target);
     let alpha = chosen.alpha;
     let solution = problem.solve(alpha);

@@ -188,7 +188,8 @@ pub struct AlphaSelection {
 /// Poses held out whole: their pose coordinates and outputs, to score a fit on.
 #[derive(Clone, Debug)]
 pub struct HeldOut {
-    /// `p_h × k` pose coordinates.
+    /// `p_h × k'` pose coordinates, `k' ≥ k`: a problem on the leading k coordinates reads
+    /// only those.
     pub z: DMatrix<f64>,
     /// `p_h × q` outputs.
     pub y: DMatrix<f64>,
@@ -493,7 +494,7 @@ impl HeldOutScore {
         let (mut e_sq, mut aeb, mut ata, mut rows) =
             (0.0, DMatrix::zeros(r, r), DMatrix::zeros(r, r), 0);
         for h in held {
-            let mut zc = h.z.clone();
+            let mut zc = h.z.columns(0, problem.v.nrows()).into_owned();
             for (mut col, m) in zc.column_iter_mut().zip(problem.z_centre.iter()) {
                 col.add_scalar_mut(-m);
             }
