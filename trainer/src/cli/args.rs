@@ -10,7 +10,7 @@ use crate::cli::source::SourceArgs;
 #[cfg(doc)]
 use crate::model::export::ExportError;
 use crate::model::export::Precision;
-use crate::model::fit::{Alpha, CoefDims, Dims, FitOptions, Prior};
+use crate::model::fit::{Alpha, CoefDims, Dims, FitOptions, Local, Prior};
 use crate::model::train::{OptionError, check_options};
 use crate::report::demo::DemoSettings;
 
@@ -109,9 +109,15 @@ pub struct FitArgs {
     /// 0.5, or none with `--paper`).
     #[arg(long)]
     pub falloff: Option<String>,
-    /// The paper's model: every pose dimension, the mean as prior, no bound (other flags may
-    /// still change its shape).
-    #[arg(long, conflicts_with_all = ["prior"])]
+    /// The local model of bone-frame models (each vertex depends only on the pose entries
+    /// that move geometry within a tenth of the character's diagonal of it, through the rest
+    /// pose): `auto` (a candidate of the selection; the default), `only`, or `none` (the
+    /// default with `--paper`).
+    #[arg(long, value_enum)]
+    pub local: Option<LocalArg>,
+    /// The paper's model: every pose dimension, the mean as prior, no bound, no local model
+    /// (other flags may still change its shape).
+    #[arg(long, conflicts_with_all = ["prior", "local"])]
     pub paper: bool,
     /// Precision of the large sections.
     #[arg(long, value_enum, default_value_t = PrecisionArg::F32)]
@@ -127,6 +133,17 @@ pub enum PriorArg {
     Rest,
     /// The mean training transfer.
     Mean,
+}
+
+/// `--local`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum LocalArg {
+    /// A candidate, kept when its held-out error is lower.
+    Auto,
+    /// The only candidate.
+    Only,
+    /// Not tried.
+    None,
 }
 
 /// `aprt train`.
@@ -258,6 +275,12 @@ impl FitArgs {
             Some(PriorArg::Auto) => Prior::Auto,
             Some(PriorArg::Rest) => Prior::Rest,
             Some(PriorArg::Mean) => Prior::Mean,
+        };
+        options.local = match self.local {
+            None => options.local,
+            Some(LocalArg::Auto) => Local::Auto,
+            Some(LocalArg::Only) => Local::Only,
+            Some(LocalArg::None) => Local::Off,
         };
         options.bound = match self.falloff.as_deref() {
             None => options.bound,

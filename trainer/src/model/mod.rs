@@ -96,6 +96,19 @@ impl PoseBounds {
         }
     }
 
+    /// The bound with `entries` held at the prior's value and left out of the blend factor
+    /// (scale 0): entries that move no geometry relative to its neighbours (a root turn, for
+    /// bone-frame models) cannot change the transfer, so whatever a model learnt from them
+    /// is chance, and they must not pull the pose towards the prior either.
+    pub fn ignoring(mut self, entries: impl IntoIterator<Item = usize>) -> Self {
+        for entry in entries {
+            self.lo[entry] = self.prior[entry];
+            self.hi[entry] = self.prior[entry];
+            self.scale[entry] = 0.0;
+        }
+        self
+    }
+
     /// The bounded pose, in f64 (the reference of aprt-core's f32 evaluation).
     pub fn apply(&self, angles: &[f64]) -> Vec<f64> {
         let clamped: Vec<f64> = angles

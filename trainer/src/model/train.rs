@@ -18,14 +18,18 @@ use crate::model::ModelFrame;
 use crate::model::export::{ExportError, Precision, check_alpha, encode_model};
 use crate::model::fit::{
     Alpha, Anchor, Choice, CoefDims, Dims, Fit, FitInput, FitOptions, FitReport, HeldOutKind,
-    PriorKind, Validation, fit, fit_input,
+    LOCALITY_RADIUS, Local, PriorKind, Validation, fit, fit_input,
 };
 use crate::model::runtime::{BlobInfo, describe};
 use crate::progress::Reporter;
 use crate::rig::Rig;
 use crate::rig::bone_frames::{FrameChange, change_frames, dominant_bones};
+use crate::rig::locality::locality;
 use crate::rig::mesh::Mesh;
 use crate::rig::pose_layout::PoseLayout;
+
+/// Training poses sampled for the locality's distances (besides the bind pose).
+const LOCALITY_POSES: usize = 24;
 
 /// What a rig's model is fitted to: the training frames (one clip or several), the rest pose
 /// (baked, one frame: the prior of bone-frame models) and the clips held out whole to choose
@@ -76,6 +80,15 @@ pub fn fit_clip(
         .iter()
         .map(|v| Ok((matrix(v), in_frame(v)?)))
         .collect::<Result<_>>()?;
+    // The local model's groups, from the rig's geometry over a sample of the training poses.
+    let locality = match (options.local, &bones, &rest) {
+        (Local::Auto | Local::Only, Some(_), Some(_)) => {
+            let stride = train.meshes.len().div_ceil(LOCALITY_POSES).max(1);
+            let sample: Vec<&Mesh> = train.meshes.iter().step_by(stride).collect();
+            Some(locality(rig, layout, &sample, LOCALITY_RADIUS)?)
+        }
+        _ => None,
+    };
     let input = FitInput {
         angles: &angles,
         transfers: &targets,
@@ -88,6 +101,7 @@ pub fn fit_clip(
             .iter()
             .map(|(angles, transfers)| Validation { angles, transfers })
             .collect(),
+        locality: locality.as_ref(),
     };
     let mut fitted = fit_input(&input, options)?;
     fitted.model.bones = bones;
@@ -341,13 +355,12 @@ impl Selection {
             self.prior.name()
         )];
         lines.extend(self.choices.iter().map(|c| {
-            let mark = if c.prior == self.prior && c.pose_dims == chosen_pose_dims {
-                " <- chosen"
-            } else {
-                ""
-            };
+            let chosen =
+                c.prior == self.prior && c.pose_dims == chosen_pose_dims && c.alpha == alpha;
+            let mark = if chosen { " <- chosen" } else { "" };
+            let shape = if c.local { "local" } else { "k_a" };
             format!(
-                "  prior {:<4} k_a {:>2}: alpha {:.3e}, held-out {:.4e}, train {:.4e}{mark}",
+                "  prior {:<4} {shape:<5} {:>2}: alpha {:.3e}, held-out {:.4e}, train {:.4e}{mark}",
                 c.prior.name(),
                 c.pose_dims,
                 c.alpha,

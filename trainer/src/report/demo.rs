@@ -233,7 +233,7 @@ impl Report {
             let (ka, _, alpha) = row.shape.unwrap_or_default();
             let _ = writeln!(
                 s,
-                "\n## Model selection of the default\n\nHeld-out mean squared error per basis coordinate of every candidate (prior, k_a), each at its best α:\n\n```\n{}\n```",
+                "\n## Model selection of the default\n\nHeld-out mean squared error per transfer value of every candidate (prior and k_a, or the local model on every entry near each vertex), each at its best α:\n\n```\n{}\n```",
                 selection.lines(ka, alpha).join("\n")
             );
         }

@@ -12,7 +12,7 @@ use crate::bake::clip::{BakedClip, bake_rest};
 use crate::bake::{BakeSettings, bake_poses};
 use crate::model::ModelFrame;
 use crate::model::export::{ExportError, Precision, encode_model};
-use crate::model::fit::{Alpha, CoefDims, Dims, Fit, FitOptions, Prior};
+use crate::model::fit::{Alpha, CoefDims, Dims, Fit, FitError, FitOptions, Local, Prior};
 use crate::model::predict::predict_world;
 use crate::model::train::{ClipSet, Selection, fit_clip};
 use crate::progress::{Reporter, Silent};
@@ -35,6 +35,8 @@ pub struct ModelConfig {
 pub const DEFAULT_CONFIG: &str = "default: bone frame, bounded, LOSO α, k_a and prior";
 /// The default with the rest prior forced.
 pub const REST_CONFIG: &str = "default, rest prior";
+/// The default with the local model forced (`--local only`).
+pub const LOCAL_CONFIG: &str = "default, local model (every entry near each vertex)";
 /// The paper's model in bone frames: every pose dimension, the mean as prior, unbounded.
 pub const PAPER_CONFIG: &str = "paper: bone frame, mean prior, unbounded, LOSO α";
 
@@ -60,6 +62,14 @@ pub fn standard_configs() -> Vec<ModelConfig> {
             REST_CONFIG,
             FitOptions {
                 prior: Prior::Rest,
+                ..default
+            },
+            ModelFrame::Bone,
+        ),
+        config(
+            LOCAL_CONFIG,
+            FitOptions {
+                local: Local::Only,
                 ..default
             },
             ModelFrame::Bone,
@@ -198,8 +208,15 @@ pub fn run(
     };
     for config in configs {
         reporter.note(&format!("fitting {}", config.name));
-        let fitted = fit_clip(rig, layout, clips, order, &config.options, config.frame)
-            .with_context(|| format!("fitting {}", config.name))?;
+        let fitted = match fit_clip(rig, layout, clips, order, &config.options, config.frame) {
+            Ok(fitted) => fitted,
+            Err(err) if matches!(err.downcast_ref(), Some(FitError::NoLocalModel(_))) => {
+                reporter.note(&format!("skipping {}: {err}", config.name));
+                skipped.push((config.name.clone(), err.to_string()));
+                continue;
+            }
+            Err(err) => return Err(err).with_context(|| format!("fitting {}", config.name)),
+        };
         let s = &fitted.report.seconds;
         let fit_s =
             s.validate + s.pose_pca + s.vertex_basis + s.projection + s.cross_validation + s.solve;

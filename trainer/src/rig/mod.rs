@@ -17,6 +17,7 @@ pub mod bone_frames;
 pub mod character;
 pub mod gltf;
 pub(crate) mod lathe;
+pub mod locality;
 pub mod mannequin;
 pub mod mesh;
 pub mod mocap;

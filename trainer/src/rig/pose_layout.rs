@@ -99,6 +99,11 @@ impl PoseLayout {
         &self.names
     }
 
+    /// Index into the rig's pose vector of each kept entry.
+    pub fn indices(&self) -> &[usize] {
+        &self.indices
+    }
+
     /// Joints that were dropped.
     pub fn dropped(&self) -> &[String] {
         &self.dropped

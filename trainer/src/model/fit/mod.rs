@@ -7,6 +7,7 @@
 //! validation → weights packed in the runtime layout.
 
 mod dims;
+mod local;
 mod pose_pca;
 mod ridge;
 mod rsvd;
@@ -16,6 +17,7 @@ mod vertex_basis;
 mod tests;
 
 pub use dims::Dims;
+pub use local::{EntryGroup, Locality};
 pub use pose_pca::PosePca;
 pub use ridge::{
     AlphaSelection, CvPoint, HeldOut, RidgeOutputs, RidgeProblem, RidgeSolution, RidgeTarget,
@@ -28,9 +30,11 @@ pub use vertex_basis::{
 
 use std::time::Instant;
 
-use nalgebra::DMatrix;
+use aprt_core::MAX_POSE_DIMS;
+use nalgebra::{DMatrix, DVector};
 
 use crate::model::{LinearModel, PoseBounds, VertexBasis};
+use local::{LocalFit, LocalScoring, fit_local};
 
 /// Size of the vertex side of the model.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -109,7 +113,25 @@ pub struct FitOptions {
     /// `falloff` box widths outside (infinite: clamped only); `None`: the paper's unbounded
     /// linear extrapolation.
     pub bound: Option<f64>,
+    /// Whether the local model (each vertex on the entries that move geometry near it, from
+    /// [`FitInput::locality`]) is a candidate, the only one, or not tried.
+    pub local: Local,
 }
+
+/// Whether the selection tries the local model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Local {
+    /// A candidate beside the shared ones, kept when its held-out error is lower.
+    Auto,
+    /// The only candidate (an error when the fit has no groups or no anchor for it).
+    Only,
+    /// Not tried: the paper's model, every vertex on every entry.
+    Off,
+}
+
+/// The radius of the locality, as a fraction of the bind mesh's bounding-box diagonal: a
+/// vertex depends on the entries that move geometry within it.
+pub const LOCALITY_RADIUS: f64 = 0.1;
 
 /// The falloff of the default bound, in box widths (see [`FitOptions::bound`]).
 pub const DEFAULT_FALLOFF: f64 = 0.5;
@@ -124,6 +146,7 @@ impl Default for FitOptions {
             alpha: Alpha::Loso { segment: None },
             prior: Prior::Auto,
             bound: Some(DEFAULT_FALLOFF),
+            local: Local::Auto,
         }
     }
 }
@@ -135,6 +158,7 @@ impl FitOptions {
             pose_dims: Dims::All,
             prior: Prior::Mean,
             bound: None,
+            local: Local::Off,
             ..Self::default()
         }
     }
@@ -147,11 +171,15 @@ pub struct Choice {
     pub prior: PriorKind,
     /// k_a.
     pub pose_dims: usize,
-    /// The best α for this prior and k_a.
+    /// Whether this is the local model (each vertex on the entries near it, every entry
+    /// kept) rather than the shared map from k_a pose coordinates.
+    pub local: bool,
+    /// The best α for this candidate.
     pub alpha: f64,
-    /// Held-out mean squared error per output entry (basis coordinates) at that α.
+    /// Held-out mean squared error per transfer value (`v·n²` per pose, the basis's
+    /// truncation included) at that α: comparable across every candidate.
     pub held_out_error: f64,
-    /// In-sample error at that α.
+    /// In-sample error at that α, in the same units.
     pub train_error: f64,
 }
 
@@ -251,6 +279,9 @@ pub enum FitError {
         /// What the training poses imply.
         expected: String,
     },
+    /// The local model was asked for alone but cannot be fitted.
+    #[error("the local model cannot be fitted: {0}")]
+    NoLocalModel(&'static str),
     /// Every α of the grid left some held-out set unpredictable.
     #[error("cross validation error is infinite for every alpha")]
     NoFiniteCvError,
@@ -342,6 +373,8 @@ pub struct FitInput<'a> {
     pub anchor: Option<Anchor<'a>>,
     /// Clips held out whole: when given, they alone choose α, k_a and the prior.
     pub validation: Vec<Validation<'a>>,
+    /// The vertex groups of the local model (needs the anchor), when the caller offers one.
+    pub locality: Option<&'a Locality>,
 }
 
 impl<'a> FitInput<'a> {
@@ -354,6 +387,7 @@ impl<'a> FitInput<'a> {
             clips: Vec::new(),
             anchor: None,
             validation: Vec::new(),
+            locality: None,
         }
     }
 }
@@ -410,13 +444,7 @@ pub fn fit_input(input: &FitInput<'_>, options: &FitOptions) -> Result<Fit, FitE
                 CoefDims::Full => unreachable!("the full model has no basis"),
             };
             let residual = fit_vertex_basis(&Deflated::new(&rows, q), rest);
-            let both =
-                DMatrix::from_fn(vertices, q.ncols() + residual.basis.ncols(), |j, k| match k
-                    .checked_sub(q.ncols())
-                {
-                    None => q[(j, k)],
-                    Some(k) => residual.basis[(j, k)],
-                });
+            let both = beside(q, &residual.basis);
             (Some(both), residual.energies, residual.total_energy)
         }
     };
@@ -430,8 +458,16 @@ pub fn fit_input(input: &FitInput<'_>, options: &FitOptions) -> Result<Fit, FitE
             None => raw_rows(&rows),
         }
     };
+    // The part of a pose's transfer outside the basis: the same for every candidate that
+    // predicts in the basis, and part of its error.
+    let outside = |transfers: &[&[f32]], outputs: &DMatrix<f64>| {
+        let rows = PoseRows::from_slices(transfers.to_vec(), n2, vertices);
+        (rows.frobenius_sq() - outputs.norm_squared()).max(0.0)
+    };
     let train_slices: Vec<&[f32]> = transfers.iter().map(Vec::as_slice).collect();
-    let outputs = RidgeOutputs::new(outputs_of(&train_slices));
+    let train_outputs = outputs_of(&train_slices);
+    let outside_train = outside(&train_slices, &train_outputs);
+    let outputs = RidgeOutputs::new(train_outputs);
     let anchor = input.anchor.map(|a| {
         let z0 = pca.project(&DMatrix::from_row_slice(1, a.angles.len(), a.angles));
         let y0 = outputs_of(&[a.transfer]);
@@ -441,17 +477,18 @@ pub fn fit_input(input: &FitInput<'_>, options: &FitOptions) -> Result<Fit, FitE
             a.angles.to_vec(),
         )
     });
-    let held: Vec<HeldOut> = input
-        .validation
-        .iter()
-        .map(|v| {
-            let slices: Vec<&[f32]> = v.transfers.iter().map(Vec::as_slice).collect();
-            HeldOut {
-                z: pca.project(v.angles),
-                y: outputs_of(&slices),
-            }
-        })
-        .collect();
+    let mut held = Vec::new();
+    let mut outside_held = 0.0;
+    for v in &input.validation {
+        let slices: Vec<&[f32]> = v.transfers.iter().map(Vec::as_slice).collect();
+        let y = outputs_of(&slices);
+        outside_held += outside(&slices, &y);
+        held.push(HeldOut {
+            z: pca.project(v.angles),
+            y,
+        });
+    }
+    let held_poses: usize = held.iter().map(|h| h.y.nrows()).sum();
     seconds.projection = clock.elapsed().as_secs_f64();
 
     let clock = Instant::now();
@@ -489,9 +526,52 @@ pub fn fit_input(input: &FitInput<'_>, options: &FitOptions) -> Result<Fit, FitE
         };
         (z.columns(0, k).into_owned(), z0)
     };
+    // Errors per transfer value: basis coordinates plus what lies outside the basis.
+    let kv = basis.as_ref().map_or(vertices, |b| b.ncols());
+    let per_value = |mse: f64, poses: usize, outside: f64| {
+        if mse == f64::MAX {
+            return mse;
+        }
+        let poses = poses.max(1) as f64;
+        (mse * poses * (n2 * kv) as f64 + outside) / (poses * (vertices * n2) as f64)
+    };
+    let (scored_poses, outside_scored) = if held.is_empty() {
+        (p, outside_train)
+    } else {
+        (held_poses, outside_held)
+    };
     let mut choices = Vec::new();
     let mut best: Option<(Choice, Vec<CvPoint>)> = None;
-    for &prior in &priors {
+    let local_wanted = options.local != Local::Off;
+    let local_ready = match (input.locality, input.anchor, options.coef_dims) {
+        (None, _, _) => {
+            Err("no vertex groups were given (bone-frame models of characters have them)")
+        }
+        (_, None, _) => Err("it needs the rest pose as anchor"),
+        _ if options.prior == Prior::Mean => Err("it is anchored at the rest pose, not the mean"),
+        (_, _, CoefDims::Count(k)) if k > n2 => Ok(k),
+        _ => Err("it needs --coef-dims above n² (the rest transfer's fields)"),
+    };
+    let local_ready = local_ready.and_then(|k| {
+        if angles.ncols() > MAX_POSE_DIMS {
+            Err("it keeps every pose entry, more than the runtime's 64 pose dimensions")
+        } else if p < 2 {
+            Err("it needs at least two poses")
+        } else {
+            Ok(k)
+        }
+    });
+    if options.local == Local::Only
+        && let Err(why) = local_ready
+    {
+        return Err(FitError::NoLocalModel(why));
+    }
+    let shared = if options.local == Local::Only {
+        &[][..]
+    } else {
+        &priors[..]
+    };
+    for &prior in shared {
         let target = target_of(prior);
         for &k in &candidates {
             let (zk, z0) = inputs_of(prior, k);
@@ -517,72 +597,143 @@ pub fn fit_input(input: &FitInput<'_>, options: &FitOptions) -> Result<Fit, FitE
             let choice = Choice {
                 prior,
                 pose_dims: k,
+                local: false,
                 alpha,
-                held_out_error: point.cv_error,
-                train_error: point.train_error,
+                held_out_error: per_value(point.cv_error, scored_poses, outside_scored),
+                train_error: per_value(point.train_error, p, outside_train),
             };
-            choices.push(choice);
-            let better = best.as_ref().is_none_or(|(b, _)| {
-                choice.held_out_error.is_finite() && choice.held_out_error < b.held_out_error
-            });
-            if better {
-                best = Some((choice, curve));
-            }
+            consider(&mut choices, &mut best, choice, curve);
         }
     }
+    let local = match (input.locality, input.anchor, local_ready) {
+        (Some(locality), Some(anchor), Ok(k)) if local_wanted => {
+            let pairs: Vec<(&DMatrix<f64>, &[Vec<f32>])> = input
+                .validation
+                .iter()
+                .map(|v| (v.angles, v.transfers))
+                .collect();
+            let scoring = if pairs.is_empty() {
+                LocalScoring::Segments(&runs)
+            } else {
+                LocalScoring::Clips(&pairs)
+            };
+            let fitted = fit_local(
+                locality,
+                angles,
+                transfers,
+                n2,
+                (anchor.angles, anchor.transfer),
+                &scoring,
+                options.alpha,
+            )?;
+            let scored: Vec<&DMatrix<f64>> = if pairs.is_empty() {
+                vec![angles]
+            } else {
+                pairs.iter().map(|(a, _)| *a).collect()
+            };
+            let model = LocalModel::new(&fitted, anchor, n2, k, angles, &scored);
+            let best_point = fitted
+                .curve
+                .iter()
+                .find(|c| c.alpha == fitted.alpha)
+                .copied()
+                .ok_or(FitError::NoFiniteCvError)?;
+            let choice = Choice {
+                prior: PriorKind::Rest,
+                pose_dims: angles.ncols(),
+                local: true,
+                alpha: fitted.alpha,
+                held_out_error: best_point.cv_error + model.outside_scored,
+                train_error: best_point.train_error + model.outside_train,
+            };
+            consider(&mut choices, &mut best, choice, fitted.curve.clone());
+            Some(model)
+        }
+        _ => None,
+    };
     let (chosen, cv_curve) = best.ok_or(FitError::NoFiniteCvError)?;
     if !chosen.held_out_error.is_finite() && !matches!(options.alpha, Alpha::Fixed(_)) {
         return Err(FitError::NoFiniteCvError);
     }
     seconds.cross_validation = clock.elapsed().as_secs_f64();
 
-    // Solved again rather than kept from the loop: the full model's solutions are large.
     let clock = Instant::now();
-    let ka = chosen.pose_dims;
-    let target = target_of(chosen.prior);
-    let (zk, z0) = inputs_of(chosen.prior, ka);
-    let problem = RidgeProblem::new(&zk, z0.as_ref(), &target);
     let alpha = chosen.alpha;
-    let solution = problem.solve(alpha);
-    let kv = basis.as_ref().map_or(vertices, |b| b.ncols());
-    let mut weights = vec![0.0; n2 * (ka + 1) * kv];
-    for c in 0..n2 {
-        for k in 0..kv {
-            let col = c * kv + k;
-            weights[c * (ka + 1) * kv + k] = solution.intercept[col];
-            for i in 0..ka {
-                weights[(c * (ka + 1) + 1 + i) * kv + k] = solution.coefficients[(i, col)];
-            }
-        }
-    }
-    let prior_angles = match (chosen.prior, &anchor) {
-        (PriorKind::Rest, Some((_, _, a))) => a.clone(),
-        _ => pca.mean.clone(),
+    // Entries no vertex depends on (a root turn, in bone frames) must not blend the pose
+    // towards the prior: the character turning round is not a pose it was not trained on.
+    let unused: Vec<usize> = match input.locality {
+        Some(locality) => (0..angles.ncols())
+            .filter(|&i| !locality.groups.iter().any(|g| g.entries.contains(&i)))
+            .collect(),
+        None => Vec::new(),
     };
-    let bounds = options
-        .bound
-        .map(|falloff| PoseBounds::of(angles, &prior_angles, falloff));
-    let projection = pca.projection.rows(0, ka).into_owned();
-    let model = LinearModel {
-        order,
-        vertices,
-        pose_len: angles.ncols(),
-        pose_mean: pca.mean.clone(),
-        // nalgebra is column-major; the model stores P row-major.
-        pose_projection: projection.transpose().as_slice().to_vec(),
-        weights,
-        basis: match basis {
-            // v × k_v vertex-major is the row-major layout, i.e. the transpose's column-major one.
-            Some(b) => VertexBasis::Stored {
-                coef_dims: b.ncols(),
-                data: b.transpose().as_slice().to_vec(),
-            },
-            None => VertexBasis::Identity,
-        },
-        alpha,
-        bones: None,
-        angle_names: Vec::new(),
-        bounds,
+    let bound_of = |prior: &[f64]| {
+        options
+            .bound
+            .map(|f| PoseBounds::of(angles, prior, f).ignoring(unused.clone()))
+    };
+    let (model, problem_rank, coef_energy) = match &local {
+        Some(local) if chosen.local => {
+            let anchor = input.anchor.expect("the local model needs the anchor");
+            let bounds = bound_of(anchor.angles);
+            let model = LinearModel {
+                order,
+                vertices,
+                pose_len: angles.ncols(),
+                pose_mean: anchor.angles.to_vec(),
+                pose_projection: DMatrix::<f64>::identity(angles.ncols(), angles.ncols())
+                    .as_slice()
+                    .to_vec(),
+                weights: local.weights.clone(),
+                basis: stored(&local.basis),
+                alpha,
+                bones: None,
+                angle_names: Vec::new(),
+                bounds,
+            };
+            (model, 1, local.energies.clone())
+        }
+        _ => {
+            // Solved again rather than kept from the loop: the full model's solutions are large.
+            let ka = chosen.pose_dims;
+            let target = target_of(chosen.prior);
+            let (zk, z0) = inputs_of(chosen.prior, ka);
+            let problem = RidgeProblem::new(&zk, z0.as_ref(), &target);
+            let solution = problem.solve(alpha);
+            let mut weights = vec![0.0; n2 * (ka + 1) * kv];
+            for c in 0..n2 {
+                for k in 0..kv {
+                    let col = c * kv + k;
+                    weights[c * (ka + 1) * kv + k] = solution.intercept[col];
+                    for i in 0..ka {
+                        weights[(c * (ka + 1) + 1 + i) * kv + k] = solution.coefficients[(i, col)];
+                    }
+                }
+            }
+            let prior_angles = match (chosen.prior, &anchor) {
+                (PriorKind::Rest, Some((_, _, a))) => a.clone(),
+                _ => pca.mean.clone(),
+            };
+            let projection = pca.projection.rows(0, ka).into_owned();
+            let model = LinearModel {
+                order,
+                vertices,
+                pose_len: angles.ncols(),
+                pose_mean: pca.mean.clone(),
+                // nalgebra is column-major; the model stores P row-major.
+                pose_projection: projection.transpose().as_slice().to_vec(),
+                weights,
+                basis: match &basis {
+                    Some(b) => stored(b),
+                    None => VertexBasis::Identity,
+                },
+                alpha,
+                bones: None,
+                angle_names: Vec::new(),
+                bounds: bound_of(&prior_angles),
+            };
+            (model, problem.rank(), coef_energy)
+        }
     };
     seconds.solve = clock.elapsed().as_secs_f64();
 
@@ -592,7 +743,7 @@ pub fn fit_input(input: &FitInput<'_>, options: &FitOptions) -> Result<Fit, FitE
         coef_total_energy,
         cv_curve,
         alpha,
-        cv_segment: (problem.rank() > 0 && held.is_empty()).then_some(segment),
+        cv_segment: (problem_rank > 0 && held.is_empty()).then_some(segment),
         prior: chosen.prior,
         held_out: if held.is_empty() {
             HeldOutKind::Segments(segment)
@@ -603,6 +754,134 @@ pub fn fit_input(input: &FitInput<'_>, options: &FitOptions) -> Result<Fit, FitE
         seconds,
     };
     Ok(Fit { model, report })
+}
+
+/// Records a candidate and keeps it as the best when its held-out error is lower (the first
+/// candidate stands until a finite, lower one comes).
+fn consider(
+    choices: &mut Vec<Choice>,
+    best: &mut Option<(Choice, Vec<CvPoint>)>,
+    choice: Choice,
+    curve: Vec<CvPoint>,
+) {
+    choices.push(choice);
+    let better = best.as_ref().is_none_or(|(b, _)| {
+        choice.held_out_error.is_finite() && choice.held_out_error < b.held_out_error
+    });
+    if better {
+        *best = Some((choice, curve));
+    }
+}
+
+/// `v × k_v` basis columns as the model stores them.
+fn stored(basis: &DMatrix<f64>) -> VertexBasis {
+    VertexBasis::Stored {
+        coef_dims: basis.ncols(),
+        // v × k_v vertex-major is the row-major layout, i.e. the transpose's column-major one.
+        data: basis.transpose().as_slice().to_vec(),
+    }
+}
+
+/// The columns of `a` followed by those of `b`.
+fn beside(a: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
+    DMatrix::from_fn(a.nrows(), a.ncols() + b.ncols(), |j, k| {
+        match k.checked_sub(a.ncols()) {
+            None => a[(j, k)],
+            Some(k) => b[(j, k)],
+        }
+    })
+}
+
+/// The local model in the runtime's layout: its per-vertex map stored through a vertex basis
+/// of k_v vectors (the anchor's n² fields exactly, the rest the leading components of the
+/// map itself), with what that truncation costs on the scored and the training poses.
+struct LocalModel {
+    basis: DMatrix<f64>,
+    energies: Vec<f64>,
+    weights: Vec<f64>,
+    /// Truncation error per transfer value on the scored poses.
+    outside_scored: f64,
+    /// The same on the training poses.
+    outside_train: f64,
+}
+
+impl LocalModel {
+    fn new(
+        fitted: &LocalFit,
+        anchor: Anchor<'_>,
+        n2: usize,
+        kv: usize,
+        angles: &DMatrix<f64>,
+        scored: &[&DMatrix<f64>],
+    ) -> Self {
+        let (a, vertices) = (angles.ncols(), anchor.transfer.len() / n2);
+        let a0 = DVector::from_column_slice(anchor.angles);
+        let offsets = |m: &DMatrix<f64>| {
+            let mut d = m.clone();
+            for mut row in d.row_iter_mut() {
+                row -= a0.transpose();
+            }
+            d
+        };
+        // Each entry's map weighted by how far the training poses move it, so the basis
+        // spends its vectors where predictions vary.
+        let train_offsets = offsets(angles);
+        let spread: Vec<f64> = (0..a)
+            .map(|i| (train_offsets.column(i).norm_squared() / angles.nrows().max(1) as f64).sqrt())
+            .collect();
+        let pseudo: Vec<Vec<f32>> = (0..a)
+            .map(|i| {
+                fitted
+                    .delta
+                    .row(i)
+                    .iter()
+                    .map(|&x| (x * spread[i]) as f32)
+                    .collect()
+            })
+            .collect();
+        let rows = PoseRows::new(&pseudo, n2, vertices);
+        let fields = field_basis(anchor.transfer, n2);
+        let residual = fit_vertex_basis(
+            &Deflated::new(&rows, &fields),
+            Dims::Count(kv.saturating_sub(fields.ncols()).max(1)),
+        );
+        let basis = beside(&fields, &residual.basis);
+        let kv = basis.ncols();
+        // Per coefficient c: the `v × a` map, its coordinates and what the basis misses.
+        let mut weights = vec![0.0; n2 * (a + 1) * kv];
+        let mut missed = DMatrix::zeros(a, a);
+        for c in 0..n2 {
+            let map = DMatrix::from_fn(vertices, a, |j, i| fitted.delta[(i, j * n2 + c)]);
+            let coords = basis.tr_mul(&map);
+            let y0 = DVector::from_fn(vertices, |j, _| f64::from(anchor.transfer[j * n2 + c]));
+            let intercept = basis.tr_mul(&y0);
+            for k in 0..kv {
+                weights[c * (a + 1) * kv + k] = intercept[k];
+                for i in 0..a {
+                    weights[(c * (a + 1) + 1 + i) * kv + k] = coords[(k, i)];
+                }
+            }
+            let rest = &map - &basis * coords;
+            missed += rest.tr_mul(&rest);
+        }
+        // Σ over poses of ‖Δaᵀ E‖² = tr(ΔAᵀΔA · EᵀE), per transfer value.
+        let outside = |sets: &[&DMatrix<f64>]| {
+            let (mut sum, mut poses) = (0.0, 0);
+            for m in sets {
+                let d = offsets(m);
+                sum += (d.tr_mul(&d)).component_mul(&missed).sum();
+                poses += m.nrows();
+            }
+            sum / (poses.max(1) * vertices * n2) as f64
+        };
+        Self {
+            outside_scored: outside(scored),
+            outside_train: outside(&[angles]),
+            basis,
+            energies: residual.energies,
+            weights,
+        }
+    }
 }
 
 /// How a candidate is scored: held-out runs of the training clips, or whole held-out clips.

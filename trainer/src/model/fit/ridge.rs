@@ -371,6 +371,27 @@ impl<'a> RidgeProblem<'a> {
     pub fn held_out_point(&self, alpha: f64, held: &[HeldOut]) -> CvPoint {
         HeldOutScore::new(self, held).evaluate(alpha)
     }
+
+    /// [`Self::cv_point`] at each of `alphas`, the α-independent products formed once.
+    pub fn cv_points(&self, alphas: &[f64], runs: &[Range<usize>]) -> Vec<CvPoint> {
+        let cv = GramCv::new(self, runs);
+        alphas.iter().map(|&alpha| cv.evaluate(alpha)).collect()
+    }
+
+    /// [`Self::held_out_point`] at each of `alphas`, the α-independent products formed once.
+    pub fn held_out_points(&self, alphas: &[f64], held: &[HeldOut]) -> Vec<CvPoint> {
+        let score = HeldOutScore::new(self, held);
+        alphas.iter().map(|&alpha| score.evaluate(alpha)).collect()
+    }
+
+    /// The α grid the selection searches: log-spaced from `1e-6` to `1e3` times `s_max`.
+    pub fn alpha_grid(s_max: f64) -> Vec<f64> {
+        let log_lo = (GRID_LOW * s_max).ln();
+        let step = ((GRID_HIGH * s_max).ln() - log_lo) / (GRID_POINTS - 1) as f64;
+        (0..GRID_POINTS)
+            .map(|i| (log_lo + step * i as f64).exp())
+            .collect()
+    }
 }
 
 /// Index of the smallest finite CV error (the first one on ties: the least regularised).

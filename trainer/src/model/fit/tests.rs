@@ -570,6 +570,7 @@ fn a_rest_anchored_model_at_huge_alpha_is_its_prior_exactly() {
         coef_dims: CoefDims::Count(8),
         pose_dims: Dims::All,
         bound: None,
+        local: Local::Off,
     };
     let (fit, _, rest_transfer, angles) = anchored_fit(&options);
     assert_eq!(fit.report.prior, PriorKind::Rest);
@@ -655,4 +656,141 @@ fn the_selection_keeps_the_candidate_with_the_lowest_held_out_error() {
     assert_eq!(fit.report.alpha, best.alpha);
     // Both priors and the k_a ladder up to the rank (4) were tried.
     assert_eq!(fit.report.choices.len(), 2 * 4);
+}
+
+/// Four vertices (order 1) in two groups: vertices 0, 1 depend on entry 0 only, 2, 3 on
+/// entry 1 only; the data are exactly linear, and entries 0 and 1 are correlated in training
+/// (a shared model would learn each group's motion from either entry).
+fn local_problem() -> (DMatrix<f64>, Vec<Vec<f32>>, Locality) {
+    let noise = uniform(40, 2, 91);
+    let angles = DMatrix::from_fn(40, 2, |i, j| {
+        let t = i as f64 / 39.0 - 0.5;
+        t + 0.05 * noise[(i, j)]
+    });
+    let transfers = angles
+        .row_iter()
+        .map(|a| {
+            vec![
+                (1.0 + 0.5 * a[0]) as f32,
+                (2.0 - 0.25 * a[0]) as f32,
+                (1.5 + 0.4 * a[1]) as f32,
+                (0.5 + 0.1 * a[1]) as f32,
+            ]
+        })
+        .collect();
+    let locality = Locality {
+        groups: vec![
+            EntryGroup {
+                entries: vec![0],
+                vertices: vec![0, 1],
+            },
+            EntryGroup {
+                entries: vec![1],
+                vertices: vec![2, 3],
+            },
+        ],
+    };
+    (angles, transfers, locality)
+}
+
+fn local_fit(alpha: Alpha) -> Fit {
+    let (angles, transfers, locality) = local_problem();
+    let rest = [0.0, 0.0];
+    let rest_transfer = [1.0f32, 2.0, 1.5, 0.5];
+    let mut input = FitInput::new(&angles, &transfers, 1);
+    input.anchor = Some(Anchor {
+        angles: &rest,
+        transfer: &rest_transfer,
+    });
+    input.locality = Some(&locality);
+    let options = FitOptions {
+        alpha,
+        coef_dims: CoefDims::Count(3),
+        local: Local::Only,
+        bound: None,
+        ..FitOptions::default()
+    };
+    fit_input(&input, &options).unwrap()
+}
+
+#[test]
+fn a_local_model_depends_only_on_its_groups_entries() {
+    let fit = local_fit(Alpha::Fixed(1e-9));
+    assert!(fit.report.choices.iter().all(|c| c.local));
+    // Exactly linear data: the fit recovers each group's own map, and turning the other
+    // group's entry far past anything seen changes nothing.
+    for pose in [[0.3, -0.2], [0.3, 5.0], [-4.0, -0.2]] {
+        let t = fit.model.predict(&pose);
+        let expect = [
+            1.0 + 0.5 * pose[0],
+            2.0 - 0.25 * pose[0],
+            1.5 + 0.4 * pose[1],
+            0.5 + 0.1 * pose[1],
+        ];
+        for (a, b) in t.iter().zip(expect) {
+            assert!((a - b).abs() < 1e-5, "{pose:?}: {t:?} vs {expect:?}");
+        }
+    }
+}
+
+#[test]
+fn a_local_model_at_huge_alpha_is_its_prior_exactly() {
+    let fit = local_fit(Alpha::Fixed(1e12));
+    for pose in [[0.3, -0.2], [10.0, -10.0]] {
+        let t = fit.model.predict(&pose);
+        for (a, b) in t.iter().zip([1.0, 2.0, 1.5, 0.5]) {
+            assert!((a - b).abs() < 1e-9, "{t:?}");
+        }
+    }
+}
+
+#[test]
+fn the_local_model_is_scored_like_the_shared_ones_and_refused_without_an_anchor() {
+    let (angles, transfers, locality) = local_problem();
+    let mut input = FitInput::new(&angles, &transfers, 1);
+    input.locality = Some(&locality);
+    let only = FitOptions {
+        coef_dims: CoefDims::Count(3),
+        local: Local::Only,
+        ..FitOptions::default()
+    };
+    assert!(matches!(
+        fit_input(&input, &only),
+        Err(FitError::NoLocalModel(_))
+    ));
+    // With the anchor, auto selection sees every candidate in the same units: on local data
+    // with noise, the shared maps also fit the noise on the other entry, the local model has
+    // the lowest held-out error.
+    let noise = uniform(transfers.len(), 4, 93);
+    let transfers: Vec<Vec<f32>> = transfers
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            t.iter()
+                .enumerate()
+                .map(|(j, x)| x + 0.02 * noise[(i, j)] as f32)
+                .collect()
+        })
+        .collect();
+    let mut input = FitInput::new(&angles, &transfers, 1);
+    input.locality = Some(&locality);
+    let rest = [0.0, 0.0];
+    let rest_transfer = [1.0f32, 2.0, 1.5, 0.5];
+    input.anchor = Some(Anchor {
+        angles: &rest,
+        transfer: &rest_transfer,
+    });
+    let auto = FitOptions {
+        local: Local::Auto,
+        ..only
+    };
+    let fit = fit_input(&input, &auto).unwrap();
+    let chosen = fit
+        .report
+        .choices
+        .iter()
+        .min_by(|a, b| a.held_out_error.total_cmp(&b.held_out_error))
+        .unwrap();
+    assert!(chosen.local, "{:?}", fit.report.choices);
+    assert!(fit.report.choices.iter().any(|c| !c.local));
 }
