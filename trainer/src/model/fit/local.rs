@@ -72,8 +72,10 @@ pub(super) fn fit_local(
         let z = angles.select_columns(&group.entries);
         let z0 = anchor_row.select_rows(&group.entries);
         let outputs = RidgeOutputs::new(group_rows(transfers, &group.vertices, n2));
-        let y0 = group_rows(std::slice::from_ref(&y0.to_vec()), &group.vertices, n2);
-        (z, z0, outputs, y0.row(0).transpose())
+        let y0 = DVector::from_fn(group.vertices.len() * n2, |col, _| {
+            f64::from(y0[group.vertices[col / n2] * n2 + col % n2])
+        });
+        (z, z0, outputs, y0)
     };
     let alphas = match alpha {
         Alpha::Fixed(alpha) => vec![alpha],

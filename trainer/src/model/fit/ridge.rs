@@ -330,9 +330,7 @@ impl<'a> RidgeProblem<'a> {
         };
         let log_lo = (GRID_LOW * s_max).ln();
         let step = ((GRID_HIGH * s_max).ln() - log_lo) / (GRID_POINTS - 1) as f64;
-        let mut curve: Vec<CvPoint> = (0..GRID_POINTS)
-            .map(|i| evaluate((log_lo + step * i as f64).exp()))
-            .collect();
+        let mut curve: Vec<CvPoint> = Self::alpha_grid(s_max).into_iter().map(&evaluate).collect();
         let best = argmin(&curve).ok_or(FitError::NoFiniteCvError)?;
         // Golden-section search on log α inside the neighbouring grid points.
         let inv_phi = (5f64.sqrt() - 1.0) / 2.0;
