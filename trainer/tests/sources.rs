@@ -449,3 +449,115 @@ fn bvh_trains_retargets_and_refuses_mismatches() {
     );
     assert!(!refused.exists());
 }
+
+/// Training and simulating on several clips: repeated `--clip` simulates the clips' frames in
+/// order (exactly the separate simulations, stacked); `train` on two of the Fox's clips with
+/// the third held out (`--validate`) selects the model on it and says so; a BVH file's frame
+/// ranges and another BVH file's motion serve the same way; the mistakes refused clearly.
+#[test]
+fn several_clips_train_and_validate() {
+    let Some(dir) = common::assets("several_clips_train_and_validate") else {
+        return;
+    };
+    let work = tempfile::tempdir().unwrap();
+    let fox = asset(&dir, "gltf", "Fox.gltf");
+    let fox_args = ["--gltf", s(&fox), "--fps", "2"];
+    let simulate = |clips: &[&str], name: &str| {
+        let npy = work.path().join(name);
+        let named: Vec<&str> = clips.iter().flat_map(|c| ["--clip", *c]).collect();
+        succeed(
+            &[
+                &["simulate"],
+                &fox_args[..],
+                &named,
+                BAKE,
+                &["--npy", s(&npy)],
+            ]
+            .concat(),
+        );
+        finite_npy(&npy)
+    };
+    let (walk_shape, walk) = simulate(&["Walk"], "walk.npy");
+    let (run_shape, run) = simulate(&["Run"], "run.npy");
+    let (both_shape, both) = simulate(&["Walk", "Run"], "both.npy");
+    assert_eq!(both_shape[0], walk_shape[0] + run_shape[0]);
+    assert_eq!(both, [walk, run].concat(), "the clips' frames, in order");
+
+    let model = work.path().join("fox.aprt");
+    let stderr = |out: std::process::Output| String::from_utf8_lossy(&out.stderr).into_owned();
+    let clips = ["--clip", "Walk", "--clip", "Run", "--validate", "Survey"];
+    let out = aprt(&[&["train"], &fox_args[..], &clips, BAKE, &["-o", s(&model)]].concat());
+    let text = stderr(out);
+    assert!(
+        text.contains("model selection (1 validation clip)"),
+        "{text}"
+    );
+    let poses = format!("{} poses", both_shape[0]);
+    assert!(
+        text.contains(&poses),
+        "trained on Walk and Run only: {text}"
+    );
+    let eval = work.path().join("eval.npy");
+    succeed(
+        &[
+            &["eval", s(&model)],
+            &fox_args[..],
+            &["--clip", "Survey", "--npy", s(&eval)],
+        ]
+        .concat(),
+    );
+    finite_npy(&eval);
+
+    let walk_bvh = asset(&dir, "bvh", "cmu_walk_delfem2.bvh");
+    let subject = asset(&dir, "bvh", "cmu_01_01.bvh");
+    let bvh = ["--bvh", s(&walk_bvh), "--fps", "10"];
+    let ranges = ["--frames", "0..60", "--frames", "120..180"];
+    let model = work.path().join("walk.aprt");
+    for validate in ["200..260", s(&subject)] {
+        let args = [
+            &["train"],
+            &bvh[..],
+            &ranges,
+            &["--validate", validate],
+            BAKE,
+        ];
+        let out = aprt(&[&args.concat()[..], &["-o", s(&model)]].concat());
+        let text = stderr(out);
+        assert!(
+            text.contains("model selection (1 validation clip)"),
+            "{validate}: {text}"
+        );
+        // 60 frames at 120 fps are 5 poses at 10 fps; two ranges, 10.
+        assert!(text.contains(": 10 poses,"), "{validate}: {text}");
+    }
+
+    let refused = work.path().join("refused.aprt");
+    let two_files = ["--bvh", s(&walk_bvh), "--bvh", s(&subject)];
+    let three = ["--frames", "0..4", "--frames", "0..4", "--frames", "0..4"];
+    let args = [
+        &["train"],
+        &two_files[..],
+        &three,
+        BAKE,
+        &["-o", s(&refused)],
+    ]
+    .concat();
+    refuse(&args, &["3 --frames ranges for 2 --bvh files"]);
+    let args = [
+        &[
+            "train",
+            "--builtin",
+            "--clip",
+            "wave",
+            "--validate",
+            "dance",
+        ],
+        BAKE,
+    ]
+    .concat();
+    refuse(
+        &[&args[..], &["-o", s(&refused)]].concat(),
+        &["--validate", "dance", "reach"],
+    );
+    assert!(!refused.exists());
+}

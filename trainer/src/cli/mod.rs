@@ -213,6 +213,7 @@ fn train(args: &TrainArgs) -> Result<()> {
     };
     // A checkpoint being resumed is read too: the model must not land on one of its files.
     let mut inputs = args.source.inputs();
+    inputs.extend(args.source.validation_inputs(&args.validate));
     let stored = std::fs::read_dir(&checkpoint.path).into_iter().flatten();
     inputs.extend(
         stored
@@ -240,7 +241,7 @@ fn train(args: &TrainArgs) -> Result<()> {
         },
     };
     settings.bake.validate()?;
-    let poses = args.source.poses(&Terminal)?;
+    let poses = args.source.poses(&args.validate, &Terminal)?;
     args.source
         .in_origin(crate::model::train::check(&poses, &settings))?;
     let trained = crate::model::train::train(poses, &args.output, &settings, &Terminal)?;

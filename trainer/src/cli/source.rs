@@ -10,7 +10,7 @@ use crate::bake::BakeSettings;
 use crate::bake::budget::Workload;
 use crate::bake::clip::pose_all;
 use crate::io::outputs::{Input, gltf_inputs, obj_sequence_inputs};
-use crate::io::source::{Poses, RigSource, obj_sequence_meshes};
+use crate::io::source::{ClipSpec, Poses, RigSource, joined, obj_sequence_meshes};
 use crate::progress::Reporter;
 use crate::rig::mannequin::MocapOptions;
 use crate::rig::mesh::Mesh;
@@ -26,28 +26,29 @@ pub struct SourceArgs {
     /// CSV with one row of joint angles per pose (a header row is allowed).
     #[arg(long)]
     pub angles: Option<PathBuf>,
-    /// The built-in procedural character; pick its clip with --clip (training, wave, walk,
-    /// reach).
+    /// The built-in procedural character; pick its clips with --clip (training, wave, walk,
+    /// reach, stretch).
     #[arg(long, conflicts_with_all = ["gltf", "bvh"])]
     pub builtin: bool,
     /// A glTF 2.0 character (.gltf with embedded or external buffers, or .glb) with a skin;
-    /// pick its animation with --clip.
+    /// pick its animations with --clip.
     #[arg(long, conflicts_with_all = ["bvh", "obj_seq"])]
     pub gltf: Option<PathBuf>,
-    /// A BVH motion-capture file driving a mannequin built from its skeleton (or from
-    /// --mannequin's).
+    /// A BVH motion-capture file driving a mannequin built from the first one's skeleton (or
+    /// from --mannequin's); repeat for several files, whose frames are used in order.
     #[arg(long, conflicts_with = "obj_seq")]
-    pub bvh: Option<PathBuf>,
-    /// The clip to use: a glTF animation or a built-in clip.
+    pub bvh: Vec<PathBuf>,
+    /// A clip to use: a glTF animation or a built-in clip; repeat for several, used in order.
     #[arg(long)]
-    pub clip: Option<String>,
+    pub clip: Vec<String>,
     /// Sampling rate of the clip in frames per second (glTF default 30; BVH default: the
     /// file's own rate).
     #[arg(long, allow_negative_numbers = true)]
     pub fps: Option<f64>,
     /// BVH frames A..B (half-open, at the file's rate, before resampling); default all.
+    /// Repeat for several ranges of one --bvh file, or give one per --bvh file.
     #[arg(long, value_parser = parse_range)]
-    pub frames: Option<Range<usize>>,
+    pub frames: Vec<Range<usize>>,
     /// Build the mannequin from this BVH's skeleton and retarget --bvh's motion onto it by
     /// joint name, so a model trained on one file can be evaluated on another.
     #[arg(long, requires = "bvh")]
@@ -59,6 +60,9 @@ pub struct SourceArgs {
     #[arg(long, requires = "bvh")]
     pub root_translation: bool,
 }
+
+/// A character, the clips to use and the clips held out to validate on.
+type RigClips = (Box<dyn Rig>, Vec<Clip>, Vec<Clip>);
 
 /// The rate glTF clips are sampled at unless --fps says otherwise.
 const GLTF_FPS: f64 = 30.0;
@@ -76,7 +80,7 @@ impl SourceArgs {
         if let Some(gltf) = &self.gltf {
             inputs.extend(gltf_inputs(gltf));
         }
-        if let Some(bvh) = &self.bvh {
+        for bvh in &self.bvh {
             inputs.push(Input::new(bvh, "the BVH motion"));
         }
         if let Some(skeleton) = &self.mannequin {
@@ -87,7 +91,7 @@ impl SourceArgs {
 
     /// Whether a rig (rather than files of meshes or angles) was named.
     pub fn names_rig(&self) -> bool {
-        self.builtin || self.gltf.is_some() || self.bvh.is_some()
+        self.builtin || self.gltf.is_some() || !self.bvh.is_empty()
     }
 
     /// The source the options name, as a flag, for messages about flags that do not apply.
@@ -96,7 +100,7 @@ impl SourceArgs {
             "--builtin"
         } else if self.gltf.is_some() {
             "--gltf"
-        } else if self.bvh.is_some() {
+        } else if !self.bvh.is_empty() {
             "--bvh"
         } else if self.obj_seq.is_some() {
             "--obj-seq"
@@ -111,27 +115,33 @@ impl SourceArgs {
     pub fn check_flags(&self) -> Result<()> {
         let kind = self.kind();
         let bvh_only = [
-            ("--frames", self.frames.is_some()),
+            ("--frames", !self.frames.is_empty()),
             ("--mannequin", self.mannequin.is_some()),
             ("--no-hat", self.no_hat),
             ("--root-translation", self.root_translation),
         ];
-        if self.bvh.is_none()
+        if self.bvh.is_empty()
             && let Some((flag, _)) = bvh_only.iter().find(|(_, given)| *given)
         {
             bail!("{flag} applies to --bvh motion capture only, not to {kind}");
         }
-        if self.clip.is_some() && !(self.builtin || self.gltf.is_some()) {
-            let instead = if self.bvh.is_some() {
-                ": a BVH file's one clip is its motion (choose frames with --frames A..B)"
-            } else {
+        if !(self.clip.is_empty() || self.builtin || self.gltf.is_some()) {
+            let instead = if self.bvh.is_empty() {
                 ""
+            } else {
+                ": a BVH file's one clip is its motion (choose frames with --frames A..B)"
             };
             bail!(
                 "--clip names a glTF animation or a built-in clip; it does not apply to {kind}{instead}"
             );
         }
-        if self.fps.is_some() && !(self.gltf.is_some() || self.bvh.is_some()) {
+        let (files, ranges) = (self.bvh.len(), self.frames.len());
+        if files > 1 && ranges > 0 && ranges != files {
+            bail!(
+                "{ranges} --frames ranges for {files} --bvh files: give one range per file (in the same order), or none to use every frame"
+            );
+        }
+        if self.fps.is_some() && self.gltf.is_none() && self.bvh.is_empty() {
             bail!("--fps resamples a --gltf or --bvh clip; it does not apply to {kind}");
         }
         if self.angles.is_some() && self.names_rig() {
@@ -148,7 +158,11 @@ impl SourceArgs {
         if self.builtin {
             return Some("the built-in character".to_owned());
         }
-        let path = self.gltf.as_ref().or(self.bvh.as_ref())?;
+        let path = self
+            .gltf
+            .as_ref()
+            .or(self.mannequin.as_ref())
+            .or(self.bvh.first())?;
         Some(path.display().to_string())
     }
 
@@ -171,11 +185,9 @@ impl SourceArgs {
                 fps: self.fps.unwrap_or(GLTF_FPS),
             });
         }
-        let path = self.bvh.as_ref()?;
+        let skeleton = self.mannequin.as_ref().or(self.bvh.first())?;
         Some(RigSource::Mocap {
-            path: path.clone(),
-            skeleton: self.mannequin.clone(),
-            frames: self.frames.clone(),
+            skeleton: skeleton.clone(),
             options: MocapOptions {
                 root_translation: self.root_translation,
                 hat: !self.no_hat,
@@ -184,27 +196,89 @@ impl SourceArgs {
         })
     }
 
-    /// The rig and clip the options name. Errors when they name no rig. Notes on what the rig
-    /// leaves out of the clip go to `reporter`.
-    pub fn rig(&self, reporter: &dyn Reporter) -> Result<(Box<dyn Rig>, Clip)> {
+    /// The clips the options name: the --clip names, or each --bvh file's --frames.
+    fn clip_specs(&self) -> Vec<ClipSpec> {
+        if !self.clip.is_empty() {
+            return self.clip.iter().cloned().map(ClipSpec::Named).collect();
+        }
+        let motion = |path: &PathBuf, frames: Option<Range<usize>>| ClipSpec::Motion {
+            path: path.clone(),
+            frames,
+        };
+        match (self.bvh.as_slice(), self.frames.as_slice()) {
+            ([one], ranges) if !ranges.is_empty() => ranges
+                .iter()
+                .map(|r| motion(one, Some(r.clone())))
+                .collect(),
+            (files, []) => files.iter().map(|f| motion(f, None)).collect(),
+            (files, ranges) => files
+                .iter()
+                .zip(ranges)
+                .map(|(f, r)| motion(f, Some(r.clone())))
+                .collect(),
+        }
+    }
+
+    /// The clip `--validate VALUE` names: a clip of a character with named clips; for a BVH
+    /// mannequin, frames `A..B` of the first --bvh file or another BVH file.
+    fn validation_spec(&self, value: &str) -> ClipSpec {
+        match (self.bvh.first(), parse_range(value)) {
+            (None, _) => ClipSpec::Named(value.to_owned()),
+            (Some(first), Ok(range)) => ClipSpec::Motion {
+                path: first.clone(),
+                frames: Some(range),
+            },
+            (Some(_), Err(_)) => ClipSpec::Motion {
+                path: PathBuf::from(value),
+                frames: None,
+            },
+        }
+    }
+
+    /// The files `--validate` values read (BVH files other than the first --bvh).
+    pub fn validation_inputs(&self, validate: &[String]) -> Vec<Input> {
+        validate
+            .iter()
+            .filter_map(|v| match self.validation_spec(v) {
+                ClipSpec::Motion { path, .. } if self.bvh.first() != Some(&path) => {
+                    Some(Input::new(path, "a --validate BVH file"))
+                }
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// The rig and clips the options name, with the clips `validate` names (`--validate`).
+    /// Errors when they name no rig. Notes on what the rig leaves out of a clip go to
+    /// `reporter`.
+    fn load(&self, validate: &[String], reporter: &dyn Reporter) -> Result<RigClips> {
         self.check_flags()?;
         let Some(source) = self.rig_source() else {
             bail!("no character given: use --builtin, --gltf or --bvh (or --obj-seq with --angles)")
         };
-        source.load(|rig| self.clip_name(rig), reporter)
+        let loaded = source.load(reporter)?;
+        let specs = self.clip_specs();
+        if specs.is_empty() {
+            bail!(
+                "--clip is needed; available: {}",
+                loaded.rig().clip_names().join(", ")
+            );
+        }
+        let clips = loaded.clips(&specs, reporter)?;
+        let held: Vec<ClipSpec> = validate.iter().map(|v| self.validation_spec(v)).collect();
+        let validation = loaded.clips(&held, reporter).context("--validate")?;
+        Ok((loaded.into_rig(), clips, validation))
     }
 
-    fn clip_name<'a>(&'a self, rig: &dyn Rig) -> Result<&'a str> {
-        self.clip.as_deref().with_context(|| {
-            format!(
-                "--clip is needed; available: {}",
-                rig.clip_names().join(", ")
-            )
-        })
+    /// The rig and the clip the options name (several clips joined in order). Errors when
+    /// they name no rig. Notes on what the rig leaves out of the clip go to `reporter`.
+    pub fn rig(&self, reporter: &dyn Reporter) -> Result<(Box<dyn Rig>, Clip)> {
+        let (rig, clips, _) = self.load(&[], reporter)?;
+        Ok((rig, joined(clips)))
     }
 
     /// The meshes to bake with `settings`, without angles: every OBJ of --obj-seq (--angles
-    /// is not needed), or the rig posed at every frame of its clip. A bake beyond the budget
+    /// is not needed), or the rig posed at every frame of its clips. A bake beyond the budget
     /// of one run ([`crate::bake::budget`]) is refused before any frame is posed.
     pub fn meshes(&self, settings: &BakeSettings, reporter: &dyn Reporter) -> Result<Vec<Mesh>> {
         settings.validate()?;
@@ -226,12 +300,20 @@ impl SourceArgs {
         Ok(meshes)
     }
 
-    /// The poses the options name: a rig's clip, or an OBJ sequence with its angles.
-    pub fn poses(&self, reporter: &dyn Reporter) -> Result<Poses> {
+    /// The poses the options name: a rig's clips (with the clips `validate` names held out to
+    /// choose the model by), or an OBJ sequence with its angles.
+    pub fn poses(&self, validate: &[String], reporter: &dyn Reporter) -> Result<Poses> {
         self.check_flags()?;
         if self.names_rig() {
-            let (rig, clip) = self.rig(reporter)?;
-            return Ok(Poses::Rig { rig, clip });
+            let (rig, clips, validation) = self.load(validate, reporter)?;
+            return Ok(Poses::Rig {
+                rig,
+                clips,
+                validation,
+            });
+        }
+        if !validate.is_empty() {
+            bail!("--validate holds out clips of a character; an OBJ sequence has none");
         }
         let (Some(dir), Some(csv)) = (&self.obj_seq, &self.angles) else {
             bail!(

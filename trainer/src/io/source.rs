@@ -1,6 +1,6 @@
 //! Where poses come from: an OBJ sequence with a joint-angle CSV, or a rig (the built-in
-//! character, a glTF skin, a mannequin driven by motion capture) and one of its clips. The
-//! command line's source options (`cli::source`) name one of these; loading happens here.
+//! character, a glTF skin, a mannequin driven by motion capture) and clips of it. The command
+//! line's source options (`cli::source`) name one of these; loading happens here.
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -26,12 +26,14 @@ pub enum Poses {
         /// One row of joint angles per mesh.
         angles: Vec<Vec<f64>>,
     },
-    /// A rig and the frames of one of its clips.
+    /// A rig and clips of it.
     Rig {
         /// The character.
         rig: Box<dyn Rig>,
-        /// The clip.
-        clip: Clip,
+        /// The clips to train on (or to bake or evaluate), in order.
+        clips: Vec<Clip>,
+        /// Clips held out whole to choose the model by (`--validate`).
+        validation: Vec<Clip>,
     },
 }
 
@@ -64,7 +66,25 @@ pub fn obj_sequence_meshes(dir: &Path, reporter: &dyn Reporter) -> Result<Vec<Me
     read_same_meshes(&obj_sequence(dir)?, reporter)
 }
 
-/// A character to load, and how to sample its clip.
+/// The clips one after the other, as one clip named by their names joined with `+` (a
+/// simulation or an evaluation of several clips writes their frames in order).
+pub fn joined(clips: Vec<Clip>) -> Clip {
+    let name = clip_names(&clips);
+    let fps = clips.first().map_or(0.0, |c| c.fps);
+    Clip {
+        name,
+        fps,
+        frames: clips.into_iter().flat_map(|c| c.frames).collect(),
+    }
+}
+
+/// The clips' names joined with `+`.
+pub fn clip_names(clips: &[Clip]) -> String {
+    let names: Vec<&str> = clips.iter().map(|c| c.name.as_str()).collect();
+    names.join(" + ")
+}
+
+/// A character to load, and how to sample its clips.
 #[derive(Clone, Debug)]
 pub enum RigSource {
     /// The built-in procedural character.
@@ -76,37 +96,67 @@ pub enum RigSource {
         /// Frames per second.
         fps: f64,
     },
-    /// BVH motion capture driving a mannequin built from the file's own skeleton, or from
-    /// `skeleton`'s with the motion retargeted onto it by joint name.
+    /// A mannequin built from the skeleton of a BVH file, driven by motion capture: that
+    /// file's own motion, or other files' retargeted onto it by joint name.
     Mocap {
-        /// The motion-capture file.
-        path: PathBuf,
-        /// The file whose skeleton the mannequin is built from, if not `path`'s.
-        skeleton: Option<PathBuf>,
-        /// Frames of the motion (half-open, at the file's rate); all when `None`.
-        frames: Option<Range<usize>>,
+        /// The file whose skeleton the mannequin is built from.
+        skeleton: PathBuf,
         /// How the mannequin is built and the motion resampled.
         options: MocapOptions,
     },
 }
 
+/// A clip to take from a loaded character.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ClipSpec {
+    /// A named clip: the built-in character's, or a glTF animation.
+    Named(String),
+    /// Frames of a BVH file's motion (half-open, at the file's rate; all when `None`), on the
+    /// mannequin: its own when the file is the mannequin's skeleton, otherwise retargeted.
+    Motion {
+        /// The motion-capture file.
+        path: PathBuf,
+        /// The frames.
+        frames: Option<Range<usize>>,
+    },
+}
+
+/// A loaded character, from which clips are taken.
+pub enum LoadedRig {
+    /// The built-in character.
+    Builtin(Box<Character>),
+    /// A glTF character, with its file.
+    Gltf(Box<GltfRig>, PathBuf),
+    /// A mannequin, with the file its skeleton (and its own motion) comes from.
+    Mannequin(Box<MocapRig>, PathBuf),
+}
+
 impl RigSource {
-    /// Loads the character and its clip. A file that does not exist is an error listing the
-    /// files of its kind beside it. `clip_name` picks the clip of a character with named clips
-    /// (the built-in character's, a glTF file's animations) once it is loaded; a mannequin's
-    /// clip is its motion, so it is not asked. Notes on what the clip leaves out (glTF channels
-    /// held at rest, mannequin joints the motion does not animate) and the bind mesh's degenerate
-    /// triangles go to `reporter`.
-    pub fn load<'a>(
-        &self,
-        clip_name: impl FnOnce(&dyn Rig) -> Result<&'a str>,
-        reporter: &dyn Reporter,
-    ) -> Result<(Box<dyn Rig>, Clip)> {
-        let (rig, clip) = self.load_rig(clip_name, reporter)?;
-        if let Some(note) = degenerate_note(&self.mesh_name(), rig.bind_mesh()) {
+    /// Loads the character. A file that does not exist is an error listing the files of its
+    /// kind beside it. The bind mesh's degenerate triangles are noted to `reporter`.
+    pub fn load(&self, reporter: &dyn Reporter) -> Result<LoadedRig> {
+        let loaded = match self {
+            RigSource::Builtin => LoadedRig::Builtin(Box::new(Character::builtin())),
+            RigSource::Gltf { path, fps } => {
+                must_exist(path, &["gltf", "glb"])?;
+                let rig = GltfRig::load(path, *fps)?;
+                if rig.clip_names().is_empty() {
+                    return Err(GltfError::NoAnimations { path: path.clone() }.into());
+                }
+                LoadedRig::Gltf(Box::new(rig), path.clone())
+            }
+            RigSource::Mocap { skeleton, options } => {
+                must_exist(skeleton, &["bvh"])?;
+                LoadedRig::Mannequin(
+                    Box::new(build_mannequin(skeleton, options)?),
+                    skeleton.clone(),
+                )
+            }
+        };
+        if let Some(note) = degenerate_note(&self.mesh_name(), loaded.rig().bind_mesh()) {
             reporter.note(&note);
         }
-        Ok((rig, clip))
+        Ok(loaded)
     }
 
     /// What the character's mesh is called in notes.
@@ -114,31 +164,39 @@ impl RigSource {
         match self {
             RigSource::Builtin => "the built-in character".to_owned(),
             RigSource::Gltf { path, .. } => format!("{}, skinned mesh", path.display()),
-            RigSource::Mocap { path, skeleton, .. } => format!(
-                "the mannequin of {}",
-                skeleton.as_deref().unwrap_or(path).display()
-            ),
+            RigSource::Mocap { skeleton, .. } => {
+                format!("the mannequin of {}", skeleton.display())
+            }
+        }
+    }
+}
+
+impl LoadedRig {
+    /// The character.
+    pub fn rig(&self) -> &dyn Rig {
+        match self {
+            LoadedRig::Builtin(rig) => rig.as_ref(),
+            LoadedRig::Gltf(rig, _) => rig.as_ref(),
+            LoadedRig::Mannequin(rig, _) => rig.as_ref(),
         }
     }
 
-    fn load_rig<'a>(
-        &self,
-        clip_name: impl FnOnce(&dyn Rig) -> Result<&'a str>,
-        reporter: &dyn Reporter,
-    ) -> Result<(Box<dyn Rig>, Clip)> {
+    /// The character, owned.
+    pub fn into_rig(self) -> Box<dyn Rig> {
         match self {
-            RigSource::Builtin => {
-                let character = Character::builtin();
-                let clip = character.clip(clip_name(&character)?)?;
-                Ok((Box::new(character), clip))
-            }
-            RigSource::Gltf { path, fps } => {
-                must_exist(path, &["gltf", "glb"])?;
-                let rig = GltfRig::load(path, *fps)?;
-                if rig.clip_names().is_empty() {
-                    return Err(GltfError::NoAnimations { path: path.clone() }.into());
-                }
-                let clip = rig.clip(clip_name(&rig)?)?;
+            LoadedRig::Builtin(rig) => rig,
+            LoadedRig::Gltf(rig, _) => rig,
+            LoadedRig::Mannequin(rig, _) => rig,
+        }
+    }
+
+    /// The clip `spec` names. Notes on what it leaves out (glTF channels held at rest,
+    /// mannequin joints a retargeted motion does not animate) go to `reporter`.
+    pub fn clip(&self, spec: &ClipSpec, reporter: &dyn Reporter) -> Result<Clip> {
+        match (self, spec) {
+            (LoadedRig::Builtin(rig), ClipSpec::Named(name)) => Ok(rig.clip(name)?),
+            (LoadedRig::Gltf(rig, path), ClipSpec::Named(name)) => {
+                let clip = rig.clip(name)?;
                 for held in rig
                     .held_channels()
                     .iter()
@@ -146,39 +204,45 @@ impl RigSource {
                 {
                     reporter.note(&format!("note: {}: {held}", path.display()));
                 }
-                Ok((Box::new(rig), clip))
+                Ok(clip)
             }
-            RigSource::Mocap {
-                path,
-                skeleton,
-                frames,
-                options,
-            } => {
+            (LoadedRig::Mannequin(rig, own), ClipSpec::Motion { path, frames }) => {
                 must_exist(path, &["bvh"])?;
-                if let Some(skeleton) = skeleton {
-                    must_exist(skeleton, &["bvh"])?;
+                let mut clip = if path == own {
+                    rig.clip_range(frames.clone().unwrap_or(0..rig.mocap().frame_count()))?
+                } else {
+                    retargeted(rig, own, path, frames.clone(), reporter)?
+                };
+                if let Some(range) = frames {
+                    clip.name = format!("{}[{}..{}]", clip.name, range.start, range.end);
                 }
-                mannequin(path, skeleton.as_deref(), frames.clone(), options, reporter)
+                Ok(clip)
             }
+            (_, ClipSpec::Motion { path, .. }) => bail!(
+                "{}: motion capture drives a BVH mannequin, not this character",
+                path.display()
+            ),
+            (LoadedRig::Mannequin(..), ClipSpec::Named(name)) => bail!(
+                "clip {name:?}: a BVH file's one clip is its motion (choose frames with A..B)"
+            ),
         }
+    }
+
+    /// Every clip `specs` names, in order.
+    pub fn clips(&self, specs: &[ClipSpec], reporter: &dyn Reporter) -> Result<Vec<Clip>> {
+        specs.iter().map(|s| self.clip(s, reporter)).collect()
     }
 }
 
-/// The mannequin (of `skeleton`, or of `path`'s own skeleton) and `path`'s motion.
-fn mannequin(
+/// `path`'s motion (frames `frames` of it, all when `None`) retargeted onto `rig`, the
+/// mannequin of `skeleton`.
+fn retargeted(
+    rig: &MocapRig,
+    skeleton: &Path,
     path: &Path,
-    skeleton: Option<&Path>,
     frames: Option<Range<usize>>,
-    options: &MocapOptions,
     reporter: &dyn Reporter,
-) -> Result<(Box<dyn Rig>, Clip)> {
-    let Some(skeleton) = skeleton else {
-        let rig = build_mannequin(path, options)?;
-        let frames = frames.unwrap_or(0..rig.mocap().frame_count());
-        let clip = rig.clip_range(frames)?;
-        return Ok((Box::new(rig), clip));
-    };
-    let rig = build_mannequin(skeleton, options)?;
+) -> Result<Clip> {
     let motion = Mocap::read(path)?;
     let frames = frames.unwrap_or(0..motion.frame_count());
     let name = path
@@ -208,7 +272,7 @@ fn mannequin(
             retargeted.extra.join(", ")
         ));
     }
-    Ok((Box::new(rig), retargeted.clip))
+    Ok(retargeted.clip)
 }
 
 /// The mannequin of `path`'s skeleton; errors past parsing (a skeleton too large or without

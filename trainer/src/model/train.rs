@@ -13,7 +13,7 @@ use crate::bake::checkpoint::{Checkpoint, OnExisting};
 use crate::bake::clip::{BakedClip, pose_all};
 use crate::bake::{BakeError, BakeSettings};
 use crate::io::atomic::write_atomic;
-use crate::io::source::Poses;
+use crate::io::source::{Poses, clip_names};
 use crate::model::ModelFrame;
 use crate::model::export::{ExportError, Precision, check_alpha, encode_model};
 use crate::model::fit::{
@@ -22,11 +22,11 @@ use crate::model::fit::{
 };
 use crate::model::runtime::{BlobInfo, describe};
 use crate::progress::Reporter;
-use crate::rig::Rig;
 use crate::rig::bone_frames::{FrameChange, change_frames, dominant_bones};
 use crate::rig::locality::locality;
 use crate::rig::mesh::Mesh;
 use crate::rig::pose_layout::PoseLayout;
+use crate::rig::{Clip, Rig};
 
 /// Training poses sampled for the locality's distances (besides the bind pose).
 const LOCALITY_POSES: usize = 24;
@@ -267,13 +267,18 @@ pub fn check(poses: &Poses, settings: &TrainSettings) -> Result<(), RequestError
             let entries = angles.first().map(Vec::len);
             (dir.display().to_string(), meshes.len(), mesh, entries, None)
         }
-        Poses::Rig { rig, clip } => {
-            let entries = PoseLayout::from_training(&rig.angle_names(), &clip.frames)
+        Poses::Rig {
+            rig,
+            clips,
+            validation,
+        } => {
+            let entries = PoseLayout::from_training(&rig.angle_names(), &training_frames(clips))
                 .map(|layout| layout.names().len())
                 .ok();
             let bones = (settings.frame == ModelFrame::Bone).then(|| rig.skin().joint_count());
-            let what = format!("clip {}", clip.name);
-            (what, clip.frames.len(), rig.bind_mesh(), entries, bones)
+            let what = format!("clip {}", clip_names(clips));
+            let frames = clips.iter().chain(validation).map(|c| c.frames.len()).sum();
+            (what, frames, rig.bind_mesh(), entries, bones)
         }
     };
     if let Some(entries) = entries.filter(|&e| e > MAX_POSE_LEN) {
@@ -348,6 +353,7 @@ impl Selection {
     pub fn lines(&self, chosen_pose_dims: usize, alpha: f64) -> Vec<String> {
         let held = match self.held_out {
             HeldOutKind::Segments(n) => format!("held-out runs of {n} poses"),
+            HeldOutKind::Clips(1) => "1 validation clip".to_owned(),
             HeldOutKind::Clips(n) => format!("{n} validation clips"),
         };
         let mut lines = vec![format!(
@@ -405,30 +411,39 @@ pub fn train(
             let fitted = fit(&a, &transfers, settings.bake.order, &settings.fit)?;
             (fitted, checkpoint, angles.len())
         }
-        Poses::Rig { rig, clip } => {
-            let layout = PoseLayout::from_training(&rig.angle_names(), &clip.frames)
-                .with_context(|| format!("clip {}", clip.name))?;
+        Poses::Rig {
+            rig,
+            clips,
+            validation,
+        } => {
+            let what = clip_names(&clips);
+            let layout = PoseLayout::from_training(&rig.angle_names(), &training_frames(&clips))
+                .with_context(|| format!("clip {what}"))?;
             if !layout.dropped().is_empty() {
                 reporter.note(&format!(
-                    "joints that never move in {} and are left out of the model: {}",
-                    clip.name,
+                    "joints that never move in {what} and are left out of the model: {}",
                     layout.dropped().join(", ")
                 ));
             }
-            let mut meshes = pose_all(rig.as_ref(), &clip.name, &clip.frames)?;
-            // Bone-frame models are anchored at the rest pose: baked last, through the
-            // checkpoint like every training pose.
+            // Training clips, then validation clips, then (for bone-frame models, which are
+            // anchored at it) the rest pose: all baked through one checkpoint.
+            let all: Vec<&Clip> = clips.iter().chain(&validation).collect();
+            let mut meshes = Vec::new();
+            let mut names = Vec::new();
+            for clip in &all {
+                meshes.extend(pose_all(rig.as_ref(), &clip.name, &clip.frames)?);
+                names.extend((0..clip.frames.len()).map(|f| (clip.name.as_str(), f)));
+            }
             let rest_pose = rig.rest_pose();
             let anchored = settings.frame == ModelFrame::Bone;
             if anchored {
                 meshes.push(rig.pose(&rest_pose)?);
             }
-            let name = |i: usize| match i.checked_sub(clip.frames.len()) {
-                Some(_) => "the rest pose".to_owned(),
-                None => format!("clip {} frame {i}", clip.name),
+            let name = |i: usize| match names.get(i) {
+                Some((clip, f)) => format!("clip {clip} frame {f}"),
+                None => "the rest pose".to_owned(),
             };
             let (mut transfer, checkpoint) = bake_checkpointed(&meshes, name, settings, reporter)?;
-            let frames = clip.frames.len();
             let rest = if anchored {
                 let (mesh, t) = (meshes.pop(), transfer.pop());
                 Some(BakedClip::new(
@@ -442,18 +457,27 @@ pub fn train(
             } else {
                 None
             };
-            let baked = BakedClip::new(
-                rig.as_ref(),
-                &layout,
-                &clip.name,
-                clip.frames,
-                meshes,
-                transfer,
-            )?;
+            let (mut meshes, mut transfer) = (meshes.into_iter(), transfer.into_iter());
+            let mut baked = all
+                .iter()
+                .map(|clip| {
+                    let n = clip.frames.len();
+                    BakedClip::new(
+                        rig.as_ref(),
+                        &layout,
+                        &clip.name,
+                        clip.frames.clone(),
+                        meshes.by_ref().take(n).collect(),
+                        transfer.by_ref().take(n).collect(),
+                    )
+                })
+                .collect::<Result<Vec<_>>>()?;
+            let held = baked.split_off(clips.len());
+            let train = BakedClip::concat(baked);
             let clips = ClipSet {
-                train: &baked,
+                train: &train,
                 rest: rest.as_ref(),
-                validation: &[],
+                validation: &held,
             };
             let fitted = fit_clip(
                 rig.as_ref(),
@@ -463,7 +487,7 @@ pub fn train(
                 &settings.fit,
                 settings.frame,
             )?;
-            (fitted, checkpoint, frames)
+            (fitted, checkpoint, train.poses.len())
         }
     };
     let blob = encode_model(&fitted.model, settings.precision)?;
@@ -474,6 +498,14 @@ pub fn train(
         selection: Selection::of(&fitted.report),
         info: describe(&blob)?,
     })
+}
+
+/// Every frame of the training clips, in order.
+fn training_frames(clips: &[Clip]) -> Vec<Vec<f64>> {
+    clips
+        .iter()
+        .flat_map(|c| c.frames.iter().cloned())
+        .collect()
 }
 
 /// The transfer of every pose of `meshes`, through the checkpoint of `settings` (opened for
