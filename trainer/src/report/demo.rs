@@ -34,6 +34,8 @@ pub struct Report {
     pub train_clip: String,
     /// Training frames.
     pub train_frames: usize,
+    /// The clip held out of training to choose the model by, and its frame count.
+    pub validation_clip: (String, usize),
     /// Novel clips and their frame counts.
     pub test_clips: Vec<(String, usize)>,
     /// Bake seconds per training frame (all cores).
@@ -85,7 +87,7 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
     };
     let training = character.training_clip();
     let layout = PoseLayout::from_training(&character.angle_names(), &training.frames)?;
-    let (train, bake_s, tests) = bake_clips(
+    let (train, bake_s, validation, tests) = bake_clips(
         &character,
         &layout,
         &training,
@@ -98,6 +100,7 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
         &character,
         &layout,
         &train,
+        std::slice::from_ref(&validation),
         &tests,
         &standard_configs(),
         &settings,
@@ -122,6 +125,7 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
         rays: args.rays,
         train_clip: train.name.clone(),
         train_frames: train.angles.len(),
+        validation_clip: (validation.name.clone(), validation.angles.len()),
         test_clips: tests
             .iter()
             .map(|t| (t.name.clone(), t.angles.len()))
@@ -139,8 +143,8 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
     Ok(markdown)
 }
 
-/// `training` (with its bake's seconds per frame) and the novel clips of the built-in character,
-/// every `stride`-th frame of each, baked.
+/// `training` (with its bake's seconds per frame), the validation clip and the novel clips of
+/// the built-in character, every `stride`-th frame of each, baked.
 fn bake_clips(
     character: &Character,
     layout: &PoseLayout,
@@ -148,7 +152,7 @@ fn bake_clips(
     settings: &BakeSettings,
     stride: usize,
     reporter: &dyn Reporter,
-) -> Result<(BakedClip, f64, Vec<BakedClip>)> {
+) -> Result<(BakedClip, f64, BakedClip, Vec<BakedClip>)> {
     let (train, bake_s) = bake_clip(
         character,
         layout,
@@ -157,12 +161,17 @@ fn bake_clips(
         settings,
         reporter,
     )?;
-    let mut tests = Vec::new();
-    for clip in character.novel_clips() {
+    let bake = |clip: Clip| {
         let poses = strided(&clip, stride);
-        tests.push(bake_clip(character, layout, &clip.name, poses, settings, reporter)?.0);
-    }
-    Ok((train, bake_s, tests))
+        Ok(bake_clip(character, layout, &clip.name, poses, settings, reporter)?.0)
+    };
+    let validation = bake(character.validation_clip())?;
+    let tests = character
+        .novel_clips()
+        .into_iter()
+        .map(bake)
+        .collect::<Result<Vec<_>>>()?;
+    Ok((train, bake_s, validation, tests))
 }
 
 /// Pictures of frame `frame` of `test` in `out`: ground truth | `blob`'s prediction | 4× error
@@ -204,13 +213,15 @@ impl Report {
         let _ = writeln!(s, "# aprt demo report\n");
         let _ = writeln!(
             s,
-            "Character: {}. SH order {} ({} coefficients), {} rays per vertex. Trained on `{}` ({} frames); tested on {}.\n",
+            "Character: {}. SH order {} ({} coefficients), {} rays per vertex. Trained on `{}` ({} frames); models chosen on `{}` ({} frames, held out of training); tested on {}.\n",
             self.character,
             self.order,
             self.order * self.order,
             self.rays,
             self.train_clip,
             self.train_frames,
+            self.validation_clip.0,
+            self.validation_clip.1,
             self.test_clips
                 .iter()
                 .map(|(n, f)| format!("`{n}` ({f} frames)"))

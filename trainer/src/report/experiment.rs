@@ -179,14 +179,16 @@ impl Experiment {
 }
 
 /// Fits every configuration on `train` (skipping, with the reason, any whose model exceeds the
-/// runtime's limits), then measures each model and the baselines on
-/// `train` and `tests` (at least one). `lighting` is the SH lighting the timings shade with.
+/// runtime's limits), choosing each by `validation` when it is not empty (by segments of
+/// `train` otherwise), then measures each model and the baselines on `train` and `tests` (at
+/// least one). `lighting` is the SH lighting the timings shade with.
 /// Which configuration is being fitted, and which are skipped, goes to `reporter`.
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     rig: &dyn Rig,
     layout: &PoseLayout,
     train: &BakedClip,
+    validation: &[BakedClip],
     tests: &[BakedClip],
     configs: &[ModelConfig],
     settings: &BakeSettings,
@@ -204,7 +206,7 @@ pub fn run(
     let clips = ClipSet {
         train,
         rest: Some(&rest),
-        validation: &[],
+        validation,
     };
     for config in configs {
         reporter.note(&format!("fitting {}", config.name));

@@ -177,6 +177,7 @@ fn measure(study: &Study, settings: &ResultsSettings, reporter: &dyn Reporter) -
         rig,
         &layout,
         &train,
+        &[],
         &tests,
         &results_configs(),
         &settings.bake,

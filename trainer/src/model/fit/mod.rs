@@ -392,6 +392,34 @@ impl<'a> FitInput<'a> {
     }
 }
 
+/// The pose entries no vertex group depends on (none without a locality).
+fn unused_entries(input: &FitInput<'_>) -> Vec<usize> {
+    let Some(locality) = input.locality else {
+        return Vec::new();
+    };
+    (0..input.angles.ncols())
+        .filter(|&i| !locality.groups.iter().any(|g| g.entries.contains(&i)))
+        .collect()
+}
+
+/// The training and validation poses with `entries` set to the anchor's values; `None` when
+/// there is nothing to pin (no entries, or no anchor).
+fn pin_entries(
+    input: &FitInput<'_>,
+    entries: &[usize],
+) -> Option<(DMatrix<f64>, Vec<DMatrix<f64>>)> {
+    let anchor = input.anchor.filter(|_| !entries.is_empty())?;
+    let pin = |angles: &DMatrix<f64>| {
+        let mut pinned = angles.clone();
+        for &i in entries {
+            pinned.column_mut(i).fill(anchor.angles[i]);
+        }
+        pinned
+    };
+    let held = input.validation.iter().map(|v| pin(v.angles)).collect();
+    Some((pin(input.angles), held))
+}
+
 /// Fits the pose-driven linear model to one clip: [`fit_input`] with no anchor.
 ///
 /// `angles` is `p × a` (one row of joint angles per pose); `transfers[i]` is pose i's
@@ -410,8 +438,34 @@ pub fn fit(
 /// by held-out error (segments of the clips, or the validation clips).
 pub fn fit_input(input: &FitInput<'_>, options: &FitOptions) -> Result<Fit, FitError> {
     let clock = Instant::now();
-    let (angles, transfers, order) = (input.angles, input.transfers, input.order);
     let vertices = validate(input, options)?;
+    // Entries no vertex depends on (a root turn, in bone frames) are held at the anchor's
+    // value in every pose the fit sees, so nothing is learnt from them, and the bound does not
+    // blend the pose towards the prior when they move: the character turning round is not a
+    // pose it was not trained on.
+    let unused = unused_entries(input);
+    let pinned = pin_entries(input, &unused);
+    let pinned_input;
+    let input = match &pinned {
+        Some((angles, held)) => {
+            pinned_input = FitInput {
+                angles,
+                validation: input
+                    .validation
+                    .iter()
+                    .zip(held)
+                    .map(|(v, angles)| Validation {
+                        angles,
+                        transfers: v.transfers,
+                    })
+                    .collect(),
+                ..input.clone()
+            };
+            &pinned_input
+        }
+        None => input,
+    };
+    let (angles, transfers, order) = (input.angles, input.transfers, input.order);
     let (p, n2) = (transfers.len(), order * order);
     let mut seconds = StageSeconds {
         validate: clock.elapsed().as_secs_f64(),
@@ -659,14 +713,6 @@ pub fn fit_input(input: &FitInput<'_>, options: &FitOptions) -> Result<Fit, FitE
 
     let clock = Instant::now();
     let alpha = chosen.alpha;
-    // Entries no vertex depends on (a root turn, in bone frames) must not blend the pose
-    // towards the prior: the character turning round is not a pose it was not trained on.
-    let unused: Vec<usize> = match input.locality {
-        Some(locality) => (0..angles.ncols())
-            .filter(|&i| !locality.groups.iter().any(|g| g.entries.contains(&i)))
-            .collect(),
-        None => Vec::new(),
-    };
     let bound_of = |prior: &[f64]| {
         options
             .bound

@@ -794,3 +794,35 @@ fn the_local_model_is_scored_like_the_shared_ones_and_refused_without_an_anchor(
     assert!(chosen.local, "{:?}", fit.report.choices);
     assert!(fit.report.choices.iter().any(|c| !c.local));
 }
+
+#[test]
+fn entries_no_vertex_depends_on_are_left_out_of_every_fit() {
+    // A third entry (a root turn) follows entry 1 in training; no group depends on it, so the
+    // shared maps must not learn from it either: turning it changes no prediction.
+    let (two, transfers, locality) = local_problem();
+    let angles = DMatrix::from_fn(two.nrows(), 3, |i, j| {
+        two[(i, j.min(1))] + [0.0, 0.0, 0.3][j]
+    });
+    let rest = [0.0, 0.0, 0.0];
+    let rest_transfer = [1.0f32, 2.0, 1.5, 0.5];
+    let mut input = FitInput::new(&angles, &transfers, 1);
+    input.anchor = Some(Anchor {
+        angles: &rest,
+        transfer: &rest_transfer,
+    });
+    input.locality = Some(&locality);
+    for local in [Local::Off, Local::Auto] {
+        let options = FitOptions {
+            coef_dims: CoefDims::Count(3),
+            local,
+            // Without the bound, which holds such entries at rest on its own.
+            bound: None,
+            ..FitOptions::default()
+        };
+        let fit = fit_input(&input, &options).unwrap();
+        let at = |turn: f64| fit.model.predict(&[0.3, -0.2, turn]);
+        for turn in [-3.0, 0.3, 3.0] {
+            assert_eq!(at(turn), at(0.0), "{local:?}, turn {turn}");
+        }
+    }
+}

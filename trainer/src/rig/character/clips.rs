@@ -182,6 +182,35 @@ fn reach(angles: &[JointAngle]) -> Clip {
     })
 }
 
+/// Stretches: both arms out to the sides while the chest twists, then a squat with the arms
+/// forward and the head down. The validation clip: held out of training to choose the model
+/// by (`--validate stretch`), never a test clip.
+pub(crate) fn stretch(angles: &[JointAngle]) -> Clip {
+    let rest = |name: &str| angles[index_of(angles, name)].rest;
+    let abduct_rest = [rest("l_shoulder_abduct"), rest("r_shoulder_abduct")];
+    scripted(angles, "stretch", 96, |t, set| {
+        let out = ease(t, 0.0, 0.6) * (1.0 - ease(t, 1.6, 2.0));
+        let squat = ease(t, 1.8, 2.6);
+        let twist = 0.45 * (std::f64::consts::TAU * 0.6 * t).sin() * out;
+        for (side, abduct_rest) in ["l", "r"].into_iter().zip(abduct_rest) {
+            let joint = |name: &str| format!("{side}_{name}");
+            set(
+                &joint("shoulder_abduct"),
+                abduct_rest + (1.45 - abduct_rest) * out,
+            );
+            set(&joint("shoulder_flex"), 1.2 * squat);
+            set(&joint("elbow_flex"), 0.2 * out + 0.4 * squat);
+            set(&joint("hip_flex"), 1.0 * squat);
+            set(&joint("knee_flex"), 1.4 * squat);
+            set(&joint("ankle_flex"), 0.35 * squat);
+        }
+        set("chest_twist", twist);
+        set("spine_lean", 0.1 * twist);
+        set("spine_flex", 0.25 * squat);
+        set("neck_flex", 0.3 * squat);
+    })
+}
+
 /// The novel test clips, in a fixed order.
 pub(crate) fn novel(angles: &[JointAngle]) -> Vec<Clip> {
     vec![wave(angles), walk(angles), reach(angles)]

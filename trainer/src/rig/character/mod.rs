@@ -123,9 +123,24 @@ impl Character {
         clips::novel(&self.angles)
     }
 
+    /// The validation clip ("stretch"): a motion unlike the training clip and the novel
+    /// clips, held out of training to choose the model by.
+    pub fn validation_clip(&self) -> Clip {
+        clips::stretch(&self.angles)
+    }
+
     /// Names and triangle ranges of the closed parts the mesh is made of, in mesh order.
     pub fn parts(&self) -> impl Iterator<Item = (&'static str, Range<usize>)> + '_ {
         self.parts.iter().cloned()
+    }
+}
+
+impl Character {
+    /// Every clip, in the order [`Rig::clip_names`] lists them.
+    fn clips(&self) -> impl Iterator<Item = Clip> {
+        std::iter::once(self.training_clip())
+            .chain(self.novel_clips())
+            .chain(std::iter::once(self.validation_clip()))
     }
 }
 
@@ -155,24 +170,18 @@ impl Rig for Character {
         Ok(skeleton::joint_matrices(&self.skeleton, &self.dofs, pose))
     }
 
-    /// The training clip first, then the novel clips.
+    /// The training clip first, then the novel clips, then the validation clip.
     fn clip_names(&self) -> Vec<String> {
-        std::iter::once(self.training_clip())
-            .chain(self.novel_clips())
-            .map(|c| c.name)
-            .collect()
+        self.clips().map(|c| c.name).collect()
     }
 
     fn clip(&self, name: &str) -> Result<Clip, RigError> {
-        std::iter::once(self.training_clip())
-            .chain(self.novel_clips())
-            .find(|c| c.name == name)
-            .ok_or_else(|| {
-                RigError::from(CharacterError::UnknownClip {
-                    name: name.into(),
-                    available: self.clip_names().join(", "),
-                })
+        self.clips().find(|c| c.name == name).ok_or_else(|| {
+            RigError::from(CharacterError::UnknownClip {
+                name: name.into(),
+                available: self.clip_names().join(", "),
             })
+        })
     }
 }
 

@@ -230,15 +230,19 @@ fn character_pose_rejects_bad_input() {
 #[test]
 fn character_clips_are_named_smooth_and_inside_the_limits() {
     let c = character();
-    assert_eq!(c.clip_names(), ["training", "wave", "walk", "reach"]);
+    assert_eq!(
+        c.clip_names(),
+        ["training", "wave", "walk", "reach", "stretch"]
+    );
     let err = c.clip("dance").unwrap_err().to_string();
     assert!(
-        err.contains("dance") && err.contains("training, wave, walk, reach"),
+        err.contains("dance") && err.contains("training, wave, walk, reach, stretch"),
         "{err}"
     );
     let training = c.clip("training").unwrap();
     assert_eq!(training.frames.len(), 250);
-    for clip in std::iter::once(training).chain(c.novel_clips()) {
+    let others = c.novel_clips().into_iter().chain([c.validation_clip()]);
+    for clip in std::iter::once(training).chain(others) {
         if clip.name != "training" {
             assert!(
                 (60..=120).contains(&clip.frames.len()),
@@ -288,14 +292,14 @@ fn nearest_training_distance(training: &Clip, frame: &[f64]) -> f64 {
 }
 
 #[test]
-fn character_novel_clips_are_not_training_poses() {
+fn character_novel_and_validation_clips_are_not_training_poses() {
     // Threshold 1 rad over all 23 angles (e.g. 0.2 rad on each of 23): a pose that close to a
     // training frame would test interpolation between neighbours, not generalisation.
     // ≥ 90% of each novel clip must be farther (measured: every frame is, the closest at
     // 1.5 rad, in walk).
     let c = character();
     let training = c.training_clip();
-    for clip in c.novel_clips() {
+    for clip in c.novel_clips().into_iter().chain([c.validation_clip()]) {
         let distances: Vec<f64> = clip
             .frames
             .iter()
