@@ -213,7 +213,7 @@ impl Report {
         let _ = writeln!(s, "# aprt demo report\n");
         let _ = writeln!(
             s,
-            "Character: {}. SH order {} ({} coefficients), {} rays per vertex. Trained on `{}` ({} frames); models chosen on `{}` ({} frames, held out of training); tested on {}.\n",
+            "Character: {}. SH order {} ({} coefficients), {} rays per vertex. Trained on `{}` ({} frames); α, k_a and the prior of every model chosen on `{}` ({} frames, held out of training; it takes the place of the LOSO and LOO selections the rows name); tested on {}.\n",
             self.character,
             self.order,
             self.order * self.order,
