@@ -693,16 +693,28 @@ fn local_problem() -> (DMatrix<f64>, Vec<Vec<f32>>, Locality) {
     (angles, transfers, locality)
 }
 
+/// The local problem's input, anchored at `rest` with the rest transfer of
+/// [`local_problem`]'s data, with its groups.
+fn local_input<'a>(
+    angles: &'a DMatrix<f64>,
+    transfers: &'a [Vec<f32>],
+    rest: &'a [f64],
+    locality: &'a Locality,
+) -> FitInput<'a> {
+    const REST_TRANSFER: [f32; 4] = [1.0, 2.0, 1.5, 0.5];
+    let mut input = FitInput::new(angles, transfers, 1);
+    input.anchor = Some(Anchor {
+        angles: rest,
+        transfer: &REST_TRANSFER,
+    });
+    input.locality = Some(locality);
+    input
+}
+
 fn local_fit(alpha: Alpha) -> Fit {
     let (angles, transfers, locality) = local_problem();
     let rest = [0.0, 0.0];
-    let rest_transfer = [1.0f32, 2.0, 1.5, 0.5];
-    let mut input = FitInput::new(&angles, &transfers, 1);
-    input.anchor = Some(Anchor {
-        angles: &rest,
-        transfer: &rest_transfer,
-    });
-    input.locality = Some(&locality);
+    let input = local_input(&angles, &transfers, &rest, &locality);
     let options = FitOptions {
         alpha,
         coef_dims: CoefDims::Count(3),
@@ -804,13 +816,7 @@ fn entries_no_vertex_depends_on_are_left_out_of_every_fit() {
         two[(i, j.min(1))] + [0.0, 0.0, 0.3][j]
     });
     let rest = [0.0, 0.0, 0.0];
-    let rest_transfer = [1.0f32, 2.0, 1.5, 0.5];
-    let mut input = FitInput::new(&angles, &transfers, 1);
-    input.anchor = Some(Anchor {
-        angles: &rest,
-        transfer: &rest_transfer,
-    });
-    input.locality = Some(&locality);
+    let input = local_input(&angles, &transfers, &rest, &locality);
     for local in [Local::Off, Local::Auto] {
         let options = FitOptions {
             coef_dims: CoefDims::Count(3),
