@@ -19,8 +19,8 @@ pub(crate) fn cos(x: f32) -> f32 {
     libm::cosf(x)
 }
 
-/// Sine.
-#[cfg(test)]
+/// Sine (the pose features' versine).
+#[inline]
 pub(crate) fn sin(x: f32) -> f32 {
     libm::sinf(x)
 }

@@ -82,7 +82,7 @@ impl<'a> Model<'a> {
     }
 
     /// Computes the pose weights of one frame from the pose vector `angles`
-    /// ([`ModelInfo::pose_len`] values): `z = P(b(a) − μ)`, then `w^c = W^c [1, z]`.
+    /// ([`ModelInfo::pose_len`] values): `z = P(φ(b(a)) − μ)`, then `w^c = W^c [1, z]`.
     ///
     /// `b` is the pose bound of a bounded model ([`ModelInfo::bounded`]), the identity
     /// otherwise: each entry is clamped into the range the training poses (and the prior's pose)
@@ -90,6 +90,10 @@ impl<'a> Model<'a> {
     /// `d` is the distance outside that box in units of its falloff. Inside the box a pose is
     /// unchanged; far outside it the model gives its prior (the rest transfer carried by the
     /// skin, or the mean transfer) instead of extrapolating without limit.
+    ///
+    /// `φ` gives the pose features ([`ModelInfo::feature_len`] values): the bounded angles,
+    /// then `1 − cos a_i` for each entry the model flags, so the model can learn shadowing
+    /// that is the same whichever way a joint turns. Without flags, `φ(a) = a`.
     ///
     /// # The pose vector
     /// Entry `i` is the value named by [`Model::angle_names`]`.get(i)`, exactly as the trainer

@@ -85,6 +85,8 @@ pub fn decode(blob: &[u8]) -> Option<LinearModel> {
             }
             _ => None,
         },
+        cosines: section(SectionKind::PoseFeatures)
+            .map_or_else(Vec::new, |flags| flags.iter().map(|&f| f == 1.0).collect()),
         bones: match h.frame {
             Frame::World => None,
             Frame::Bones { count } => Some(BoneFrames {

@@ -123,5 +123,17 @@ pub fn random_model(
         bones: None,
         angle_names: (0..pose_len).map(|i| format!("joint{i}")).collect(),
         bounds: None,
+        cosines: Vec::new(),
     }
+}
+
+/// `model` with the cosine features of the entries `flags` sets: its pose mean and projection
+/// drawn again over the longer feature vector.
+pub fn with_cosines(mut model: LinearModel, flags: &[bool]) -> LinearModel {
+    let ka = model.pose_dims();
+    model.cosines = flags.to_vec();
+    let f = model.feature_len();
+    model.pose_mean = noise(5, f);
+    model.pose_projection = noise(6, ka * f);
+    model
 }

@@ -16,14 +16,17 @@ pub fn f16_rounding(x: f64) -> f64 {
 
 /// `predict` of the model with every value replaced by a magnitude: `|x|` in the pose
 /// sections, `big(|x|)` in the weights and per-vertex rows (the sections a writer may store in
-/// half precision), and the pose mean folded into the angles as `|a| + |μ|`. Every product in
+/// half precision), and the pose mean folded into the features as `|φ(a)| + |μ|`. Every product in
 /// `predict` becomes a product of magnitudes, so with `big = |x| ↦ |x|` each value bounds the
 /// sum of the absolute terms of the matching transfer value, and with `big = |x| ↦ |x| + e(x)`
 /// the difference to that bounds the effect of perturbing every big value by at most `e`.
 pub fn magnitude(model: &LinearModel, angles: &[f64], big: impl Fn(f64) -> f64) -> Vec<f64> {
     let abs = |xs: &[f64]| xs.iter().map(|x| x.abs()).collect::<Vec<_>>();
+    // The features of the bounded pose become the pose vector of a model without cosines.
+    let f = model.feature_len();
     let m = LinearModel {
-        pose_mean: vec![0.0; model.pose_len],
+        pose_len: f,
+        pose_mean: vec![0.0; f],
         pose_projection: abs(&model.pose_projection),
         weights: model.weights.iter().map(|x| big(x.abs())).collect(),
         basis: match &model.basis {
@@ -35,12 +38,13 @@ pub fn magnitude(model: &LinearModel, angles: &[f64], big: impl Fn(f64) -> f64) 
         },
         // The magnitudes of the bounded pose: the bound itself is not a sum of products.
         bounds: None,
+        cosines: Vec::new(),
+        angle_names: Vec::new(),
         ..model.clone()
     };
     let bounded = model.bounds.as_ref().map(|b| b.apply(angles));
-    let a: Vec<f64> = bounded
-        .as_deref()
-        .unwrap_or(angles)
+    let features = model.features().of(bounded.as_deref().unwrap_or(angles));
+    let a: Vec<f64> = features
         .iter()
         .zip(&model.pose_mean)
         .map(|(a, m)| a.abs() + m.abs())
@@ -60,9 +64,17 @@ fn steps(model: &LinearModel) -> usize {
         VertexBasis::Stored { coef_dims, .. } => coef_dims,
         VertexBasis::Identity => 0,
     };
-    // The bounded pose is rounded to f32 once more than the angles.
+    // The bounded pose is rounded to f32 once more than the angles; a cosine feature (a sine,
+    // a square) takes a few steps more.
     let bound = usize::from(model.bounds.is_some());
-    model.pose_len + bound + (model.pose_dims() + 1) * (n2 + 1) + kv + 2 * model.order + 16
+    let cosine = if model.features().is_angles() { 0 } else { 4 };
+    model.feature_len()
+        + bound
+        + cosine
+        + (model.pose_dims() + 1) * (n2 + 1)
+        + kv
+        + 2 * model.order
+        + 16
 }
 
 /// Relative error bound of the f32 evaluation: ε = 2u per rounding step, doubled for margin.
@@ -84,12 +96,16 @@ fn largest(model: &LinearModel, angles: &[f32], lighting: &[f32]) -> f64 {
         VertexBasis::Stored { coef_dims, data } => (*coef_dims as f64, max_abs(data)),
         VertexBasis::Identity => (1.0, 1.0),
     };
-    let a = angles
-        .iter()
-        .zip(&model.pose_mean)
-        .fold(0.0f64, |m, (a, mu)| m.max((*a as f64).abs() + mu.abs()));
+    // A cosine feature lies in [0, 2].
+    let angle = angles.iter().fold(0.0f64, |m, a| m.max((*a as f64).abs()));
+    let feature = if model.features().is_angles() {
+        angle
+    } else {
+        angle.max(2.0)
+    };
+    let a = feature + max_abs(&model.pose_mean);
     let light = lighting.iter().map(|l| (*l as f64).abs()).sum::<f64>();
-    let p = model.pose_len as f64 * max_abs(&model.pose_projection);
+    let p = model.feature_len() as f64 * max_abs(&model.pose_projection);
     let w = (model.pose_dims() + 1) as f64 * max_abs(&model.weights);
     let l = n2 as f64 * light;
     [p * a, w, kv * u, l].iter().map(|f| f.max(1.0)).product()

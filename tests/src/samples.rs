@@ -1,10 +1,10 @@
 //! Small valid blobs, one per kind of model (stored or identity basis, world or bone frame,
-//! f32 or f16): the starting points of the mutation tests and the seeds of the fuzz corpus
+//! f32 or f16, angles or cosine features): the starting points of the mutation tests and the seeds of the fuzz corpus
 //! (`cargo test -p aprt-tests --test corpus -- --ignored` writes `fuzz/corpus/`).
 
 use aprt_trainer::{BoneFrames, LinearModel, Precision, encode_model};
 
-use crate::random_model;
+use crate::{random_model, with_cosines};
 
 fn with_bones(mut m: LinearModel, count: usize) -> LinearModel {
     m.bones = Some(BoneFrames {
@@ -37,6 +37,11 @@ pub fn sample_models() -> Vec<(&'static str, LinearModel, Precision)> {
         (
             "bones-identity-f32",
             with_bones(random_model(2, 8, 1, 1, None), 2),
+            Precision::F32,
+        ),
+        (
+            "cosines-stored-f32",
+            with_cosines(random_model(2, 7, 3, 2, Some(2)), &[true, false, true]),
             Precision::F32,
         ),
     ]

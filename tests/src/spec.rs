@@ -76,6 +76,19 @@ impl<'a> Arbitrary<'a> for ModelSpec {
             false => u.int_in_range(1..=12)?,
         };
         let pose_dims = u.int_in_range(0..=pose_len.min(if edge { MAX_POSE_DIMS } else { 6 }))?;
+        // Now and then cosine features on some entries, within the feature limit.
+        let mut cosines: Vec<bool> = if pose_len < MAX_POSE_LEN && u.arbitrary()? {
+            (0..pose_len)
+                .map(|_| u.arbitrary())
+                .collect::<arbitrary::Result<_>>()?
+        } else {
+            Vec::new()
+        };
+        // No flag set is no section, which reads back as no flags.
+        if !cosines.contains(&true) {
+            cosines.clear();
+        }
+        let features = pose_len + cosines.iter().filter(|&&c| c).count();
         let vertices = u.int_in_range(1..=if edge { 300 } else { 40 })?;
         let coef_dims = match u.arbitrary::<bool>()? {
             true => None,
@@ -127,13 +140,14 @@ impl<'a> Arbitrary<'a> for ModelSpec {
                 order,
                 vertices,
                 pose_len,
-                pose_mean: values(u, pose_len)?,
-                pose_projection: values(u, pose_dims * pose_len)?,
+                pose_mean: values(u, features)?,
+                pose_projection: values(u, pose_dims * features)?,
                 weights: values(u, n2 * (pose_dims + 1) * kv)?,
                 basis,
                 alpha: u.int_in_range(0..=1000u16)? as f64 / 64.0,
                 bones,
                 bounds,
+                cosines,
                 angle_names: if u.arbitrary()? {
                     (0..pose_len).map(|i| format!("joint{i}.x")).collect()
                 } else {

@@ -18,6 +18,7 @@ fn constant_model(values: &[f64]) -> LinearModel {
         bones: None,
         angle_names: Vec::new(),
         bounds: None,
+        cosines: Vec::new(),
     }
 }
 
@@ -94,6 +95,7 @@ fn a_joint_the_projection_ignores_cannot_overflow_the_pose() {
         bones: None,
         angle_names: Vec::new(),
         bounds: None,
+        cosines: Vec::new(),
     };
     let blob = encode_model(&model, Precision::F32).unwrap();
     let core = Model::parse(&blob).unwrap();

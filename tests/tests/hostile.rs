@@ -99,6 +99,36 @@ fn every_single_bit_flip_is_caught_or_harmless() {
     }
 }
 
+/// A pose-features flag must be 0 or 1: anything else, checksums matching, is refused.
+#[test]
+fn a_pose_feature_flag_other_than_0_or_1_is_refused() {
+    let (_, blob) = sample_blobs()
+        .into_iter()
+        .find(|(name, _)| name.starts_with("cosines"))
+        .expect("a sample with cosine features");
+    assert_eq!(parse(&blob).map(|i| i.feature_len()), Ok(5));
+    let header = read_header(&blob).unwrap();
+    let flags = header
+        .sections
+        .iter()
+        .find(|s| s.kind == SectionKind::PoseFeatures.tag())
+        .expect("the pose-features section");
+    for bad in [0.5f32, -1.0, 2.0, f32::NAN] {
+        let mut edited = blob.clone();
+        let at = flags.offset as usize;
+        edited[at..at + 4].copy_from_slice(&bad.to_le_bytes());
+        let result = parse(&reseal(&edited));
+        let expected = if bad.is_nan() {
+            Error::NonFinite {
+                section: SectionKind::PoseFeatures,
+            }
+        } else {
+            Error::BadPoseFeatures
+        };
+        assert_eq!(result, Err(expected), "flag {bad}");
+    }
+}
+
 #[test]
 fn crafted_headers_get_the_right_error() {
     let blob = valid_blob();
@@ -318,7 +348,7 @@ fn resealed_mutations_reach_the_deep_checks() {
     let pick = |x: f64, n: usize| ((x + 1.0) * 0.5 * n as f64) as usize % n;
     for i in 0..3000 {
         let x = &r[4 * i..4 * i + 4];
-        let mut blob = samples()[i % 4].1.clone();
+        let mut blob = samples()[i % samples().len()].1.clone();
         let at = pick(x[0], blob.len());
         let m = match i % 3 {
             0 => Mutation::Word {

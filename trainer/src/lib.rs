@@ -31,6 +31,7 @@ pub use bake::{
 };
 pub use io::obj::{LineError, ObjError, read_obj};
 pub use model::export::{ExportError, Precision, encode_model};
+pub use model::features::PoseFeatures;
 pub use model::fit::{Alpha, CoefDims, Dims, Fit, FitError, FitOptions, FitReport, fit};
 pub use model::{BoneFrames, LinearModel, ModelFrame, PoseBounds, VertexBasis};
 pub use progress::{BakeProgress, Reporter, Silent};

@@ -1,7 +1,7 @@
 //! The one error type of the core: small, `Copy`, no heap payload, one variant per way a blob
 //! or a call can be wrong, each saying where.
 
-use super::format::{SectionKind, VERSION};
+use super::format::{MAX_POSE_LEN, SectionKind, VERSION};
 
 /// Which header dimension was out of range.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -135,6 +135,8 @@ pub enum Error {
     BadAngleNames,
     /// The pose-bounds section has `lo > hi`, a prior outside `[lo, hi]` or a negative scale.
     BadPoseBounds,
+    /// A pose-features flag is not 0 or 1, or the features outnumber the evaluator's limit.
+    BadPoseFeatures,
     /// The caller's buffer is too small; `needed` bytes would do.
     BufferTooSmall {
         /// Minimum size in bytes.
@@ -240,6 +242,10 @@ impl core::fmt::Display for Error {
             Error::BadPoseBounds => write!(
                 f,
                 "pose bounds need lo <= prior <= hi and a scale >= 0 for every entry"
+            ),
+            Error::BadPoseFeatures => write!(
+                f,
+                "pose features need a flag of 0 or 1 per entry and at most {MAX_POSE_LEN} features"
             ),
             Error::BufferTooSmall { needed } => write!(f, "buffer too small: needs {needed} bytes"),
             Error::WeightsTooSmall { needed, capacity } => write!(

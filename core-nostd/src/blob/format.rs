@@ -26,7 +26,8 @@ pub const MAX_SECTIONS: usize = 16;
 /// Largest header accepted; a real header is well under 200 bytes.
 pub const MAX_HEADER_LEN: u32 = 1024;
 
-/// Most entries of a pose vector (joint angles) the evaluator accepts.
+/// Most entries of a pose vector (joint angles) the evaluator accepts, and most pose features
+/// (the angles and their flagged cosines).
 pub const MAX_POSE_LEN: usize = 512;
 /// Most pose dimensions k_a after projection.
 pub const MAX_POSE_DIMS: usize = 64;
@@ -110,9 +111,10 @@ impl Encoding {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum SectionKind {
-    /// Tag 1. Mean pose μ: `pose_len` values, f32.
+    /// Tag 1. Mean pose features μ: `feature_len` values, f32 (`feature_len` is `pose_len`
+    /// plus the entries flagged in [`SectionKind::PoseFeatures`]).
     PoseMean,
-    /// Tag 2. Pose projection P: `pose_dims × pose_len` row-major, f32.
+    /// Tag 2. Pose projection P: `pose_dims × feature_len` row-major, f32.
     PoseProjection,
     /// Tag 3, stored basis only: `n² × (1 + pose_dims) × coef_dims`; `[c][0][k]` is the
     /// intercept.
@@ -132,13 +134,19 @@ pub enum SectionKind {
     /// pose far outside the training poses gets the prior's transfer (see
     /// [`Model::set_pose`](crate::Model::set_pose)). `lo ≤ prior ≤ hi`, `scale ≥ 0`.
     PoseBounds,
+    /// Tag 8, optional for the writer, required once written: the pose features, `pose_len`
+    /// f32 flags, each 0 or 1. The projection sees the bounded angles `a`, then `1 − cos a_i`
+    /// for each flagged entry i in order: an even feature, for occlusion that is the same
+    /// whichever way a joint turns, which a model linear in the angles cannot represent.
+    /// Without this section the features are the angles.
+    PoseFeatures,
     /// A tag this version does not know.
     Unknown(u16),
 }
 
 impl SectionKind {
     /// The kinds this version knows, in tag order.
-    const KNOWN: [SectionKind; 7] = [
+    const KNOWN: [SectionKind; 8] = [
         SectionKind::PoseMean,
         SectionKind::PoseProjection,
         SectionKind::Weights,
@@ -146,12 +154,13 @@ impl SectionKind {
         SectionKind::VertexWeights,
         SectionKind::AngleNames,
         SectionKind::PoseBounds,
+        SectionKind::PoseFeatures,
     ];
 
     /// The kind of a section-table tag.
     pub const fn from_tag(tag: u16) -> SectionKind {
         match tag {
-            1..=7 => Self::KNOWN[tag as usize - 1],
+            1..=8 => Self::KNOWN[tag as usize - 1],
             other => SectionKind::Unknown(other),
         }
     }
@@ -166,6 +175,7 @@ impl SectionKind {
             SectionKind::VertexWeights => 5,
             SectionKind::AngleNames => 6,
             SectionKind::PoseBounds => 7,
+            SectionKind::PoseFeatures => 8,
             SectionKind::Unknown(tag) => tag,
         }
     }

@@ -22,6 +22,8 @@ pub struct ModelInfo {
     pub(crate) order: usize,
     pub(crate) vertices: usize,
     pub(crate) pose_len: usize,
+    /// The angles and their flagged cosines: what the mean and the projection are over.
+    pub(crate) feature_len: usize,
     pub(crate) pose_dims: usize,
     pub(crate) coef_dims: usize,
     pub(crate) basis: Basis,
@@ -36,6 +38,8 @@ pub struct ModelInfo {
     pub(crate) angle_names: Option<Span>,
     /// The pose bound, when the model has one.
     pub(crate) pose_bounds: Option<Span>,
+    /// The flags of the entries whose cosine is a feature, when any is.
+    pub(crate) pose_features: Option<Span>,
 }
 
 impl ModelInfo {
@@ -60,6 +64,11 @@ impl ModelInfo {
     /// Entries of the pose vector a (see [`Model::set_pose`](crate::Model::set_pose)).
     pub fn pose_len(&self) -> usize {
         self.pose_len
+    }
+    /// Pose features the projection sees: the `pose_len` angles, then the cosine features of
+    /// the flagged entries (see [`SectionKind::PoseFeatures`](crate::SectionKind)).
+    pub fn feature_len(&self) -> usize {
+        self.feature_len
     }
     /// Pose dimensions k_a after projection.
     pub fn pose_dims(&self) -> usize {
@@ -124,7 +133,7 @@ impl ModelInfo {
             .weights
             .map_or(0, |w| self.coef_dims * w.encoding.size());
         self.block_bytes()
-            .max(self.pose_len * Encoding::F32.size())
+            .max(self.feature_len * Encoding::F32.size())
             .max(weights_row)
     }
 

@@ -36,12 +36,19 @@ impl ModelInfo {
         let order = dim(Dim::Order, h.order as u64, 1, MAX_ORDER as u64)?;
         let vertices = dim(Dim::Vertices, h.vertices as u64, 1, MAX_VERTICES as u64)?;
         let pose_len = dim(Dim::PoseLen, h.pose_len as u64, 1, MAX_POSE_LEN as u64)?;
-        let pose_dims = dim(
-            Dim::PoseDims,
-            h.pose_dims as u64,
-            0,
-            MAX_POSE_DIMS.min(pose_len) as u64,
-        )?;
+        // The dimensions are checked before the section table, so at first against the most
+        // features the blob could have (each entry adds at most its cosine), and exactly once
+        // the pose-features section is read.
+        let cosines = h
+            .sections
+            .iter()
+            .any(|e| e.kind == SectionKind::PoseFeatures.tag());
+        let most_features = pose_len * (1 + usize::from(cosines));
+        let pose_dims_in = |features: usize| {
+            let most = MAX_POSE_DIMS.min(features) as u64;
+            dim(Dim::PoseDims, h.pose_dims as u64, 0, most)
+        };
+        let pose_dims = pose_dims_in(most_features)?;
         let coef_dims = match h.basis {
             Basis::Stored => dim(Dim::CoefDims, h.coef_dims as u64, 1, MAX_COEF_DIMS as u64)?,
             Basis::Identity => dim(
@@ -70,11 +77,14 @@ impl ModelInfo {
                 1
             }
         };
+        check_no_overlap(&h.sections, decoded.end, r.len())?;
+        let (feature_len, pose_features) = pose_features(r, &h.sections, pose_len)?;
+        pose_dims_in(feature_len)?;
         // Elements of each array section this basis uses; `None` for the others.
         let expected_elems = |kind: SectionKind| -> Option<Result<u64, Error>> {
             Some(match (kind, h.basis) {
-                (SectionKind::PoseMean, _) => product(&[pose_len]),
-                (SectionKind::PoseProjection, _) => product(&[pose_dims, pose_len]),
+                (SectionKind::PoseMean, _) => product(&[feature_len]),
+                (SectionKind::PoseProjection, _) => product(&[pose_dims, feature_len]),
                 (SectionKind::PoseBounds, _) => product(&[4, pose_len]),
                 (SectionKind::Weights, Basis::Stored) => product(&[n2, 1 + pose_dims, coef_dims]),
                 (SectionKind::VertexBasis, Basis::Stored) => product(&[padded, lead + coef_dims]),
@@ -87,7 +97,6 @@ impl ModelInfo {
 
         let mut found: [Option<Span>; SectionKind::KNOWN_COUNT] = [None; SectionKind::KNOWN_COUNT];
         let mut end_of_data = decoded.end;
-        check_no_overlap(&h.sections, decoded.end, r.len())?;
         for e in &h.sections {
             end_of_data = end_of_data.max(e.offset + e.len); // no overflow: checked above
             let kind = SectionKind::from_tag(e.kind);
@@ -99,7 +108,9 @@ impl ModelInfo {
                 check_crc(r, e, |_| {})?;
                 continue;
             };
-            let span = if kind == SectionKind::AngleNames {
+            let span = if kind == SectionKind::PoseFeatures {
+                continue; // read and checked by `pose_features`
+            } else if kind == SectionKind::AngleNames {
                 if found[slot].is_some() {
                     return Err(Error::DuplicateSection { section: kind });
                 }
@@ -137,6 +148,7 @@ impl ModelInfo {
             order,
             vertices,
             pose_len,
+            feature_len,
             pose_dims,
             coef_dims,
             basis: h.basis,
@@ -148,6 +160,7 @@ impl ModelInfo {
             rows,
             angle_names: get(SectionKind::AngleNames),
             pose_bounds: get(SectionKind::PoseBounds),
+            pose_features,
         };
         info.verify_bones(r)?;
         info.verify_bounds(r)?;
@@ -211,6 +224,39 @@ fn check_no_overlap(
         }
     }
     Ok(())
+}
+
+/// The pose-features section, read before the others because the mean's and the
+/// projection's lengths depend on it: the feature count (`pose_len` without the section) and
+/// where the flags are. Checks the checksum, one flag of 0 or 1 per entry, and the limit.
+fn pose_features<R: Reader>(
+    r: &mut R,
+    sections: &[SectionEntry],
+    pose_len: usize,
+) -> Result<(usize, Option<Span>), Error> {
+    let section = SectionKind::PoseFeatures;
+    let mut entries = sections.iter().filter(|e| e.kind == section.tag());
+    let Some(e) = entries.next() else {
+        return Ok((pose_len, None));
+    };
+    if entries.next().is_some() {
+        return Err(Error::DuplicateSection { section });
+    }
+    let span = array_span(e, section, pose_len as u64)?;
+    verify_array(r, e, span)?;
+    let (mut flagged, mut ok) = (0, true);
+    r.chunks(span.offset, 4, pose_len, |_, bytes| {
+        for word in bytes.as_chunks::<4>().0 {
+            let flag = f32::from_le_bytes(*word);
+            ok &= flag == 0.0 || flag == 1.0;
+            flagged += usize::from(flag == 1.0);
+        }
+        Ok(())
+    })?;
+    if !ok || pose_len + flagged > MAX_POSE_LEN {
+        return Err(Error::BadPoseFeatures);
+    }
+    Ok((pose_len + flagged, Some(span)))
 }
 
 /// Streams a section's bytes to `visit` in chunks and checks its CRC, so a flipped bit

@@ -2,8 +2,8 @@
 //! shading (lighting pushed through the basis) or per-vertex transfer.
 //!
 //! A frame is three steps, each with caller-owned state:
-//! 1. `set_pose`: `z = P(a − μ)`, then `w^c = W^c z'` with `z' = [1, z]` (O(n² k_a k_v),
-//!    reads only the small sections).
+//! 1. `set_pose`: `z = P(φ(b(a)) − μ)` with the pose bound `b` and the pose features `φ`,
+//!    then `w^c = W^c z'` with `z' = [1, z]` (O(n² k_a k_v), reads only the small sections).
 //! 2. `light`: push an SH lighting vector `L` through the weights, `s_k = Σ_c L_c w^c_k`
 //!    (O(n² k_v), no blob access), rotated into each bone's frame first for bone-frame models.
 //! 3. `shade` streams the vertex rows: `shade_j = Σ_k s_k U_jk` (O(k_v) per vertex); or
@@ -14,6 +14,7 @@
 //! over [`Reader`], for the resident and the streamed model alike.
 
 mod bounds;
+mod features;
 mod kernels;
 mod weights;
 
@@ -79,20 +80,28 @@ impl ModelInfo {
             return Err(Error::NonFiniteAngle { index });
         }
         check_capacity(self.pose_weights_len(), N)?;
-        let (a, ka, kv) = (self.pose_len, self.pose_dims, self.coef_dims);
+        let (a, f, ka, kv) = (
+            self.pose_len,
+            self.feature_len,
+            self.pose_dims,
+            self.coef_dims,
+        );
         let mut mean = [0.0f32; MAX_POSE_LEN];
-        let mean = &mut mean[..a];
+        let mean = &mut mean[..f];
         // The mean row decoded (added to zeros), then centred in f64 by `dot_centred`.
-        self.each_row(r, self.pose_mean, a, |_, mu| {
+        self.each_row(r, self.pose_mean, f, |_, mu| {
             mu.add_scaled(1.0, mean.iter_mut())
         })?;
         let mut bounded = [0.0f32; MAX_POSE_LEN];
         let bounded = &mut bounded[..a];
         self.bound_pose(r, angles, bounded)?;
+        let mut features = [0.0f32; MAX_POSE_LEN];
+        let features = &mut features[..f];
+        self.pose_features(r, bounded, features)?;
         let z = &mut pose.z[..=ka];
         z[0] = 1.0;
-        self.each_row(r, self.pose_projection, a, |i, p| {
-            z[1 + i] = p.dot_centred(bounded, mean) as f32
+        self.each_row(r, self.pose_projection, f, |i, p| {
+            z[1 + i] = p.dot_centred(features, mean) as f32
         })?;
         if let (Basis::Stored, Some(weights)) = (self.basis, self.weights) {
             let n2 = self.coeffs();

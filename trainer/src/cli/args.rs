@@ -10,7 +10,7 @@ use crate::cli::source::SourceArgs;
 #[cfg(doc)]
 use crate::model::export::ExportError;
 use crate::model::export::Precision;
-use crate::model::fit::{Alpha, CoefDims, Dims, FitOptions, Local, Prior};
+use crate::model::fit::{Alpha, CoefDims, Dims, Features, FitOptions, Local, Prior};
 use crate::model::train::{OptionError, check_options};
 use crate::report::demo::DemoSettings;
 
@@ -115,9 +115,14 @@ pub struct FitArgs {
     /// default with `--paper`).
     #[arg(long, value_enum)]
     pub local: Option<LocalArg>,
-    /// The paper's model: every pose dimension, the mean as prior, no bound, no local model
-    /// (other flags may still change its shape).
-    #[arg(long, conflicts_with_all = ["prior", "local"])]
+    /// The pose features the model is linear in: `auto` (the one of the two below with the
+    /// lower held-out error; the default), `cosines` (each angle a and 1 − cos a, for shadowing
+    /// that is the same whichever way a joint turns) or `angles` (the default with `--paper`).
+    #[arg(long, value_enum)]
+    pub features: Option<FeaturesArg>,
+    /// The paper's model: every pose dimension, the mean as prior, no bound, no local model,
+    /// the angles as features (other flags may still change its shape).
+    #[arg(long, conflicts_with_all = ["prior", "local", "features"])]
     pub paper: bool,
     /// Precision of the large sections.
     #[arg(long, value_enum, default_value_t = PrecisionArg::F32)]
@@ -144,6 +149,17 @@ pub enum LocalArg {
     Only,
     /// Not tried.
     None,
+}
+
+/// `--features`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum FeaturesArg {
+    /// Whichever of the two has the lower held-out error.
+    Auto,
+    /// The angles and their cosines.
+    Cosines,
+    /// The angles alone.
+    Angles,
 }
 
 /// `aprt train`.
@@ -286,6 +302,12 @@ impl FitArgs {
             Some(LocalArg::Auto) => Local::Auto,
             Some(LocalArg::Only) => Local::Only,
             Some(LocalArg::None) => Local::Off,
+        };
+        options.features = match self.features {
+            None => options.features,
+            Some(FeaturesArg::Auto) => Features::Auto,
+            Some(FeaturesArg::Cosines) => Features::Cosines,
+            Some(FeaturesArg::Angles) => Features::Angles,
         };
         options.bound = match self.falloff.as_deref() {
             None => options.bound,

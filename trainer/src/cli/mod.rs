@@ -246,10 +246,7 @@ fn train(args: &TrainArgs) -> Result<()> {
         .in_origin(crate::model::train::check(&poses, &settings))?;
     let trained = crate::model::train::train(poses, &args.output, &settings, &Terminal)?;
     let info = &trained.info;
-    for line in trained
-        .selection
-        .lines(info.pose_dims, f64::from(info.alpha))
-    {
+    for line in trained.selection.lines() {
         eprintln!("{line}");
     }
     eprintln!(

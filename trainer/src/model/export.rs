@@ -180,16 +180,18 @@ fn blocked(
 
 /// Serialises `model` into a complete blob.
 pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>, ExportError> {
-    let (n2, v, a, ka) = (
+    let (n2, v, a, f, ka) = (
         model.order * model.order,
         model.vertices,
         model.pose_len,
+        model.feature_len(),
         model.pose_dims(),
     );
     limit("order", model.order, 1, MAX_ORDER)?;
     limit("vertices", v, 1, MAX_VERTICES)?;
     limit("joints", a, 1, MAX_POSE_LEN)?;
-    limit("pose dims", ka, 0, MAX_POSE_DIMS.min(a))?;
+    limit("pose features", f, 1, MAX_POSE_LEN)?;
+    limit("pose dims", ka, 0, MAX_POSE_DIMS.min(f))?;
     check_alpha(model.alpha)?;
     if let VertexBasis::Stored { coef_dims, .. } = model.basis {
         limit("coef dims", coef_dims, 1, MAX_COEF_DIMS)?;
@@ -225,7 +227,7 @@ pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>
         (
             SectionKind::PoseMean,
             Encoding::F32,
-            encode(SectionKind::PoseMean, &model.pose_mean, a, Encoding::F32)?,
+            encode(SectionKind::PoseMean, &model.pose_mean, f, Encoding::F32)?,
         ),
         (
             SectionKind::PoseProjection,
@@ -233,7 +235,7 @@ pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>
             encode(
                 SectionKind::PoseProjection,
                 &model.pose_projection,
-                ka * a,
+                ka * f,
                 Encoding::F32,
             )?,
         ),
@@ -284,6 +286,21 @@ pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>
             required: true,
             encoding: Encoding::F32,
             bytes: encode(kind, &bounds.rows(), 4 * a, Encoding::F32)?,
+        });
+    }
+    if !model.features().is_angles() {
+        let kind = SectionKind::PoseFeatures;
+        check_len(kind, model.cosines.len(), a)?;
+        let flags: Vec<f64> = model
+            .cosines
+            .iter()
+            .map(|&c| f64::from(u8::from(c)))
+            .collect();
+        table.push(SectionBytes {
+            tag: kind.tag(),
+            required: true,
+            encoding: Encoding::F32,
+            bytes: encode(kind, &flags, a, Encoding::F32)?,
         });
     }
     assemble(model, basis, frame, &table)
@@ -400,6 +417,7 @@ mod tests {
             bones: None,
             angle_names: Vec::new(),
             bounds: None,
+            cosines: Vec::new(),
         }
     }
 

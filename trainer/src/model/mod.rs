@@ -1,7 +1,8 @@
 //! The fitted pose-driven linear PRT model in trainer precision (f64), before quantisation.
 //!
 //! Runtime semantics, shared with `aprt-core`'s evaluator:
-//! `z = P (a − μ)` (k_a values), `z' = [1, z]`, per SH coefficient `c`:
+//! `z = P (φ(a) − μ)` (k_a values, over the pose features φ: the angles and, for the entries
+//! the model flags, `1 − cos a`), `z' = [1, z]`, per SH coefficient `c`:
 //! `w^c_k = Σ_i z'_i W[c][i][k]`, and per vertex `j`: `t_jc = Σ_k w^c_k U[j][k]` with a stored
 //! vertex basis, or `t_jc = w^c_j` with the identity basis (the full linear model, `k_v = v`).
 //!
@@ -9,10 +10,13 @@
 //! [`runtime`] evaluates a written blob through `aprt-core`.
 
 pub mod export;
+pub mod features;
 pub mod fit;
 pub mod predict;
 pub mod runtime;
 pub mod train;
+
+use features::PoseFeatures;
 
 /// The vertex side of the model.
 #[derive(Clone, Debug, PartialEq)]
@@ -150,9 +154,9 @@ pub struct LinearModel {
     pub vertices: usize,
     /// Length a of the pose vector: entries per pose (joint angles, rotation-vector components).
     pub pose_len: usize,
-    /// Mean pose μ (a values).
+    /// Mean pose features μ ([`LinearModel::feature_len`] values).
     pub pose_mean: Vec<f64>,
-    /// Pose projection P, `k_a × a` row-major.
+    /// Pose projection P, `k_a × f` row-major over the f pose features.
     pub pose_projection: Vec<f64>,
     /// `n² × (1 + k_a) × k_v` weights; entry `[c][0][k]` is the unpenalised intercept.
     pub weights: Vec<f64>,
@@ -168,6 +172,9 @@ pub struct LinearModel {
     pub angle_names: Vec<String>,
     /// The pose bound; `None`: the paper's unbounded linear model.
     pub bounds: Option<PoseBounds>,
+    /// Per pose entry, whether `1 − cos a` is a pose feature besides `a` (see
+    /// [`PoseFeatures`]); empty or all false: the features are the angles, as in the paper.
+    pub cosines: Vec<bool>,
 }
 
 impl LinearModel {
@@ -175,8 +182,18 @@ impl LinearModel {
     pub fn pose_dims(&self) -> usize {
         self.pose_projection
             .len()
-            .checked_div(self.pose_len)
+            .checked_div(self.feature_len())
             .unwrap_or(0)
+    }
+
+    /// The pose features the projection sees: the angles and their flagged cosines.
+    pub fn features(&self) -> PoseFeatures {
+        PoseFeatures::new(self.pose_len, &self.cosines)
+    }
+
+    /// f, the number of pose features.
+    pub fn feature_len(&self) -> usize {
+        self.features().count()
     }
 
     /// k_v, the number of vertex basis vectors (`v` for the identity basis).
@@ -189,18 +206,18 @@ impl LinearModel {
 
     /// Reference prediction in f64: per-vertex transfer, `v × n²` vertex-major.
     pub fn predict(&self, angles: &[f64]) -> Vec<f64> {
-        let (a, ka, kv, n2) = (
-            self.pose_len,
+        let (f, ka, kv, n2) = (
+            self.feature_len(),
             self.pose_dims(),
             self.coef_dims(),
             self.order * self.order,
         );
         let bounded = self.bounds.as_ref().map(|b| b.apply(angles));
-        let angles = bounded.as_deref().unwrap_or(angles);
+        let x = self.features().of(bounded.as_deref().unwrap_or(angles));
         let mut z = vec![1.0; ka + 1];
         for (i, zi) in z[1..].iter_mut().enumerate() {
-            *zi = (0..a)
-                .map(|j| self.pose_projection[i * a + j] * (angles[j] - self.pose_mean[j]))
+            *zi = (0..f)
+                .map(|j| self.pose_projection[i * f + j] * (x[j] - self.pose_mean[j]))
                 .sum();
         }
         let mut w = vec![0.0; n2 * kv];

@@ -327,15 +327,17 @@ pub fn check(poses: &Poses, settings: &TrainSettings) -> Result<(), RequestError
     Ok(())
 }
 
-/// The model selection of a fit, for reports and report.json: the chosen prior and k_a, what
-/// was held out, and every candidate with its held-out error.
+/// The model selection of a fit, for reports and report.json: the chosen candidate, what was
+/// held out, and every candidate with its held-out error.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Selection {
     /// The chosen prior.
     pub prior: PriorKind,
     /// What the selection held out.
     pub held_out: HeldOutKind,
-    /// Every (prior, k_a) candidate with its best α, in the order tried.
+    /// The candidate the model is.
+    pub chosen: Choice,
+    /// Every (features, prior, k_a or local) candidate with its best α, in the order tried.
     pub choices: Vec<Choice>,
 }
 
@@ -345,28 +347,33 @@ impl Selection {
         Self {
             prior: report.prior,
             held_out: report.held_out,
+            chosen: report.chosen,
             choices: report.choices.clone(),
         }
     }
 
     /// One line per candidate, the chosen one marked: the held-out curve over k_a and prior.
-    pub fn lines(&self, chosen_pose_dims: usize, alpha: f64) -> Vec<String> {
+    pub fn lines(&self) -> Vec<String> {
         let held = match self.held_out {
             HeldOutKind::Segments(n) => format!("held-out runs of {n} poses"),
             HeldOutKind::Clips(1) => "1 validation clip".to_owned(),
             HeldOutKind::Clips(n) => format!("{n} validation clips"),
         };
+        let c = &self.chosen;
+        let shape = if c.local { "local model" } else { "k_a" };
         let mut lines = vec![format!(
-            "model selection ({held}): prior {}, k_a {chosen_pose_dims}, alpha {alpha:.3e}",
-            self.prior.name()
+            "model selection ({held}): {}, prior {}, {shape} {}, alpha {:.3e}",
+            features_name(c.cosines),
+            c.prior.name(),
+            c.pose_dims,
+            c.alpha
         )];
         lines.extend(self.choices.iter().map(|c| {
-            let chosen =
-                c.prior == self.prior && c.pose_dims == chosen_pose_dims && c.alpha == alpha;
-            let mark = if chosen { " <- chosen" } else { "" };
+            let mark = if *c == self.chosen { " <- chosen" } else { "" };
             let shape = if c.local { "local" } else { "k_a" };
             format!(
-                "  prior {:<4} {shape:<5} {:>2}: alpha {:.3e}, held-out {:.4e}, train {:.4e}{mark}",
+                "  {:<7} prior {:<4} {shape:<5} {:>2}: alpha {:.3e}, held-out {:.4e}, train {:.4e}{mark}",
+                features_name(c.cosines),
                 c.prior.name(),
                 c.pose_dims,
                 c.alpha,
@@ -376,6 +383,11 @@ impl Selection {
         }));
         lines
     }
+}
+
+/// The name of a candidate's pose features, as `--features` spells them.
+fn features_name(cosines: bool) -> &'static str {
+    if cosines { "cosines" } else { "angles" }
 }
 
 /// What [`train`] wrote.

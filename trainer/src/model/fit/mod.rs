@@ -30,9 +30,10 @@ pub use vertex_basis::{
 
 use std::time::Instant;
 
-use aprt_core::MAX_POSE_DIMS;
+use aprt_core::{MAX_POSE_DIMS, MAX_POSE_LEN};
 use nalgebra::{DMatrix, DVector};
 
+use crate::model::features::PoseFeatures;
 use crate::model::{LinearModel, PoseBounds, VertexBasis};
 use local::{LocalFit, LocalScoring, fit_local};
 
@@ -116,6 +117,20 @@ pub struct FitOptions {
     /// Whether the local model (each vertex on the entries that move geometry near it, from
     /// [`FitInput::locality`]) is a candidate, the only one, or not tried.
     pub local: Local,
+    /// The pose features the model is linear in.
+    pub features: Features,
+}
+
+/// The pose features a fit may use (see [`PoseFeatures`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Features {
+    /// The angles alone, as in the paper.
+    Angles,
+    /// The angles and `1 − cos a` of every entry some vertex depends on: shadowing that is the
+    /// same whichever way a joint turns.
+    Cosines,
+    /// Whichever of the two has the lower held-out error.
+    Auto,
 }
 
 /// Whether the selection tries the local model.
@@ -147,6 +162,7 @@ impl Default for FitOptions {
             prior: Prior::Auto,
             bound: Some(DEFAULT_FALLOFF),
             local: Local::Auto,
+            features: Features::Auto,
         }
     }
 }
@@ -159,6 +175,7 @@ impl FitOptions {
             prior: Prior::Mean,
             bound: None,
             local: Local::Off,
+            features: Features::Angles,
             ..Self::default()
         }
     }
@@ -174,6 +191,8 @@ pub struct Choice {
     /// Whether this is the local model (each vertex on the entries near it, every entry
     /// kept) rather than the shared map from k_a pose coordinates.
     pub local: bool,
+    /// Whether the pose features hold the cosines besides the angles.
+    pub cosines: bool,
     /// The best α for this candidate.
     pub alpha: f64,
     /// Held-out mean squared error per transfer value (`v·n²` per pose, the basis's
@@ -279,6 +298,16 @@ pub enum FitError {
         /// What the training poses imply.
         expected: String,
     },
+    /// The cosine features were asked for but would outnumber the runtime's limit.
+    #[error(
+        "{features} pose features (the angles and their cosines) exceed the runtime's {max}; use --features angles"
+    )]
+    TooManyFeatures {
+        /// Features the cosines would make.
+        features: usize,
+        /// The runtime's limit.
+        max: usize,
+    },
     /// The local model was asked for alone but cannot be fitted.
     #[error("the local model cannot be fitted: {0}")]
     NoLocalModel(&'static str),
@@ -287,7 +316,7 @@ pub enum FitError {
     NoFiniteCvError,
 }
 
-/// Wall-clock seconds per stage.
+/// Wall-clock seconds per stage (summed over the feature sets tried).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct StageSeconds {
     /// Input checks.
@@ -302,6 +331,18 @@ pub struct StageSeconds {
     pub cross_validation: f64,
     /// Final solve and packing.
     pub solve: f64,
+}
+
+impl StageSeconds {
+    /// Adds `other`'s seconds stage by stage.
+    fn add(&mut self, other: &StageSeconds) {
+        self.validate += other.validate;
+        self.pose_pca += other.pose_pca;
+        self.vertex_basis += other.vertex_basis;
+        self.projection += other.projection;
+        self.cross_validation += other.cross_validation;
+        self.solve += other.solve;
+    }
 }
 
 /// What the fit measured, for reports and the paper's figures.
@@ -323,8 +364,11 @@ pub struct FitReport {
     pub prior: PriorKind,
     /// What the selection held out.
     pub held_out: HeldOutKind,
-    /// Every candidate (prior, k_a) with its best α and held-out error, in the order tried.
+    /// Every candidate (features, prior, k_a or local) with its best α and held-out error, in
+    /// the order tried.
     pub choices: Vec<Choice>,
+    /// The candidate the model is.
+    pub chosen: Choice,
     /// Time per stage.
     pub seconds: StageSeconds,
 }
@@ -434,8 +478,9 @@ pub fn fit(
 }
 
 /// Fits the pose-driven linear model: the vertex basis over the training poses (and the
-/// anchor), then for each candidate prior and k_a the ridge, with α, k_a and the prior chosen
-/// by held-out error (segments of the clips, or the validation clips).
+/// anchor), then for each candidate feature set, prior and k_a (and the local model) the
+/// ridge, with α and all of these chosen by held-out error (segments of the clips, or the
+/// validation clips).
 pub fn fit_input(input: &FitInput<'_>, options: &FitOptions) -> Result<Fit, FitError> {
     let clock = Instant::now();
     let vertices = validate(input, options)?;
@@ -465,12 +510,104 @@ pub fn fit_input(input: &FitInput<'_>, options: &FitOptions) -> Result<Fit, FitE
         }
         None => input,
     };
-    let (angles, transfers, order) = (input.angles, input.transfers, input.order);
-    let (p, n2) = (transfers.len(), order * order);
+    let a = input.angles.ncols();
+    let used: Vec<bool> = (0..a).map(|i| !unused.contains(&i)).collect();
+    let (angles_only, cosines) = (PoseFeatures::new(a, &[]), PoseFeatures::new(a, &used));
+    let cosines_fit = cosines.count() <= MAX_POSE_LEN && !cosines.is_angles();
+    let sets = match options.features {
+        Features::Angles => vec![angles_only],
+        Features::Cosines if cosines.count() > MAX_POSE_LEN => {
+            return Err(FitError::TooManyFeatures {
+                features: cosines.count(),
+                max: MAX_POSE_LEN,
+            });
+        }
+        Features::Cosines => vec![cosines],
+        Features::Auto if cosines_fit => vec![angles_only, cosines],
+        Features::Auto => vec![angles_only],
+    };
+    let validated = clock.elapsed().as_secs_f64();
+    let mut best: Option<Fit> = None;
+    let mut choices = Vec::new();
     let mut seconds = StageSeconds {
-        validate: clock.elapsed().as_secs_f64(),
+        validate: validated,
         ..Default::default()
     };
+    for features in &sets {
+        let fit = fit_features(input, options, vertices, &unused, features)?;
+        choices.extend_from_slice(&fit.report.choices);
+        seconds.add(&fit.report.seconds);
+        let better = best.as_ref().is_none_or(|b| {
+            let (new, old) = (
+                fit.report.chosen.held_out_error,
+                b.report.chosen.held_out_error,
+            );
+            new.is_finite() && new < old
+        });
+        if better {
+            best = Some(fit);
+        }
+    }
+    let mut fit = best.expect("every fit has at least one feature set");
+    fit.report.choices = choices;
+    fit.report.seconds = seconds;
+    Ok(fit)
+}
+
+/// [`fit_input`] for one set of pose features, of training and validation poses that are
+/// already pinned (`unused` entries held at the anchor's value).
+fn fit_features(
+    pinned: &FitInput<'_>,
+    options: &FitOptions,
+    vertices: usize,
+    unused: &[usize],
+    features: &PoseFeatures,
+) -> Result<Fit, FitError> {
+    // Everything but the bound sees the features; the bound stays on the angles the runtime
+    // is given.
+    let raw = pinned.angles;
+    let x = features.of_rows(raw);
+    let held_x: Vec<DMatrix<f64>> = pinned
+        .validation
+        .iter()
+        .map(|v| features.of_rows(v.angles))
+        .collect();
+    let anchor_x = pinned.anchor.map(|a| features.of(a.angles));
+    let locality = pinned.locality.map(|l| Locality {
+        groups: l
+            .groups
+            .iter()
+            .map(|g| EntryGroup {
+                entries: features.of_entries(&g.entries),
+                vertices: g.vertices.clone(),
+            })
+            .collect(),
+    });
+    let input = &FitInput {
+        angles: &x,
+        validation: pinned
+            .validation
+            .iter()
+            .zip(&held_x)
+            .map(|(v, angles)| Validation {
+                angles,
+                transfers: v.transfers,
+            })
+            .collect(),
+        anchor: pinned
+            .anchor
+            .zip(anchor_x.as_deref())
+            .map(|(a, angles)| Anchor {
+                angles,
+                transfer: a.transfer,
+            }),
+        locality: locality.as_ref(),
+        ..pinned.clone()
+    };
+    let (angles, transfers, order) = (input.angles, input.transfers, input.order);
+    let (p, n2) = (transfers.len(), order * order);
+    let mut seconds = StageSeconds::default();
+    let with_cosines = !features.is_angles();
 
     let clock = Instant::now();
     let pca = PosePca::fit(angles, options.pose_dims);
@@ -652,6 +789,7 @@ pub fn fit_input(input: &FitInput<'_>, options: &FitOptions) -> Result<Fit, FitE
                 prior,
                 pose_dims: k,
                 local: false,
+                cosines: with_cosines,
                 alpha,
                 held_out_error: per_value(point.cv_error, scored_poses, outside_scored),
                 train_error: per_value(point.train_error, p, outside_train),
@@ -696,6 +834,7 @@ pub fn fit_input(input: &FitInput<'_>, options: &FitOptions) -> Result<Fit, FitE
                 prior: PriorKind::Rest,
                 pose_dims: angles.ncols(),
                 local: true,
+                cosines: with_cosines,
                 alpha: fitted.alpha,
                 held_out_error: best_point.cv_error + model.outside_scored,
                 train_error: best_point.train_error + model.outside_train,
@@ -716,16 +855,20 @@ pub fn fit_input(input: &FitInput<'_>, options: &FitOptions) -> Result<Fit, FitE
     let bound_of = |prior: &[f64]| {
         options
             .bound
-            .map(|f| PoseBounds::of(angles, prior, f).ignoring(unused.clone()))
+            .map(|f| PoseBounds::of(raw, prior, f).ignoring(unused.to_vec()))
     };
+    let flags: Vec<bool> = (0..raw.ncols())
+        .map(|i| features.of_entries(&[i]).len() > 1)
+        .collect();
     let (model, problem_rank, coef_energy) = match &local {
         Some(local) if chosen.local => {
             let anchor = input.anchor.expect("the local model needs the anchor");
-            let bounds = bound_of(anchor.angles);
+            let raw_anchor = pinned.anchor.expect("the local model needs the anchor");
+            let bounds = bound_of(raw_anchor.angles);
             let model = LinearModel {
                 order,
                 vertices,
-                pose_len: angles.ncols(),
+                pose_len: raw.ncols(),
                 pose_mean: anchor.angles.to_vec(),
                 pose_projection: DMatrix::<f64>::identity(angles.ncols(), angles.ncols())
                     .as_slice()
@@ -736,6 +879,7 @@ pub fn fit_input(input: &FitInput<'_>, options: &FitOptions) -> Result<Fit, FitE
                 bones: None,
                 angle_names: Vec::new(),
                 bounds,
+                cosines: flags,
             };
             (model, 1, local.energies.clone())
         }
@@ -756,15 +900,16 @@ pub fn fit_input(input: &FitInput<'_>, options: &FitOptions) -> Result<Fit, FitE
                     }
                 }
             }
-            let prior_angles = match (chosen.prior, &anchor) {
-                (PriorKind::Rest, Some((_, _, a))) => a.clone(),
-                _ => pca.mean.clone(),
+            // The prior's pose in angles: the rest pose, or the mean of the training poses.
+            let prior_angles = match (chosen.prior, pinned.anchor) {
+                (PriorKind::Rest, Some(a)) => a.angles.to_vec(),
+                _ => raw.row_mean().iter().copied().collect(),
             };
             let projection = pca.projection.rows(0, ka).into_owned();
             let model = LinearModel {
                 order,
                 vertices,
-                pose_len: angles.ncols(),
+                pose_len: raw.ncols(),
                 pose_mean: pca.mean.clone(),
                 // nalgebra is column-major; the model stores P row-major.
                 pose_projection: projection.transpose().as_slice().to_vec(),
@@ -777,6 +922,7 @@ pub fn fit_input(input: &FitInput<'_>, options: &FitOptions) -> Result<Fit, FitE
                 bones: None,
                 angle_names: Vec::new(),
                 bounds: bound_of(&prior_angles),
+                cosines: flags,
             };
             (model, problem.rank(), coef_energy)
         }
@@ -797,6 +943,7 @@ pub fn fit_input(input: &FitInput<'_>, options: &FitOptions) -> Result<Fit, FitE
             HeldOutKind::Clips(held.len())
         },
         choices,
+        chosen,
         seconds,
     };
     Ok(Fit { model, report })

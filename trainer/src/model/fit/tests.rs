@@ -4,6 +4,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::*;
+use crate::model::features::versine;
 
 /// Deterministic uniform values in [−0.5, 0.5) (an LCG), shared by the fit module tests.
 pub(crate) fn uniform(rows: usize, cols: usize, seed: u64) -> DMatrix<f64> {
@@ -563,21 +564,26 @@ fn anchored_fit(options: &FitOptions) -> (Fit, Vec<f64>, Vec<f32>, DMatrix<f64>)
 
 #[test]
 fn a_rest_anchored_model_at_huge_alpha_is_its_prior_exactly() {
-    // k_v 8 > n² = 4: the basis spans the rest transfer's fields, so the prior is exact.
-    let options = FitOptions {
-        prior: Prior::Rest,
-        alpha: Alpha::Fixed(1e12),
-        coef_dims: CoefDims::Count(8),
-        pose_dims: Dims::All,
-        bound: None,
-        local: Local::Off,
-    };
-    let (fit, _, rest_transfer, angles) = anchored_fit(&options);
-    assert_eq!(fit.report.prior, PriorKind::Rest);
-    for pose in [angles.row(3).transpose(), angles.row(17).transpose() * 10.0] {
-        let t = fit.model.predict(pose.as_slice());
-        for (a, b) in t.iter().zip(&rest_transfer) {
-            assert!((a - f64::from(*b)).abs() < 1e-9, "{a} vs {b}");
+    // k_v 8 > n² = 4: the basis spans the rest transfer's fields, so the prior is exact,
+    // whatever the pose features.
+    for features in [Features::Angles, Features::Cosines] {
+        let options = FitOptions {
+            prior: Prior::Rest,
+            alpha: Alpha::Fixed(1e12),
+            coef_dims: CoefDims::Count(8),
+            pose_dims: Dims::All,
+            bound: None,
+            local: Local::Off,
+            features,
+        };
+        let (fit, _, rest_transfer, angles) = anchored_fit(&options);
+        assert_eq!(fit.report.prior, PriorKind::Rest);
+        assert_eq!(fit.report.chosen.cosines, features == Features::Cosines);
+        for pose in [angles.row(3).transpose(), angles.row(17).transpose() * 10.0] {
+            let t = fit.model.predict(pose.as_slice());
+            for (a, b) in t.iter().zip(&rest_transfer) {
+                assert!((a - f64::from(*b)).abs() < 1e-9, "{a} vs {b}");
+            }
         }
     }
 }
@@ -654,8 +660,15 @@ fn the_selection_keeps_the_candidate_with_the_lowest_held_out_error() {
     assert_eq!(fit.report.prior, best.prior);
     assert_eq!(fit.model.pose_dims(), best.pose_dims);
     assert_eq!(fit.report.alpha, best.alpha);
-    // Both priors and the k_a ladder up to the rank (4) were tried.
-    assert_eq!(fit.report.choices.len(), 2 * 4);
+    assert_eq!(fit.report.chosen, *best);
+    assert_eq!(fit.model.cosines.contains(&true), best.cosines);
+    // Both feature sets, both priors and the k_a ladder up to the rank were tried: 4 angles
+    // (k_a 1, 2, 3, 4), or the angles and their cosines (8: k_a 1, 2, 3, 4, 6, 8).
+    let count = |cosines: bool| {
+        let of = fit.report.choices.iter().filter(|c| c.cosines == cosines);
+        of.count()
+    };
+    assert_eq!((count(false), count(true)), (2 * 4, 2 * 6));
 }
 
 /// Four vertices (order 1) in two groups: vertices 0, 1 depend on entry 0 only, 2, 3 on
@@ -830,5 +843,36 @@ fn entries_no_vertex_depends_on_are_left_out_of_every_fit() {
         for turn in [-3.0, 0.3, 3.0] {
             assert_eq!(at(turn), at(0.0), "{local:?}, turn {turn}");
         }
+    }
+}
+
+/// Shadowing that is the same whichever way a joint turns (transfer even in the angle): a
+/// model linear in the angle cannot follow it, one with the cosine feature fits it exactly,
+/// and the selection picks the cosines by their held-out error.
+#[test]
+fn an_even_transfer_is_fitted_exactly_by_the_cosine_features() {
+    let p = 60;
+    let angles = DMatrix::from_fn(p, 1, |i, _| 1.5 * (0.37 * i as f64).sin());
+    let transfers: Vec<Vec<f32>> = angles
+        .column(0)
+        .iter()
+        .map(|&a| vec![(1.0 - 0.4 * versine(a)) as f32, (0.2 + 0.3 * versine(a)) as f32])
+        .collect();
+    let options = FitOptions {
+        coef_dims: CoefDims::Full,
+        alpha: Alpha::Fixed(0.0),
+        bound: None,
+        ..FitOptions::default()
+    };
+    let fit = super::fit(&angles, &transfers, 1, &options).unwrap();
+    let chosen = fit.report.chosen;
+    assert!(chosen.cosines, "{:?}", fit.report.choices);
+    let angles_only = fit.report.choices.iter().find(|c| !c.cosines).unwrap();
+    assert!(chosen.held_out_error < 1e-12, "{chosen:?}");
+    assert!(angles_only.held_out_error > 1e-4, "{angles_only:?}");
+    // Either way round, and at a pose never seen: the even function itself.
+    for a in [-1.2, 1.2, 0.0] {
+        let t = fit.model.predict(&[a]);
+        assert!((t[0] - (1.0 - 0.4 * versine(a))).abs() < 1e-5, "{a}: {t:?}");
     }
 }
