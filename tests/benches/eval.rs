@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 
 use aprt_core::format::read_header;
 use aprt_core::{LitWeights, Model, PoseWeights, SectionKind, StreamedModel};
-use aprt_tests::{Streamed, noise, random_model};
+use aprt_tests::{Streamed, noise, random_model, with_cosines};
 use aprt_trainer::{BoneFrames, LinearModel, Precision, encode_model};
 
 const VERTICES: usize = 11_500;
@@ -53,15 +53,24 @@ fn main() {
         "{:<34} {:>10} {:>11} {:>10} {:>9} {:>13}",
         "model / step", "bytes", "µs/frame", "frames/s", "MFLOP", "× memcpy"
     );
-    for (name, ka, kv, precision, bones) in [
-        ("PCA(8,22) f32", 8, Some(22), Precision::F32, 0),
-        ("PCA(8,22) f16", 8, Some(22), Precision::F16, 0),
+    for (name, ka, kv, precision, bones, cosines) in [
+        ("PCA(8,22) f32", 8, Some(22), Precision::F32, 0, false),
+        (
+            "PCA(8,22) f32, cosine features",
+            8,
+            Some(22),
+            Precision::F32,
+            0,
+            true,
+        ),
+        ("PCA(8,22) f16", 8, Some(22), Precision::F16, 0, false),
         (
             "PCA(8,22) f32, 30 bone frames",
             8,
             Some(22),
             Precision::F32,
             30,
+            false,
         ),
         (
             "full linear (k_a 8, no k_v) f32",
@@ -69,9 +78,14 @@ fn main() {
             None,
             Precision::F32,
             0,
+            false,
         ),
     ] {
         let mut reference = model(ka, kv);
+        if cosines {
+            // Every angle's cosine beside it: 108 pose features.
+            reference = with_cosines(reference, &[true; JOINTS]);
+        }
         if bones > 0 {
             // Contiguous runs of vertices per bone, as body parts are in real meshes.
             let vertex_bone = (0..VERTICES)
@@ -134,7 +148,7 @@ fn main() {
         });
         let n2 = (ORDER * ORDER) as f64;
         let (v, ka, width) = (VERTICES as f64, ka as f64, m.info().row_width() as f64);
-        let pose_flops = 2.0 * ka * JOINTS as f64
+        let pose_flops = 2.0 * ka * m.info().feature_len() as f64
             + if kv.is_some() {
                 2.0 * n2 * (ka + 1.0) * width
             } else {

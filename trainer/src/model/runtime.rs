@@ -85,6 +85,8 @@ pub struct BlobInfo {
     /// Entries of the pose vector (JSON key `joints`, which scripts read).
     #[serde(rename = "joints")]
     pub pose_len: usize,
+    /// Pose features the projection sees: the angles and their cosines, where flagged.
+    pub features: usize,
     /// k_a.
     pub pose_dims: usize,
     /// k_v (vertices for the identity basis).
@@ -138,6 +140,7 @@ pub fn describe(blob: &[u8]) -> Result<BlobInfo, aprt_core::Error> {
         order: info.order(),
         vertices: info.vertices(),
         pose_len: info.pose_len(),
+        features: info.feature_len(),
         pose_dims: info.pose_dims(),
         coef_dims: info.coef_dims(),
         basis: match info.basis() {
@@ -167,6 +170,14 @@ impl std::fmt::Display for BlobInfo {
         )?;
         writeln!(f, "  vertices        {}", self.vertices)?;
         writeln!(f, "  joint angles    {}", self.pose_len)?;
+        let cosines = self.features - self.pose_len;
+        if cosines > 0 {
+            writeln!(
+                f,
+                "  pose features   {} (the angles and {cosines} of their cosines)",
+                self.features
+            )?;
+        }
         writeln!(f, "  pose dims k_a   {}", self.pose_dims)?;
         writeln!(
             f,

@@ -856,7 +856,12 @@ fn an_even_transfer_is_fitted_exactly_by_the_cosine_features() {
     let transfers: Vec<Vec<f32>> = angles
         .column(0)
         .iter()
-        .map(|&a| vec![(1.0 - 0.4 * versine(a)) as f32, (0.2 + 0.3 * versine(a)) as f32])
+        .map(|&a| {
+            vec![
+                (1.0 - 0.4 * versine(a)) as f32,
+                (0.2 + 0.3 * versine(a)) as f32,
+            ]
+        })
         .collect();
     let options = FitOptions {
         coef_dims: CoefDims::Full,
