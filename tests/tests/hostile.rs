@@ -400,7 +400,7 @@ fn overflowing_dimensions_are_refused() {
     let coef = [0u32, 1, 96, 97, u32::MAX];
     for (i, (&order, &v)) in orders.iter().zip(&vertices).enumerate() {
         for (&a, &kv) in joints.iter().zip(&coef) {
-            for (pose_dims, bones) in [(0u16, 0u16), (64, 256), (65, 257), (u16::MAX, u16::MAX)] {
+            for (pose_dims, bones) in [(0u16, 0u16), (128, 256), (129, 257), (u16::MAX, u16::MAX)] {
                 let edited = with_header(&blob, |h| {
                     (h.order, h.vertices, h.pose_len, h.pose_dims, h.coef_dims) =
                         (order, v, a, pose_dims, kv);
@@ -418,7 +418,7 @@ fn overflowing_dimensions_are_refused() {
                 let within = (1..=6).contains(&order)
                     && (1..=1 << 22).contains(&v)
                     && (1..=512).contains(&a)
-                    && pose_dims <= 64.min(a);
+                    && pose_dims <= 128.min(a);
                 let result = exercise(&edited);
                 // Refused for the dimension itself: every section length is wrong too, so
                 // any other error would pass even with the dimension checks gone.

@@ -29,8 +29,9 @@ pub const MAX_HEADER_LEN: u32 = 1024;
 /// Most entries of a pose vector (joint angles) the evaluator accepts, and most pose features
 /// (the angles and their flagged cosines).
 pub const MAX_POSE_LEN: usize = 512;
-/// Most pose dimensions k_a after projection.
-pub const MAX_POSE_DIMS: usize = 64;
+/// Most pose dimensions k_a after projection: room for a local model on every entry of a
+/// 40-joint skeleton's rotation vectors (it keeps one dimension per entry).
+pub const MAX_POSE_DIMS: usize = 128;
 /// Most vertex-basis vectors k_v.
 pub const MAX_COEF_DIMS: usize = 96;
 /// Vertices per block of the per-vertex sections. Within a block the values are stored

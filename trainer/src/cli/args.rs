@@ -115,9 +115,9 @@ pub struct FitArgs {
     /// default with `--paper`).
     #[arg(long, value_enum)]
     pub local: Option<LocalArg>,
-    /// The pose features the model is linear in: `auto` (the one of the two below with the
-    /// lower held-out error; the default), `cosines` (each angle a and 1 − cos a, for shadowing
-    /// that is the same whichever way a joint turns) or `angles` (the default with `--paper`).
+    /// The pose features the model is linear in: `angles` (the default), `cosines` (each angle
+    /// a and 1 − cos a, for shadowing that is the same whichever way a joint turns) or `auto`
+    /// (the one of the two with the lower held-out error).
     #[arg(long, value_enum)]
     pub features: Option<FeaturesArg>,
     /// The paper's model: every pose dimension, the mean as prior, no bound, no local model,

@@ -18,7 +18,7 @@ use crate::model::ModelFrame;
 use crate::model::export::{ExportError, Precision, check_alpha, encode_model};
 use crate::model::fit::{
     Alpha, Anchor, Choice, CoefDims, Dims, Fit, FitInput, FitOptions, FitReport, HeldOutKind,
-    LOCALITY_RADIUS, Local, PriorKind, Validation, fit, fit_input,
+    LOCALITY_RADIUS, Local, PriorKind, REST_DISTANCE_LIMIT, Validation, fit, fit_input,
 };
 use crate::model::runtime::{BlobInfo, describe};
 use crate::progress::Reporter;
@@ -337,6 +337,9 @@ pub struct Selection {
     pub held_out: HeldOutKind,
     /// The candidate the model is.
     pub chosen: Choice,
+    /// How far the rest pose lies from the training poses, in standard deviations (see
+    /// `fit::rest_distance`).
+    pub rest_distance: Option<f64>,
     /// Every (features, prior, k_a or local) candidate with its best α, in the order tried.
     pub choices: Vec<Choice>,
 }
@@ -348,6 +351,7 @@ impl Selection {
             prior: report.prior,
             held_out: report.held_out,
             chosen: report.chosen,
+            rest_distance: report.rest_distance,
             choices: report.choices.clone(),
         }
     }
@@ -368,6 +372,16 @@ impl Selection {
             c.pose_dims,
             c.alpha
         )];
+        if let Some(d) = self.rest_distance {
+            let tried = if d > REST_DISTANCE_LIMIT {
+                "beyond"
+            } else {
+                "within"
+            };
+            lines.push(format!(
+                "  the rest pose is {d:.2} standard deviations from the training poses, {tried} the {REST_DISTANCE_LIMIT} up to which --prior auto tries it"
+            ));
+        }
         lines.extend(self.choices.iter().map(|c| {
             let mark = if *c == self.chosen { " <- chosen" } else { "" };
             let shape = if c.local { "local" } else { "k_a" };

@@ -12,7 +12,7 @@ use crate::bake::clip::{BakedClip, bake_rest};
 use crate::bake::{BakeSettings, bake_poses};
 use crate::model::ModelFrame;
 use crate::model::export::{ExportError, Precision, encode_model};
-use crate::model::fit::{Alpha, CoefDims, Dims, Fit, FitError, FitOptions, Local, Prior};
+use crate::model::fit::{Alpha, CoefDims, Dims, Features, Fit, FitError, FitOptions, Local, Prior};
 use crate::model::predict::predict_world;
 use crate::model::train::{ClipSet, Selection, fit_clip};
 use crate::progress::{Reporter, Silent};
@@ -37,6 +37,10 @@ pub const DEFAULT_CONFIG: &str = "default: bone frame, bounded, LOSO α, k_a and
 pub const REST_CONFIG: &str = "default, rest prior";
 /// The default with the local model forced (`--local only`).
 pub const LOCAL_CONFIG: &str = "default, local model (every entry near each vertex)";
+/// The default with the cosine features forced (`--features cosines`).
+pub const COSINES_CONFIG: &str = "default, cosine features";
+/// The default with the features chosen by held-out error (`--features auto`).
+pub const AUTO_FEATURES_CONFIG: &str = "default, angles or cosine features by held-out error";
 /// The paper's model in bone frames: every pose dimension, the mean as prior, unbounded.
 pub const PAPER_CONFIG: &str = "paper: bone frame, mean prior, unbounded, LOSO α";
 
@@ -67,9 +71,49 @@ pub fn standard_configs() -> Vec<ModelConfig> {
             ModelFrame::Bone,
         ),
         config(
+            "default, mean prior",
+            FitOptions {
+                prior: Prior::Mean,
+                ..default
+            },
+            ModelFrame::Bone,
+        ),
+        config(
+            "default, bound reaching the prior 2 widths out",
+            FitOptions {
+                bound: Some(2.0),
+                ..default
+            },
+            ModelFrame::Bone,
+        ),
+        config(
+            "default, bound clamping only (falloff ∞)",
+            FitOptions {
+                bound: Some(f64::INFINITY),
+                ..default
+            },
+            ModelFrame::Bone,
+        ),
+        config(
             LOCAL_CONFIG,
             FitOptions {
                 local: Local::Only,
+                ..default
+            },
+            ModelFrame::Bone,
+        ),
+        config(
+            AUTO_FEATURES_CONFIG,
+            FitOptions {
+                features: Features::Auto,
+                ..default
+            },
+            ModelFrame::Bone,
+        ),
+        config(
+            COSINES_CONFIG,
+            FitOptions {
+                features: Features::Cosines,
                 ..default
             },
             ModelFrame::Bone,

@@ -538,9 +538,10 @@ proptest::proptest! {
 }
 
 /// A clip of 30 poses of 4 entries, order 2 (4 coefficients), 12 vertices, with a rest pose at
-/// the origin whose transfer is not any training pose's.
+/// the origin whose transfer is not any training pose's (1.4 standard deviations from their
+/// mean: near enough for `--prior auto` to try it).
 fn anchored_problem() -> (DMatrix<f64>, Vec<Vec<f32>>, Vec<f64>, Vec<f32>) {
-    let angles = uniform(30, 4, 71).add_scalar(0.8);
+    let angles = uniform(30, 4, 71).add_scalar(0.4);
     let transfers = smooth_transfer(&angles, 12 * 4, 0.2, 72);
     let rest = vec![0.0; 4];
     let rest_transfer = smooth_transfer(&DMatrix::from_row_slice(1, 4, &rest), 12 * 4, 0.2, 72)
@@ -649,6 +650,7 @@ fn the_selection_keeps_the_candidate_with_the_lowest_held_out_error() {
     let (fit, ..) = anchored_fit(&FitOptions {
         coef_dims: CoefDims::Count(8),
         prior: Prior::Auto,
+        features: Features::Auto,
         ..FitOptions::default()
     });
     let best = fit
@@ -867,6 +869,7 @@ fn an_even_transfer_is_fitted_exactly_by_the_cosine_features() {
         coef_dims: CoefDims::Full,
         alpha: Alpha::Fixed(0.0),
         bound: None,
+        features: Features::Auto,
         ..FitOptions::default()
     };
     let fit = super::fit(&angles, &transfers, 1, &options).unwrap();
@@ -880,4 +883,54 @@ fn an_even_transfer_is_fitted_exactly_by_the_cosine_features() {
         let t = fit.model.predict(&[a]);
         assert!((t[0] - (1.0 - 0.4 * versine(a))).abs() < 1e-5, "{a}: {t:?}");
     }
+}
+
+#[test]
+fn the_rest_distance_is_the_rms_of_standard_scores_over_moving_entries() {
+    // Entry 0: mean 0, standard deviation 1, rest at 3; entry 1 never moves and is ignored.
+    let angles = DMatrix::from_row_slice(4, 2, &[-1.0, 0.5, 1.0, 0.5, -1.0, 0.5, 1.0, 0.5]);
+    assert_eq!(rest_distance(&angles, &[3.0, 7.0]), Some(3.0));
+    assert_eq!(
+        rest_distance(&angles.columns(1, 1).into_owned(), &[7.0]),
+        None
+    );
+}
+
+/// `--prior auto` tries the rest prior only when the rest pose lies among the training poses;
+/// asked for, it is still fitted.
+#[test]
+fn a_rest_pose_far_from_the_training_poses_is_not_an_automatic_prior() {
+    let (angles, transfers, _, rest_transfer) = anchored_problem();
+    let far = vec![-3.0; 4];
+    let mut input = FitInput::new(&angles, &transfers, 2);
+    input.anchor = Some(Anchor {
+        angles: &far,
+        transfer: &rest_transfer,
+    });
+    let options = FitOptions {
+        coef_dims: CoefDims::Count(8),
+        ..FitOptions::default()
+    };
+    let fit = fit_input(&input, &options).unwrap();
+    assert!(fit.report.rest_distance.unwrap() > REST_DISTANCE_LIMIT);
+    assert!(
+        fit.report
+            .choices
+            .iter()
+            .all(|c| c.prior == PriorKind::Mean)
+    );
+    let (near, ..) = anchored_fit(&options);
+    assert!(near.report.rest_distance.unwrap() < REST_DISTANCE_LIMIT);
+    assert!(
+        near.report
+            .choices
+            .iter()
+            .any(|c| c.prior == PriorKind::Rest)
+    );
+    let forced = FitOptions {
+        prior: Prior::Rest,
+        ..options
+    };
+    let fit = fit_input(&input, &forced).unwrap();
+    assert_eq!(fit.report.prior, PriorKind::Rest);
 }
