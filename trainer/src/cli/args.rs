@@ -100,8 +100,9 @@ pub struct FitArgs {
     #[arg(long, default_value = "auto", allow_negative_numbers = true)]
     pub alpha: String,
     /// What the model tends to as α grows: `auto` (the one of the two below with the lower
-    /// held-out error; the default), `rest` (the rest pose's transfer carried by the skin, for
-    /// bone-frame models; others keep the mean) or `mean`.
+    /// held-out error, the rest prior only when the rest pose lies within 2 standard
+    /// deviations of the training poses; the default), `rest` (the rest pose's transfer
+    /// carried by the skin, for bone-frame models; others keep the mean) or `mean`.
     #[arg(long, value_enum)]
     pub prior: Option<PriorArg>,
     /// Bounded extrapolation: poses are clamped into the training range and reach the prior

@@ -236,12 +236,8 @@ impl Report {
         let _ = writeln!(s, "{}\n", experiment::TABLE_LEGEND);
         let names: Vec<String> = self.test_clips.iter().map(|(n, _)| n.clone()).collect();
         s.push_str(&table_markdown(&self.rows, &names));
-        if let Some(selection) = self.rows.first().and_then(|r| r.selection.as_ref()) {
-            let _ = writeln!(
-                s,
-                "\n## Model selection of the default\n\nHeld-out mean squared error per transfer value of every candidate (pose features, prior and k_a, or the local model on every entry near each vertex), each at its best α:\n\n```\n{}\n```",
-                selection.lines().join("\n")
-            );
+        if let Some(selection) = experiment::selection_markdown(&self.rows, "##") {
+            let _ = writeln!(s, "{selection}");
         }
         let _ = writeln!(
             s,

@@ -448,6 +448,16 @@ fn megaops(model: &ModelInfo) -> f64 {
 /// What the table's columns mean, for the documents that print it.
 pub const TABLE_LEGEND: &str = "Errors are relative transfer errors ‖pred − truth‖ / ‖truth‖ over all frames, vertices and coefficients. Times are one core through aprt-core; megaops count multiply-adds for RGB shading of every vertex.";
 
+/// The default's model selection (the first row's) under a markdown heading of `level`:
+/// every candidate with its held-out error, as `train` prints it.
+pub fn selection_markdown(rows: &[Row], level: &str) -> Option<String> {
+    let selection = rows.first()?.selection.as_ref()?;
+    Some(format!(
+        "\n{level} Model selection of the default\n\nHeld-out mean squared error per transfer value of every candidate (pose features, prior and k_a, or the local model on every entry near each vertex), each at its best α:\n\n```\n{}\n```",
+        selection.lines().join("\n")
+    ))
+}
+
 /// The table as markdown: one column per test clip.
 pub fn table_markdown(rows: &[Row], test_clips: &[String]) -> String {
     let mut s = String::new();

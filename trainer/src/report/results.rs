@@ -289,6 +289,9 @@ fn section_markdown(study: &Study, measured: &Measured, seconds: f64) -> String 
     for (name, reason) in &result.skipped {
         let _ = writeln!(s, "\n*Not in the table: {name}, because {reason}.*");
     }
+    if let Some(selection) = experiment::selection_markdown(&result.rows, "###") {
+        let _ = writeln!(s, "{selection}");
+    }
     let file = |what: &str| figure_file(&study.id, what);
     let _ = writeln!(
         s,
