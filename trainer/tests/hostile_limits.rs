@@ -159,11 +159,11 @@ fn model_options_are_checked_before_the_bake() {
             ],
         ),
         (
-            &["--pose-dims", "65"],
+            &["--pose-dims", "129"],
             &[
-                "--pose-dims 65",
-                "65 pose dimensions",
-                "the 64 aprt-core holds",
+                "--pose-dims 129",
+                "129 pose dimensions",
+                "the 128 aprt-core holds",
             ],
         ),
         (
