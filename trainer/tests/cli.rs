@@ -88,13 +88,12 @@ fn train_inspect_eval_and_stream_agree() {
     assert_eq!(info["order"], 3);
     assert_eq!(info["vertices"], 12);
     assert_eq!(info["joints"], 2);
-    // The arm's angle and its cosine; the constant column (and its cosine) carries no
-    // variance.
     assert!(
-        info["pose_dims"].as_u64().unwrap() <= 2,
+        info["pose_dims"].as_u64().unwrap() <= 1,
         "the constant column carries no variance"
     );
-    assert!([2, 4].contains(&info["features"].as_u64().unwrap()));
+    // The default features are the angles.
+    assert_eq!(info["features"], 2);
     assert!(info["coef_dims"].as_u64().unwrap() <= 6);
     assert_eq!(
         info["bytes"].as_u64().unwrap() as usize,

@@ -14,19 +14,18 @@ pub(crate) fn versine(a: f32) -> f32 {
 }
 
 impl ModelInfo {
-    /// The features of the bounded pose `angles` (`pose_len` values) in `out` (`feature_len`
-    /// values): the angles, then the versine of each flagged entry in entry order.
-    pub(crate) fn pose_features<R: Reader>(
+    /// Completes the pose features in place: `features` (`feature_len` values) holds the
+    /// bounded angles in its first `pose_len` values, and gets the versine of each flagged
+    /// entry, in entry order, after them.
+    pub(crate) fn add_cosines<R: Reader>(
         &self,
         r: &mut R,
-        angles: &[f32],
-        out: &mut [f32],
+        features: &mut [f32],
     ) -> Result<(), Error> {
-        let (angle_part, versines) = out.split_at_mut(self.pose_len);
-        angle_part.copy_from_slice(angles);
         let Some(span) = self.pose_features else {
             return Ok(());
         };
+        let (angles, versines) = features.split_at_mut(self.pose_len);
         let mut next = versines.iter_mut();
         r.chunks(span.offset, 4, self.pose_len, |first, bytes| {
             for (i, word) in bytes.as_chunks::<4>().0.iter().enumerate() {

@@ -92,12 +92,11 @@ impl ModelInfo {
         self.each_row(r, self.pose_mean, f, |_, mu| {
             mu.add_scaled(1.0, mean.iter_mut())
         })?;
-        let mut bounded = [0.0f32; MAX_POSE_LEN];
-        let bounded = &mut bounded[..a];
-        self.bound_pose(r, angles, bounded)?;
+        // The bounded angles are the features' first `a` values; the cosines follow them.
         let mut features = [0.0f32; MAX_POSE_LEN];
         let features = &mut features[..f];
-        self.pose_features(r, bounded, features)?;
+        self.bound_pose(r, angles, &mut features[..a])?;
+        self.add_cosines(r, features)?;
         let z = &mut pose.z[..=ka];
         z[0] = 1.0;
         self.each_row(r, self.pose_projection, f, |i, p| {

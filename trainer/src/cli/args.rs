@@ -172,7 +172,7 @@ pub struct TrainArgs {
     /// Output model file.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Hold this clip out of training and choose the model (prior, α, k_a) by its error: a
+    /// Hold this clip out of training and choose the model (prior, α, k_a and, with --features auto, the features) by its error: a
     /// clip name (--builtin, --gltf), or for --bvh frames A..B of the first file or another
     /// BVH file. Repeat for several; without it, segments of the training clips are held out.
     #[arg(long, value_name = "CLIP")]

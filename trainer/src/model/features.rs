@@ -33,6 +33,13 @@ impl PoseFeatures {
         self.pose_len + self.cosines.len()
     }
 
+    /// One flag per entry, as the model stores them: whether its cosine is a feature.
+    pub fn flags(&self) -> Vec<bool> {
+        (0..self.pose_len)
+            .map(|i| self.cosines.binary_search(&i).is_ok())
+            .collect()
+    }
+
     /// Whether the features are the angles alone.
     pub fn is_angles(&self) -> bool {
         self.cosines.is_empty()
@@ -93,6 +100,7 @@ mod tests {
         assert_eq!(x[3], versine(0.5));
         assert_eq!(x[4], versine(2.0));
         assert_eq!(f.of_entries(&[1, 2]), vec![1, 2, 4]);
+        assert_eq!(f.flags(), vec![true, false, true]);
         let none = PoseFeatures::new(3, &[]);
         assert!(none.is_angles());
         assert_eq!(none.of(&[1.0, 2.0, 3.0]), vec![1.0, 2.0, 3.0]);

@@ -896,9 +896,7 @@ fn fit_features(
             .bound
             .map(|f| PoseBounds::of(raw, prior, f).ignoring(unused.to_vec()))
     };
-    let flags: Vec<bool> = (0..raw.ncols())
-        .map(|i| features.of_entries(&[i]).len() > 1)
-        .collect();
+    let flags = features.flags();
     let (model, problem_rank, coef_energy) = match &local {
         Some(local) if chosen.local => {
             let anchor = input.anchor.expect("the local model needs the anchor");
