@@ -42,6 +42,7 @@
 
 mod blob;
 mod eval;
+mod irradiance_rig;
 mod math;
 mod model;
 mod rotation;
@@ -53,6 +54,10 @@ pub use blob::format::{
 };
 pub use blob::{AngleNames, BlobSource, Dim, Error, Input, ModelInfo, SourceError};
 pub use eval::{LitWeights, MAX_POSE_WEIGHTS, PoseWeights};
+pub use irradiance_rig::{
+    AxisKind, IrradianceRig, MAX_LATTICE, MAX_RIG_SAMPLES, MAX_RIG_TABLE, MAX_RIG_VECTORS,
+    Placement, RIG_SUPPORT, RigLayout, RigLitWeights, RigShape, RigWeights,
+};
 pub use model::{Model, StreamedModel};
 pub use rotation::{Rotation, ShRotation};
 pub use sh::{

@@ -3,8 +3,9 @@
 //! the whole blob once and share one evaluator; their per-frame calls take the same
 //! arguments in the same order (inputs, then the first vertex, then the output).
 
-use crate::blob::{AngleNames, BlobSource, Error, ModelInfo, Resident, Streaming};
+use crate::blob::{AngleNames, BlobSource, Error, ModelInfo, Reader, Resident, Streaming};
 use crate::eval::{LitWeights, PoseWeights};
+use crate::irradiance_rig::{IrradianceRig, Placement, RigLitWeights};
 use crate::rotation::Rotation;
 
 /// A model whose blob is in memory: every call reads it in place, with no buffer.
@@ -31,6 +32,7 @@ use crate::rotation::Rotation;
 pub struct Model<'a> {
     blob: &'a [u8],
     info: ModelInfo,
+    rig: Option<IrradianceRig<'a>>,
 }
 
 impl<'a> Model<'a> {
@@ -47,7 +49,20 @@ impl<'a> Model<'a> {
     /// ```
     pub fn parse(blob: &'a [u8]) -> Result<Model<'a>, Error> {
         let info = ModelInfo::open(&mut Resident(blob))?;
-        Ok(Model { blob, info })
+        let rig = match info.irradiance_rig {
+            // `open` checked that the span lies inside the blob.
+            Some(span) => Some(IrradianceRig::parse(
+                &blob[span.offset as usize..(span.offset + span.len) as usize],
+            )?),
+            None => None,
+        };
+        Ok(Model { blob, info, rig })
+    }
+
+    /// The irradiance rig fitted to the character, when the model has one (validated by
+    /// [`Model::parse`]).
+    pub fn irradiance_rig(&self) -> Option<IrradianceRig<'a>> {
+        self.rig
     }
 
     /// The model's dimensions and what its calls need.
@@ -231,6 +246,45 @@ impl<'a> Model<'a> {
     pub fn vertex_bones(&self, first: usize, out: &mut [u16]) -> Result<(), Error> {
         self.info.vertex_bones(&mut Resident(self.blob), first, out)
     }
+
+    /// Pushes an irradiance rig's K SH vectors (`vectors`, K n² RGB values, vector-major, from
+    /// [`IrradianceRig::vectors_from`]) through the pose weights, per colour channel, as
+    /// [`Model::light`] does for one lighting vector. `lit` must hold
+    /// [`ModelInfo::rig_lit_weights_len`] values.
+    pub fn light_rig<const P: usize>(
+        &self,
+        pose: &PoseWeights<P>,
+        vectors: &[[f32; 3]],
+        bones: &[Rotation],
+        lit: &mut RigLitWeights<'_>,
+    ) -> Result<(), Error> {
+        self.info.light_rig(pose, vectors, bones, lit)
+    }
+
+    /// Per-vertex RGB shading under the rig's lighting at each vertex's own position:
+    /// `Σ_k φ_k(p_j) t_j · C_k`, self-shadowed by the vertex's transfer. `positions` are the
+    /// world positions of vertices `first .. first + out.len()` this frame (skinned by the
+    /// caller), `placement` the root frame's place in the world. Multiply by albedo / π for
+    /// exit radiance.
+    pub fn shade_rig(
+        &self,
+        lit: &RigLitWeights<'_>,
+        rig: &IrradianceRig<'_>,
+        placement: &Placement,
+        positions: &[[f32; 3]],
+        first: usize,
+        out: &mut [[f32; 3]],
+    ) -> Result<(), Error> {
+        self.info.shade_rig(
+            &mut Resident(self.blob),
+            lit,
+            rig,
+            placement,
+            positions,
+            first,
+            out,
+        )
+    }
 }
 
 /// A model read from a [`BlobSource`] (flash, a file) through a caller-owned buffer, so the
@@ -391,5 +445,53 @@ impl<'s, S: BlobSource> StreamedModel<'s, S> {
     pub fn vertex_bones(&mut self, first: usize, out: &mut [u16]) -> Result<(), Error> {
         let info = self.info;
         info.vertex_bones(&mut self.reader(), first, out)
+    }
+
+    /// The irradiance rig, read into `buf` (at least [`ModelInfo::irradiance_rig_bytes`]) and
+    /// validated; [`Error::NoIrradianceRig`] when the model has none.
+    pub fn irradiance_rig<'b>(&mut self, buf: &'b mut [u8]) -> Result<IrradianceRig<'b>, Error> {
+        let span = self.info.irradiance_rig.ok_or(Error::NoIrradianceRig)?;
+        let len = span.len as usize;
+        let dst = buf
+            .get_mut(..len)
+            .ok_or(Error::BufferTooSmall { needed: len })?;
+        self.reader().chunks(span.offset, 1, len, |at, bytes| {
+            dst[at..at + bytes.len()].copy_from_slice(bytes);
+            Ok(())
+        })?;
+        IrradianceRig::parse(dst)
+    }
+
+    /// As [`Model::light_rig`].
+    pub fn light_rig<const P: usize>(
+        &mut self,
+        pose: &PoseWeights<P>,
+        vectors: &[[f32; 3]],
+        bones: &[Rotation],
+        lit: &mut RigLitWeights<'_>,
+    ) -> Result<(), Error> {
+        self.info.light_rig(pose, vectors, bones, lit)
+    }
+
+    /// As [`Model::shade_rig`].
+    pub fn shade_rig(
+        &mut self,
+        lit: &RigLitWeights<'_>,
+        rig: &IrradianceRig<'_>,
+        placement: &Placement,
+        positions: &[[f32; 3]],
+        first: usize,
+        out: &mut [[f32; 3]],
+    ) -> Result<(), Error> {
+        let info = self.info;
+        info.shade_rig(
+            &mut self.reader(),
+            lit,
+            rig,
+            placement,
+            positions,
+            first,
+            out,
+        )
     }
 }

@@ -30,7 +30,7 @@ pub use bake::{
     Accel, BakeError, BakeSettings, bake_pose, bake_pose_with, bake_poses, bake_vertices,
 };
 pub use io::obj::{LineError, ObjError, read_obj};
-pub use model::export::{ExportError, Precision, encode_model};
+pub use model::export::{ExportError, Precision, encode_model, encode_model_with_rig};
 pub use model::features::PoseFeatures;
 pub use model::fit::{Alpha, CoefDims, Dims, Fit, FitError, FitOptions, FitReport, fit};
 pub use model::{BoneFrames, LinearModel, ModelFrame, PoseBounds, VertexBasis};

@@ -33,6 +33,10 @@ pub enum Input {
     BoneRotations,
     /// The output of `transfer` (n² values per vertex).
     Transfer,
+    /// The rig vectors of `light_rig` (K n² RGB values).
+    RigVectors,
+    /// The vertex positions of `shade_rig` and `shade_lights` (one per vertex shaded).
+    Positions,
 }
 
 /// Everything that can go wrong reading a blob or evaluating a model.
@@ -137,6 +141,12 @@ pub enum Error {
     BadPoseBounds,
     /// A pose-features flag is not 0 or 1, or the features outnumber the evaluator's limit.
     BadPoseFeatures,
+    /// An irradiance rig's shape, counts, box, radius or error table is not valid.
+    BadIrradianceRig,
+    /// A call needs the model's irradiance rig and the model has none.
+    NoIrradianceRig,
+    /// Rig lighting weights were computed for a rig of another size.
+    WeightsForOtherRig,
     /// The caller's buffer is too small; `needed` bytes would do.
     BufferTooSmall {
         /// Minimum size in bytes.
@@ -166,6 +176,11 @@ pub enum Error {
     /// A lighting coefficient is NaN or infinite.
     NonFiniteLighting {
         /// Index of the coefficient.
+        index: usize,
+    },
+    /// A vertex position is NaN or infinite.
+    NonFinitePosition {
+        /// Index of the vertex in the call's range.
         index: usize,
     },
     /// A bone rotation is not orthonormal (within 10⁻³) or holds NaN or infinity.
@@ -247,6 +262,14 @@ impl core::fmt::Display for Error {
                 f,
                 "pose features need a flag of 0 or 1 per entry and at most {MAX_POSE_LEN} features"
             ),
+            Error::BadIrradianceRig => write!(
+                f,
+                "irradiance rig has a bad shape, count, box, radius or error table"
+            ),
+            Error::NoIrradianceRig => write!(f, "the model has no irradiance rig"),
+            Error::WeightsForOtherRig => {
+                write!(f, "rig lighting weights were computed for another rig")
+            }
             Error::BufferTooSmall { needed } => write!(f, "buffer too small: needs {needed} bytes"),
             Error::WeightsTooSmall { needed, capacity } => write!(
                 f,
@@ -263,6 +286,9 @@ impl core::fmt::Display for Error {
             Error::NonFiniteAngle { index } => write!(f, "pose entry {index} is NaN or infinite"),
             Error::NonFiniteLighting { index } => {
                 write!(f, "lighting coefficient {index} is NaN or infinite")
+            }
+            Error::NonFinitePosition { index } => {
+                write!(f, "vertex position {index} is NaN or infinite")
             }
             Error::BadRotation { bone } => {
                 write!(f, "rotation of bone {bone} is not orthonormal")

@@ -141,13 +141,17 @@ pub enum SectionKind {
     /// whichever way a joint turns, which a model linear in the angles cannot represent.
     /// Without this section the features are the angles.
     PoseFeatures,
+    /// Tag 9, optional: an irradiance rig fitted to the character (*Irradiance Rigs*), its
+    /// own little layout of a 16-byte prelude and f32 arrays, described and validated by
+    /// [`IrradianceRig`](crate::IrradianceRig). Readers that predate it skip it.
+    IrradianceRig,
     /// A tag this version does not know.
     Unknown(u16),
 }
 
 impl SectionKind {
     /// The kinds this version knows, in tag order.
-    const KNOWN: [SectionKind; 8] = [
+    const KNOWN: [SectionKind; 9] = [
         SectionKind::PoseMean,
         SectionKind::PoseProjection,
         SectionKind::Weights,
@@ -156,12 +160,13 @@ impl SectionKind {
         SectionKind::AngleNames,
         SectionKind::PoseBounds,
         SectionKind::PoseFeatures,
+        SectionKind::IrradianceRig,
     ];
 
     /// The kind of a section-table tag.
     pub const fn from_tag(tag: u16) -> SectionKind {
         match tag {
-            1..=8 => Self::KNOWN[tag as usize - 1],
+            1..=9 => Self::KNOWN[tag as usize - 1],
             other => SectionKind::Unknown(other),
         }
     }
@@ -177,6 +182,7 @@ impl SectionKind {
             SectionKind::AngleNames => 6,
             SectionKind::PoseBounds => 7,
             SectionKind::PoseFeatures => 8,
+            SectionKind::IrradianceRig => 9,
             SectionKind::Unknown(tag) => tag,
         }
     }

@@ -40,6 +40,9 @@ pub struct ModelInfo {
     pub(crate) pose_bounds: Option<Span>,
     /// The flags of the entries whose cosine is a feature, when any is.
     pub(crate) pose_features: Option<Span>,
+    /// The irradiance rig, when the model has one (its bytes checksummed at open, its
+    /// contents validated by [`IrradianceRig::parse`](crate::IrradianceRig::parse)).
+    pub(crate) irradiance_rig: Option<Span>,
 }
 
 impl ModelInfo {
@@ -147,6 +150,12 @@ impl ModelInfo {
     /// [`StreamedModel::angle_names`](crate::StreamedModel::angle_names) needs.
     pub fn angle_names_bytes(&self) -> usize {
         self.angle_names.map_or(0, |s| s.len as usize)
+    }
+
+    /// Bytes of the model's irradiance rig (0 without one): what
+    /// [`StreamedModel::irradiance_rig`](crate::StreamedModel::irradiance_rig) reads it into.
+    pub fn irradiance_rig_bytes(&self) -> usize {
+        self.irradiance_rig.map_or(0, |s| s.len as usize)
     }
 
     /// Extra leading rows per block: 1 (the bone indices) for bone-frame models, else 0.

@@ -110,6 +110,16 @@ impl ModelInfo {
             };
             let span = if kind == SectionKind::PoseFeatures {
                 continue; // read and checked by `pose_features`
+            } else if kind == SectionKind::IrradianceRig {
+                if found[slot].is_some() {
+                    return Err(Error::DuplicateSection { section: kind });
+                }
+                check_crc(r, e, |_| {})?;
+                Span {
+                    offset: e.offset,
+                    len: e.len,
+                    encoding: Encoding::F32,
+                }
             } else if kind == SectionKind::AngleNames {
                 if found[slot].is_some() {
                     return Err(Error::DuplicateSection { section: kind });
@@ -161,6 +171,7 @@ impl ModelInfo {
             angle_names: get(SectionKind::AngleNames),
             pose_bounds: get(SectionKind::PoseBounds),
             pose_features,
+            irradiance_rig: get(SectionKind::IrradianceRig),
         };
         info.verify_bones(r)?;
         info.verify_bounds(r)?;

@@ -16,6 +16,7 @@
 mod bounds;
 mod features;
 mod kernels;
+mod rig;
 mod weights;
 
 use kernels::{Decode, RowRef, bone_lane, dot, shade_block, transfer_identity, transfer_stored};
@@ -126,14 +127,7 @@ impl ModelInfo {
         lit: &mut LitWeights<L>,
     ) -> Result<(), Error> {
         lit.stamp = None;
-        check_stamp(pose.stamp, self)?;
-        if self.frame != Frame::World && bones.len() != self.bones() {
-            return Err(Error::WrongLength {
-                what: Input::BoneRotations,
-                expected: self.bones(),
-                found: bones.len(),
-            });
-        }
+        self.check_lighting_inputs(pose, bones)?;
         let n2 = self.coeffs();
         if lighting.len() != n2 {
             return Err(Error::WrongLength {
@@ -146,25 +140,72 @@ impl ModelInfo {
             return Err(Error::NonFiniteLighting { index });
         }
         check_capacity(self.lit_weights_len(), L)?;
-        let width = self.row_width();
-        if self.frame == Frame::World {
-            self.push(pose, lighting, &mut lit.q[..width]);
-        } else {
-            let rotation = ShRotation::of_order(self.order);
-            let mut local = [0.0f32; MAX_COEFFS];
-            for (bone, (r, q)) in bones.iter().zip(lit.q.chunks_exact_mut(width)).enumerate() {
-                if !r.iter().flatten().all(|x| x.is_finite()) || !is_rotation(r, 1e-3) {
-                    return Err(Error::BadRotation { bone });
-                }
-                // Bone-frame lighting is the world lighting rotated by Rᵀ.
-                let rt = core::array::from_fn(|i| core::array::from_fn(|j| f64::from(r[j][i])));
-                local[..n2].copy_from_slice(lighting);
-                rotation.rotate(&rt, &mut local);
-                self.push(pose, &local[..n2], q);
-            }
-        }
+        self.check_rotations(bones)?;
+        self.light_checked(pose, lighting, bones, &mut lit.q[..self.lit_weights_len()]);
         lit.stamp = Some(self.id);
         Ok(())
+    }
+
+    /// What every lighting call checks first: pose weights of this model, and one rotation
+    /// per bone for a bone-frame model (checked by [`ModelInfo::check_rotations`]).
+    fn check_lighting_inputs<const P: usize>(
+        &self,
+        pose: &PoseWeights<P>,
+        bones: &[Rotation],
+    ) -> Result<(), Error> {
+        check_stamp(pose.stamp, self)?;
+        if self.frame == Frame::World {
+            return Ok(());
+        }
+        if bones.len() != self.bones() {
+            return Err(Error::WrongLength {
+                what: Input::BoneRotations,
+                expected: self.bones(),
+                found: bones.len(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Every bone rotation finite and orthonormal within 10⁻³; a world-frame model ignores
+    /// them.
+    fn check_rotations(&self, bones: &[Rotation]) -> Result<(), Error> {
+        if self.frame == Frame::World {
+            return Ok(());
+        }
+        match bones
+            .iter()
+            .position(|r| !r.iter().flatten().all(|x| x.is_finite()) || !is_rotation(r, 1e-3))
+        {
+            Some(bone) => Err(Error::BadRotation { bone }),
+            None => Ok(()),
+        }
+    }
+
+    /// The lighting weights `q` ([`ModelInfo::lit_weights_len`] values) of world lighting
+    /// `lighting` (n², finite), rotated into each bone's frame for bone-frame models; the
+    /// inputs passed [`ModelInfo::check_lighting_inputs`].
+    fn light_checked<const P: usize>(
+        &self,
+        pose: &PoseWeights<P>,
+        lighting: &[f32],
+        bones: &[Rotation],
+        q: &mut [f32],
+    ) {
+        let (width, n2) = (self.row_width(), self.coeffs());
+        if self.frame == Frame::World {
+            self.push(pose, lighting, &mut q[..width]);
+            return;
+        }
+        let rotation = ShRotation::of_order(self.order);
+        let mut local = [0.0f32; MAX_COEFFS];
+        for (r, q) in bones.iter().zip(q.chunks_exact_mut(width)) {
+            // Bone-frame lighting is the world lighting rotated by Rᵀ.
+            let rt = core::array::from_fn(|i| core::array::from_fn(|j| f64::from(r[j][i])));
+            local[..n2].copy_from_slice(lighting);
+            rotation.rotate(&rt, &mut local);
+            self.push(pose, &local[..n2], q);
+        }
     }
 
     /// `q` = the lighting pushed through the pose weights: `s_k = Σ_c L_c w^c_k` (stored

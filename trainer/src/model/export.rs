@@ -180,6 +180,16 @@ fn blocked(
 
 /// Serialises `model` into a complete blob.
 pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>, ExportError> {
+    encode_model_with_rig(model, precision, None)
+}
+
+/// Serialises `model` into a complete blob, with an irradiance rig's bytes (from
+/// [`aprt_core::RigLayout::write`]) as its optional `IrradianceRig` section when given.
+pub fn encode_model_with_rig(
+    model: &LinearModel,
+    precision: Precision,
+    irradiance_rig: Option<&[u8]>,
+) -> Result<Vec<u8>, ExportError> {
     let (n2, v, a, f, ka) = (
         model.order * model.order,
         model.vertices,
@@ -301,6 +311,14 @@ pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>
             required: true,
             encoding: Encoding::F32,
             bytes: encode(kind, &flags, a, Encoding::F32)?,
+        });
+    }
+    if let Some(rig) = irradiance_rig {
+        table.push(SectionBytes {
+            tag: SectionKind::IrradianceRig.tag(),
+            required: false,
+            encoding: Encoding::F32,
+            bytes: rig.to_vec(),
         });
     }
     assemble(model, basis, frame, &table)

@@ -1,0 +1,160 @@
+//! Rig-lit frames: the K SH vectors of an irradiance rig pushed through the pose weights
+//! (`light_rig`), then each vertex shaded by the rig's lighting at its own position
+//! (`shade_rig`): `shade_j = t_j · Σ_k φ_k(p_j) C_k = Σ_k φ_k(p_j) (t_j · C_k)`. The rig is
+//! linear in the lighting, so each `t_j · C_k` is the ordinary O(k_v) shading of the pose model
+//! with lighting `C_k`: a vertex costs 3 k_v per non-zero `φ_k` (at most eight), never n² k_v,
+//! and its transfer keeps its self-shadowing.
+
+use super::kernels::shade_block;
+use super::weights::{check_capacity, check_stamp};
+use super::{PoseWeights, first_non_finite};
+use crate::blob::format::{Encoding, VERTEX_BLOCK};
+use crate::blob::{Error, Input, ModelInfo, Reader};
+use crate::irradiance_rig::{
+    IrradianceRig, MAX_RIG_VECTORS, Placement, RIG_SUPPORT, RigLitWeights, RigWeights,
+};
+use crate::rotation::Rotation;
+use crate::sh::MAX_COEFFS;
+
+/// Most distinct rig vectors the eight vertices of a block can touch.
+const BLOCK_VECTORS: usize = VERTEX_BLOCK * RIG_SUPPORT;
+
+impl ModelInfo {
+    /// Values [`RigLitWeights`] must hold for this model and a rig of `vectors` SH vectors:
+    /// one [`LitWeights`](crate::LitWeights) per vector and colour channel.
+    pub fn rig_lit_weights_len(&self, vectors: usize) -> usize {
+        3 * vectors * self.lit_weights_len()
+    }
+
+    pub(crate) fn light_rig<const P: usize>(
+        &self,
+        pose: &PoseWeights<P>,
+        vectors: &[[f32; 3]],
+        bones: &[Rotation],
+        lit: &mut RigLitWeights<'_>,
+    ) -> Result<(), Error> {
+        lit.stamp = None;
+        self.check_lighting_inputs(pose, bones)?;
+        let n2 = self.coeffs();
+        let k = vectors.len() / n2;
+        if !vectors.len().is_multiple_of(n2) || !(1..=MAX_RIG_VECTORS).contains(&k) {
+            return Err(Error::WrongLength {
+                what: Input::RigVectors,
+                expected: n2 * k.clamp(1, MAX_RIG_VECTORS),
+                found: vectors.len(),
+            });
+        }
+        if let Some(index) = vectors.iter().position(|c| first_non_finite(c).is_some()) {
+            return Err(Error::NonFiniteLighting { index });
+        }
+        let lit_len = self.lit_weights_len();
+        check_capacity(self.rig_lit_weights_len(k), lit.q.len())?;
+        self.check_rotations(bones)?;
+        let mut channel = [0.0f32; MAX_COEFFS];
+        let sets = lit.q.chunks_exact_mut(lit_len);
+        for (set, q) in sets.take(3 * k).enumerate() {
+            let (kk, ch) = (set / 3, set % 3);
+            for (l, c) in channel.iter_mut().zip(&vectors[kk * n2..(kk + 1) * n2]) {
+                *l = c[ch];
+            }
+            self.light_checked(pose, &channel[..n2], bones, q);
+        }
+        lit.vectors = k;
+        lit.stamp = Some(self.id);
+        Ok(())
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn shade_rig<R: Reader>(
+        &self,
+        r: &mut R,
+        lit: &RigLitWeights<'_>,
+        rig: &IrradianceRig<'_>,
+        placement: &Placement,
+        positions: &[[f32; 3]],
+        first: usize,
+        out: &mut [[f32; 3]],
+    ) -> Result<(), Error> {
+        check_stamp(lit.stamp, self)?;
+        if lit.vectors != rig.vectors() {
+            return Err(Error::WeightsForOtherRig);
+        }
+        self.check_positions(positions, out.len())?;
+        self.check_range(first, out.len())?;
+        let (width, lit_len) = (self.row_width(), self.lit_weights_len());
+        let encoding = self.rows.encoding;
+        let end = first + out.len();
+        self.each_block(r, first, out.len(), |v0, bones, bytes| {
+            let (lo, hi) = (v0.max(first), (v0 + VERTEX_BLOCK).min(end));
+            let empty = RigWeights {
+                index: [0; RIG_SUPPORT],
+                weight: [0.0; RIG_SUPPORT],
+                len: 0,
+            };
+            let lanes: [RigWeights; VERTEX_BLOCK] = core::array::from_fn(|l| {
+                let j = v0 + l;
+                match (lo..hi).contains(&j) {
+                    true => rig.weights_at(placement.to_root(positions[j - first])),
+                    false => empty,
+                }
+            });
+            let (touched, count) = touched_vectors(&lanes);
+            // `t_j · C_k` for every vector the block touches, eight lanes at a time.
+            let mut dots = [[[0.0f32; VERTEX_BLOCK]; 3]; BLOCK_VECTORS];
+            for (&k, dk) in touched[..count].iter().zip(&mut dots) {
+                let sets = lit.q[3 * k * lit_len..].chunks_exact(lit_len);
+                for (q, d) in sets.zip(dk.iter_mut()) {
+                    *d = match encoding {
+                        Encoding::F32 => shade_block(bytes.as_chunks::<4>().0, q, width, bones),
+                        Encoding::F16 => shade_block(bytes.as_chunks::<2>().0, q, width, bones),
+                    };
+                }
+            }
+            // Each lane sums its own terms in its own order, so a vertex's value does not
+            // depend on which others share the call.
+            let acc: [[f32; 3]; VERTEX_BLOCK] = core::array::from_fn(|l| {
+                let mut sum = [0.0f32; 3];
+                for (k, w) in lanes[l].pairs() {
+                    let slot = touched[..count].iter().position(|&t| t == k).unwrap_or(0);
+                    for (s, d) in sum.iter_mut().zip(&dots[slot]) {
+                        *s += w * d[l];
+                    }
+                }
+                sum
+            });
+            out[lo - first..hi - first].copy_from_slice(&acc[lo - v0..hi - v0]);
+        })
+    }
+
+    /// Positions must be one per output value, and finite.
+    pub(crate) fn check_positions(
+        &self,
+        positions: &[[f32; 3]],
+        count: usize,
+    ) -> Result<(), Error> {
+        if positions.len() != count {
+            return Err(Error::WrongLength {
+                what: Input::Positions,
+                expected: count,
+                found: positions.len(),
+            });
+        }
+        match positions.iter().position(|p| first_non_finite(p).is_some()) {
+            Some(index) => Err(Error::NonFinitePosition { index }),
+            None => Ok(()),
+        }
+    }
+}
+
+/// The distinct rig vectors any lane of a block uses, and how many there are.
+fn touched_vectors(lanes: &[RigWeights; VERTEX_BLOCK]) -> ([usize; BLOCK_VECTORS], usize) {
+    let mut touched = [0usize; BLOCK_VECTORS];
+    let mut count = 0;
+    for (k, _) in lanes.iter().flat_map(RigWeights::pairs) {
+        if !touched[..count].contains(&k) {
+            touched[count] = k;
+            count += 1;
+        }
+    }
+    (touched, count)
+}

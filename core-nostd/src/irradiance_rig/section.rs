@@ -1,0 +1,336 @@
+//! An irradiance rig's bytes (the blob's `IrradianceRig` section, or a rig on its own), read in
+//! place after one validation, and the per-frame steps that only need the rig.
+//!
+//! ```text
+//! offset  size    field
+//! 0       1       shape: 0 product of axes, 1 gradient
+//! 1       3       axis codes x, y, z (product; 0 for a gradient): 0 constant, 1 linear,
+//!                 n ≥ 2 a lattice of n nodes
+//! 4       4       N, sample points, u32 LE
+//! 8       4       K, SH vectors (what the shape gives), u32 LE
+//! 12      4       M, error-table entries, u32 LE
+//! 16      12      centre of the rig's box, root frame, 3 f32
+//! 28      12      half-widths of the box, 3 f32, > 0
+//! 40      4       radius R of the character about the centre, f32, > 0
+//! 44      8 M     error table: (distance / R, grey levels per unit strength), distances
+//!                 increasing
+//! ..      12 N    sample points, root frame
+//! ..      4 K N   the fit matrix L, row k holds every sample's weight for vector k
+//! ```
+//! Every value is a little-endian f32 after the 16-byte prelude, and finite.
+
+use super::Placement;
+use super::shape::{AxisKind, MAX_RIG_VECTORS, RigShape, RigWeights};
+use crate::blob::Error;
+
+/// Most sample points of a rig.
+pub const MAX_RIG_SAMPLES: usize = 4096;
+/// Most entries of a rig's error table.
+pub const MAX_RIG_TABLE: usize = 64;
+
+/// Bytes before the arrays.
+const PRELUDE: usize = 44;
+
+/// A rig as the trainer builds it, for [`RigLayout::write`].
+#[derive(Clone, Copy, Debug)]
+pub struct RigLayout<'a> {
+    /// The basis functions.
+    pub shape: RigShape,
+    /// Centre of the rig's box in the root frame.
+    pub centre: [f32; 3],
+    /// Half-widths of the box.
+    pub half: [f32; 3],
+    /// Radius of the character about the centre: the unit of the error table's distances.
+    pub radius: f32,
+    /// (distance / radius, grey levels per unit strength), distances increasing.
+    pub table: &'a [[f32; 2]],
+    /// Sample points in the root frame.
+    pub samples: &'a [[f32; 3]],
+    /// The fit matrix, K rows of N.
+    pub matrix: &'a [f32],
+}
+
+impl RigLayout<'_> {
+    /// Bytes [`RigLayout::write`] needs.
+    pub fn len(&self) -> usize {
+        PRELUDE + 4 * (2 * self.table.len() + 3 * self.samples.len() + self.matrix.len())
+    }
+
+    /// Always false: a rig has a prelude.
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// Writes the rig's bytes into the start of `out`; the count written, or
+    /// [`Error::BufferTooSmall`]. The bytes are not checked here: [`IrradianceRig::parse`] them.
+    pub fn write(&self, out: &mut [u8]) -> Result<usize, Error> {
+        let len = self.len();
+        let out = out
+            .get_mut(..len)
+            .ok_or(Error::BufferTooSmall { needed: len })?;
+        let (shape, axes) = match self.shape {
+            RigShape::Gradient => (1, [0; 3]),
+            RigShape::Product(axes) => (0, axes.map(AxisKind::code)),
+        };
+        out[0] = shape;
+        out[1..4].copy_from_slice(&axes);
+        let counts = [self.samples.len(), self.shape.vectors(), self.table.len()];
+        for (dst, n) in out[4..16].chunks_exact_mut(4).zip(counts) {
+            dst.copy_from_slice(&(n as u32).to_le_bytes());
+        }
+        let values = self
+            .centre
+            .iter()
+            .chain(&self.half)
+            .chain(core::iter::once(&self.radius))
+            .chain(self.table.iter().flatten())
+            .chain(self.samples.iter().flatten())
+            .chain(self.matrix);
+        for (dst, v) in out[16..].chunks_exact_mut(4).zip(values) {
+            dst.copy_from_slice(&v.to_le_bytes());
+        }
+        Ok(len)
+    }
+}
+
+/// A validated irradiance rig over its bytes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IrradianceRig<'a> {
+    shape: RigShape,
+    centre: [f32; 3],
+    half: [f32; 3],
+    radius: f32,
+    table: &'a [[u8; 4]],
+    samples: &'a [[u8; 4]],
+    matrix: &'a [[u8; 4]],
+}
+
+fn u32_at(bytes: &[u8], at: usize) -> usize {
+    let word: [u8; 4] = core::array::from_fn(|i| bytes[at + i]);
+    u32::from_le_bytes(word) as usize
+}
+
+fn f32_at(words: &[[u8; 4]], i: usize) -> f32 {
+    f32::from_le_bytes(words[i])
+}
+
+impl<'a> IrradianceRig<'a> {
+    /// Validates a rig's bytes: the shape, the counts against their limits and the length,
+    /// every value finite, a positive box and radius, an increasing table of non-negative
+    /// errors. Anything else is [`Error::BadIrradianceRig`] (or [`Error::Truncated`]).
+    pub fn parse(bytes: &'a [u8]) -> Result<IrradianceRig<'a>, Error> {
+        if bytes.len() < PRELUDE {
+            return Err(Error::Truncated {
+                needed: PRELUDE as u64,
+            });
+        }
+        let axes = [1, 2, 3].map(|i| AxisKind::from_code(bytes[i]));
+        let shape = match (bytes[0], axes) {
+            (0, [Some(x), Some(y), Some(z)]) => RigShape::Product([x, y, z]),
+            (1, _) if bytes[1..4] == [0, 0, 0] => RigShape::Gradient,
+            _ => return Err(Error::BadIrradianceRig),
+        };
+        let (n, k, m) = (u32_at(bytes, 4), u32_at(bytes, 8), u32_at(bytes, 12));
+        let limits_ok = (1..=MAX_RIG_SAMPLES).contains(&n)
+            && k == shape.vectors()
+            && (1..=MAX_RIG_VECTORS).contains(&k)
+            && m <= MAX_RIG_TABLE;
+        if !limits_ok {
+            return Err(Error::BadIrradianceRig);
+        }
+        // Within the limits these products cannot overflow even a 32-bit usize.
+        let len = PRELUDE + 4 * (2 * m + 3 * n + k * n);
+        if bytes.len() != len {
+            return Err(if bytes.len() < len {
+                Error::Truncated { needed: len as u64 }
+            } else {
+                Error::BadIrradianceRig
+            });
+        }
+        let words = bytes[16..].as_chunks::<4>().0;
+        if !words.iter().all(|w| f32::from_le_bytes(*w).is_finite()) {
+            return Err(Error::BadIrradianceRig);
+        }
+        let (head, rest) = words.split_at(7);
+        let (table, rest) = rest.split_at(2 * m);
+        let (samples, matrix) = rest.split_at(3 * n);
+        let rig = IrradianceRig {
+            shape,
+            centre: core::array::from_fn(|i| f32_at(head, i)),
+            half: core::array::from_fn(|i| f32_at(head, 3 + i)),
+            radius: f32_at(head, 6),
+            table,
+            samples,
+            matrix,
+        };
+        let table_ok = (0..m).all(|i| {
+            let [d, e] = rig.table_entry(i);
+            d > 0.0 && e >= 0.0 && (i == 0 || d > rig.table_entry(i - 1)[0])
+        });
+        if !(rig.half.iter().all(|&h| h > 0.0) && rig.radius > 0.0 && table_ok) {
+            return Err(Error::BadIrradianceRig);
+        }
+        Ok(rig)
+    }
+
+    /// The basis functions.
+    pub fn shape(&self) -> RigShape {
+        self.shape
+    }
+    /// SH vectors K.
+    pub fn vectors(&self) -> usize {
+        self.shape.vectors()
+    }
+    /// Sample points N.
+    pub fn samples(&self) -> usize {
+        self.samples.len() / 3
+    }
+    /// Centre of the rig's box, root frame.
+    pub fn centre(&self) -> [f32; 3] {
+        self.centre
+    }
+    /// Half-widths of the box.
+    pub fn half(&self) -> [f32; 3] {
+        self.half
+    }
+    /// The character's radius about the centre.
+    pub fn radius(&self) -> f32 {
+        self.radius
+    }
+    /// Sample point `i` in the root frame (`i < N`).
+    pub fn sample(&self, i: usize) -> [f32; 3] {
+        core::array::from_fn(|a| f32_at(self.samples, 3 * i + a))
+    }
+    /// Error-table entries.
+    pub fn table_len(&self) -> usize {
+        self.table.len() / 2
+    }
+    /// Error-table entry `i`: (distance / radius, grey levels per unit strength).
+    pub fn table_entry(&self, i: usize) -> [f32; 2] {
+        [f32_at(self.table, 2 * i), f32_at(self.table, 2 * i + 1)]
+    }
+
+    /// The weights `φ_k` at a root-frame point.
+    pub fn weights_at(&self, p_root: [f32; 3]) -> RigWeights {
+        let p = core::array::from_fn(|i| p_root[i] - self.centre[i]);
+        self.shape.weights(p, self.half)
+    }
+
+    /// The rig's K SH vectors from the lighting at its sample points: `sample(p, out)` adds
+    /// the lighting at world point `p` into `out` (n² RGB coefficients, zeroed before each
+    /// call); `out` receives `C_k = Σ_i L_ki l_i`, vector-major (`out[k · n² + c]`).
+    /// `scratch` holds one sample's lighting (at least n² entries). Costs N light projections
+    /// and 3 K N n² multiply–adds.
+    pub fn vectors_from(
+        &self,
+        coeffs: usize,
+        placement: &Placement,
+        scratch: &mut [[f32; 3]],
+        mut sample: impl FnMut([f32; 3], &mut [[f32; 3]]),
+        out: &mut [[f32; 3]],
+    ) -> Result<(), Error> {
+        let k = self.vectors();
+        let need = |found: usize, expected: usize| {
+            if found < expected {
+                Err(Error::BufferTooSmall { needed: expected })
+            } else {
+                Ok(())
+            }
+        };
+        need(scratch.len(), coeffs)?;
+        need(out.len(), k * coeffs)?;
+        let (l, out) = (&mut scratch[..coeffs], &mut out[..k * coeffs]);
+        out.fill([0.0; 3]);
+        let n = self.samples();
+        for i in 0..n {
+            l.fill([0.0; 3]);
+            sample(placement.to_world(self.sample(i)), l);
+            for (kk, ck) in out.chunks_exact_mut(coeffs).enumerate() {
+                let w = f32_at(self.matrix, kk * n + i);
+                for (c, li) in ck.iter_mut().zip(l.iter()) {
+                    for ch in 0..3 {
+                        c[ch] += w * li[ch];
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The rig's lighting at a world point: `Σ_k φ_k(p) C_k` into `out` (n² RGB).
+    pub fn lighting_at(
+        &self,
+        vectors: &[[f32; 3]],
+        placement: &Placement,
+        p_world: [f32; 3],
+        out: &mut [[f32; 3]],
+    ) {
+        let coeffs = out.len();
+        out.fill([0.0; 3]);
+        for (k, w) in self.weights_at(placement.to_root(p_world)).pairs() {
+            let Some(ck) = vectors.get(k * coeffs..(k + 1) * coeffs) else {
+                continue;
+            };
+            for (o, c) in out.iter_mut().zip(ck) {
+                for ch in 0..3 {
+                    o[ch] += w * c[ch];
+                }
+            }
+        }
+    }
+
+    /// The rig's worst error, grey levels per unit strength, at `distance` radii from its
+    /// centre: the table's upper envelope from there outwards (so the choice it drives is
+    /// monotone in distance), linearly interpolated; beyond the table the last entry scaled
+    /// by the inverse square, inside it the first.
+    pub fn error_at(&self, distance: f32) -> f32 {
+        let m = self.table_len();
+        if m == 0 {
+            return 0.0;
+        }
+        let [d_last, e_last] = self.table_entry(m - 1);
+        if distance >= d_last {
+            return e_last * (d_last / distance) * (d_last / distance);
+        }
+        // `upper`: the largest entry beyond the segment; the interpolation never drops below it.
+        let mut upper = e_last;
+        for i in (0..m - 1).rev() {
+            let ([d0, e0], [d1, e1]) = (self.table_entry(i), self.table_entry(i + 1));
+            upper = upper.max(e1);
+            if distance >= d0 {
+                let t = (distance - d0) / (d1 - d0);
+                return (e0 + (e1 - e0) * t).max(upper);
+            }
+        }
+        upper.max(self.table_entry(0)[1])
+    }
+
+    /// The share of a light the rig should carry, 0 (per-vertex evaluation) to 1 (the rig),
+    /// for a light of `strength` (grey-level units: a sphere light's radiance × π r², a point
+    /// light's intensity) at world distance `distance` from the rig's centre, so that the
+    /// rig's error stays below `target` grey levels. Between the distance where the rig meets
+    /// the target and `1 + band` times it the share rises linearly, so a moving light never
+    /// jumps from one path to the other.
+    pub fn rig_share(&self, strength: f32, distance: f32, target: f32, band: f32) -> f32 {
+        // No light, or one infinitely far: the rig carries it at no error.
+        if strength.is_nan() || strength <= 0.0 || !distance.is_finite() {
+            return 1.0;
+        }
+        let d = distance / self.radius;
+        let meets = |d: f32| self.error_at(d) * strength <= target;
+        if !meets(d) {
+            return 0.0;
+        }
+        // Bisection for the nearest distance that meets the target (the envelope decreases).
+        let (mut lo, mut hi) = (0.0f32, d);
+        if meets(lo) {
+            return 1.0;
+        }
+        for _ in 0..40 {
+            let mid = 0.5 * (lo + hi);
+            if meets(mid) { hi = mid } else { lo = mid }
+        }
+        let start = hi;
+        ((d - start) / (band.max(1e-6) * start)).clamp(0.0, 1.0)
+    }
+}
