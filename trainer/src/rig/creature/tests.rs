@@ -1,9 +1,8 @@
-use std::collections::HashMap;
-
 use glam::Vec3;
 
 use super::*;
 use crate::rig::character::CharacterError;
+use crate::rig::procedural::assert_parts_closed_and_outward;
 use crate::rig::{PoseError, RigError};
 
 fn creature() -> Creature {
@@ -100,34 +99,7 @@ fn creature_is_long_along_y_stands_on_the_ground_and_faces_minus_y() {
 fn creature_parts_are_closed_and_face_outward() {
     let c = creature();
     let mesh = c.bind_mesh();
-    let mut covered = 0;
-    for (name, range) in c.parts() {
-        let triangles = &mesh.triangles[range.clone()];
-        let mut directed: HashMap<(u32, u32), usize> = HashMap::new();
-        for t in triangles {
-            for k in 0..3 {
-                *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
-            }
-        }
-        for (&(a, b), &count) in &directed {
-            assert_eq!(count, 1, "{name}: edge {a}->{b} used {count} times");
-            assert_eq!(
-                directed.get(&(b, a)),
-                Some(&1),
-                "{name}: {a}->{b} has no twin"
-            );
-        }
-        let volume: f64 = triangles
-            .iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|i| Vec3::from(mesh.positions[i as usize]).as_dvec3());
-                a.dot(b.cross(c)) / 6.0
-            })
-            .sum();
-        assert!(volume > 0.0, "{name}: signed volume {volume}");
-        covered += range.len();
-    }
-    assert_eq!(covered, mesh.triangles.len());
+    assert_parts_closed_and_outward(mesh, c.parts());
     assert_eq!(c.parts().count(), 4 + 3 * 4);
 }
 
