@@ -39,6 +39,7 @@ pub use report::render::{
     Colormap, RenderError, View, lambert, render_scalar, save_png_atomic, side_by_side,
 };
 pub use rig::character::{Character, CharacterError, JointAngle};
+pub use rig::creature::Creature;
 pub use rig::gltf::{GltfError, GltfRig, HeldChannel};
 pub use rig::mannequin::{MocapOptions, MocapRig, MocapRigError, Retargeted};
 pub use rig::mesh::Mesh;

@@ -209,3 +209,51 @@ fn bad_input_fails_clearly_and_writes_nothing() {
         &["invalid model"],
     );
 }
+
+#[test]
+fn builtin_creature_simulates_and_character_is_refused_without_builtin() {
+    let dir = tempfile::tempdir().unwrap();
+    let npy = dir.path().join("lash.npy");
+    let npy_arg = npy.to_str().unwrap();
+    succeed(&[
+        "simulate",
+        "--builtin",
+        "--character",
+        "creature",
+        "--clip",
+        "lash",
+        "--rays",
+        "16",
+        "--order",
+        "2",
+        "--npy",
+        npy_arg,
+    ]);
+    let (shape, data) = read_npy(&npy);
+    assert_eq!(shape.len(), 3);
+    assert_eq!((shape[0], shape[2]), (90, 4), "{shape:?}");
+    assert!((5_000..=10_000).contains(&shape[1]), "{shape:?}");
+    assert!(data.iter().all(|x| x.is_finite()));
+
+    // The creature's clips are its own, and --character needs --builtin.
+    let refused = dir.path().join("refused.npy");
+    let refused_arg = refused.to_str().unwrap();
+    let creature = ["simulate", "--builtin", "--character", "creature"];
+    refuse(
+        &[&creature[..], &["--clip", "wave", "--npy", refused_arg]].concat(),
+        &["wave", "training, prowl, lash, crouch"],
+    );
+    refuse(
+        &[
+            "simulate",
+            "--obj-seq",
+            dir.path().to_str().unwrap(),
+            "--character",
+            "creature",
+            "--npy",
+            refused_arg,
+        ],
+        &["--character", "--builtin only", "--obj-seq"],
+    );
+    assert!(!refused.exists());
+}

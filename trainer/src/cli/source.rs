@@ -10,7 +10,9 @@ use crate::bake::BakeSettings;
 use crate::bake::budget::Workload;
 use crate::bake::clip::pose_all;
 use crate::io::outputs::{Input, gltf_inputs, obj_sequence_inputs};
-use crate::io::source::{ClipSpec, Poses, RigSource, joined, obj_sequence_meshes};
+use crate::io::source::{
+    BuiltinCharacter, ClipSpec, Poses, RigSource, joined, obj_sequence_meshes,
+};
 use crate::progress::Reporter;
 use crate::rig::mannequin::MocapOptions;
 use crate::rig::mesh::Mesh;
@@ -26,10 +28,15 @@ pub struct SourceArgs {
     /// CSV with one row of joint angles per pose (a header row is allowed).
     #[arg(long)]
     pub angles: Option<PathBuf>,
-    /// The built-in procedural character; pick its clips with --clip (training, wave, walk,
-    /// reach, stretch).
+    /// A built-in procedural character (see --character); pick its clips with --clip (the
+    /// human's: training, wave, walk, reach, stretch; the creature's: training, prowl, lash,
+    /// crouch).
     #[arg(long, conflicts_with_all = ["gltf", "bvh"])]
     pub builtin: bool,
+    /// Which built-in character --builtin gives: the human (the default) or the long-tailed,
+    /// four-legged creature, about 4 m long.
+    #[arg(long, value_enum)]
+    pub character: Option<CharacterArg>,
     /// A glTF 2.0 character (.gltf with embedded or external buffers, or .glb) with a skin;
     /// pick its animations with --clip.
     #[arg(long, conflicts_with_all = ["bvh", "obj_seq"])]
@@ -59,6 +66,24 @@ pub struct SourceArgs {
     /// Keep the BVH root's translation as pose entries (transfer does not depend on it).
     #[arg(long, requires = "bvh")]
     pub root_translation: bool,
+}
+
+/// `--character`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum CharacterArg {
+    /// The human with the wide-brimmed hat.
+    Human,
+    /// The long-tailed creature.
+    Creature,
+}
+
+impl From<CharacterArg> for BuiltinCharacter {
+    fn from(arg: CharacterArg) -> BuiltinCharacter {
+        match arg {
+            CharacterArg::Human => BuiltinCharacter::Human,
+            CharacterArg::Creature => BuiltinCharacter::Creature,
+        }
+    }
 }
 
 /// A character, the clips to use and the clips held out to validate on.
@@ -125,6 +150,11 @@ impl SourceArgs {
         {
             bail!("{flag} applies to --bvh motion capture only, not to {kind}");
         }
+        if self.character.is_some() && !self.builtin {
+            bail!(
+                "--character picks a built-in character; it applies to --builtin only, not to {kind}"
+            );
+        }
         if !(self.clip.is_empty() || self.builtin || self.gltf.is_some()) {
             let instead = if self.bvh.is_empty() {
                 ""
@@ -156,7 +186,7 @@ impl SourceArgs {
     /// or angles, whose own errors name them.
     pub fn origin(&self) -> Option<String> {
         if self.builtin {
-            return Some("the built-in character".to_owned());
+            return Some(self.builtin_character().description().to_owned());
         }
         let path = self
             .gltf
@@ -174,10 +204,16 @@ impl SourceArgs {
         })
     }
 
+    /// The built-in character --builtin gives (the human unless --character says otherwise).
+    fn builtin_character(&self) -> BuiltinCharacter {
+        self.character
+            .map_or_else(BuiltinCharacter::default, BuiltinCharacter::from)
+    }
+
     /// The character the options name, if any.
     fn rig_source(&self) -> Option<RigSource> {
         if self.builtin {
-            return Some(RigSource::Builtin);
+            return Some(RigSource::Builtin(self.builtin_character()));
         }
         if let Some(path) = &self.gltf {
             return Some(RigSource::Gltf {

@@ -9,6 +9,7 @@ use anyhow::{Context, Result, bail};
 
 use crate::progress::Reporter;
 use crate::rig::character::Character;
+use crate::rig::creature::Creature;
 use crate::rig::gltf::{GltfError, GltfRig};
 use crate::rig::mannequin::{MocapOptions, MocapRig, MocapRigError};
 use crate::rig::mesh::{Mesh, degenerate_note};
@@ -84,11 +85,39 @@ pub fn clip_names(clips: &[Clip]) -> String {
     names.join(" + ")
 }
 
+/// One of the built-in procedural characters.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BuiltinCharacter {
+    /// The human with the wide-brimmed hat ([`Character`]).
+    #[default]
+    Human,
+    /// The long-tailed, four-legged creature ([`Creature`]).
+    Creature,
+}
+
+impl BuiltinCharacter {
+    /// What messages call it.
+    pub fn description(self) -> &'static str {
+        match self {
+            BuiltinCharacter::Human => "the built-in character",
+            BuiltinCharacter::Creature => "the built-in creature",
+        }
+    }
+
+    /// Builds it.
+    pub fn build(self) -> Box<dyn Rig> {
+        match self {
+            BuiltinCharacter::Human => Box::new(Character::builtin()),
+            BuiltinCharacter::Creature => Box::new(Creature::builtin()),
+        }
+    }
+}
+
 /// A character to load, and how to sample its clips.
 #[derive(Clone, Debug)]
 pub enum RigSource {
-    /// The built-in procedural character.
-    Builtin,
+    /// A built-in procedural character.
+    Builtin(BuiltinCharacter),
     /// A glTF 2.0 character (`.gltf` or `.glb`) with a skin, its animations sampled at `fps`.
     Gltf {
         /// The file.
@@ -123,8 +152,8 @@ pub enum ClipSpec {
 
 /// A loaded character, from which clips are taken.
 pub enum LoadedRig {
-    /// The built-in character.
-    Builtin(Box<Character>),
+    /// A built-in character.
+    Builtin(Box<dyn Rig>),
     /// A glTF character, with its file.
     Gltf(Box<GltfRig>, PathBuf),
     /// A mannequin, with the file its skeleton (and its own motion) comes from.
@@ -136,7 +165,7 @@ impl RigSource {
     /// kind beside it. The bind mesh's degenerate triangles are noted to `reporter`.
     pub fn load(&self, reporter: &dyn Reporter) -> Result<LoadedRig> {
         let loaded = match self {
-            RigSource::Builtin => LoadedRig::Builtin(Box::new(Character::builtin())),
+            RigSource::Builtin(which) => LoadedRig::Builtin(which.build()),
             RigSource::Gltf { path, fps } => {
                 must_exist(path, &["gltf", "glb"])?;
                 let rig = GltfRig::load(path, *fps)?;
@@ -162,7 +191,7 @@ impl RigSource {
     /// What the character's mesh is called in notes.
     fn mesh_name(&self) -> String {
         match self {
-            RigSource::Builtin => "the built-in character".to_owned(),
+            RigSource::Builtin(which) => which.description().to_owned(),
             RigSource::Gltf { path, .. } => format!("{}, skinned mesh", path.display()),
             RigSource::Mocap { skeleton, .. } => {
                 format!("the mannequin of {}", skeleton.display())

@@ -7,7 +7,7 @@
 //!   (linear blend skinning), [`rotation_vector`] (the log and exp maps behind glTF and
 //!   mannequin pose vectors), and the lathe surfaces of the built-in character and the
 //!   mannequin;
-//! - the rigs: [`character`] (built in), [`gltf`] (glTF 2.0 skins and animations), [`mocap`]
+//! - the rigs: [`character`] and [`creature`] (built in, sharing one construction and clip machinery), [`gltf`] (glTF 2.0 skins and animations), [`mocap`]
 //!   (BVH motion-capture files) and [`mannequin`] (the rig a motion-capture skeleton drives);
 //! - what a model needs of a rig: [`pose_layout`] (which pose entries it takes),
 //!   [`bone_frames`] (transfer in each vertex's bone frame) and [`transfer_rotation`]
@@ -15,6 +15,7 @@
 
 pub mod bone_frames;
 pub mod character;
+pub mod creature;
 pub mod gltf;
 pub(crate) mod lathe;
 pub mod locality;
@@ -22,6 +23,7 @@ pub mod mannequin;
 pub mod mesh;
 pub mod mocap;
 pub mod pose_layout;
+pub(crate) mod procedural;
 pub mod rotation_vector;
 pub mod skin;
 pub mod transfer_rotation;
@@ -94,7 +96,7 @@ pub fn check_pose(
 /// `dyn Rig` still reports which file, entry or clip was wrong.
 #[derive(Debug, thiserror::Error)]
 pub enum RigError {
-    /// From the built-in character.
+    /// From a built-in character (the human or the creature).
     #[error(transparent)]
     Character(#[from] CharacterError),
     /// From a glTF character.

@@ -17,9 +17,10 @@ use std::ops::Range;
 use glam::Mat4;
 
 use crate::rig::mesh::Mesh;
+use crate::rig::procedural::{self, Articulated, find_clip};
 use crate::rig::skin::{Skin, SkinError};
-use crate::rig::{Clip, PoseError, Rig, RigError, check_pose};
-use skeleton::{Dof, Skeleton};
+use crate::rig::{Clip, PoseError, Rig, RigError};
+use skeleton::Skeleton;
 
 /// Why a pose or clip request failed.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -59,12 +60,7 @@ pub struct JointAngle {
 /// The built-in character: bind mesh, skin, skeleton and joint angles.
 #[derive(Clone, Debug)]
 pub struct Character {
-    bind: Mesh,
-    skin: Skin,
-    skeleton: Skeleton,
-    dofs: Vec<Dof>,
-    angles: Vec<JointAngle>,
-    parts: Vec<(&'static str, Range<usize>)>,
+    body: Articulated,
 }
 
 impl Character {
@@ -72,116 +68,95 @@ impl Character {
     /// platform (the geometry is computed in f64 and rounded once to f32).
     pub fn builtin() -> Character {
         let skeleton = Skeleton::new();
-        let dofs = skeleton::dofs();
         let (body, names) = body::build(&skeleton);
-        let bind = Mesh::with_area_weighted_normals(body.positions, body.triangles);
-        let skin = Skin::from_influences(&body.influences).unwrap_or_else(|e| {
-            unreachable!("built-in weights are positive partitions of unity: {e}")
-        });
-        let angles = dofs
-            .iter()
-            .map(|d| JointAngle {
-                name: d.name,
-                rest: d.rest,
-                min: d.min,
-                max: d.max,
-            })
-            .collect();
         Character {
-            bind,
-            skin,
-            skeleton,
-            dofs,
-            angles,
-            parts: names.into_iter().zip(body.parts).collect(),
+            body: Articulated::new(
+                &skeleton.parents,
+                &skeleton.bind,
+                skeleton::dofs(),
+                body,
+                names,
+            ),
         }
     }
 
     /// Number of joint angles a pose has.
     pub fn pose_len(&self) -> usize {
-        self.angles.len()
+        self.body.angles.len()
     }
 
     /// The joint angles, in pose order.
     pub fn joint_angles(&self) -> &[JointAngle] {
-        &self.angles
+        &self.body.angles
     }
 
     /// `(min, max)` of each joint angle, in pose order.
     pub fn limits(&self) -> Vec<(f64, f64)> {
-        self.angles.iter().map(|a| (a.min, a.max)).collect()
+        self.body.limits()
     }
 
     /// The training clip ("training", 250 frames at 30 fps) that spans the pose space.
     pub fn training_clip(&self) -> Clip {
-        clips::training(&self.angles)
+        procedural::clips::training(&self.body.angles, clips::TRAINING_SEED)
     }
 
     /// The novel test clips ("wave", "walk", "reach"): motions unlike the training clip,
     /// inside the limits.
     pub fn novel_clips(&self) -> Vec<Clip> {
-        clips::novel(&self.angles)
+        clips::novel(&self.body.angles)
     }
 
     /// The validation clip ("stretch"): a motion unlike the training clip and the novel
     /// clips, held out of training to choose the model by.
     pub fn validation_clip(&self) -> Clip {
-        clips::stretch(&self.angles)
+        clips::stretch(&self.body.angles)
     }
 
     /// Names and triangle ranges of the closed parts the mesh is made of, in mesh order.
     pub fn parts(&self) -> impl Iterator<Item = (&'static str, Range<usize>)> + '_ {
-        self.parts.iter().cloned()
+        self.body.parts.iter().cloned()
     }
-}
 
-impl Character {
     /// Every clip, in the order [`Rig::clip_names`] lists them.
-    fn clips(&self) -> impl Iterator<Item = Clip> {
-        std::iter::once(self.training_clip())
-            .chain(self.novel_clips())
-            .chain(std::iter::once(self.validation_clip()))
+    fn clips(&self) -> Vec<Clip> {
+        let mut clips = vec![self.training_clip()];
+        clips.extend(self.novel_clips());
+        clips.push(self.validation_clip());
+        clips
     }
 }
 
 /// The built-in character as a [`Rig`]. Its errors are [`RigError::Character`].
 impl Rig for Character {
     fn angle_names(&self) -> Vec<String> {
-        self.angles.iter().map(|a| a.name.to_owned()).collect()
+        self.body.angle_names()
     }
 
     fn bind_mesh(&self) -> &Mesh {
-        &self.bind
+        &self.body.bind
     }
 
     /// The bind pose: the angles for which `pose` returns the bind mesh.
     fn rest_pose(&self) -> Vec<f64> {
-        self.angles.iter().map(|a| a.rest).collect()
+        self.body.rest_pose()
     }
 
     fn skin(&self) -> &Skin {
-        &self.skin
+        &self.body.skin
     }
 
     /// Skinning matrices (bind space → posed space) for each joint at the joint angles `pose`.
     fn joint_matrices(&self, pose: &[f64]) -> Result<Vec<Mat4>, RigError> {
-        check_pose(pose, self.angles.len(), |i| self.angles[i].name.to_owned())
-            .map_err(CharacterError::Pose)?;
-        Ok(skeleton::joint_matrices(&self.skeleton, &self.dofs, pose))
+        self.body.joint_matrices(pose)
     }
 
     /// The training clip first, then the novel clips, then the validation clip.
     fn clip_names(&self) -> Vec<String> {
-        self.clips().map(|c| c.name).collect()
+        self.clips().into_iter().map(|c| c.name).collect()
     }
 
     fn clip(&self, name: &str) -> Result<Clip, RigError> {
-        self.clips().find(|c| c.name == name).ok_or_else(|| {
-            RigError::from(CharacterError::UnknownClip {
-                name: name.into(),
-                available: self.clip_names().join(", "),
-            })
-        })
+        find_clip(self.clips(), name)
     }
 }
 

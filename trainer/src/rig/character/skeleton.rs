@@ -1,11 +1,13 @@
 //! The built-in character's skeleton: joints in the bind pose, the named joint angles that
-//! drive them, and forward kinematics from angles to skinning matrices.
+//! drive them (posed by the shared forward kinematics of [`crate::rig::procedural`]).
 //!
 //! Frame: z up, feet on z = 0, the character faces −y, so its left is +x. Joint frames are
 //! world-aligned in the bind pose (an A-pose, arms 40° below horizontal), so every joint angle
 //! is a rotation about a fixed bind-space axis, applied at its joint.
 
-use glam::{DMat4, DQuat, DVec3, Mat4};
+use glam::DVec3;
+
+use crate::rig::procedural::{Dof, dof};
 
 /// Joint indices, named so the body and clip tables read as anatomy.
 pub(crate) mod joint {
@@ -87,17 +89,6 @@ impl Skeleton {
     }
 }
 
-/// One joint angle: a rotation of `joint` about a bind-space `axis` by `angle − rest`.
-#[derive(Clone, Debug)]
-pub(crate) struct Dof {
-    pub name: &'static str,
-    pub joint: usize,
-    pub axis: DVec3,
-    pub rest: f64,
-    pub min: f64,
-    pub max: f64,
-}
-
 /// The joint angles, in the order poses list them. Within a joint, earlier angles are applied
 /// after later ones (`R = R_first · R_second`), so e.g. the shoulder abducts in the bind plane
 /// and then swings that plane forward.
@@ -112,14 +103,6 @@ pub(crate) fn dofs() -> Vec<Dof> {
     let y = DVec3::Y;
     let z = DVec3::Z;
     let forward = DVec3::NEG_Y;
-    let dof = |name, joint, axis: DVec3, rest, min, max| Dof {
-        name,
-        joint,
-        axis: axis.normalize(),
-        rest,
-        min,
-        max,
-    };
     let arm_rest = std::f64::consts::FRAC_PI_2 - ARM_DROOP;
     let left_arm = left_arm_direction();
     let right_arm = left_arm * DVec3::new(-1.0, 1.0, 1.0);
@@ -176,33 +159,4 @@ pub(crate) fn dofs() -> Vec<Dof> {
         dof("r_knee_flex", R_KNEE, x, 0.0, 0.0, 2.2),
         dof("r_ankle_flex", R_ANKLE, -x, 0.0, -0.6, 0.4),
     ]
-}
-
-/// Forward kinematics: one skinning matrix per joint, mapping bind-space positions to posed
-/// ones. Computed in f64 and rounded once, so long chains do not accumulate f32 error.
-/// `angles` must have one value per entry of `dofs` (checked by the caller).
-pub(crate) fn joint_matrices(skeleton: &Skeleton, dofs: &[Dof], angles: &[f64]) -> Vec<Mat4> {
-    let mut local = [DQuat::IDENTITY; joint::COUNT];
-    for (dof, &angle) in dofs.iter().zip(angles) {
-        local[dof.joint] *= DQuat::from_axis_angle(dof.axis, angle - dof.rest);
-    }
-    let mut world_rot = [DQuat::IDENTITY; joint::COUNT];
-    let mut world_pos = skeleton.bind;
-    // Parents precede children in the joint table, so one pass suffices.
-    for j in 0..joint::COUNT {
-        match skeleton.parents[j] {
-            None => world_rot[j] = local[j],
-            Some(p) => {
-                world_rot[j] = world_rot[p] * local[j];
-                world_pos[j] = world_pos[p] + world_rot[p] * (skeleton.bind[j] - skeleton.bind[p]);
-            }
-        }
-    }
-    (0..joint::COUNT)
-        .map(|j| {
-            let m = DMat4::from_rotation_translation(world_rot[j], world_pos[j])
-                * DMat4::from_translation(-skeleton.bind[j]);
-            m.as_mat4()
-        })
-        .collect()
 }

@@ -1,6 +1,5 @@
-use std::collections::HashMap;
-
 use super::*;
+use crate::rig::procedural::assert_parts_closed_and_outward;
 
 fn character() -> Character {
     Character::builtin()
@@ -105,35 +104,7 @@ fn the_crown_is_the_top_of_the_head() {
 fn character_parts_are_closed_and_face_outward() {
     let c = character();
     let mesh = c.bind_mesh();
-    let mut covered = 0;
-    for (name, range) in c.parts() {
-        let triangles = &mesh.triangles[range.clone()];
-        // Each directed edge once and its reverse once: closed, consistently wound.
-        let mut directed: HashMap<(u32, u32), usize> = HashMap::new();
-        for t in triangles {
-            for k in 0..3 {
-                *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
-            }
-        }
-        for (&(a, b), &count) in &directed {
-            assert_eq!(count, 1, "{name}: edge {a}->{b} used {count} times");
-            assert_eq!(
-                directed.get(&(b, a)),
-                Some(&1),
-                "{name}: edge {a}->{b} has no twin"
-            );
-        }
-        let volume: f64 = triangles
-            .iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|i| glam::Vec3::from(mesh.positions[i as usize]).as_dvec3());
-                a.dot(b.cross(c)) / 6.0
-            })
-            .sum();
-        assert!(volume > 0.0, "{name}: signed volume {volume}");
-        covered += range.len();
-    }
-    assert_eq!(covered, mesh.triangles.len());
+    assert_parts_closed_and_outward(mesh, c.parts());
     // Vertex normals agree with the outward faces around them.
     for t in &mesh.triangles {
         let [a, b, cc] = t.map(|i| glam::Vec3::from(mesh.positions[i as usize]));
