@@ -17,6 +17,8 @@
 //! - The SH convention (real, orthonormal, `c = l² + l + m`, no Condon–Shortley phase, z up)
 //!   is stated once, at [`eval_basis`]; [`project_directional`] and [`clamped_cosine`] project
 //!   lights, [`ShRotation`] rotates SH vectors.
+//! - [`Light`] (sphere, point, directional) projects into RGB SH radiance with its gradient,
+//!   and gives the exact unshadowed irradiance the SH path ([`irradiance_sh`]) is judged by.
 //!
 //! ```
 //! use aprt_core::{LitWeights, Model, PoseWeights, project_directional};
@@ -42,6 +44,7 @@
 
 mod blob;
 mod eval;
+mod light;
 mod math;
 mod model;
 mod rotation;
@@ -53,6 +56,11 @@ pub use blob::format::{
 };
 pub use blob::{AngleNames, BlobSource, Dim, Error, Input, ModelInfo, SourceError};
 pub use eval::{LitWeights, MAX_POSE_WEIGHTS, PoseWeights};
+pub use light::{
+    DERIVATIVE_COS2_FLOOR, DirectionalLight, GRADIENT_STEP, Light, LightError, PointLight, Rgb,
+    SphereLight, Window, apply_window, irradiance_sh, sphere_light_bands,
+    sphere_light_derivative_bands,
+};
 pub use model::{Model, StreamedModel};
 pub use rotation::{Rotation, ShRotation};
 pub use sh::{
