@@ -17,6 +17,8 @@
 //! - The SH convention (real, orthonormal, `c = l² + l + m`, no Condon–Shortley phase, z up)
 //!   is stated once, at [`eval_basis`]; [`project_directional`] and [`clamped_cosine`] project
 //!   lights, [`ShRotation`] rotates SH vectors.
+//! - [`Light`] (sphere, point, directional) projects into RGB SH radiance with its gradient,
+//!   and gives the exact unshadowed irradiance the SH path ([`irradiance_sh`]) is judged by.
 //!
 //! ```
 //! use aprt_core::{LitWeights, Model, PoseWeights, project_directional};
@@ -43,6 +45,7 @@
 mod blob;
 mod eval;
 mod irradiance_rig;
+mod light;
 mod math;
 mod model;
 mod rotation;
@@ -57,6 +60,11 @@ pub use eval::{LitWeights, MAX_POSE_WEIGHTS, PoseWeights};
 pub use irradiance_rig::{
     AxisKind, IrradianceRig, MAX_LATTICE, MAX_RIG_SAMPLES, MAX_RIG_TABLE, MAX_RIG_VECTORS,
     Placement, RIG_SUPPORT, RigLayout, RigLitWeights, RigShape, RigWeights,
+};
+pub use light::{
+    DERIVATIVE_COS2_FLOOR, DirectionalLight, GRADIENT_STEP, Light, LightError, PointLight, Rgb,
+    SphereLight, Window, apply_window, irradiance_sh, sphere_light_bands,
+    sphere_light_derivative_bands,
 };
 pub use model::{Model, StreamedModel};
 pub use rotation::{Rotation, ShRotation};

@@ -13,8 +13,8 @@ pub(crate) fn sqrt_f64(x: f64) -> f64 {
     libm::sqrt(x)
 }
 
-/// Cosine.
-#[cfg(test)]
+/// Cosine (the deringing windows, the gradient's stencil directions).
+#[inline]
 pub(crate) fn cos(x: f32) -> f32 {
     libm::cosf(x)
 }
@@ -35,6 +35,12 @@ pub(crate) fn abs(x: f32) -> f32 {
 #[inline]
 pub(crate) fn atan2_f64(y: f64, x: f64) -> f64 {
     libm::atan2(y, x)
+}
+
+/// Arc cosine in f64 (the horizon-clipped sphere light).
+#[inline]
+pub(crate) fn acos_f64(x: f64) -> f64 {
+    libm::acos(x)
 }
 
 /// `√(x² + y²)` without intermediate overflow, in f64.

@@ -69,7 +69,7 @@ fn check(order: usize, out_len: usize) -> Result<usize, ShError> {
 /// would underflow into subnormals (components below ~1e-19, where it loses digits and the
 /// result is no longer unit length) or overflow (above ~1e19), the components are first
 /// divided by the largest one. The common case pays one extra comparison.
-fn normalise(dir: [f32; 3]) -> Result<[f32; 3], ShError> {
+pub(crate) fn normalise(dir: [f32; 3]) -> Result<[f32; 3], ShError> {
     let len2 = dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2];
     if len2.is_normal() {
         let inv = 1.0 / math::sqrt(len2);
