@@ -9,6 +9,8 @@
 //! - [`io`]: OBJ, angle CSV and `.npy` files, atomic writes, and where poses come from;
 //! - [`bake`]: the transfer simulation, with checkpoints for long bakes;
 //! - [`model`]: the linear model, its fit, the blob writer and evaluation through `aprt-core`;
+//! - [`lighting`]: lights (the lights file) and irradiance through SH and exactly
+//!   (*Irradiance Rigs*);
 //! - [`report`]: experiments against baselines, pictures, plots, the demo and the results
 //!   document;
 //! - [`cli`]: the `aprt` command line.
@@ -16,6 +18,7 @@
 pub mod bake;
 pub mod cli;
 pub mod io;
+pub mod lighting;
 pub mod model;
 pub mod progress;
 pub mod report;

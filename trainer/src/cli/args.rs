@@ -233,6 +233,78 @@ pub struct InspectArgs {
     pub json: bool,
 }
 
+/// `aprt light`.
+#[derive(Debug, Args)]
+pub struct LightArgs {
+    /// What to compute.
+    #[command(subcommand)]
+    pub command: LightCommand,
+}
+
+/// The `aprt light` commands.
+#[derive(Debug, clap::Subcommand)]
+pub enum LightCommand {
+    /// Irradiance at a point from a lights file, through SH and exactly (unshadowed).
+    Irradiance(IrradianceArgs),
+}
+
+/// `aprt light irradiance`.
+#[derive(Debug, Args)]
+pub struct IrradianceArgs {
+    /// The lights file (`[[light]]` tables; see fixtures/lights/).
+    pub lights: PathBuf,
+    /// The point, X,Y,Z.
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub at: [f32; 3],
+    /// The surface normal, X,Y,Z (any non-zero length).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub normal: [f32; 3],
+    /// SH order of the SH path.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u8).range(1..=6))]
+    pub order: u8,
+    /// Window each light's SH radiance against ringing (costs accuracy; see `aprt_core::Window`).
+    #[arg(long, value_enum)]
+    pub dering: Option<DeringArg>,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `--dering`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum DeringArg {
+    /// `(1 + cos(π l / n))/2`.
+    Hann,
+    /// `sin(π l / n)/(π l / n)`.
+    Lanczos,
+}
+
+impl From<DeringArg> for aprt_core::Window {
+    fn from(arg: DeringArg) -> aprt_core::Window {
+        match arg {
+            DeringArg::Hann => aprt_core::Window::Hann,
+            DeringArg::Lanczos => aprt_core::Window::Lanczos,
+        }
+    }
+}
+
+/// Three finite numbers separated by commas.
+fn parse_vec3(text: &str) -> std::result::Result<[f32; 3], String> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let [x, y, z] = parts[..] else {
+        return Err(format!("expected X,Y,Z, got {} values", parts.len()));
+    };
+    let mut out = [0.0f32; 3];
+    for (o, p) in out.iter_mut().zip([x, y, z]) {
+        *o = p
+            .parse::<f32>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| format!("{p:?} is not a finite number"))?;
+    }
+    Ok(out)
+}
+
 /// Precision of a model's large sections (weights and per-vertex rows), as `--precision`
 /// names it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]

@@ -12,8 +12,8 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 
 pub use args::{
-    BakeArgs, DemoArgs, EvalArgs, FitArgs, InspectArgs, PrecisionArg, ResultsArgs, SimulateArgs,
-    TrainArgs, TransferArgs,
+    BakeArgs, DemoArgs, DeringArg, EvalArgs, FitArgs, InspectArgs, IrradianceArgs, LightArgs,
+    LightCommand, PrecisionArg, ResultsArgs, SimulateArgs, TrainArgs, TransferArgs,
 };
 pub use source::SourceArgs;
 pub use terminal::Terminal;
@@ -55,6 +55,8 @@ pub enum Command {
     Inspect(InspectArgs),
     /// Regenerate the results document on the real glTF characters and BVH motion capture.
     Results(ResultsArgs),
+    /// Lights: irradiance at a point from a lights file, through SH and exactly.
+    Light(LightArgs),
 }
 
 /// Runs one command. An interrupted run (SIGINT, SIGTERM, SIGHUP) leaves no temporary file.
@@ -68,7 +70,53 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Eval(args) => eval(&args),
         Command::Inspect(args) => inspect(&args),
         Command::Results(args) => results(&args),
+        Command::Light(args) => match args.command {
+            LightCommand::Irradiance(args) => light_irradiance(&args),
+        },
     }
+}
+
+fn light_irradiance(args: &IrradianceArgs) -> Result<()> {
+    if args.normal.iter().all(|&x| x == 0.0) {
+        bail!("--normal 0,0,0: the normal must have non-zero length");
+    }
+    let lights = crate::lighting::read_lights(&args.lights)?;
+    let report = crate::lighting::irradiance(
+        &lights,
+        args.at,
+        args.normal,
+        args.order as usize,
+        args.dering.map(Into::into),
+    )
+    .with_context(|| {
+        let [x, y, z] = args.at;
+        format!("{}: at {x},{y},{z}", args.lights.display())
+    })?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+        return Ok(());
+    }
+    let rgb = |c: [f32; 3]| format!("{:.6} {:.6} {:.6}", c[0], c[1], c[2]);
+    println!(
+        "{} light(s) at {:?}, normal {:?}, SH order {}{}",
+        report.lights.len(),
+        report.at,
+        report.normal,
+        report.order,
+        report
+            .window
+            .map(|w| format!(", {w} window"))
+            .unwrap_or_default()
+    );
+    println!("  irradiance, SH path  {}", rgb(report.sh));
+    println!("  irradiance, exact    {}", rgb(report.exact));
+    println!("  |SH - exact|         {}", rgb(report.abs_error));
+    let g = report.grey_levels;
+    println!(
+        "  8-bit grey levels    {:.2} {:.2} {:.2}  (white Lambertian surface, 255 |SH - exact| / pi)",
+        g[0], g[1], g[2]
+    );
+    Ok(())
 }
 
 fn demo(args: &DemoArgs) -> Result<()> {
