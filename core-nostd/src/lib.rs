@@ -58,8 +58,9 @@ pub use blob::format::{
 pub use blob::{AngleNames, BlobSource, Dim, Error, Input, ModelInfo, SourceError};
 pub use eval::{LitWeights, MAX_POSE_WEIGHTS, PoseWeights};
 pub use irradiance_rig::{
-    AxisKind, IrradianceRig, MAX_LATTICE, MAX_RIG_SAMPLES, MAX_RIG_TABLE, MAX_RIG_VECTORS,
-    Placement, RIG_SUPPORT, RigLayout, RigLitWeights, RigShape, RigWeights,
+    AxisKind, DEFAULT_BAND, IrradianceRig, MAX_LATTICE, MAX_RIG_SAMPLES, MAX_RIG_TABLE,
+    MAX_RIG_VECTORS, Placement, RIG_SUPPORT, RigLayout, RigLitWeights, RigShape, RigWeights,
+    light_strength,
 };
 pub use light::{
     DERIVATIVE_COS2_FLOOR, DirectionalLight, GRADIENT_STEP, Light, LightError, PointLight, Rgb,

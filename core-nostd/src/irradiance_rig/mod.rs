@@ -11,14 +11,16 @@
 //!
 //! The rig also carries the error table of the paper's section 3.1: the worst shading error
 //! it makes, in 8-bit grey levels per unit of light strength, against normalised distance
-//! from its centre. [`IrradianceRig::rig_share`] turns it into the per-light choice between
+//! from its centre. [`IrradianceRig::share_of`] turns it into the per-light choice between
 //! the rig and per-vertex (analytic) evaluation, blended over a band so nothing pops.
 
 mod section;
 mod shape;
+mod split;
 
 pub use section::{IrradianceRig, MAX_RIG_SAMPLES, MAX_RIG_TABLE, RigLayout};
 pub use shape::{AxisKind, MAX_LATTICE, MAX_RIG_VECTORS, RIG_SUPPORT, RigShape, RigWeights};
+pub use split::{DEFAULT_BAND, light_strength};
 
 /// Where the character's root frame is in the world this frame: `world = rotation · p +
 /// translation`, the rotation row-major and orthonormal.

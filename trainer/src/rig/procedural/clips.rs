@@ -14,10 +14,11 @@ const TRAINING_REACH: f64 = 0.95;
 
 /// splitmix64: a tiny, well-mixed generator so the clip is identical on every platform and
 /// does not depend on a random-number crate's version.
-struct SplitMix(u64);
+pub(crate) struct SplitMix(pub(crate) u64);
 
 impl SplitMix {
-    fn next_unit(&mut self) -> f64 {
+    /// The next value, uniform in [0, 1).
+    pub(crate) fn next_unit(&mut self) -> f64 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
