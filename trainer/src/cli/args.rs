@@ -270,6 +270,40 @@ pub struct IrradianceArgs {
     pub json: bool,
 }
 
+/// `aprt rig`.
+#[derive(Debug, Args)]
+pub struct RigArgs {
+    /// A static mesh (OBJ); or name a character with the source flags instead (its bind pose
+    /// and training poses are fitted, frame --frame of its clip evaluated).
+    pub mesh: Option<PathBuf>,
+    /// The character, when no mesh is given.
+    #[command(flatten)]
+    pub source: SourceArgs,
+    /// Frame of the clip to evaluate on (characters only).
+    #[arg(long, default_value_t = 0)]
+    pub frame: usize,
+    /// The lights file (`[[light]]` tables; see fixtures/lights/).
+    #[arg(long)]
+    pub lights: PathBuf,
+    /// Rig kind: constant, gradient, lattice:NXxNYxNZ or mixed:x=KIND,y=KIND,z=KIND (KIND
+    /// constant, gradient or latticeN), over the character's own axes.
+    #[arg(long)]
+    pub rig: crate::lighting::RigKind,
+    /// The error a light may cost the rig before it is evaluated per vertex, in 8-bit grey
+    /// levels (of a white Lambertian surface, radiance 1 = white).
+    #[arg(long, default_value_t = 1.0)]
+    pub target_error: f32,
+    /// SH order of the lighting.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u8).range(1..=6))]
+    pub order: u8,
+    /// Surface samples of the fit (default 6 per SH vector, at least 64).
+    #[arg(long)]
+    pub samples: Option<usize>,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
 /// `--dering`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum DeringArg {

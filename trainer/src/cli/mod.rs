@@ -3,6 +3,7 @@
 //! and prints what it wrote; the library reports progress through [`Terminal`].
 
 mod args;
+mod irradiance_rig;
 mod source;
 mod terminal;
 
@@ -13,7 +14,7 @@ use clap::{Parser, Subcommand};
 
 pub use args::{
     BakeArgs, DemoArgs, DeringArg, EvalArgs, FitArgs, InspectArgs, IrradianceArgs, LightArgs,
-    LightCommand, PrecisionArg, ResultsArgs, SimulateArgs, TrainArgs, TransferArgs,
+    LightCommand, PrecisionArg, ResultsArgs, RigArgs, SimulateArgs, TrainArgs, TransferArgs,
 };
 pub use source::SourceArgs;
 pub use terminal::Terminal;
@@ -57,6 +58,9 @@ pub enum Command {
     Results(ResultsArgs),
     /// Lights: irradiance at a point from a lights file, through SH and exactly.
     Light(LightArgs),
+    /// Fit an irradiance rig to a mesh or character and report, for a lights file, which
+    /// lights it carries, its error against exact evaluation and its cost per frame.
+    Rig(RigArgs),
 }
 
 /// Runs one command. An interrupted run (SIGINT, SIGTERM, SIGHUP) leaves no temporary file.
@@ -70,6 +74,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Eval(args) => eval(&args),
         Command::Inspect(args) => inspect(&args),
         Command::Results(args) => results(&args),
+        Command::Rig(args) => irradiance_rig::run(&args),
         Command::Light(args) => match args.command {
             LightCommand::Irradiance(args) => light_irradiance(&args),
         },

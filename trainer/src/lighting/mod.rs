@@ -3,6 +3,7 @@
 //! `aprt_core` (`Light`), so engines and the trainer evaluate the same ones. (In the trainer,
 //! `rig/` is the skinned character; paper 2's lighting rigs are called irradiance rigs here.)
 
+pub mod evaluate;
 pub mod lights_file;
 pub mod rig_fit;
 pub mod rig_kind;
@@ -11,6 +12,7 @@ pub mod surface_samples;
 use aprt_core::{Light, LightError, MAX_COEFFS, Rgb, Window, apply_window, irradiance_sh};
 use serde::Serialize;
 
+pub use evaluate::{RigEvaluation, RigSettings, evaluate_rig};
 pub use lights_file::{LightsFileError, light_from_table, parse_lights, read_lights};
 pub use rig_fit::{FittedRig, GreyError, fit_rig, rig_error, rig_vectors};
 pub use rig_kind::{RigKind, RigKindError};

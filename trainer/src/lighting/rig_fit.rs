@@ -16,6 +16,7 @@ use rayon::prelude::*;
 use super::rig_kind::RigKind;
 use super::surface_samples::surface_samples;
 use crate::rig::mesh::Mesh;
+use crate::rig::{Clip, Rig, RigError};
 
 /// Surface samples per rig vector, and at least this many in all: a least-squares fit wants
 /// several samples per unknown, and a lattice's corner cells hold little surface.
@@ -230,6 +231,21 @@ fn bounds(meshes: &[&Mesh]) -> ([f64; 3], [f64; 3], f64) {
         })
         .fold(1e-3, f64::max);
     (centre, half, radius)
+}
+
+/// Poses of a clip the rig of a deforming character is fitted over, besides the bind pose.
+pub const FIT_POSES: usize = 24;
+
+/// The meshes a character's rig is fitted over: the bind pose and up to [`FIT_POSES`] frames
+/// spread evenly over `clip`, as the rig poses them (its root frame).
+pub fn fitting_meshes(rig: &dyn Rig, clip: &Clip) -> Result<Vec<Mesh>, RigError> {
+    let frames = clip.frames.len();
+    let step = frames.div_ceil(FIT_POSES).max(1);
+    let mut meshes = vec![rig.bind_mesh().clone()];
+    for pose in clip.frames.iter().step_by(step) {
+        meshes.push(rig.pose(pose)?);
+    }
+    Ok(meshes)
 }
 
 /// Fits a rig of `kind` to `meshes`: the character's surface in its bind pose and training

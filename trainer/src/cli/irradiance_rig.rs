@@ -1,0 +1,105 @@
+//! `aprt rig`: fit an irradiance rig to a mesh or a character and report, for a lights file,
+//! each light's path, the error against exact evaluation and the core's cost per frame.
+
+use anyhow::{Context, Result, bail};
+
+use crate::cli::args::RigArgs;
+use crate::cli::terminal::Terminal;
+use crate::io::outputs::{Input, check};
+use crate::lighting::rig_fit::fitting_meshes;
+use crate::lighting::{RigEvaluation, RigSettings, evaluate_rig, fit_rig, read_lights};
+use crate::rig::mesh::Mesh;
+
+/// The meshes the rig is fitted over and the mesh it is evaluated on.
+fn meshes(args: &RigArgs) -> Result<(Vec<Mesh>, Mesh)> {
+    match (&args.mesh, args.source.names_rig()) {
+        (Some(_), true) => bail!("give a mesh or a character (--builtin, --gltf, --bvh), not both"),
+        (Some(path), false) => {
+            let mesh = crate::io::obj::read_obj(path)?;
+            Ok((vec![mesh.clone()], mesh))
+        }
+        (None, true) => {
+            let (rig, clip) = args.source.rig(&Terminal)?;
+            let Some(pose) = clip.frames.get(args.frame) else {
+                bail!(
+                    "--frame {}: clip {} has {} frames",
+                    args.frame,
+                    clip.name,
+                    clip.frames.len()
+                );
+            };
+            let posed = args.source.in_origin(rig.pose(pose))?;
+            let fitting = args.source.in_origin(fitting_meshes(rig.as_ref(), &clip))?;
+            Ok((fitting, posed))
+        }
+        (None, false) => bail!("give a mesh (OBJ) or a character (--builtin, --gltf or --bvh)"),
+    }
+}
+
+/// Runs `aprt rig`.
+pub fn run(args: &RigArgs) -> Result<()> {
+    let mut inputs = args.source.inputs();
+    inputs.push(Input::new(&args.lights, "the lights file"));
+    if let Some(mesh) = &args.mesh {
+        inputs.push(Input::new(mesh, "the mesh"));
+    }
+    check(&[], &inputs)?;
+    if !(args.target_error.is_finite() && args.target_error > 0.0) {
+        bail!(
+            "--target-error {}: give a positive number of grey levels",
+            args.target_error
+        );
+    }
+    let lights = read_lights(&args.lights)?;
+    let (fitting, posed) = meshes(args)?;
+    let settings = RigSettings {
+        order: args.order as usize,
+        target_error: args.target_error,
+        ..RigSettings::default()
+    };
+    let refs: Vec<&Mesh> = fitting.iter().collect();
+    let mut fitted = fit_rig(args.rig, &refs, args.samples);
+    fitted.tabulate(&posed, settings.order);
+    let report = evaluate_rig(&fitted, &posed, &lights, &settings);
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&report).context("writing JSON")?
+        );
+    } else {
+        print_report(&report);
+    }
+    Ok(())
+}
+
+fn print_report(r: &RigEvaluation) {
+    println!(
+        "rig {}: {} SH vectors from {} surface samples, order {}, {} vertices, radius {:.3}",
+        r.rig, r.sh_vectors, r.samples, r.order, r.vertices, r.radius
+    );
+    for l in &r.lights {
+        let distance = l
+            .distance
+            .map_or("at infinity".into(), |d| format!("at {d:.3}"));
+        println!(
+            "  light {} ({}) {distance}: {} (rig share {:.2}, transition distance {:.3})",
+            l.index, l.kind, l.mode, l.rig_share, l.transition_distance
+        );
+    }
+    let g = |e: crate::lighting::GreyError| format!("mean {:.3}, max {:.3}", e.mean, e.max);
+    println!(
+        "  error against exact, grey levels (target {}):",
+        r.target_error
+    );
+    println!("    as chosen            {}", g(r.error_grey));
+    println!("    every light in rig   {}", g(r.error_grey_all_rig));
+    println!(
+        "    every light per vertex (SH floor) {}",
+        g(r.error_grey_per_vertex)
+    );
+    let c = r.us_per_frame;
+    println!(
+        "  aprt-core per frame: {:.1} us rig vectors + {:.1} us shading = {:.1} us",
+        c.rig_vectors, c.shade, c.total
+    );
+}

@@ -1,0 +1,331 @@
+//! A fitted irradiance rig under a set of lights, on one posed mesh: which lights it carries
+//! and which go per vertex (the error-driven choice of *Irradiance Rigs*, section 3.1), its
+//! error against the exact, horizon-clipped irradiance at every vertex, and what the core
+//! spends on it per frame.
+
+use std::time::{Duration, Instant};
+
+use aprt_core::{
+    DEFAULT_BAND, IrradianceRig, Light, MAX_COEFFS, Model, Placement, PoseWeights, Rgb,
+    RigLitWeights, clamped_cosine, irradiance_sh, light_strength,
+};
+use serde::Serialize;
+
+use super::kind_name;
+use super::rig_fit::{FittedRig, GREY_PER_IRRADIANCE, GreyError, rig_vectors};
+use crate::model::export::{Precision, encode_model_with_rig};
+use crate::model::{LinearModel, VertexBasis};
+use crate::rig::mesh::Mesh;
+
+/// What to evaluate a rig for.
+#[derive(Clone, Copy, Debug)]
+pub struct RigSettings {
+    /// SH order of the lighting.
+    pub order: usize,
+    /// The error a light may cost the rig, in 8-bit grey levels.
+    pub target_error: f32,
+    /// Width of the blend past a light's transition distance, as a share of it.
+    pub band: f32,
+}
+
+impl Default for RigSettings {
+    /// Order 3 (irradiance needs no more), one grey level, a quarter-distance band.
+    fn default() -> Self {
+        RigSettings {
+            order: 3,
+            target_error: 1.0,
+            band: DEFAULT_BAND,
+        }
+    }
+}
+
+/// One light's path.
+#[derive(Clone, Debug, Serialize)]
+pub struct LightPath {
+    /// Its position in the lights file, from 1.
+    pub index: usize,
+    /// `sphere`, `point` or `directional`.
+    pub kind: &'static str,
+    /// `"rig"` when the rig carries at least half of it, else `"analytic"` (per vertex).
+    pub mode: &'static str,
+    /// The share the rig carries, 0 to 1 (between, the light is in the blend band).
+    pub rig_share: f32,
+    /// Distance from the rig's centre (`null` for a directional light).
+    pub distance: Option<f32>,
+    /// Distance from the rig's centre beyond which the rig meets the target for this light;
+    /// 0 when it does everywhere (a directional light, or a faint one).
+    pub transition_distance: f32,
+}
+
+/// Microseconds per frame in aprt-core, median of repeated frames.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct FrameCost {
+    /// The lights projected at the rig's samples and mapped to its SH vectors.
+    pub rig_vectors: f64,
+    /// The vectors pushed through the transfer and every vertex shaded.
+    pub shade: f64,
+    /// The two together.
+    pub total: f64,
+}
+
+/// A rig under a set of lights on one mesh.
+#[derive(Clone, Debug, Serialize)]
+pub struct RigEvaluation {
+    /// The rig kind, as `--rig` spells it.
+    pub rig: String,
+    /// SH vectors the rig hands a shader per frame.
+    pub sh_vectors: usize,
+    /// Surface samples the lights are projected at per frame.
+    pub samples: usize,
+    /// SH order.
+    pub order: usize,
+    /// Vertices shaded.
+    pub vertices: usize,
+    /// The target of the rig-or-analytic choice, grey levels.
+    pub target_error: f32,
+    /// The character's radius about the rig's centre.
+    pub radius: f64,
+    /// Each light's path.
+    pub lights: Vec<LightPath>,
+    /// Rig plus per-vertex lights, as chosen, against the exact irradiance with horizon
+    /// clipping, unshadowed, at every vertex.
+    pub error_grey: GreyError,
+    /// Every light in the rig, against the exact irradiance.
+    pub error_grey_all_rig: GreyError,
+    /// Every light per vertex through SH, against the exact irradiance: the truncation floor
+    /// no choice of rig can go below.
+    pub error_grey_per_vertex: GreyError,
+    /// aprt-core's cost per frame for the rig's share.
+    pub us_per_frame: FrameCost,
+}
+
+/// `light` with its colour scaled by `s`.
+pub fn scaled(light: &Light, s: f32) -> Light {
+    let mut out = *light;
+    match &mut out {
+        Light::Sphere(l) => l.radiance = l.radiance.map(|c| c * s),
+        Light::Point(l) => l.intensity = l.intensity.map(|c| c * s),
+        Light::Directional(l) => l.irradiance = l.irradiance.map(|c| c * s),
+    }
+    out
+}
+
+/// Each light's share carried by the rig, in order.
+pub fn shares(rig: &IrradianceRig<'_>, lights: &[Light], settings: &RigSettings) -> Vec<f32> {
+    lights
+        .iter()
+        .map(|l| {
+            rig.share_of(
+                l,
+                &Placement::IDENTITY,
+                settings.target_error,
+                settings.band,
+            )
+        })
+        .collect()
+}
+
+/// Errors in grey levels, accumulated per vertex and channel.
+#[derive(Default)]
+struct Tally {
+    sum: f64,
+    max: f64,
+    count: usize,
+}
+
+impl Tally {
+    fn add(&mut self, a: Rgb, b: Rgb) {
+        for k in 0..3 {
+            let e = GREY_PER_IRRADIANCE * f64::from((a[k] - b[k]).abs());
+            self.sum += e;
+            self.max = self.max.max(e);
+            self.count += 1;
+        }
+    }
+
+    fn result(&self) -> GreyError {
+        GreyError {
+            mean: self.sum / self.count.max(1) as f64,
+            max: self.max,
+        }
+    }
+}
+
+/// The per-vertex SH irradiance of `lights` weighted by `weights` (n² lighting at `p`).
+fn per_vertex(lights: &[Light], weights: &[f32], order: usize, p: [f32; 3], n: [f32; 3]) -> Rgb {
+    let mut l = [[0.0f32; 3]; MAX_COEFFS];
+    for (light, &w) in lights.iter().zip(weights) {
+        if w > 0.0 {
+            // A vertex on a point light sees nothing finite from it: that light is skipped.
+            let _ = scaled(light, w).add_radiance_sh(order, p, &mut l[..order * order]);
+        }
+    }
+    irradiance_sh(order, &l[..order * order], n).unwrap_or([0.0; 3])
+}
+
+/// Evaluates a fitted rig under `lights` on `mesh` (in the rig's root frame).
+pub fn evaluate_rig(
+    fitted: &FittedRig,
+    mesh: &Mesh,
+    lights: &[Light],
+    settings: &RigSettings,
+) -> RigEvaluation {
+    let bytes = fitted.bytes();
+    let rig = IrradianceRig::parse(&bytes).expect("a fitted rig's bytes are valid");
+    let order = settings.order;
+    let share = shares(&rig, lights, settings);
+    let rest: Vec<f32> = share.iter().map(|s| 1.0 - s).collect();
+    let in_rig: Vec<Light> = lights
+        .iter()
+        .zip(&share)
+        .map(|(l, &s)| scaled(l, s))
+        .collect();
+    let all = rig_vectors(&rig, lights, order, &Placement::IDENTITY);
+    let split = rig_vectors(&rig, &in_rig, order, &Placement::IDENTITY);
+    let (mut chosen, mut all_rig, mut floor) =
+        (Tally::default(), Tally::default(), Tally::default());
+    let mut here = [[0.0f32; 3]; MAX_COEFFS];
+    let ones = vec![1.0f32; lights.len()];
+    for (p, n) in mesh.positions.iter().zip(&mesh.normals) {
+        let exact = lights
+            .iter()
+            .fold([0.0f32; 3], |acc, l| match l.irradiance(*p, *n) {
+                Ok(e) => std::array::from_fn(|k| acc[k] + e[k]),
+                Err(_) => acc,
+            });
+        let here = &mut here[..order * order];
+        rig.lighting_at(&all, &Placement::IDENTITY, *p, here);
+        all_rig.add(irradiance_sh(order, here, *n).unwrap_or([0.0; 3]), exact);
+        rig.lighting_at(&split, &Placement::IDENTITY, *p, here);
+        let from_rig = irradiance_sh(order, here, *n).unwrap_or([0.0; 3]);
+        let near = per_vertex(lights, &rest, order, *p, *n);
+        chosen.add(std::array::from_fn(|k| from_rig[k] + near[k]), exact);
+        floor.add(per_vertex(lights, &ones, order, *p, *n), exact);
+    }
+    let paths = lights
+        .iter()
+        .zip(&share)
+        .enumerate()
+        .map(|(i, (light, &s))| {
+            let distance = match light {
+                Light::Sphere(l) => Some(l.position),
+                Light::Point(l) => Some(l.position),
+                Light::Directional(_) => None,
+            }
+            .map(|p| {
+                let c = rig.centre();
+                (0..3).map(|k| (p[k] - c[k]).powi(2)).sum::<f32>().sqrt()
+            });
+            LightPath {
+                index: i + 1,
+                kind: kind_name(light),
+                mode: if s >= 0.5 { "rig" } else { "analytic" },
+                rig_share: s,
+                distance,
+                transition_distance: rig
+                    .transition_distance(light_strength(light), settings.target_error),
+            }
+        })
+        .collect();
+    RigEvaluation {
+        rig: fitted.kind.to_string(),
+        sh_vectors: rig.vectors(),
+        samples: rig.samples(),
+        order,
+        vertices: mesh.vertex_count(),
+        target_error: settings.target_error,
+        radius: fitted.radius,
+        lights: paths,
+        error_grey: chosen.result(),
+        error_grey_all_rig: all_rig.result(),
+        error_grey_per_vertex: floor.result(),
+        us_per_frame: frame_cost(&bytes, mesh, &in_rig, order),
+    }
+}
+
+/// A world-frame model of `mesh` whose transfer is the clamped cosine at each vertex normal
+/// (one pose entry, no pose dimensions), carrying `rig`: what the core shades an unshadowed
+/// static mesh with, so a bare mesh's rig is timed on the core's own per-frame path.
+pub fn static_model(mesh: &Mesh, order: usize) -> LinearModel {
+    let (n2, v) = (order * order, mesh.vertex_count());
+    let mut weights = vec![0.0f64; n2 * v];
+    let mut t = [0.0f32; MAX_COEFFS];
+    for (j, n) in mesh.normals.iter().enumerate() {
+        if clamped_cosine(order, *n, &mut t[..n2]).is_ok() {
+            for c in 0..n2 {
+                weights[c * v + j] = f64::from(t[c]);
+            }
+        }
+    }
+    LinearModel {
+        order,
+        vertices: v,
+        pose_len: 1,
+        pose_mean: vec![0.0],
+        pose_projection: Vec::new(),
+        weights,
+        basis: VertexBasis::Identity,
+        alpha: 0.0,
+        bones: None,
+        angle_names: vec!["static".into()],
+        bounds: None,
+        cosines: Vec::new(),
+    }
+}
+
+/// Median microseconds of `f` over repeated calls within about a tenth of a second.
+fn median_us(mut f: impl FnMut()) -> f64 {
+    let mut times = Vec::new();
+    let start = Instant::now();
+    while times.len() < 5 || (start.elapsed() < Duration::from_millis(100) && times.len() < 1000) {
+        let t = Instant::now();
+        f();
+        times.push(t.elapsed().as_secs_f64() * 1e6);
+    }
+    times.sort_by(f64::total_cmp);
+    times[times.len() / 2]
+}
+
+/// The core's cost per frame of the rig's lights on `mesh`: rig vectors, then the shading.
+fn frame_cost(rig_bytes: &[u8], mesh: &Mesh, in_rig: &[Light], order: usize) -> FrameCost {
+    let Ok(blob) =
+        encode_model_with_rig(&static_model(mesh, order), Precision::F32, Some(rig_bytes))
+    else {
+        return FrameCost::default();
+    };
+    let Ok(model) = Model::parse(&blob) else {
+        return FrameCost::default();
+    };
+    let Some(rig) = model.irradiance_rig() else {
+        return FrameCost::default();
+    };
+    let mut pose = PoseWeights::new();
+    if model.set_pose(&[0.0], &mut pose).is_err() {
+        return FrameCost::default();
+    }
+    let mut vectors = Vec::new();
+    let rig_vectors_us = median_us(|| {
+        vectors = rig_vectors(&rig, in_rig, order, &Placement::IDENTITY);
+    });
+    let mut buffer = vec![0.0f32; model.info().rig_lit_weights_len(rig.vectors())];
+    let mut shading = vec![[0.0f32; 3]; mesh.vertex_count()];
+    let shade_us = median_us(|| {
+        let mut lit = RigLitWeights::new(&mut buffer);
+        let lit_ok = model.light_rig(&pose, &vectors, &[], &mut lit).is_ok();
+        if lit_ok {
+            let _ = model.shade_rig(
+                &lit,
+                &rig,
+                &Placement::IDENTITY,
+                &mesh.positions,
+                0,
+                &mut shading,
+            );
+        }
+    });
+    FrameCost {
+        rig_vectors: rig_vectors_us,
+        shade: shade_us,
+        total: rig_vectors_us + shade_us,
+    }
+}
