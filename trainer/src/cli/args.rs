@@ -194,6 +194,11 @@ pub struct TrainArgs {
     /// Continue an interrupted bake from its checkpoint (same inputs and bake settings).
     #[arg(long)]
     pub resume: bool,
+    /// Fit an irradiance rig of this kind (constant, gradient, lattice:NXxNYxNZ,
+    /// mixed:x=KIND,y=KIND,z=KIND) to the character's bind and training poses and store it in
+    /// the model, so an engine lights it from a handful of SH vectors (see `aprt rig`).
+    #[arg(long)]
+    pub rig: Option<crate::lighting::RigKind>,
 }
 
 /// `aprt simulate`.

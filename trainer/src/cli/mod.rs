@@ -292,6 +292,7 @@ fn train(args: &TrainArgs) -> Result<()> {
         } else {
             OnExisting::Refuse
         },
+        irradiance_rig: args.rig,
     };
     settings.bake.validate()?;
     let poses = args.source.poses(&args.validate, &Terminal)?;

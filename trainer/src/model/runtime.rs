@@ -111,6 +111,37 @@ pub struct BlobInfo {
     pub sections: Vec<SectionInfo>,
     /// Names of the pose entries, in pose-vector order (empty when the blob records none).
     pub angle_names: Vec<String>,
+    /// The irradiance rig the model carries, if any.
+    pub irradiance_rig: Option<RigInfo>,
+}
+
+/// What `inspect` says of a model's irradiance rig.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct RigInfo {
+    /// The kind, as `--rig` spells it.
+    pub kind: String,
+    /// SH vectors per frame.
+    pub sh_vectors: usize,
+    /// Surface samples the lights are projected at per frame.
+    pub samples: usize,
+    /// Values the runtime's rig lighting weights hold for this model.
+    pub rig_lit_weights: usize,
+}
+
+impl RigInfo {
+    fn of(rig: &aprt_core::IrradianceRig<'_>, info: &aprt_core::ModelInfo) -> RigInfo {
+        let kind = crate::lighting::RigKind {
+            shape: rig.shape(),
+            // A constant rig of one sample is the centroid probe; fitted ones have many.
+            centroid: rig.vectors() == 1 && rig.samples() == 1,
+        };
+        RigInfo {
+            kind: kind.to_string(),
+            sh_vectors: rig.vectors(),
+            samples: rig.samples(),
+            rig_lit_weights: info.rig_lit_weights_len(rig.vectors()),
+        }
+    }
 }
 
 /// Validates `blob` completely and describes it.
@@ -156,6 +187,7 @@ pub fn describe(blob: &[u8]) -> Result<BlobInfo, aprt_core::Error> {
         frame_prt_bytes: info.vertices() * info.coeffs() * 4,
         sections,
         angle_names: model.angle_names().iter().map(str::to_owned).collect(),
+        irradiance_rig: model.irradiance_rig().map(|r| RigInfo::of(&r, info)),
     })
 }
 
@@ -202,6 +234,13 @@ impl std::fmt::Display for BlobInfo {
         )?;
         if !self.angle_names.is_empty() {
             writeln!(f, "  pose entries    {}", self.angle_names.join(" "))?;
+        }
+        if let Some(rig) = &self.irradiance_rig {
+            writeln!(
+                f,
+                "  irradiance rig  {}: {} SH vectors from {} samples, {} rig lighting weights",
+                rig.kind, rig.sh_vectors, rig.samples, rig.rig_lit_weights
+            )?;
         }
         writeln!(f, "  sections:")?;
         for s in &self.sections {

@@ -13,9 +13,11 @@ use crate::bake::checkpoint::{Checkpoint, OnExisting};
 use crate::bake::clip::{BakedClip, pose_all};
 use crate::bake::{BakeError, BakeSettings};
 use crate::io::atomic::write_atomic;
-use crate::io::source::{Poses, clip_names};
+use crate::io::source::{Poses, clip_names, joined};
+use crate::lighting::rig_fit::{FIT_POSES, fitting_meshes};
+use crate::lighting::{RigKind, fit_rig};
 use crate::model::ModelFrame;
-use crate::model::export::{ExportError, Precision, check_alpha, encode_model};
+use crate::model::export::{ExportError, Precision, check_alpha, encode_model_with_rig};
 use crate::model::fit::{
     Alpha, Anchor, Choice, CoefDims, Dims, Fit, FitInput, FitOptions, FitReport, HeldOutKind,
     LOCALITY_RADIUS, Local, PriorKind, REST_DISTANCE_LIMIT, Validation, fit, fit_input,
@@ -125,6 +127,9 @@ pub struct TrainSettings {
     pub checkpoint: PathBuf,
     /// What to do with a checkpoint that is already there.
     pub existing: OnExisting,
+    /// An irradiance rig to fit to the character and store in the blob (its optional
+    /// `IrradianceRig` section), so an engine lights the model from a handful of SH vectors.
+    pub irradiance_rig: Option<RigKind>,
 }
 
 /// A model option that no bake could make valid.
@@ -425,6 +430,10 @@ pub fn train(
     reporter: &dyn Reporter,
 ) -> Result<Trained> {
     check(&poses, settings)?;
+    let rig_section = match &settings.irradiance_rig {
+        Some(kind) => Some(fit_irradiance_rig(*kind, &poses, settings.bake.order)?),
+        None => None,
+    };
     let (fitted, checkpoint, poses) = match poses {
         Poses::Meshes {
             files,
@@ -516,7 +525,7 @@ pub fn train(
             (fitted, checkpoint, train.poses.len())
         }
     };
-    let blob = encode_model(&fitted.model, settings.precision)?;
+    let blob = encode_model_with_rig(&fitted.model, settings.precision, rig_section.as_deref())?;
     write_atomic(output, &blob).with_context(|| format!("cannot write {}", output.display()))?;
     checkpoint.remove()?;
     Ok(Trained {
@@ -524,6 +533,27 @@ pub fn train(
         selection: Selection::of(&fitted.report),
         info: describe(&blob)?,
     })
+}
+
+/// The bytes of an irradiance rig of `kind` fitted to the poses' surfaces (a character's bind
+/// pose and training poses in its root frame; up to [`FIT_POSES`] of the meshes read from
+/// files), its error table computed at `order` on the first of them.
+fn fit_irradiance_rig(kind: RigKind, poses: &Poses, order: usize) -> Result<Vec<u8>> {
+    let meshes = match poses {
+        Poses::Meshes { meshes, .. } => {
+            let step = meshes.len().div_ceil(FIT_POSES).max(1);
+            meshes.iter().step_by(step).cloned().collect()
+        }
+        Poses::Rig { rig, clips, .. } => {
+            let clip = joined(clips.clone());
+            fitting_meshes(rig.as_ref(), &clip)
+                .with_context(|| format!("posing clip {} to fit the irradiance rig", clip.name))?
+        }
+    };
+    let refs: Vec<&Mesh> = meshes.iter().collect();
+    let mut fitted = fit_rig(kind, &refs, None);
+    fitted.tabulate(&meshes[0], order);
+    Ok(fitted.bytes())
 }
 
 /// Every frame of the training clips, in order.
