@@ -211,6 +211,16 @@ impl Light {
     fn zonal(&self, at: [f32; 3]) -> Result<([f32; MAX_ORDER], Option<[f32; 3]>), LightError> {
         self.validate()?;
         finite3(at)?;
+        self.zonal_at(at)
+    }
+
+    /// [`Light::zonal`] for a light that passed [`Light::validate`] and a finite `at`, without
+    /// checking them again: per-vertex shading asks it once per light and vertex. Still an
+    /// error on a point light (`AtPointLight`) or when the offset overflows f32 (`Overflow`).
+    pub(crate) fn zonal_at(
+        &self,
+        at: [f32; 3],
+    ) -> Result<([f32; MAX_ORDER], Option<[f32; 3]>), LightError> {
         match self {
             Light::Sphere(s) => {
                 let (d, dir) = towards(s.position, at)?;

@@ -6,6 +6,7 @@
 use crate::blob::{AngleNames, BlobSource, Error, ModelInfo, Reader, Resident, Streaming};
 use crate::eval::{LitWeights, PoseWeights};
 use crate::irradiance_rig::{IrradianceRig, Placement, RigLitWeights};
+use crate::light::Light;
 use crate::rotation::Rotation;
 
 /// A model whose blob is in memory: every call reads it in place, with no buffer.
@@ -285,6 +286,54 @@ impl<'a> Model<'a> {
             out,
         )
     }
+
+    /// Adds (`+=`) to `out` the RGB shading of vertices `first .. first + out.len()` under
+    /// `lights`, each evaluated at the vertex's own world position (`positions`, one per
+    /// vertex, skinned by the caller) and scaled by `weights[i]`, its per-vertex share
+    /// (`1 −` [`IrradianceRig::rig_share`]): `Σ_i w_i t_j · l_i(p_j)`, `t_j` the vertex's
+    /// transfer for `pose` (in its bone's frame for a bone-frame model, `bones` as in
+    /// [`Model::light`]).
+    ///
+    /// Lights near the character vary too fast for a rig; evaluated per vertex against its
+    /// transfer they stay self-shadowed (*Irradiance Rigs*). Each vertex costs its transfer
+    /// once, then per light its bands, one rotated direction and one SH basis evaluation. A
+    /// weight of 0 skips the light; a vertex on a point light gets nothing from that light
+    /// (its radiance there is unbounded). Everything is checked before anything is written.
+    ///
+    /// ```
+    /// use aprt_core::{Light, Model, PointLight, PoseWeights};
+    ///
+    /// let model = Model::parse(include_bytes!("../../fixtures/golden/v1-world.aprt"))?;
+    /// let mut pose = PoseWeights::new();
+    /// model.set_pose(&[0.0; 4], &mut pose)?;
+    /// let lamp = Light::Point(PointLight { position: [0.0, 0.0, 2.0], intensity: [1.0; 3] });
+    /// let positions = [[0.0, 0.0, 0.0], [0.5, 0.0, 0.0]];
+    /// let mut rgb = [[0.0; 3]; 2];
+    /// model.shade_lights(&pose, &[], &[lamp], &[1.0], &positions, 4, &mut rgb)?;
+    /// # Ok::<(), aprt_core::Error>(())
+    /// ```
+    #[allow(clippy::too_many_arguments)]
+    pub fn shade_lights<const P: usize>(
+        &self,
+        pose: &PoseWeights<P>,
+        bones: &[Rotation],
+        lights: &[Light],
+        weights: &[f32],
+        positions: &[[f32; 3]],
+        first: usize,
+        out: &mut [[f32; 3]],
+    ) -> Result<(), Error> {
+        self.info.shade_lights(
+            &mut Resident(self.blob),
+            pose,
+            bones,
+            lights,
+            weights,
+            positions,
+            first,
+            out,
+        )
+    }
 }
 
 /// A model read from a [`BlobSource`] (flash, a file) through a caller-owned buffer, so the
@@ -489,6 +538,31 @@ impl<'s, S: BlobSource> StreamedModel<'s, S> {
             lit,
             rig,
             placement,
+            positions,
+            first,
+            out,
+        )
+    }
+
+    /// As [`Model::shade_lights`], streaming the blocks of the range.
+    #[allow(clippy::too_many_arguments)]
+    pub fn shade_lights<const P: usize>(
+        &mut self,
+        pose: &PoseWeights<P>,
+        bones: &[Rotation],
+        lights: &[Light],
+        weights: &[f32],
+        positions: &[[f32; 3]],
+        first: usize,
+        out: &mut [[f32; 3]],
+    ) -> Result<(), Error> {
+        let info = self.info;
+        info.shade_lights(
+            &mut self.reader(),
+            pose,
+            bones,
+            lights,
+            weights,
             positions,
             first,
             out,

@@ -2,6 +2,7 @@
 //! or a call can be wrong, each saying where.
 
 use super::format::{MAX_POSE_LEN, SectionKind, VERSION};
+use crate::light::LightError;
 
 /// Which header dimension was out of range.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -37,6 +38,8 @@ pub enum Input {
     RigVectors,
     /// The vertex positions of `shade_rig` and `shade_lights` (one per vertex shaded).
     Positions,
+    /// The per-light weights of `shade_lights` (one per light).
+    LightWeights,
 }
 
 /// Everything that can go wrong reading a blob or evaluating a model.
@@ -188,6 +191,18 @@ pub enum Error {
         /// Index of the bone.
         bone: usize,
     },
+    /// A light of `shade_lights` fails [`Light::validate`](crate::Light::validate).
+    BadLight {
+        /// Index of the light.
+        index: usize,
+        /// Why it was refused.
+        reason: LightError,
+    },
+    /// A light's weight in `shade_lights` is negative, NaN or infinite.
+    BadLightWeight {
+        /// Index of the light.
+        index: usize,
+    },
     /// The vertex range runs past the model's vertices.
     VertexRange {
         /// First vertex requested.
@@ -292,6 +307,10 @@ impl core::fmt::Display for Error {
             }
             Error::BadRotation { bone } => {
                 write!(f, "rotation of bone {bone} is not orthonormal")
+            }
+            Error::BadLight { index, reason } => write!(f, "light {index} is invalid: {reason}"),
+            Error::BadLightWeight { index } => {
+                write!(f, "weight of light {index} is negative, NaN or infinite")
             }
             Error::VertexRange { first, count } => {
                 write!(f, "vertex range {first}..{first}+{count} is out of bounds")

@@ -12,7 +12,12 @@
 //! With the identity basis (the full linear model) the rows are the per-vertex weights and the
 //! same steps cost O(n² k_a) per vertex, as in the paper. The steps are written once here,
 //! over [`Reader`], for the resident and the streamed model alike.
+//!
+//! Beside them, `rig.rs` shades under an irradiance rig's lighting at each vertex's position,
+//! and `analytic.rs` under lights evaluated per vertex (*Irradiance Rigs*), both through the
+//! same transfer.
 
+mod analytic;
 mod bounds;
 mod features;
 mod kernels;
