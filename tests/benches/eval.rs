@@ -3,11 +3,11 @@
 //! One core, one run, ratios side by side. `cargo bench -p aprt-tests --bench eval`.
 
 use std::hint::black_box;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use aprt_core::format::read_header;
 use aprt_core::{LitWeights, Model, PoseWeights, SectionKind, StreamedModel};
-use aprt_tests::{Streamed, noise, random_model, with_cosines};
+use aprt_tests::{Streamed, median_seconds as time, noise, random_model, with_cosines};
 use aprt_trainer::{BoneFrames, LinearModel, Precision, encode_model};
 
 const VERTICES: usize = 11_500;
@@ -19,29 +19,6 @@ fn model(ka: usize, kv: Option<usize>) -> LinearModel {
     // Values in [-0.5, 0.5): realistic magnitudes, safely inside f16's range.
     m.weights.iter_mut().for_each(|x| *x *= 0.5);
     m
-}
-
-/// Median seconds per call over repeated batches lasting about `budget` in total.
-fn time(budget: Duration, mut f: impl FnMut()) -> f64 {
-    f();
-    let start = Instant::now();
-    let mut calls = 0u32;
-    while start.elapsed() < budget / 10 {
-        f();
-        calls += 1;
-    }
-    let batch = calls.max(1);
-    let mut samples: Vec<f64> = (0..9)
-        .map(|_| {
-            let t = Instant::now();
-            for _ in 0..batch {
-                f();
-            }
-            t.elapsed().as_secs_f64() / batch as f64
-        })
-        .collect();
-    samples.sort_by(f64::total_cmp);
-    samples[4]
 }
 
 fn main() {

@@ -137,3 +137,27 @@ pub fn with_cosines(mut model: LinearModel, flags: &[bool]) -> LinearModel {
     model.pose_projection = noise(6, ka * f);
     model
 }
+
+/// Median seconds per call of `f` over nine batches, each sized from a first pass lasting a
+/// tenth of `budget`: the benchmarks' one timer, so every ratio they print is timed alike.
+pub fn median_seconds(budget: std::time::Duration, mut f: impl FnMut()) -> f64 {
+    f();
+    let start = std::time::Instant::now();
+    let mut calls = 0u32;
+    while start.elapsed() < budget / 10 {
+        f();
+        calls += 1;
+    }
+    let batch = calls.max(1);
+    let mut samples: Vec<f64> = (0..9)
+        .map(|_| {
+            let t = std::time::Instant::now();
+            for _ in 0..batch {
+                f();
+            }
+            t.elapsed().as_secs_f64() / batch as f64
+        })
+        .collect();
+    samples.sort_by(f64::total_cmp);
+    samples[4]
+}

@@ -253,3 +253,48 @@ impl std::fmt::Display for BlobInfo {
         Ok(())
     }
 }
+
+/// One frame of rig lighting through aprt-core, as an engine runs it: the model's pose
+/// weights, each light's share from the rig's error table (`target` grey levels, `band`), the
+/// rig's SH vectors from the lights' rig shares, rig-lit shading of every vertex at its own
+/// position, and the rest of each light per vertex through the vertex's transfer. `positions`
+/// are the posed vertices in the world, which is the root frame here. Returns the RGB shading
+/// and each light's rig share.
+pub fn predict_rig_shading(
+    blob: &[u8],
+    angles: &[f64],
+    rotations: &[Rotation],
+    positions: &[[f32; 3]],
+    lights: &[aprt_core::Light],
+    target: f32,
+    band: f32,
+) -> Result<(Vec<[f32; 3]>, Vec<f32>), aprt_core::Error> {
+    use aprt_core::{Placement, RigLitWeights};
+    let model = Model::parse(blob)?;
+    let rig = model
+        .irradiance_rig()
+        .ok_or(aprt_core::Error::NoIrradianceRig)?;
+    let order = model.info().order();
+    let angles: Vec<f32> = angles.iter().map(|&a| a as f32).collect();
+    let mut pose = Box::new(PoseWeights::new());
+    model.set_pose(&angles, &mut pose)?;
+    let place = Placement::IDENTITY;
+    let shares: Vec<f32> = lights
+        .iter()
+        .map(|l| rig.share_of(l, &place, target, band))
+        .collect();
+    let in_rig: Vec<aprt_core::Light> = lights
+        .iter()
+        .zip(&shares)
+        .map(|(l, &s)| crate::lighting::evaluate::scaled(l, s))
+        .collect();
+    let vectors = crate::lighting::rig_vectors(&rig, &in_rig, order, &place);
+    let mut buffer = vec![0.0f32; model.info().rig_lit_weights_len(rig.vectors())];
+    let mut lit = RigLitWeights::new(&mut buffer);
+    model.light_rig(&pose, &vectors, rotations, &mut lit)?;
+    let mut out = vec![[0.0f32; 3]; model.info().vertices()];
+    model.shade_rig(&lit, &rig, &place, positions, 0, &mut out)?;
+    let rest: Vec<f32> = shares.iter().map(|s| 1.0 - s).collect();
+    model.shade_lights(&pose, rotations, lights, &rest, positions, 0, &mut out)?;
+    Ok((out, shares))
+}
