@@ -119,7 +119,7 @@ fn main() {
                 .zip(&shares)
                 .map(|(l, &s)| aprt_trainer::lighting::evaluate::scaled(l, s))
                 .collect();
-            let vectors = rig_vectors(&rig, &in_rig, ORDER, &place);
+            let vectors = rig_vectors(&rig, &in_rig, ORDER, &place).unwrap();
             let mut lit = RigLitWeights::new(&mut buffer);
             model
                 .light_rig(pose, &vectors, &rotations, &mut lit)

@@ -265,3 +265,63 @@ fn a_model_without_a_rig_has_none() {
         Some(Error::NoIrradianceRig)
     );
 }
+
+/// The per-frame call an engine makes, against the same projection written out by hand.
+#[test]
+fn vectors_from_lights_project_every_light_at_every_sample() {
+    use aprt_core::{Light, PointLight, SphereLight};
+    let bytes = rig_bytes(SHAPES[1], 9, 13);
+    let rig = IrradianceRig::parse(&bytes).unwrap();
+    let lights = [
+        Light::Sphere(SphereLight {
+            position: [0.5, 2.0, -1.0],
+            radius: 0.3,
+            radiance: [2.0, 1.0, 0.5],
+        }),
+        Light::Point(PointLight {
+            position: [-3.0, 0.1, 0.2],
+            intensity: [1.0, 2.0, 3.0],
+        }),
+    ];
+    let sky = [
+        [0.3f32, 0.2, 0.1],
+        [0.0, 0.05, 0.0],
+        [0.01, 0.0, 0.0],
+        [0.0, 0.0, 0.02],
+    ];
+    let place = Placement {
+        rotation: rotation([0.3, 0.1, 1.0], 0.8),
+        translation: [0.2, 0.0, -0.5],
+    };
+    let mut got = vec![[0.0f32; 3]; rig.vectors() * 4];
+    rig.vectors_from_lights(2, &place, &lights, &sky, &mut got)
+        .unwrap();
+    let mut want = vec![[0.0f32; 3]; rig.vectors() * 4];
+    let mut scratch = [[0.0f32; 3]; 4];
+    rig.vectors_from(
+        4,
+        &place,
+        &mut scratch,
+        |p, l| {
+            l.copy_from_slice(&sky);
+            for light in &lights {
+                light.add_radiance_sh(2, p, l).unwrap();
+            }
+        },
+        &mut want,
+    )
+    .unwrap();
+    assert_eq!(got, want);
+    let bad = [Light::Point(PointLight {
+        position: [f32::NAN, 0.0, 0.0],
+        intensity: [1.0; 3],
+    })];
+    assert!(matches!(
+        rig.vectors_from_lights(2, &place, &bad, &[], &mut got),
+        Err(Error::BadLight { index: 0, .. })
+    ));
+    assert!(matches!(
+        rig.vectors_from_lights(2, &place, &lights, &sky[..3], &mut got),
+        Err(Error::WrongLength { .. })
+    ));
+}

@@ -21,7 +21,9 @@
 
 use super::Placement;
 use super::shape::{AxisKind, MAX_RIG_VECTORS, RigShape, RigWeights};
-use crate::blob::Error;
+use crate::blob::{Dim, Error, Input};
+use crate::light::Light;
+use crate::sh::{MAX_COEFFS, MAX_ORDER, coeff_count};
 
 /// Most sample points of a rig.
 pub const MAX_RIG_SAMPLES: usize = 4096;
@@ -255,6 +257,60 @@ impl<'a> IrradianceRig<'a> {
             }
         }
         Ok(())
+    }
+
+    /// The rig's K SH vectors for `lights` and a uniform `environment` (n² RGB radiance
+    /// coefficients, or empty): each light projected at every sample ([`Light::add_radiance_sh`];
+    /// a sample exactly on a point light skips that light), then mapped by the fit matrix
+    /// ([`IrradianceRig::vectors_from`]). Every light is validated first
+    /// ([`Error::BadLight`]). What an engine calls once per frame; the vectors go to
+    /// [`Model::light_rig`](crate::Model::light_rig) or to a shader.
+    pub fn vectors_from_lights(
+        &self,
+        order: usize,
+        placement: &Placement,
+        lights: &[Light],
+        environment: &[[f32; 3]],
+        out: &mut [[f32; 3]],
+    ) -> Result<(), Error> {
+        let coeffs = coeff_count(order);
+        if order == 0 || order > MAX_ORDER {
+            return Err(Error::BadDimension {
+                what: Dim::Order,
+                value: order as u64,
+            });
+        }
+        if !environment.is_empty() && environment.len() != coeffs {
+            return Err(Error::WrongLength {
+                what: Input::Lighting,
+                expected: coeffs,
+                found: environment.len(),
+            });
+        }
+        if let Some(index) = environment
+            .iter()
+            .position(|c| c.iter().any(|x| !x.is_finite()))
+        {
+            return Err(Error::NonFiniteLighting { index });
+        }
+        for (index, light) in lights.iter().enumerate() {
+            light
+                .validate()
+                .map_err(|reason| Error::BadLight { index, reason })?;
+        }
+        let mut scratch = [[0.0f32; 3]; MAX_COEFFS];
+        self.vectors_from(
+            coeffs,
+            placement,
+            &mut scratch,
+            |p, l| {
+                l.iter_mut().zip(environment).for_each(|(a, e)| *a = *e);
+                for light in lights {
+                    let _ = light.add_radiance_sh(order, p, l);
+                }
+            },
+            out,
+        )
     }
 
     /// The rig's lighting at a world point: `Σ_k φ_k(p) C_k` into `out` (n² RGB).

@@ -60,7 +60,8 @@ pub fn run(args: &RigArgs) -> Result<()> {
     let refs: Vec<&Mesh> = fitting.iter().collect();
     let mut fitted = fit_rig(args.rig, &refs, args.samples);
     fitted.tabulate(&posed, settings.order);
-    let report = evaluate_rig(&fitted, &posed, &lights, &settings);
+    let report = evaluate_rig(&fitted, &posed, &lights, &settings)
+        .with_context(|| format!("{}", args.lights.display()))?;
     if args.json {
         println!(
             "{}",
@@ -99,7 +100,7 @@ fn print_report(r: &RigEvaluation) {
     );
     let c = r.us_per_frame;
     println!(
-        "  aprt-core per frame: {:.1} us rig vectors + {:.1} us shading = {:.1} us",
-        c.rig_vectors, c.shade, c.total
+        "  aprt-core per frame: {:.1} us rig vectors + {:.1} us rig shading + {:.1} us per-vertex lights = {:.1} us",
+        c.rig_vectors, c.shade, c.analytic, c.total
     );
 }

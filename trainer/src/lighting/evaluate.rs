@@ -64,7 +64,9 @@ pub struct FrameCost {
     pub rig_vectors: f64,
     /// The vectors pushed through the transfer and every vertex shaded.
     pub shade: f64,
-    /// The two together.
+    /// The lights' per-vertex shares, through each vertex's transfer.
+    pub analytic: f64,
+    /// All three together.
     pub total: f64,
 }
 
@@ -163,15 +165,16 @@ fn per_vertex(lights: &[Light], weights: &[f32], order: usize, p: [f32; 3], n: [
     irradiance_sh(order, &l[..order * order], n).unwrap_or([0.0; 3])
 }
 
-/// Evaluates a fitted rig under `lights` on `mesh` (in the rig's root frame).
+/// Evaluates a fitted rig under `lights` on `mesh` (in the rig's root frame); an error names
+/// the light the core refused.
 pub fn evaluate_rig(
     fitted: &FittedRig,
     mesh: &Mesh,
     lights: &[Light],
     settings: &RigSettings,
-) -> RigEvaluation {
+) -> Result<RigEvaluation, aprt_core::Error> {
     let bytes = fitted.bytes();
-    let rig = IrradianceRig::parse(&bytes).expect("a fitted rig's bytes are valid");
+    let rig = IrradianceRig::parse(&bytes)?;
     let order = settings.order;
     let share = shares(&rig, lights, settings);
     let rest: Vec<f32> = share.iter().map(|s| 1.0 - s).collect();
@@ -180,8 +183,8 @@ pub fn evaluate_rig(
         .zip(&share)
         .map(|(l, &s)| scaled(l, s))
         .collect();
-    let all = rig_vectors(&rig, lights, order, &Placement::IDENTITY);
-    let split = rig_vectors(&rig, &in_rig, order, &Placement::IDENTITY);
+    let all = rig_vectors(&rig, lights, order, &Placement::IDENTITY)?;
+    let split = rig_vectors(&rig, &in_rig, order, &Placement::IDENTITY)?;
     let (mut chosen, mut all_rig, mut floor) =
         (Tally::default(), Tally::default(), Tally::default());
     let mut here = [[0.0f32; 3]; MAX_COEFFS];
@@ -227,7 +230,7 @@ pub fn evaluate_rig(
             }
         })
         .collect();
-    RigEvaluation {
+    Ok(RigEvaluation {
         rig: fitted.kind.to_string(),
         sh_vectors: rig.vectors(),
         samples: rig.samples(),
@@ -239,8 +242,8 @@ pub fn evaluate_rig(
         error_grey: chosen.result(),
         error_grey_all_rig: all_rig.result(),
         error_grey_per_vertex: floor.result(),
-        us_per_frame: frame_cost(&bytes, mesh, &in_rig, order),
-    }
+        us_per_frame: frame_cost(&bytes, mesh, lights, &share, order),
+    })
 }
 
 /// A world-frame model of `mesh` whose transfer is the clamped cosine at each vertex normal
@@ -286,8 +289,21 @@ fn median_us(mut f: impl FnMut()) -> f64 {
     times[times.len() / 2]
 }
 
-/// The core's cost per frame of the rig's lights on `mesh`: rig vectors, then the shading.
-fn frame_cost(rig_bytes: &[u8], mesh: &Mesh, in_rig: &[Light], order: usize) -> FrameCost {
+/// The core's cost per frame of `lights` on `mesh`, each split by its rig share: the rig's
+/// vectors, the rig-lit shading, and the per-vertex shares.
+fn frame_cost(
+    rig_bytes: &[u8],
+    mesh: &Mesh,
+    lights: &[Light],
+    share: &[f32],
+    order: usize,
+) -> FrameCost {
+    let in_rig: Vec<Light> = lights
+        .iter()
+        .zip(share)
+        .map(|(l, &s)| scaled(l, s))
+        .collect();
+    let rest: Vec<f32> = share.iter().map(|s| 1.0 - s).collect();
     let Ok(blob) =
         encode_model_with_rig(&static_model(mesh, order), Precision::F32, Some(rig_bytes))
     else {
@@ -305,7 +321,7 @@ fn frame_cost(rig_bytes: &[u8], mesh: &Mesh, in_rig: &[Light], order: usize) -> 
     }
     let mut vectors = Vec::new();
     let rig_vectors_us = median_us(|| {
-        vectors = rig_vectors(&rig, in_rig, order, &Placement::IDENTITY);
+        vectors = rig_vectors(&rig, &in_rig, order, &Placement::IDENTITY).unwrap_or_default();
     });
     let mut buffer = vec![0.0f32; model.info().rig_lit_weights_len(rig.vectors())];
     let mut shading = vec![[0.0f32; 3]; mesh.vertex_count()];
@@ -323,10 +339,17 @@ fn frame_cost(rig_bytes: &[u8], mesh: &Mesh, in_rig: &[Light], order: usize) -> 
             );
         }
     });
+    let analytic_us = match rest.iter().any(|&w| w > 0.0) {
+        true => median_us(|| {
+            let _ = model.shade_lights(&pose, &[], lights, &rest, &mesh.positions, 0, &mut shading);
+        }),
+        false => 0.0,
+    };
     FrameCost {
         rig_vectors: rig_vectors_us,
         shade: shade_us,
-        total: rig_vectors_us + shade_us,
+        analytic: analytic_us,
+        total: rig_vectors_us + shade_us + analytic_us,
     }
 }
 
@@ -363,7 +386,8 @@ mod tests {
                 settings.target_error,
                 settings.band,
             );
-            let vectors = rig_vectors(&rig, &[scaled(&light, share)], 3, &Placement::IDENTITY);
+            let vectors =
+                rig_vectors(&rig, &[scaled(&light, share)], 3, &Placement::IDENTITY).unwrap();
             let mut here = [[0.0f32; 3]; 9];
             which
                 .iter()

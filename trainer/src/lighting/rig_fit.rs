@@ -7,8 +7,7 @@
 //! pose, and the samples cover where the surface goes, not only where it rests.
 
 use aprt_core::{
-    AxisKind, IrradianceRig, Light, MAX_COEFFS, Placement, PointLight, Rgb, RigLayout, RigShape,
-    irradiance_sh,
+    AxisKind, IrradianceRig, Light, Placement, PointLight, Rgb, RigLayout, RigShape, irradiance_sh,
 };
 use nalgebra::DMatrix;
 use rayon::prelude::*;
@@ -157,7 +156,12 @@ pub fn rig_error(
     order: usize,
 ) -> GreyError {
     let n2 = order * order;
-    let vectors = rig_vectors(rig, lights, order, &Placement::IDENTITY);
+    let Ok(vectors) = rig_vectors(rig, lights, order, &Placement::IDENTITY) else {
+        return GreyError {
+            mean: f64::INFINITY,
+            max: f64::INFINITY,
+        };
+    };
     let mut rig_here = vec![[0.0f32; 3]; n2];
     let mut exact_here = vec![[0.0f32; 3]; n2];
     let (mut sum, mut max, mut count) = (0.0, 0.0f64, 0usize);
@@ -194,18 +198,10 @@ pub fn rig_vectors(
     lights: &[Light],
     order: usize,
     placement: &Placement,
-) -> Vec<Rgb> {
-    let n2 = order * order;
-    let mut out = vec![[0.0f32; 3]; rig.vectors() * n2];
-    let mut scratch = [[0.0f32; 3]; MAX_COEFFS];
-    let sample = |p: [f32; 3], l: &mut [Rgb]| {
-        for light in lights {
-            let _ = light.add_radiance_sh(order, p, l);
-        }
-    };
-    // `out` and `scratch` are sized for the rig and order.
-    let _ = rig.vectors_from(n2, placement, &mut scratch, sample, &mut out);
-    out
+) -> Result<Vec<Rgb>, aprt_core::Error> {
+    let mut out = vec![[0.0f32; 3]; rig.vectors() * order * order];
+    rig.vectors_from_lights(order, placement, lights, &[], &mut out)?;
+    Ok(out)
 }
 
 /// The box around `meshes` (centre, half-widths; a flat axis gets a millimetre) and the
@@ -361,6 +357,7 @@ mod tests {
     use super::*;
     use crate::rig::Rig;
     use crate::rig::character::Character;
+    use aprt_core::MAX_COEFFS;
 
     /// A field the rig represents exactly: `l(p) = Σ_k φ_k(p) C_k` for random C.
     fn field(shape: RigShape, seed: u64) -> Vec<Rgb> {

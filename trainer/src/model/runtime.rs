@@ -288,7 +288,7 @@ pub fn predict_rig_shading(
         .zip(&shares)
         .map(|(l, &s)| crate::lighting::evaluate::scaled(l, s))
         .collect();
-    let vectors = crate::lighting::rig_vectors(&rig, &in_rig, order, &place);
+    let vectors = crate::lighting::rig_vectors(&rig, &in_rig, order, &place)?;
     let mut buffer = vec![0.0f32; model.info().rig_lit_weights_len(rig.vectors())];
     let mut lit = RigLitWeights::new(&mut buffer);
     model.light_rig(&pose, &vectors, rotations, &mut lit)?;

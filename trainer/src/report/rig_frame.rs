@@ -43,7 +43,7 @@ pub fn demo_lights(mesh: &crate::rig::mesh::Mesh) -> Vec<Light> {
         }),
         Light::Point(PointLight {
             position: [c[0] - 4.0, c[1] - 3.0, c[2] + 3.5],
-            intensity: [5.0, 6.0, 8.0],
+            intensity: [1.5, 1.8, 2.4],
         }),
         Light::Directional(DirectionalLight {
             direction: [-0.3, -0.5, 0.8],
