@@ -9,7 +9,8 @@
 //! stores, by the f64 reference. A panic anywhere is a finding.
 
 use aprt_core::{
-    Error, Frame, Input, LitWeights, Model, ModelInfo, PoseWeights, Rotation, StreamedModel,
+    Error, Frame, Input, IrradianceRig, Light, LitWeights, Model, ModelInfo, Placement, PointLight,
+    PoseWeights, RigLitWeights, Rotation, SphereLight, StreamedModel,
 };
 
 use crate::decode::decode;
@@ -181,7 +182,74 @@ pub fn exercise(blob: &[u8], probe: &Probe) -> Result<Evaluation, Error> {
     check_range(&model, probe, &eval);
     let stored = decode(blob).expect("FORMAT.md reads every blob the core accepts");
     reference::assert_matches(&stored, &eval, |_| 0.0);
+    if let Some(rig) = model.irradiance_rig() {
+        exercise_rig(&model, &rig, probe, &eval);
+    }
     Ok(eval)
+}
+
+/// A model's irradiance rig lit by a sphere and a point light placed from the probe: lights
+/// the core refuses are refused with [`Error::BadLight`]; valid ones give finite rig vectors
+/// and finite rig-lit and per-vertex shading at finite positions, or a refusal of a position
+/// that is not finite, never a panic.
+fn exercise_rig(model: &Model, rig: &IrradianceRig<'_>, probe: &Probe, eval: &Evaluation) {
+    let a = probe.angles;
+    let lights = [
+        Light::Sphere(SphereLight {
+            position: [a[0], a[1], a[2]],
+            radius: probe.lighting[0].abs(),
+            radiance: [probe.lighting[1]; 3],
+        }),
+        Light::Point(PointLight {
+            position: [a[3], a[0], a[1]],
+            intensity: [probe.lighting[2].abs(); 3],
+        }),
+    ];
+    let info = model.info();
+    let mut vectors = vec![[0.0f32; 3]; rig.vectors() * info.coeffs()];
+    let place = Placement::IDENTITY;
+    let valid = lights.iter().all(|l| l.validate().is_ok());
+    match rig.vectors_from_lights(info.order(), &place, &lights, &[], &mut vectors) {
+        Err(Error::BadLight { .. }) if !valid => return,
+        Err(e) => panic!("rig vectors of valid lights refused: {e}"),
+        Ok(()) => assert!(valid, "invalid lights accepted"),
+    }
+    let positions: Vec<[f32; 3]> = (0..info.vertices())
+        .map(|j| [a[j % 4], a[(j + 1) % 4], a[(j + 2) % 4]])
+        .collect();
+    let mut pose = Box::new(PoseWeights::new());
+    model
+        .set_pose(&eval.angles, &mut pose)
+        .expect("set once already");
+    let mut buffer = vec![0.0f32; info.rig_lit_weights_len(rig.vectors())];
+    let mut lit = RigLitWeights::new(&mut buffer);
+    let lit_ok = model.light_rig(&pose, &vectors, &eval.rotations, &mut lit);
+    if vectors.iter().flatten().any(|x| !x.is_finite()) {
+        assert!(lit_ok.is_err(), "non-finite rig vectors accepted");
+        return;
+    }
+    lit_ok.expect("finite rig vectors light a valid model");
+    let mut out = vec![[0.0f32; 3]; info.vertices()];
+    let finite = positions.iter().flatten().all(|x| x.is_finite());
+    let shaded = model.shade_rig(&lit, rig, &place, &positions, 0, &mut out);
+    let weights = [0.5f32; 2];
+    let near = model.shade_lights(
+        &pose,
+        &eval.rotations,
+        &lights,
+        &weights,
+        &positions,
+        0,
+        &mut out,
+    );
+    if finite {
+        shaded.expect("finite positions shade");
+        near.expect("finite positions shade per vertex");
+        assert!(out.iter().flatten().all(|x| !x.is_nan()), "NaN shading");
+    } else {
+        assert!(matches!(shaded, Err(Error::NonFinitePosition { .. })));
+        assert!(matches!(near, Err(Error::NonFinitePosition { .. })));
+    }
 }
 
 fn angles(info: &ModelInfo, probe: &Probe) -> Vec<f32> {

@@ -2,7 +2,8 @@
 //! f32 or f16, angles or cosine features): the starting points of the mutation tests and the seeds of the fuzz corpus
 //! (`cargo test -p aprt-tests --test corpus -- --ignored` writes `fuzz/corpus/`).
 
-use aprt_trainer::{BoneFrames, LinearModel, Precision, encode_model};
+use aprt_core::{AxisKind, RigLayout, RigShape};
+use aprt_trainer::{BoneFrames, LinearModel, Precision, encode_model, encode_model_with_rig};
 
 use crate::{random_model, with_cosines};
 
@@ -47,10 +48,44 @@ pub fn sample_models() -> Vec<(&'static str, LinearModel, Precision)> {
     ]
 }
 
-/// `(name, blob)` of each sample.
+/// A small mixed irradiance rig's bytes: a 2-node lattice along x, linear along y, over five
+/// samples, with an error table.
+pub fn sample_rig() -> Vec<u8> {
+    let samples = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.2, 0.0],
+        [-1.0, 0.1, 0.3],
+        [0.5, -0.5, 0.1],
+        [0.0, 0.4, -0.2],
+    ];
+    let shape = RigShape::Product([AxisKind::Lattice(2), AxisKind::Linear, AxisKind::Constant]);
+    let matrix: Vec<f32> = (0..shape.vectors() * samples.len())
+        .map(|i| ((i * 7 % 5) as f32 - 2.0) * 0.25)
+        .collect();
+    let layout = RigLayout {
+        shape,
+        centre: [0.0, 0.0, 0.0],
+        half: [1.0, 0.5, 0.3],
+        radius: 1.2,
+        table: &[[1.1, 30.0], [3.0, 4.0], [9.0, 0.4]],
+        samples: &samples,
+        matrix: &matrix,
+    };
+    let mut bytes = vec![0u8; layout.len()];
+    layout.write(&mut bytes).expect("sized for the layout");
+    bytes
+}
+
+/// `(name, blob)` of each sample, and a bone-frame model carrying an irradiance rig.
 pub fn sample_blobs() -> Vec<(&'static str, Vec<u8>)> {
+    let rigged = with_bones(random_model(2, 10, 3, 1, Some(2)), 2);
     sample_models()
         .into_iter()
         .map(|(name, m, p)| (name, encode_model(&m, p).expect("samples are valid")))
+        .chain([(
+            "rig-bones-f32",
+            encode_model_with_rig(&rigged, Precision::F32, Some(&sample_rig()))
+                .expect("samples are valid"),
+        )])
         .collect()
 }

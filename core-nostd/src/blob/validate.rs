@@ -10,6 +10,7 @@ use super::header::decode_header;
 use super::info::{ModelInfo, Span};
 use super::names::NamesCheck;
 use super::{Dim, Error, Reader};
+use crate::irradiance_rig::{RigCheck, RigFailure};
 use crate::sh::{MAX_ORDER, coeff_count};
 
 fn dim(what: Dim, value: u64, min: u64, max: u64) -> Result<usize, Error> {
@@ -114,7 +115,16 @@ impl ModelInfo {
                 if found[slot].is_some() {
                     return Err(Error::DuplicateSection { section: kind });
                 }
-                check_crc(r, e, |_| {})?;
+                let mut rig = RigCheck::new();
+                check_crc(r, e, |bytes| rig.feed(bytes))?;
+                rig.finish().map_err(|failure| match failure {
+                    RigFailure::Content(error) => error,
+                    RigFailure::Length { expected } => Error::SectionLength {
+                        section: kind,
+                        expected: expected as u64,
+                        found: e.len,
+                    },
+                })?;
                 Span {
                     offset: e.offset,
                     len: e.len,

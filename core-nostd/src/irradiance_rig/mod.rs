@@ -14,11 +14,14 @@
 //! from its centre. [`IrradianceRig::share_of`] turns it into the per-light choice between
 //! the rig and per-vertex (analytic) evaluation, blended over a band so nothing pops.
 
+mod check;
 mod section;
 mod shape;
 mod split;
 
-pub use section::{IrradianceRig, MAX_RIG_SAMPLES, MAX_RIG_TABLE, RigLayout};
+pub use check::{MAX_RIG_SAMPLES, MAX_RIG_TABLE};
+pub(crate) use check::{RigCheck, RigFailure};
+pub use section::{IrradianceRig, RigLayout};
 pub use shape::{AxisKind, MAX_LATTICE, MAX_RIG_VECTORS, RIG_SUPPORT, RigShape, RigWeights};
 pub use split::{DEFAULT_BAND, light_strength};
 

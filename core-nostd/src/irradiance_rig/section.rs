@@ -20,18 +20,11 @@
 //! Every value is a little-endian f32 after the 16-byte prelude, and finite.
 
 use super::Placement;
-use super::shape::{AxisKind, MAX_RIG_VECTORS, RigShape, RigWeights};
+use super::check::{PRELUDE, RigCheck, RigFailure};
+use super::shape::{AxisKind, RigShape, RigWeights};
 use crate::blob::{Dim, Error, Input};
 use crate::light::Light;
 use crate::sh::{MAX_COEFFS, MAX_ORDER, coeff_count};
-
-/// Most sample points of a rig.
-pub const MAX_RIG_SAMPLES: usize = 4096;
-/// Most entries of a rig's error table.
-pub const MAX_RIG_TABLE: usize = 64;
-
-/// Bytes before the arrays.
-const PRELUDE: usize = 44;
 
 /// A rig as the trainer builds it, for [`RigLayout::write`].
 #[derive(Clone, Copy, Debug)]
@@ -107,11 +100,6 @@ pub struct IrradianceRig<'a> {
     matrix: &'a [[u8; 4]],
 }
 
-fn u32_at(bytes: &[u8], at: usize) -> usize {
-    let word: [u8; 4] = core::array::from_fn(|i| bytes[at + i]);
-    u32::from_le_bytes(word) as usize
-}
-
 fn f32_at(words: &[[u8; 4]], i: usize) -> f32 {
     f32::from_le_bytes(words[i])
 }
@@ -121,58 +109,28 @@ impl<'a> IrradianceRig<'a> {
     /// every value finite, a positive box and radius, an increasing table of non-negative
     /// errors. Anything else is [`Error::BadIrradianceRig`] (or [`Error::Truncated`]).
     pub fn parse(bytes: &'a [u8]) -> Result<IrradianceRig<'a>, Error> {
-        if bytes.len() < PRELUDE {
-            return Err(Error::Truncated {
-                needed: PRELUDE as u64,
-            });
-        }
-        let axes = [1, 2, 3].map(|i| AxisKind::from_code(bytes[i]));
-        let shape = match (bytes[0], axes) {
-            (0, [Some(x), Some(y), Some(z)]) => RigShape::Product([x, y, z]),
-            (1, _) if bytes[1..4] == [0, 0, 0] => RigShape::Gradient,
-            _ => return Err(Error::BadIrradianceRig),
-        };
-        let (n, k, m) = (u32_at(bytes, 4), u32_at(bytes, 8), u32_at(bytes, 12));
-        let limits_ok = (1..=MAX_RIG_SAMPLES).contains(&n)
-            && k == shape.vectors()
-            && (1..=MAX_RIG_VECTORS).contains(&k)
-            && m <= MAX_RIG_TABLE;
-        if !limits_ok {
-            return Err(Error::BadIrradianceRig);
-        }
-        // Within the limits these products cannot overflow even a 32-bit usize.
-        let len = PRELUDE + 4 * (2 * m + 3 * n + k * n);
-        if bytes.len() != len {
-            return Err(if bytes.len() < len {
-                Error::Truncated { needed: len as u64 }
-            } else {
-                Error::BadIrradianceRig
-            });
-        }
+        let mut check = RigCheck::new();
+        check.feed(bytes);
+        let layout = check.finish().map_err(|failure| match failure {
+            RigFailure::Content(e) => e,
+            RigFailure::Length { expected } if bytes.len() < expected => Error::Truncated {
+                needed: expected as u64,
+            },
+            RigFailure::Length { .. } => Error::BadIrradianceRig,
+        })?;
         let words = bytes[16..].as_chunks::<4>().0;
-        if !words.iter().all(|w| f32::from_le_bytes(*w).is_finite()) {
-            return Err(Error::BadIrradianceRig);
-        }
         let (head, rest) = words.split_at(7);
-        let (table, rest) = rest.split_at(2 * m);
-        let (samples, matrix) = rest.split_at(3 * n);
-        let rig = IrradianceRig {
-            shape,
+        let (table, rest) = rest.split_at(2 * layout.table);
+        let (samples, matrix) = rest.split_at(3 * layout.samples);
+        Ok(IrradianceRig {
+            shape: layout.shape,
             centre: core::array::from_fn(|i| f32_at(head, i)),
             half: core::array::from_fn(|i| f32_at(head, 3 + i)),
             radius: f32_at(head, 6),
             table,
             samples,
             matrix,
-        };
-        let table_ok = (0..m).all(|i| {
-            let [d, e] = rig.table_entry(i);
-            d > 0.0 && e >= 0.0 && (i == 0 || d > rig.table_entry(i - 1)[0])
-        });
-        if !(rig.half.iter().all(|&h| h > 0.0) && rig.radius > 0.0 && table_ok) {
-            return Err(Error::BadIrradianceRig);
-        }
-        Ok(rig)
+        })
     }
 
     /// The basis functions.
