@@ -88,7 +88,72 @@ impl RigLayout<'_> {
     }
 }
 
-/// A validated irradiance rig over its bytes.
+/// A validated irradiance rig over its bytes: from a model
+/// ([`Model::irradiance_rig`](crate::Model::irradiance_rig)) or on
+/// its own ([`IrradianceRig::parse`]).
+///
+/// One frame of rig lighting, as an engine runs it (here with a gradient rig written by hand;
+/// `aprt train --rig KIND` fits one to the character and stores it in the model):
+///
+/// ```
+/// use aprt_core::*;
+///
+/// let model = Model::parse(include_bytes!("../../../fixtures/golden/v1-bones.aprt"))?;
+/// let samples = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+/// // C = L · l(samples): the centre's lighting and three differences, a gradient.
+/// let matrix = [
+///     1.0, 0.0, 0.0, 0.0, // l_c
+///     -1.0, 1.0, 0.0, 0.0, // g_x
+///     -1.0, 0.0, 1.0, 0.0, // g_y
+///     -1.0, 0.0, 0.0, 1.0, // g_z
+/// ];
+/// let layout = RigLayout {
+///     shape: RigShape::Gradient,
+///     centre: [0.0; 3],
+///     half: [1.0; 3],
+///     radius: 1.0,
+///     table: &[[1.5, 40.0], [4.0, 3.0], [16.0, 0.2]],
+///     samples: &samples,
+///     matrix: &matrix,
+/// };
+/// let mut bytes = vec![0u8; layout.len()];
+/// layout.write(&mut bytes)?;
+/// let rig = IrradianceRig::parse(&bytes)?;
+///
+/// // Per frame: the pose, each light's share (far lights in the rig, near ones per vertex).
+/// let info = *model.info();
+/// let mut pose = PoseWeights::new();
+/// model.set_pose(&[0.1, 0.0, -0.2, 0.3, 0.0], &mut pose)?;
+/// let bones = [[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]; 3];
+/// let lights = [
+///     Light::Point(PointLight { position: [0.0, 0.0, 30.0], intensity: [9.0; 3] }),
+///     Light::Sphere(SphereLight { position: [0.3, 1.2, 0.0], radius: 0.1, radiance: [50.0; 3] }),
+/// ];
+/// let place = Placement::IDENTITY; // the character's root in the world
+/// let share: Vec<f32> = lights.iter().map(|l| rig.share_of(l, &place, 1.0, DEFAULT_BAND)).collect();
+/// assert_eq!(share, [1.0, 0.0]); // the far light in the rig, the near one per vertex
+///
+/// // The rig's K SH vectors from the rig's share of each light (a shader's uniforms)...
+/// let mut in_rig = lights;
+/// for (l, s) in in_rig.iter_mut().zip(&share) {
+///     if let Light::Point(p) = l { p.intensity = p.intensity.map(|c| c * s) }
+///     if let Light::Sphere(p) = l { p.radiance = p.radiance.map(|c| c * s) }
+/// }
+/// let mut vectors = vec![[0.0; 3]; rig.vectors() * info.coeffs()];
+/// rig.vectors_from_lights(info.order(), &place, &in_rig, &[], &mut vectors)?;
+/// // ...pushed through the pose model, and every vertex shaded at its own position, with the
+/// // rest of each light per vertex through the vertex's transfer: both self-shadowed.
+/// let mut buffer = vec![0.0; info.rig_lit_weights_len(rig.vectors())];
+/// let mut lit = RigLitWeights::new(&mut buffer);
+/// model.light_rig(&pose, &vectors, &bones, &mut lit)?;
+/// let positions = vec![[0.0, 0.5, 0.0]; info.vertices()]; // skinned by the engine
+/// let mut rgb = vec![[0.0; 3]; info.vertices()];
+/// model.shade_rig(&lit, &rig, &place, &positions, 0, &mut rgb)?;
+/// let rest: Vec<f32> = share.iter().map(|s| 1.0 - s).collect();
+/// model.shade_lights(&pose, &bones, &lights, &rest, &positions, 0, &mut rgb)?;
+/// assert!(rgb.iter().flatten().all(|x| x.is_finite()));
+/// # Ok::<(), aprt_core::Error>(())
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct IrradianceRig<'a> {
     shape: RigShape,
