@@ -161,3 +161,17 @@ pub fn median_seconds(budget: std::time::Duration, mut f: impl FnMut()) -> f64 {
     samples.sort_by(f64::total_cmp);
     samples[4]
 }
+
+/// The rotation by `angle` radians about `axis` (any non-zero length; Rodrigues), row-major, as
+/// the core's bone rotations are given.
+pub fn axis_angle(axis: [f32; 3], angle: f32) -> [[f32; 3]; 3] {
+    let n = (axis.iter().map(|a| a * a).sum::<f32>()).sqrt();
+    let [x, y, z] = axis.map(|a| a / n);
+    let (s, c) = angle.sin_cos();
+    let t = 1.0 - c;
+    [
+        [t * x * x + c, t * x * y - s * z, t * x * z + s * y],
+        [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
+        [t * x * z - s * y, t * y * z + s * x, t * z * z + c],
+    ]
+}

@@ -5,24 +5,12 @@
 
 use aprt_core::{
     CLAMPED_COSINE_BANDS, DirectionalLight, Error, Input, Light, LightError, Model, PointLight,
-    PoseWeights, Rotation, ShRotation, SphereLight, StreamedModel, clamped_cosine, coeff_count,
-    irradiance_sh, sphere_light_bands,
+    PoseWeights, Rotation, ShRotation, SphereLight, StreamedModel, coeff_count, irradiance_sh,
+    sphere_light_bands,
 };
-use aprt_tests::{noise, random_model};
-use aprt_trainer::{BoneFrames, LinearModel, Precision, VertexBasis, encode_model};
-
-/// A rotation about an arbitrary axis (Rodrigues), row-major.
-fn rotation(axis: [f32; 3], angle: f32) -> Rotation {
-    let n = (axis.iter().map(|a| a * a).sum::<f32>()).sqrt();
-    let [x, y, z] = axis.map(|a| a / n);
-    let (s, c) = angle.sin_cos();
-    let t = 1.0 - c;
-    [
-        [t * x * x + c, t * x * y - s * z, t * x * z + s * y],
-        [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
-        [t * x * z - s * y, t * y * z + s * x, t * z * z + c],
-    ]
-}
+use aprt_tests::{axis_angle, noise, random_model};
+use aprt_trainer::lighting::evaluate::static_model;
+use aprt_trainer::{BoneFrames, LinearModel, Precision, encode_model};
 
 const ROTATIONS: [([f32; 3], f32); 3] = [
     ([1.0, 2.0, 0.5], 0.7),
@@ -126,7 +114,7 @@ fn reference(
 #[test]
 fn shading_is_transfer_dot_light_at_each_vertex() {
     let (order, vertices) = (4, 29);
-    let rotations: Vec<Rotation> = ROTATIONS.iter().map(|&(a, t)| rotation(a, t)).collect();
+    let rotations: Vec<Rotation> = ROTATIONS.iter().map(|&(a, t)| axis_angle(a, t)).collect();
     let lights = random_lights(7, 9);
     let weights: Vec<f32> = noise(8, 9).iter().map(|w| 0.1 + w.abs() as f32).collect();
     let positions = triples(9, vertices, 1.0);
@@ -237,34 +225,6 @@ fn clamped_cosine_tail(n: usize) -> f64 {
     sum + 5.0 * PI * (2.0 / PI).sqrt() / (N as f64).sqrt()
 }
 
-/// A world-frame model with no pose dimensions whose vertex `j` has the transfer of an
-/// unoccluded point of normal `normals[j]`: the clamped cosine lobe.
-fn clamped_cosine_model(order: usize, normals: &[[f32; 3]]) -> LinearModel {
-    let (n2, v) = (coeff_count(order), normals.len());
-    let mut weights = vec![0.0f64; n2 * v];
-    for (j, n) in normals.iter().enumerate() {
-        let mut t = vec![0.0f32; n2];
-        clamped_cosine(order, *n, &mut t).unwrap();
-        for c in 0..n2 {
-            weights[c * v + j] = f64::from(t[c]); // [c][intercept][vertex]
-        }
-    }
-    LinearModel {
-        order,
-        vertices: v,
-        pose_len: 1,
-        pose_mean: vec![0.0],
-        pose_projection: Vec::new(),
-        weights,
-        basis: VertexBasis::Identity,
-        alpha: 0.0,
-        bones: None,
-        angle_names: Vec::new(),
-        bounds: None,
-        cosines: Vec::new(),
-    }
-}
-
 /// Test 2: An unoccluded vertex under a fully visible sphere light: exactly the SH path's
 /// irradiance (`irradiance_sh` of `add_radiance_sh`), and within the truncation bound of the
 /// exact `π L r²/d² cos θ` (`Light::irradiance`). By the addition theorem the SH irradiance is
@@ -286,7 +246,7 @@ fn sphere_light_on_an_unoccluded_vertex_matches_the_closed_form() {
     let mut worst = Vec::new(); // per order, the largest |E_n − E| / (L b_0)
     for order in 1..=6 {
         let mut order_worst = 0.0f64;
-        let blob = encode_model(&clamped_cosine_model(order, &normals), Precision::F32).unwrap();
+        let blob = encode_model(&static_model(&normals, order), Precision::F32).unwrap();
         let core = Model::parse(&blob).unwrap();
         let mut pose = PoseWeights::new();
         core.set_pose(&[0.7], &mut pose).unwrap();
@@ -368,7 +328,7 @@ fn scene() -> Scene {
     .unwrap();
     Scene {
         blob,
-        rotations: ROTATIONS.iter().map(|&(a, t)| rotation(a, t)).collect(),
+        rotations: ROTATIONS.iter().map(|&(a, t)| axis_angle(a, t)).collect(),
         lights: random_lights(17, 3),
         positions: triples(19, vertices, 1.0),
         vertices,

@@ -6,7 +6,7 @@ use aprt_core::{
     AxisKind, Error, IrradianceRig, LitWeights, Model, Placement, PoseWeights, RigLayout,
     RigLitWeights, RigShape, StreamedModel,
 };
-use aprt_tests::{noise, random_model};
+use aprt_tests::{axis_angle, noise, random_model};
 use aprt_trainer::{BoneFrames, Precision, encode_model_with_rig};
 
 /// The rig's bytes for `shape` with a random matrix over `n` random samples.
@@ -92,19 +92,6 @@ fn malformed_rigs_are_refused_without_panic() {
     assert_eq!(IrradianceRig::parse(&long).err(), bad, "trailing bytes");
 }
 
-/// A rotation about an arbitrary axis (Rodrigues), row-major.
-fn rotation(axis: [f32; 3], angle: f32) -> [[f32; 3]; 3] {
-    let n = (axis.iter().map(|a| a * a).sum::<f32>()).sqrt();
-    let [x, y, z] = axis.map(|a| a / n);
-    let (s, c) = angle.sin_cos();
-    let t = 1.0 - c;
-    [
-        [t * x * x + c, t * x * y - s * z, t * x * z + s * y],
-        [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
-        [t * x * z - s * y, t * y * z + s * x, t * z * z + c],
-    ]
-}
-
 /// Rig-lit shading against its definition: for every vertex, its transfer (in its bone's
 /// frame) dotted with the rig's world lighting at its position rotated into that frame. The
 /// reference rotates the vertex's transfer to the world instead, through a second model lit
@@ -123,9 +110,9 @@ fn rig_shading_is_transfer_dot_rig_lighting() {
             });
         }
         let rotations = [
-            rotation([1.0, 2.0, 0.5], 0.7),
-            rotation([0.0, 0.0, 1.0], -1.2),
-            rotation([-1.0, 0.3, 0.2], 2.5),
+            axis_angle([1.0, 2.0, 0.5], 0.7),
+            axis_angle([0.0, 0.0, 1.0], -1.2),
+            axis_angle([-1.0, 0.3, 0.2], 2.5),
         ];
         let rotations = &rotations[..bones.unwrap_or(0)];
         for shape in SHAPES {
@@ -139,7 +126,7 @@ fn rig_shading_is_transfer_dot_rig_lighting() {
                 .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32])
                 .collect();
             let placement = Placement {
-                rotation: rotation([0.2, 1.0, 0.1], 0.4),
+                rotation: axis_angle([0.2, 1.0, 0.1], 0.4),
                 translation: [0.5, -1.0, 2.0],
             };
             let positions: Vec<[f32; 3]> = noise(41, 3 * vertices)
@@ -290,7 +277,7 @@ fn vectors_from_lights_project_every_light_at_every_sample() {
         [0.0, 0.0, 0.02],
     ];
     let place = Placement {
-        rotation: rotation([0.3, 0.1, 1.0], 0.8),
+        rotation: axis_angle([0.3, 0.1, 1.0], 0.8),
         translation: [0.2, 0.0, -0.5],
     };
     let mut got = vec![[0.0f32; 3]; rig.vectors() * 4];

@@ -99,29 +99,24 @@ impl ModelInfo {
                 }
             });
             let (touched, count) = touched_vectors(&lanes);
-            // `t_j · C_k` for every vector the block touches, eight lanes at a time.
-            let mut dots = [[[0.0f32; VERTEX_BLOCK]; 3]; BLOCK_VECTORS];
-            for (&k, dk) in touched[..count].iter().zip(&mut dots) {
+            // `t_j · C_k` eight lanes at a time for each vector the block touches, in
+            // ascending k, each lane adding only its own terms: a vertex sums the same terms in
+            // the same order whichever others share its block or the call.
+            let mut acc = [[0.0f32; 3]; VERTEX_BLOCK];
+            for &k in &touched[..count] {
                 let sets = lit.q[3 * k * lit_len..].chunks_exact(lit_len);
-                for (q, d) in sets.zip(dk.iter_mut()) {
-                    *d = match encoding {
+                for (ch, q) in sets.take(3).enumerate() {
+                    let dots = match encoding {
                         Encoding::F32 => shade_block(bytes.as_chunks::<4>().0, q, width, bones),
                         Encoding::F16 => shade_block(bytes.as_chunks::<2>().0, q, width, bones),
                     };
-                }
-            }
-            // Each lane sums its own terms in its own order, so a vertex's value does not
-            // depend on which others share the call.
-            let acc: [[f32; 3]; VERTEX_BLOCK] = core::array::from_fn(|l| {
-                let mut sum = [0.0f32; 3];
-                for (k, w) in lanes[l].pairs() {
-                    let slot = touched[..count].iter().position(|&t| t == k).unwrap_or(0);
-                    for (s, d) in sum.iter_mut().zip(&dots[slot]) {
-                        *s += w * d[l];
+                    for (l, lane) in lanes.iter().enumerate() {
+                        if let Some((_, w)) = lane.pairs().find(|&(i, _)| i == k) {
+                            acc[l][ch] += w * dots[l];
+                        }
                     }
                 }
-                sum
-            });
+            }
             out[lo - first..hi - first].copy_from_slice(&acc[lo - v0..hi - v0]);
         })
     }
@@ -146,13 +141,16 @@ impl ModelInfo {
     }
 }
 
-/// The distinct rig vectors any lane of a block uses, and how many there are.
+/// The distinct rig vectors any lane of a block uses, ascending, and how many there are.
 fn touched_vectors(lanes: &[RigWeights; VERTEX_BLOCK]) -> ([usize; BLOCK_VECTORS], usize) {
     let mut touched = [0usize; BLOCK_VECTORS];
     let mut count = 0;
     for (k, _) in lanes.iter().flat_map(RigWeights::pairs) {
-        if !touched[..count].contains(&k) {
-            touched[count] = k;
+        // Insertion into the sorted prefix; a block touches a few dozen vectors at most.
+        let at = touched[..count].partition_point(|&t| t < k);
+        if touched.get(at) != Some(&k) || at == count {
+            touched.copy_within(at..count, at + 1);
+            touched[at] = k;
             count += 1;
         }
     }

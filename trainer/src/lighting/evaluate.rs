@@ -246,14 +246,14 @@ pub fn evaluate_rig(
     })
 }
 
-/// A world-frame model of `mesh` whose transfer is the clamped cosine at each vertex normal
-/// (one pose entry, no pose dimensions), carrying `rig`: what the core shades an unshadowed
-/// static mesh with, so a bare mesh's rig is timed on the core's own per-frame path.
-pub fn static_model(mesh: &Mesh, order: usize) -> LinearModel {
-    let (n2, v) = (order * order, mesh.vertex_count());
+/// A world-frame model whose vertex `j` has the transfer of an unoccluded point of normal
+/// `normals[j]`, the clamped cosine (one pose entry, no pose dimensions): what the core shades
+/// a static mesh with, so a bare mesh's rig is timed on the core's own per-frame path.
+pub fn static_model(normals: &[[f32; 3]], order: usize) -> LinearModel {
+    let (n2, v) = (order * order, normals.len());
     let mut weights = vec![0.0f64; n2 * v];
     let mut t = [0.0f32; MAX_COEFFS];
-    for (j, n) in mesh.normals.iter().enumerate() {
+    for (j, n) in normals.iter().enumerate() {
         if clamped_cosine(order, *n, &mut t[..n2]).is_ok() {
             for c in 0..n2 {
                 weights[c * v + j] = f64::from(t[c]);
@@ -304,9 +304,11 @@ fn frame_cost(
         .map(|(l, &s)| scaled(l, s))
         .collect();
     let rest: Vec<f32> = share.iter().map(|s| 1.0 - s).collect();
-    let Ok(blob) =
-        encode_model_with_rig(&static_model(mesh, order), Precision::F32, Some(rig_bytes))
-    else {
+    let Ok(blob) = encode_model_with_rig(
+        &static_model(&mesh.normals, order),
+        Precision::F32,
+        Some(rig_bytes),
+    ) else {
         return FrameCost::default();
     };
     let Ok(model) = Model::parse(&blob) else {
