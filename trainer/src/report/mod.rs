@@ -9,3 +9,4 @@ pub mod figures;
 pub mod plots;
 pub mod render;
 pub mod results;
+pub mod rig_study;
