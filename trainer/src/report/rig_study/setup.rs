@@ -96,7 +96,7 @@ pub const SWEEP: [f64; 13] = [
 pub const LIGHT_RADIUS: f64 = 0.05;
 /// Far-field irradiance of every light at the nearest point of the bounding sphere: π, so a
 /// white Lambertian surface facing the light there reflects radiance 1, 255 grey levels (the
-/// paper's normalisation, "reflected radiance … is 1"). The brief's `π r² L = (d − R)²` gives
+/// paper's normalisation, "reflected radiance … is 1"). `π r² L = (d − R)²` would give
 /// irradiance 1 instead, 81 grey levels; every error here is π times what it would give.
 pub const NEAREST_IRRADIANCE: f64 = std::f64::consts::PI;
 
