@@ -31,6 +31,17 @@ pub struct ResultsArgs {
     pub rays: usize,
 }
 
+/// `aprt rig-study`.
+#[derive(Debug, Args)]
+pub struct RigStudyArgs {
+    /// Output directory for README.md, results.json and the PNG figures.
+    #[arg(long, default_value = "docs/rigs")]
+    pub out: PathBuf,
+    /// SH order of the lighting.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u8).range(1..=6))]
+    pub order: u8,
+}
+
 /// `aprt demo`.
 #[derive(Debug, Args)]
 pub struct DemoArgs {

@@ -14,7 +14,8 @@ use clap::{Parser, Subcommand};
 
 pub use args::{
     BakeArgs, DemoArgs, DeringArg, EvalArgs, FitArgs, InspectArgs, IrradianceArgs, LightArgs,
-    LightCommand, PrecisionArg, ResultsArgs, RigArgs, SimulateArgs, TrainArgs, TransferArgs,
+    LightCommand, PrecisionArg, ResultsArgs, RigArgs, RigStudyArgs, SimulateArgs, TrainArgs,
+    TransferArgs,
 };
 pub use source::SourceArgs;
 pub use terminal::Terminal;
@@ -61,6 +62,8 @@ pub enum Command {
     /// Fit an irradiance rig to a mesh or character and report, for a lights file, which
     /// lights it carries, its error against exact evaluation and its cost per frame.
     Rig(RigArgs),
+    /// Regenerate the irradiance-rig study on the built-in creature (docs/rigs).
+    RigStudy(RigStudyArgs),
 }
 
 /// Runs one command. An interrupted run (SIGINT, SIGTERM, SIGHUP) leaves no temporary file.
@@ -75,6 +78,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Inspect(args) => inspect(&args),
         Command::Results(args) => results(&args),
         Command::Rig(args) => irradiance_rig::run(&args),
+        Command::RigStudy(args) => rig_study(&args),
         Command::Light(args) => match args.command {
             LightCommand::Irradiance(args) => light_irradiance(&args),
         },
@@ -239,6 +243,18 @@ fn results(args: &ResultsArgs) -> Result<()> {
         args.rays
     );
     let path = write_document(&studies, &settings, &args.out, &command, &Terminal)?;
+    eprintln!("wrote {}", path.display());
+    Ok(())
+}
+
+fn rig_study(args: &RigStudyArgs) -> Result<()> {
+    check(&[Output::directory(&args.out, "--out")], &[])?;
+    let command = format!(
+        "cargo run --release -p aprt-trainer --bin aprt -- rig-study --out {} --order {}",
+        args.out.display(),
+        args.order
+    );
+    let path = crate::report::rig_study::run(&args.out, args.order as usize, &command, &Terminal)?;
     eprintln!("wrote {}", path.display());
     Ok(())
 }

@@ -165,6 +165,75 @@ fn per_vertex(lights: &[Light], weights: &[f32], order: usize, p: [f32; 3], n: [
     irradiance_sh(order, &l[..order * order], n).unwrap_or([0.0; 3])
 }
 
+/// A rig's errors against the exact, horizon-clipped, unshadowed irradiance, in grey levels.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct RigErrors {
+    /// Rig plus per-vertex lights, as the shares chose.
+    pub chosen: GreyError,
+    /// Every light in the rig.
+    pub all_rig: GreyError,
+    /// Every light per vertex through SH: the truncation floor.
+    pub per_vertex: GreyError,
+    /// Every light in the rig against every light per vertex through SH: what the rig adds
+    /// to the truncation (what [`FittedRig::tabulate`] measures).
+    pub rig_vs_per_vertex: GreyError,
+}
+
+/// The errors of `rig` under `lights` at the vertices `which` of `mesh` (root frame), each
+/// light's share of the rig given by `share` (see [`shares`]); an error names the light the
+/// core refused.
+pub fn rig_errors(
+    rig: &IrradianceRig<'_>,
+    mesh: &Mesh,
+    which: impl Iterator<Item = usize>,
+    lights: &[Light],
+    share: &[f32],
+    order: usize,
+) -> Result<RigErrors, aprt_core::Error> {
+    let rest: Vec<f32> = share.iter().map(|s| 1.0 - s).collect();
+    let in_rig: Vec<Light> = lights
+        .iter()
+        .zip(share)
+        .map(|(l, &s)| scaled(l, s))
+        .collect();
+    let all = rig_vectors(rig, lights, order, &Placement::IDENTITY)?;
+    let split = rig_vectors(rig, &in_rig, order, &Placement::IDENTITY)?;
+    let (mut chosen, mut all_rig, mut floor, mut added) = (
+        Tally::default(),
+        Tally::default(),
+        Tally::default(),
+        Tally::default(),
+    );
+    let mut here = [[0.0f32; 3]; MAX_COEFFS];
+    let ones = vec![1.0f32; lights.len()];
+    for j in which {
+        let (p, n) = (&mesh.positions[j], &mesh.normals[j]);
+        let exact = lights
+            .iter()
+            .fold([0.0f32; 3], |acc, l| match l.irradiance(*p, *n) {
+                Ok(e) => std::array::from_fn(|k| acc[k] + e[k]),
+                Err(_) => acc,
+            });
+        let here = &mut here[..order * order];
+        rig.lighting_at(&all, &Placement::IDENTITY, *p, here);
+        let every = irradiance_sh(order, here, *n).unwrap_or([0.0; 3]);
+        all_rig.add(every, exact);
+        rig.lighting_at(&split, &Placement::IDENTITY, *p, here);
+        let from_rig = irradiance_sh(order, here, *n).unwrap_or([0.0; 3]);
+        let near = per_vertex(lights, &rest, order, *p, *n);
+        chosen.add(std::array::from_fn(|k| from_rig[k] + near[k]), exact);
+        let sh = per_vertex(lights, &ones, order, *p, *n);
+        floor.add(sh, exact);
+        added.add(every, sh);
+    }
+    Ok(RigErrors {
+        chosen: chosen.result(),
+        all_rig: all_rig.result(),
+        per_vertex: floor.result(),
+        rig_vs_per_vertex: added.result(),
+    })
+}
+
 /// Evaluates a fitted rig under `lights` on `mesh` (in the rig's root frame); an error names
 /// the light the core refused.
 pub fn evaluate_rig(
@@ -177,34 +246,7 @@ pub fn evaluate_rig(
     let rig = IrradianceRig::parse(&bytes)?;
     let order = settings.order;
     let share = shares(&rig, lights, settings);
-    let rest: Vec<f32> = share.iter().map(|s| 1.0 - s).collect();
-    let in_rig: Vec<Light> = lights
-        .iter()
-        .zip(&share)
-        .map(|(l, &s)| scaled(l, s))
-        .collect();
-    let all = rig_vectors(&rig, lights, order, &Placement::IDENTITY)?;
-    let split = rig_vectors(&rig, &in_rig, order, &Placement::IDENTITY)?;
-    let (mut chosen, mut all_rig, mut floor) =
-        (Tally::default(), Tally::default(), Tally::default());
-    let mut here = [[0.0f32; 3]; MAX_COEFFS];
-    let ones = vec![1.0f32; lights.len()];
-    for (p, n) in mesh.positions.iter().zip(&mesh.normals) {
-        let exact = lights
-            .iter()
-            .fold([0.0f32; 3], |acc, l| match l.irradiance(*p, *n) {
-                Ok(e) => std::array::from_fn(|k| acc[k] + e[k]),
-                Err(_) => acc,
-            });
-        let here = &mut here[..order * order];
-        rig.lighting_at(&all, &Placement::IDENTITY, *p, here);
-        all_rig.add(irradiance_sh(order, here, *n).unwrap_or([0.0; 3]), exact);
-        rig.lighting_at(&split, &Placement::IDENTITY, *p, here);
-        let from_rig = irradiance_sh(order, here, *n).unwrap_or([0.0; 3]);
-        let near = per_vertex(lights, &rest, order, *p, *n);
-        chosen.add(std::array::from_fn(|k| from_rig[k] + near[k]), exact);
-        floor.add(per_vertex(lights, &ones, order, *p, *n), exact);
-    }
+    let errors = rig_errors(&rig, mesh, 0..mesh.vertex_count(), lights, &share, order)?;
     let paths = lights
         .iter()
         .zip(&share)
@@ -239,9 +281,9 @@ pub fn evaluate_rig(
         target_error: settings.target_error,
         radius: fitted.radius,
         lights: paths,
-        error_grey: chosen.result(),
-        error_grey_all_rig: all_rig.result(),
-        error_grey_per_vertex: floor.result(),
+        error_grey: errors.chosen,
+        error_grey_all_rig: errors.all_rig,
+        error_grey_per_vertex: errors.per_vertex,
         us_per_frame: frame_cost(&bytes, mesh, lights, &share, order),
     })
 }

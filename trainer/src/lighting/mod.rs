@@ -12,7 +12,7 @@ pub mod surface_samples;
 use aprt_core::{Light, LightError, MAX_COEFFS, Rgb, Window, apply_window, irradiance_sh};
 use serde::Serialize;
 
-pub use evaluate::{RigEvaluation, RigSettings, evaluate_rig};
+pub use evaluate::{RigErrors, RigEvaluation, RigSettings, evaluate_rig, rig_errors};
 pub use lights_file::{LightsFileError, light_from_table, parse_lights, read_lights};
 pub use rig_fit::{FittedRig, GreyError, fit_rig, rig_error, rig_vectors};
 pub use rig_kind::{RigKind, RigKindError};

@@ -10,3 +10,4 @@ pub mod plots;
 pub mod render;
 pub mod results;
 pub mod rig_frame;
+pub mod rig_study;

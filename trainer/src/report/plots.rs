@@ -37,16 +37,21 @@ pub struct Axes<'a> {
 
 const WIDTH: u32 = 720;
 const HEIGHT: u32 = 440;
-const COLORS: [RGBColor; 6] = [
+const COLORS: [RGBColor; 10] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
     RGBColor(44, 160, 44),
     RGBColor(255, 127, 14),
     RGBColor(148, 103, 189),
     RGBColor(23, 190, 207),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(188, 189, 34),
+    RGBColor(127, 127, 127),
 ];
 
-fn register_font() {
+/// Registers the bundled font as `sans-serif` (once).
+pub(crate) fn register_font() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         // Registration fails only for a malformed font; the bundled one is not.
