@@ -289,8 +289,9 @@ pub struct IrradianceArgs {
 /// `aprt rig`.
 #[derive(Debug, Args)]
 pub struct RigArgs {
-    /// A static mesh (OBJ); or name a character with the source flags instead (its bind pose
-    /// and training poses are fitted, frame --frame of its clip evaluated).
+    /// A static mesh (OBJ); or name a character with the source flags instead: the rig is
+    /// fitted over its bind pose and up to 24 frames of the clips given (name its training
+    /// clip to fit as `train --rig` does), and frame --frame of them is evaluated.
     pub mesh: Option<PathBuf>,
     /// The character, when no mesh is given.
     #[command(flatten)]
