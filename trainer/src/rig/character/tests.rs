@@ -1,5 +1,7 @@
 use super::*;
-use crate::rig::procedural::assert_parts_closed_and_outward;
+use crate::rig::mesh::Mesh;
+use crate::rig::procedural::checks::assert_parts_closed_and_outward;
+use crate::rig::{PoseError, Rig, RigError};
 
 fn character() -> Character {
     Character::builtin()

@@ -2,8 +2,9 @@ use glam::Vec3;
 
 use super::*;
 use crate::rig::character::CharacterError;
-use crate::rig::procedural::assert_parts_closed_and_outward;
-use crate::rig::{PoseError, RigError};
+use crate::rig::mesh::Mesh;
+use crate::rig::procedural::checks::assert_parts_closed_and_outward;
+use crate::rig::{PoseError, Rig, RigError};
 
 fn creature() -> Creature {
     Creature::builtin()
