@@ -84,7 +84,7 @@ impl FittedRig {
     }
 
     /// The error table of section 3.1: for unit-strength point lights at
-    /// [`TABLE_DISTANCES`] distances (in radii) around the character, in 26 directions, the
+    /// `TABLE_DISTANCES` (24) distances (in radii) around the character, in 26 directions, the
     /// worst grey-level difference over the vertices of `mesh` (root frame) between the rig's
     /// irradiance and the per-vertex SH evaluation of the same light at `order`. That is the
     /// error moving a light into the rig costs; the SH truncation both paths share is not

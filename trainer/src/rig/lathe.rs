@@ -52,7 +52,8 @@ pub(crate) struct Part {
 /// The assembled bind-pose surface: positions, triangles, per-vertex influences, and the
 /// triangle range of each part, in the order the parts were given (for per-part closedness
 /// checks).
-pub(crate) struct Body {
+// Nominally `pub` (the module is crate-private) because `procedural::Spec` names it.
+pub struct Body {
     pub positions: Vec<[f32; 3]>,
     pub triangles: Vec<[u32; 3]>,
     pub influences: Vec<Vec<(u32, f32)>>,

@@ -7,7 +7,8 @@
 //!   (linear blend skinning), [`rotation_vector`] (the log and exp maps behind glTF and
 //!   mannequin pose vectors), and the lathe surfaces of the built-in character and the
 //!   mannequin;
-//! - the rigs: [`character`] and [`creature`] (built in, sharing one construction and clip machinery), [`gltf`] (glTF 2.0 skins and animations), [`mocap`]
+//! - the rigs: [`character`] and [`creature`] (built in, both a [`BuiltinRig`] sharing one
+//!   construction and clip machinery), [`gltf`] (glTF 2.0 skins and animations), [`mocap`]
 //!   (BVH motion-capture files) and [`mannequin`] (the rig a motion-capture skeleton drives);
 //! - what a model needs of a rig: [`pose_layout`] (which pose entries it takes),
 //!   [`bone_frames`] (transfer in each vertex's bone frame) and [`transfer_rotation`]
@@ -27,6 +28,8 @@ pub(crate) mod procedural;
 pub mod rotation_vector;
 pub mod skin;
 pub mod transfer_rotation;
+
+pub use procedural::BuiltinRig;
 
 use glam::Mat4;
 

@@ -7,8 +7,9 @@
 
 use glam::DVec3;
 
-use super::skeleton::{FOREARM, Skeleton, UPPER_ARM, joint, left_arm_direction};
+use super::skeleton::{FOREARM, UPPER_ARM, joint, left_arm_direction};
 use crate::rig::lathe::{Body, Lathe, Part, band, capsule_profile, smooth_profile};
+use crate::rig::procedural::Skeleton;
 
 /// Target spacing between rings along a profile, in metres. Chosen so the character lands near
 /// 12k vertices while the elbow and knee blend regions (±5–6 cm) still span five or more rings,

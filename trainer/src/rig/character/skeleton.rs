@@ -7,7 +7,7 @@
 
 use glam::DVec3;
 
-use crate::rig::procedural::{Dof, dof};
+use crate::rig::procedural::{Dof, Skeleton, dof};
 
 /// Joint indices, named so the body and clip tables read as anatomy.
 pub(crate) mod joint {
@@ -46,47 +46,34 @@ pub(crate) fn left_arm_direction() -> DVec3 {
     DVec3::new(ARM_DROOP.cos(), 0.0, -ARM_DROOP.sin())
 }
 
-/// Bind-pose joint positions and parents.
-#[derive(Clone, Debug)]
-pub(crate) struct Skeleton {
-    pub parents: [Option<usize>; joint::COUNT],
-    pub bind: [DVec3; joint::COUNT],
-}
-
-impl Skeleton {
-    pub fn new() -> Skeleton {
-        use joint::*;
-        let mut bind = [DVec3::ZERO; COUNT];
-        let mut parents = [None; COUNT];
-        let mut set = |j: usize, parent: Option<usize>, p: DVec3| {
-            bind[j] = p;
-            parents[j] = parent;
-        };
-        set(PELVIS, None, DVec3::new(0.0, 0.0, 0.98));
-        set(SPINE, Some(PELVIS), DVec3::new(0.0, 0.0, 1.10));
-        set(CHEST, Some(SPINE), DVec3::new(0.0, 0.0, 1.30));
-        set(NECK, Some(CHEST), DVec3::new(0.0, 0.0, 1.50));
-        set(HEAD, Some(NECK), DVec3::new(0.0, 0.0, 1.60));
-        for (side, shoulder, elbow, wrist) in [
-            (1.0, L_SHOULDER, L_ELBOW, L_WRIST),
-            (-1.0, R_SHOULDER, R_ELBOW, R_WRIST),
-        ] {
-            let d = left_arm_direction() * DVec3::new(side, 1.0, 1.0);
-            let s = DVec3::new(side * SHOULDER_X, 0.0, 1.43);
-            set(shoulder, Some(CHEST), s);
-            set(elbow, Some(shoulder), s + d * UPPER_ARM);
-            set(wrist, Some(elbow), s + d * (UPPER_ARM + FOREARM));
-        }
-        for (side, hip, knee, ankle) in [
-            (1.0, L_HIP, L_KNEE, L_ANKLE),
-            (-1.0, R_HIP, R_KNEE, R_ANKLE),
-        ] {
-            set(hip, Some(PELVIS), DVec3::new(side * HIP_X, 0.0, 0.93));
-            set(knee, Some(hip), DVec3::new(side * HIP_X, 0.0, 0.50));
-            set(ankle, Some(knee), DVec3::new(side * HIP_X, 0.0, 0.08));
-        }
-        Skeleton { parents, bind }
+/// Bind-pose joint positions and parents (parents precede children).
+pub(crate) fn skeleton() -> Skeleton {
+    use joint::*;
+    let mut skeleton = Skeleton::with_joints(COUNT);
+    skeleton.set(PELVIS, None, DVec3::new(0.0, 0.0, 0.98));
+    skeleton.set(SPINE, Some(PELVIS), DVec3::new(0.0, 0.0, 1.10));
+    skeleton.set(CHEST, Some(SPINE), DVec3::new(0.0, 0.0, 1.30));
+    skeleton.set(NECK, Some(CHEST), DVec3::new(0.0, 0.0, 1.50));
+    skeleton.set(HEAD, Some(NECK), DVec3::new(0.0, 0.0, 1.60));
+    for (side, shoulder, elbow, wrist) in [
+        (1.0, L_SHOULDER, L_ELBOW, L_WRIST),
+        (-1.0, R_SHOULDER, R_ELBOW, R_WRIST),
+    ] {
+        let d = left_arm_direction() * DVec3::new(side, 1.0, 1.0);
+        let s = DVec3::new(side * SHOULDER_X, 0.0, 1.43);
+        skeleton.set(shoulder, Some(CHEST), s);
+        skeleton.set(elbow, Some(shoulder), s + d * UPPER_ARM);
+        skeleton.set(wrist, Some(elbow), s + d * (UPPER_ARM + FOREARM));
     }
+    for (side, hip, knee, ankle) in [
+        (1.0, L_HIP, L_KNEE, L_ANKLE),
+        (-1.0, R_HIP, R_KNEE, R_ANKLE),
+    ] {
+        skeleton.set(hip, Some(PELVIS), DVec3::new(side * HIP_X, 0.0, 0.93));
+        skeleton.set(knee, Some(hip), DVec3::new(side * HIP_X, 0.0, 0.50));
+        skeleton.set(ankle, Some(knee), DVec3::new(side * HIP_X, 0.0, 0.08));
+    }
+    skeleton
 }
 
 /// The joint angles, in the order poses list them. Within a joint, earlier angles are applied

@@ -7,10 +7,11 @@
 use glam::DVec3;
 
 use super::skeleton::{
-    HIP_Z, KNEE_Z, LEGS, Leg, NECK_DIRECTION, NECK_STEP, Skeleton, TAIL_BASE, TAIL_DIRECTION,
-    TAIL_LENGTH, TAIL_STEP, joint,
+    HIP_Z, KNEE_Z, LEGS, Leg, NECK_DIRECTION, NECK_STEP, TAIL_BASE, TAIL_DIRECTION, TAIL_LENGTH,
+    TAIL_STEP, joint,
 };
 use crate::rig::lathe::{Body, Lathe, Part, band, capsule_profile, smooth_profile};
+use crate::rig::procedural::Skeleton;
 
 /// Target spacing between rings along a profile, in metres. Chosen so the creature lands
 /// near 8k vertices while the knee blend regions (±7 cm) span five rings and each tail

@@ -6,7 +6,7 @@ use std::f64::consts::{PI, TAU};
 
 use super::skeleton::{LEGS, joint::TAIL_JOINTS};
 use crate::rig::Clip;
-use crate::rig::character::JointAngle;
+use crate::rig::procedural::JointAngle;
 use crate::rig::procedural::clips::{ease, scripted};
 
 /// Seed of the training clip's random walk.

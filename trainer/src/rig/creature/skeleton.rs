@@ -12,7 +12,7 @@
 
 use glam::DVec3;
 
-use crate::rig::procedural::{Dof, dof};
+use crate::rig::procedural::{Dof, Skeleton, dof};
 
 /// Joint indices, named so the body and clip tables read as anatomy.
 pub(crate) mod joint {
@@ -104,42 +104,29 @@ pub(crate) fn tail_joint(k: usize) -> DVec3 {
 }
 
 /// Bind-pose joint positions and parents (parents precede children).
-#[derive(Clone, Debug)]
-pub(crate) struct Skeleton {
-    pub parents: [Option<usize>; joint::COUNT],
-    pub bind: [DVec3; joint::COUNT],
-}
-
-impl Skeleton {
-    pub fn new() -> Skeleton {
-        use joint::*;
-        let mut bind = [DVec3::ZERO; COUNT];
-        let mut parents = [None; COUNT];
-        let mut set = |j: usize, parent: Option<usize>, p: DVec3| {
-            bind[j] = p;
-            parents[j] = parent;
-        };
-        set(PELVIS, None, DVec3::new(0.0, 0.42, BACK_Z));
-        set(SPINE, Some(PELVIS), DVec3::new(0.0, 0.0, BACK_Z));
-        set(CHEST, Some(SPINE), DVec3::new(0.0, -0.35, BACK_Z));
-        set(NECK_1, Some(CHEST), neck_joint(0));
-        set(NECK_2, Some(NECK_1), neck_joint(1));
-        set(HEAD, Some(NECK_2), neck_joint(2));
-        for k in 0..TAIL_JOINTS {
-            let parent = if k == 0 { PELVIS } else { TAIL + k - 1 };
-            set(TAIL + k, Some(parent), tail_joint(k));
-        }
-        for (i, leg) in LEGS.iter().enumerate() {
-            let parent = if leg.hind { PELVIS } else { CHEST };
-            set(LEG_HIP[i], Some(parent), leg.hip);
-            set(
-                LEG_KNEE[i],
-                Some(LEG_HIP[i]),
-                DVec3::new(leg.hip.x, leg.hip.y, KNEE_Z),
-            );
-        }
-        Skeleton { parents, bind }
+pub(crate) fn skeleton() -> Skeleton {
+    use joint::*;
+    let mut skeleton = Skeleton::with_joints(COUNT);
+    skeleton.set(PELVIS, None, DVec3::new(0.0, 0.42, BACK_Z));
+    skeleton.set(SPINE, Some(PELVIS), DVec3::new(0.0, 0.0, BACK_Z));
+    skeleton.set(CHEST, Some(SPINE), DVec3::new(0.0, -0.35, BACK_Z));
+    skeleton.set(NECK_1, Some(CHEST), neck_joint(0));
+    skeleton.set(NECK_2, Some(NECK_1), neck_joint(1));
+    skeleton.set(HEAD, Some(NECK_2), neck_joint(2));
+    for k in 0..TAIL_JOINTS {
+        let parent = if k == 0 { PELVIS } else { TAIL + k - 1 };
+        skeleton.set(TAIL + k, Some(parent), tail_joint(k));
     }
+    for (i, leg) in LEGS.iter().enumerate() {
+        let parent = if leg.hind { PELVIS } else { CHEST };
+        skeleton.set(LEG_HIP[i], Some(parent), leg.hip);
+        skeleton.set(
+            LEG_KNEE[i],
+            Some(LEG_HIP[i]),
+            DVec3::new(leg.hip.x, leg.hip.y, KNEE_Z),
+        );
+    }
+    skeleton
 }
 
 /// Names of the tail's angles, base to tip: `tail_1_pitch`, `tail_1_yaw`, … `tail_6_yaw`.

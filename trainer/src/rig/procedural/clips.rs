@@ -1,8 +1,8 @@
 //! The clip machinery of the built-in characters: a training clip that sweeps the whole pose
 //! space by a deterministic random walk, and scripted clips written as functions of time.
 
+use super::JointAngle;
 use crate::rig::Clip;
-use crate::rig::character::JointAngle;
 
 /// Frame rate of every built-in clip.
 pub(crate) const FPS: f64 = 30.0;
