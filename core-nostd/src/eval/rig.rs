@@ -99,21 +99,27 @@ impl ModelInfo {
                 }
             });
             let (touched, count) = touched_vectors(&lanes);
-            // `t_j · C_k` eight lanes at a time for each vector the block touches, in
-            // ascending k, each lane adding only its own terms: a vertex sums the same terms in
-            // the same order whichever others share its block or the call.
+            // Each lane's weight per touched vector (0 where it has none), so the loop below
+            // runs over eight lanes at once without looking anything up.
+            let mut phi = [[0.0f32; VERTEX_BLOCK]; BLOCK_VECTORS];
+            for (l, lane) in lanes.iter().enumerate() {
+                for (k, w) in lane.pairs() {
+                    phi[touched[..count].partition_point(|&t| t < k)][l] += w;
+                }
+            }
+            // `t_j · C_k` eight lanes at a time for each vector the block touches, in ascending
+            // k: a vertex sums its terms in the same order whichever others share its block or
+            // the call (another vertex's vectors add exact zeros).
             let mut acc = [[0.0f32; 3]; VERTEX_BLOCK];
-            for &k in &touched[..count] {
+            for (&k, phi_k) in touched[..count].iter().zip(&phi) {
                 let sets = lit.q[3 * k * lit_len..].chunks_exact(lit_len);
                 for (ch, q) in sets.take(3).enumerate() {
                     let dots = match encoding {
                         Encoding::F32 => shade_block(bytes.as_chunks::<4>().0, q, width, bones),
                         Encoding::F16 => shade_block(bytes.as_chunks::<2>().0, q, width, bones),
                     };
-                    for (l, lane) in lanes.iter().enumerate() {
-                        if let Some((_, w)) = lane.pairs().find(|&(i, _)| i == k) {
-                            acc[l][ch] += w * dots[l];
-                        }
+                    for l in 0..VERTEX_BLOCK {
+                        acc[l][ch] += phi_k[l] * dots[l];
                     }
                 }
             }

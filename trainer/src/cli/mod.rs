@@ -133,7 +133,7 @@ fn demo(args: &DemoArgs) -> Result<()> {
     let markdown = crate::report::demo::run(&args.settings()?, &Terminal)?;
     print!("{markdown}");
     eprintln!(
-        "wrote {}/{{model.aprt, report.md, report.json, novel_pose.png, baselines.png}}",
+        "wrote {}/{{model.aprt, report.md, report.json, novel_pose.png, baselines.png, rig_frame.png}}",
         args.out.display()
     );
     Ok(())

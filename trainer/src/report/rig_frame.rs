@@ -28,8 +28,8 @@ pub struct RigFrame {
 }
 
 /// The demo's lights for a frame of `mesh`: a small bright sphere light a hand's breadth in
-/// front of the character's right shoulder (near: per vertex), a point light 6 m away and a
-/// sun (both far: in the rig).
+/// front of the character's right shoulder (near: per vertex), a lamp 11 m away and a sun
+/// (both far: in the rig).
 pub fn demo_lights(mesh: &crate::rig::mesh::Mesh) -> Vec<Light> {
     let n = mesh.positions.len().max(1) as f32;
     let c = mesh.positions.iter().fold([0.0f32; 3], |a, p| {
@@ -42,8 +42,8 @@ pub fn demo_lights(mesh: &crate::rig::mesh::Mesh) -> Vec<Light> {
             radiance: [60.0, 45.0, 30.0],
         }),
         Light::Point(PointLight {
-            position: [c[0] - 4.0, c[1] - 3.0, c[2] + 3.5],
-            intensity: [1.5, 1.8, 2.4],
+            position: [c[0] - 8.0, c[1] - 6.0, c[2] + 5.0],
+            intensity: [3.0, 3.6, 4.8],
         }),
         Light::Directional(DirectionalLight {
             direction: [-0.3, -0.5, 0.8],

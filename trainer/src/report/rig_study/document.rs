@@ -247,9 +247,10 @@ pub fn markdown(m: &Measured, claim: &[ClaimEntry], command: &str, seconds: f64)
          mean over directions of the mean over vertices and channels, then the worst over \
          directions of the largest vertex error. \"per vertex (SH floor)\" evaluates the light \
          through SH at every vertex (`error_grey_per_vertex`): no rig can do better.\n\
-         - **µs / frame**: `us_per_frame.total` of `evaluate_rig` (aprt-core: the rig's \
-         vectors from its surface samples, then every vertex shaded), the mid light beyond \
-         the tail in the rig, median of repeated frames, one thread.\n\n",
+         - **µs / frame**: `us_per_frame.rig_vectors + us_per_frame.shade` of `evaluate_rig` \
+         (aprt-core: the rig's vectors from its surface samples, then every vertex shaded \
+         through a static model's transfer), the mid light beyond the tail, median of \
+         repeated frames, one thread.\n\n",
         m.vertices,
         m.centre[0],
         m.centre[1],

@@ -269,10 +269,11 @@ fn timed(fitted: &FittedRig, poses: &Poses, settings: &StudySettings) -> f64 {
         order: settings.order,
         ..RigSettings::default()
     };
-    evaluate_rig(fitted, &poses.lash, &[light], &rig_settings)
+    let cost = evaluate_rig(fitted, &poses.lash, &[light], &rig_settings)
         .expect("the study's lights are valid")
-        .us_per_frame
-        .total
+        .us_per_frame;
+    // The rig's own cost, whatever share of the light the target leaves per vertex.
+    cost.rig_vectors + cost.shade
 }
 
 /// The novel-pose rows: each rig fitted over the bind pose alone and over bind + training, at
