@@ -196,6 +196,18 @@ impl Light {
         Ok(())
     }
 
+    /// The light with its colour scaled by `s`: its share of a path (the rig's, or the
+    /// per-vertex rest) when a light is split between the two.
+    pub fn scaled(&self, s: f32) -> Light {
+        let mut out = *self;
+        match &mut out {
+            Light::Sphere(l) => l.radiance = l.radiance.map(|c| c * s),
+            Light::Point(l) => l.intensity = l.intensity.map(|c| c * s),
+            Light::Directional(l) => l.irradiance = l.irradiance.map(|c| c * s),
+        }
+        out
+    }
+
     /// The light's colour: radiance, intensity or irradiance.
     pub fn colour(&self) -> Rgb {
         match self {

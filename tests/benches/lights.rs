@@ -10,7 +10,7 @@ use std::time::Duration;
 use aprt_core::{Light, Model, Placement, PoseWeights, RigLitWeights, Rotation, SphereLight};
 use aprt_tests::{median_seconds, noise, random_model};
 use aprt_trainer::lighting::{RigKind, fit_rig, rig_vectors};
-use aprt_trainer::{BoneFrames, Character, Precision, Rig, encode_model_with_rig};
+use aprt_trainer::{BoneFrames, Character, LinearModel, Precision, Rig, encode_model_with_rig};
 
 const ORDER: usize = 4;
 const BONES: usize = 20;
@@ -41,24 +41,50 @@ fn lights(centre: [f32; 3]) -> Vec<Light> {
         .collect()
 }
 
-fn main() {
-    let budget = Duration::from_millis(600);
-    let human = Character::builtin();
-    let walk = human.clip("walk").unwrap();
-    let mesh = human.pose(&walk.frames[10]).unwrap();
-    let v = mesh.vertex_count();
+/// A random bone-frame model the size of the benchmark's (order 4, k_a 8, k_v 32, contiguous
+/// runs of vertices per bone, as body parts are) and one rotation per bone.
+fn bone_model(v: usize) -> (LinearModel, Vec<Rotation>) {
     let mut reference = random_model(ORDER, v, 23, 8, Some(32));
     reference.weights.iter_mut().for_each(|x| *x *= 0.5);
     reference.bones = Some(BoneFrames {
         count: BONES,
         vertex_bone: (0..v).map(|j| (j * BONES / v) as u16).collect(),
     });
-    let rotations: Vec<Rotation> = (0..BONES)
+    let rotations = (0..BONES)
         .map(|b| {
             let (s, c) = (0.1 * b as f32).sin_cos();
             [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
         })
         .collect();
+    (reference, rotations)
+}
+
+/// Seconds per call of `a` and `b`, timed alternately over seven rounds so a drift in the
+/// machine's speed falls on both: the medians of each, and the median and range of `a / b`.
+fn alternate(budget: Duration, mut a: impl FnMut(), mut b: impl FnMut()) -> ([f64; 2], [f64; 3]) {
+    let (mut sa, mut sb, mut ratios) = (Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..7 {
+        let (ta, tb) = (
+            median_seconds(budget / 2, &mut a),
+            median_seconds(budget / 2, &mut b),
+        );
+        sa.push(ta);
+        sb.push(tb);
+        ratios.push(ta / tb);
+    }
+    for xs in [&mut sa, &mut sb, &mut ratios] {
+        xs.sort_by(f64::total_cmp);
+    }
+    ([sa[3], sb[3]], [ratios[3], ratios[0], ratios[6]])
+}
+
+fn main() {
+    let budget = Duration::from_millis(600);
+    let human = Character::builtin();
+    let walk = human.clip("walk").unwrap();
+    let mesh = human.pose(&walk.frames[10]).unwrap();
+    let v = mesh.vertex_count();
+    let (reference, rotations) = bone_model(v);
     let angles: Vec<f32> = noise(7, 23).iter().map(|&x| x as f32).collect();
     let target = 1.0;
     println!(
@@ -87,7 +113,7 @@ fn main() {
         let mut buffer = vec![0.0f32; model.info().rig_lit_weights_len(rig.vectors())];
         let mut out = vec![[0.0f32; 3]; v];
         let ones = vec![1.0f32; LIGHTS];
-        let mut all_analytic = || {
+        let all_analytic = || {
             model.set_pose(black_box(&angles), &mut pose).unwrap();
             out.fill([0.0; 3]);
             model
@@ -106,7 +132,7 @@ fn main() {
         let mut out2 = vec![[0.0f32; 3]; v];
         let mut counts = (0, 0);
         let mut pose2 = Box::new(PoseWeights::new());
-        let mut split = || {
+        let split = || {
             let pose = &mut pose2;
             model.set_pose(black_box(&angles), pose).unwrap();
             let place = Placement::IDENTITY;
@@ -117,7 +143,7 @@ fn main() {
             let in_rig: Vec<Light> = lights
                 .iter()
                 .zip(&shares)
-                .map(|(l, &s)| aprt_trainer::lighting::evaluate::scaled(l, s))
+                .map(|(l, &s)| l.scaled(s))
                 .collect();
             let vectors = rig_vectors(&rig, &in_rig, ORDER, &place).unwrap();
             let mut lit = RigLitWeights::new(&mut buffer);
@@ -145,31 +171,20 @@ fn main() {
             );
             black_box(&out2);
         };
-        let mut ratios = Vec::new();
-        let (mut analytic_s, mut split_s) = (Vec::new(), Vec::new());
-        for _ in 0..7 {
-            let a = median_seconds(budget / 2, &mut all_analytic);
-            let b = median_seconds(budget / 2, &mut split);
-            analytic_s.push(a);
-            split_s.push(b);
-            ratios.push(a / b);
-        }
-        for xs in [&mut ratios, &mut analytic_s, &mut split_s] {
-            xs.sort_by(f64::total_cmp);
-        }
+        let ([analytic_s, split_s], [ratio, low, high]) = alternate(budget, all_analytic, split);
         println!(
             "{:<40} {:>8} {:>10} {:>10} {:>9.0} {:>9.1}   all analytic {:.0} us ({:.1} frames/s): median {:.2}x, range {:.2}x to {:.2}x",
             kind.to_string(),
             rig.vectors(),
             counts.0,
             counts.1,
-            split_s[3] * 1e6,
-            1.0 / split_s[3],
-            analytic_s[3] * 1e6,
-            1.0 / analytic_s[3],
-            ratios[3],
-            ratios[0],
-            ratios[6]
+            split_s * 1e6,
+            1.0 / split_s,
+            analytic_s * 1e6,
+            1.0 / analytic_s,
+            ratio,
+            low,
+            high
         );
     }
 }

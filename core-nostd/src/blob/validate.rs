@@ -115,21 +115,7 @@ impl ModelInfo {
                 if found[slot].is_some() {
                     return Err(Error::DuplicateSection { section: kind });
                 }
-                let mut rig = RigCheck::new();
-                check_crc(r, e, |bytes| rig.feed(bytes))?;
-                rig.finish().map_err(|failure| match failure {
-                    RigFailure::Content(error) => error,
-                    RigFailure::Length { expected } => Error::SectionLength {
-                        section: kind,
-                        expected: expected as u64,
-                        found: e.len,
-                    },
-                })?;
-                Span {
-                    offset: e.offset,
-                    len: e.len,
-                    encoding: Encoding::F32,
-                }
+                check_irradiance_rig(r, e)?
             } else if kind == SectionKind::AngleNames {
                 if found[slot].is_some() {
                     return Err(Error::DuplicateSection { section: kind });
@@ -300,6 +286,27 @@ fn check_crc<R: Reader>(
         });
     }
     Ok(())
+}
+
+/// The irradiance rig: checksummed and its contents validated as they stream past
+/// ([`RigCheck`], which the resident `IrradianceRig::parse` runs too); a length its prelude
+/// does not announce is a section-length error. Its encoding byte carries no meaning.
+fn check_irradiance_rig<R: Reader>(r: &mut R, e: &SectionEntry) -> Result<Span, Error> {
+    let mut rig = RigCheck::new();
+    check_crc(r, e, |bytes| rig.feed(bytes))?;
+    rig.finish().map_err(|failure| match failure {
+        RigFailure::Content(error) => error,
+        RigFailure::Length { expected } => Error::SectionLength {
+            section: SectionKind::IrradianceRig,
+            expected: expected as u64,
+            found: e.len,
+        },
+    })?;
+    Ok(Span {
+        offset: e.offset,
+        len: e.len,
+        encoding: Encoding::F32,
+    })
 }
 
 /// The angle names: checksummed, then one UTF-8 line per pose entry. Their encoding byte

@@ -9,8 +9,7 @@
 //! nine multiplies per vertex and light, where rotating the SH vector would cost O(n³).
 
 use super::PoseWeights;
-use super::kernels::{transfer_identity, transfer_stored};
-use crate::blob::format::{Basis, Encoding, Frame, VERTEX_BLOCK};
+use crate::blob::format::{Frame, VERTEX_BLOCK};
 use crate::blob::{Error, Input, ModelInfo, Reader};
 use crate::light::Light;
 use crate::rotation::Rotation;
@@ -54,24 +53,12 @@ impl ModelInfo {
 
         let (order, n2) = (self.order, self.coeffs());
         let world = self.frame == Frame::World;
-        let encoding = self.rows.encoding;
-        let (basis, z) = (self.basis, &pose.z[..=self.pose_dims]);
-        let w = &pose.w[..self.pose_weights_len()];
         let end = first + out.len();
         let mut lanes = [0.0f32; VERTEX_BLOCK * MAX_COEFFS];
         self.each_block(r, first, out.len(), |v0, lane_bones, bytes| {
             // The transfer once per vertex, eight at a time, as `transfer` gives it.
             let t = &mut lanes[..VERTEX_BLOCK * n2];
-            match (basis, encoding) {
-                (Basis::Stored, Encoding::F32) => transfer_stored(bytes.as_chunks::<4>().0, w, t),
-                (Basis::Stored, Encoding::F16) => transfer_stored(bytes.as_chunks::<2>().0, w, t),
-                (Basis::Identity, Encoding::F32) => {
-                    transfer_identity(bytes.as_chunks::<4>().0, z, t)
-                }
-                (Basis::Identity, Encoding::F16) => {
-                    transfer_identity(bytes.as_chunks::<2>().0, z, t)
-                }
-            }
+            self.block_transfer(pose, bytes, t);
             for j in v0.max(first)..(v0 + VERTEX_BLOCK).min(end) {
                 let lane = j - v0;
                 let rotation = match world {

@@ -323,6 +323,24 @@ impl ModelInfo {
         })
     }
 
+    /// The transfer of one streamed block's eight vertices into `t` (`8 n²` values,
+    /// vertex-major), from the pose weights: what `transfer` and `shade_lights` both need.
+    pub(crate) fn block_transfer<const P: usize>(
+        &self,
+        pose: &PoseWeights<P>,
+        bytes: &[u8],
+        t: &mut [f32],
+    ) {
+        let z = &pose.z[..=self.pose_dims];
+        let w = &pose.w[..self.pose_weights_len()];
+        match (self.basis, self.rows.encoding) {
+            (Basis::Stored, Encoding::F32) => transfer_stored(bytes.as_chunks::<4>().0, w, t),
+            (Basis::Stored, Encoding::F16) => transfer_stored(bytes.as_chunks::<2>().0, w, t),
+            (Basis::Identity, Encoding::F32) => transfer_identity(bytes.as_chunks::<4>().0, z, t),
+            (Basis::Identity, Encoding::F16) => transfer_identity(bytes.as_chunks::<2>().0, z, t),
+        }
+    }
+
     pub(crate) fn transfer<R: Reader, const P: usize>(
         &self,
         r: &mut R,
@@ -341,23 +359,11 @@ impl ModelInfo {
         }
         let count = out.len() / n2;
         self.check_range(first, count)?;
-        let encoding = self.rows.encoding;
-        let (basis, z) = (self.basis, &pose.z[..=self.pose_dims]);
-        let w = &pose.w[..self.pose_weights_len()];
         let end = first + count;
         let mut lanes = [0.0f32; VERTEX_BLOCK * MAX_COEFFS];
         self.each_block(r, first, count, |v0, _, bytes| {
             let t = &mut lanes[..VERTEX_BLOCK * n2];
-            match (basis, encoding) {
-                (Basis::Stored, Encoding::F32) => transfer_stored(bytes.as_chunks::<4>().0, w, t),
-                (Basis::Stored, Encoding::F16) => transfer_stored(bytes.as_chunks::<2>().0, w, t),
-                (Basis::Identity, Encoding::F32) => {
-                    transfer_identity(bytes.as_chunks::<4>().0, z, t)
-                }
-                (Basis::Identity, Encoding::F16) => {
-                    transfer_identity(bytes.as_chunks::<2>().0, z, t)
-                }
-            }
+            self.block_transfer(pose, bytes, t);
             let (lo, hi) = (v0.max(first), (v0 + VERTEX_BLOCK).min(end));
             out[(lo - first) * n2..(hi - first) * n2]
                 .copy_from_slice(&t[(lo - v0) * n2..(hi - v0) * n2]);

@@ -134,11 +134,7 @@ impl RigLayout<'_> {
 /// assert_eq!(share, [1.0, 0.0]); // the far light in the rig, the near one per vertex
 ///
 /// // The rig's K SH vectors from the rig's share of each light (a shader's uniforms)...
-/// let mut in_rig = lights;
-/// for (l, s) in in_rig.iter_mut().zip(&share) {
-///     if let Light::Point(p) = l { p.intensity = p.intensity.map(|c| c * s) }
-///     if let Light::Sphere(p) = l { p.radiance = p.radiance.map(|c| c * s) }
-/// }
+/// let in_rig: Vec<Light> = lights.iter().zip(&share).map(|(l, &s)| l.scaled(s)).collect();
 /// let mut vectors = vec![[0.0; 3]; rig.vectors() * info.coeffs()];
 /// rig.vectors_from_lights(info.order(), &place, &in_rig, &[], &mut vectors)?;
 /// // ...pushed through the pose model, and every vertex shaded at its own position, with the

@@ -101,17 +101,6 @@ pub struct RigEvaluation {
     pub us_per_frame: FrameCost,
 }
 
-/// `light` with its colour scaled by `s`.
-pub fn scaled(light: &Light, s: f32) -> Light {
-    let mut out = *light;
-    match &mut out {
-        Light::Sphere(l) => l.radiance = l.radiance.map(|c| c * s),
-        Light::Point(l) => l.intensity = l.intensity.map(|c| c * s),
-        Light::Directional(l) => l.irradiance = l.irradiance.map(|c| c * s),
-    }
-    out
-}
-
 /// Each light's share carried by the rig, in order.
 pub fn shares(rig: &IrradianceRig<'_>, lights: &[Light], settings: &RigSettings) -> Vec<f32> {
     lights
@@ -159,7 +148,9 @@ fn per_vertex(lights: &[Light], weights: &[f32], order: usize, p: [f32; 3], n: [
     for (light, &w) in lights.iter().zip(weights) {
         if w > 0.0 {
             // A vertex on a point light sees nothing finite from it: that light is skipped.
-            let _ = scaled(light, w).add_radiance_sh(order, p, &mut l[..order * order]);
+            let _ = light
+                .scaled(w)
+                .add_radiance_sh(order, p, &mut l[..order * order]);
         }
     }
     irradiance_sh(order, &l[..order * order], n).unwrap_or([0.0; 3])
@@ -194,7 +185,7 @@ pub fn rig_errors(
     let in_rig: Vec<Light> = lights
         .iter()
         .zip(share)
-        .map(|(l, &s)| scaled(l, s))
+        .map(|(l, &s)| l.scaled(s))
         .collect();
     let all = rig_vectors(rig, lights, order, &Placement::IDENTITY)?;
     let split = rig_vectors(rig, &in_rig, order, &Placement::IDENTITY)?;
@@ -343,7 +334,7 @@ fn frame_cost(
     let in_rig: Vec<Light> = lights
         .iter()
         .zip(share)
-        .map(|(l, &s)| scaled(l, s))
+        .map(|(l, &s)| l.scaled(s))
         .collect();
     let rest: Vec<f32> = share.iter().map(|s| 1.0 - s).collect();
     let Ok(blob) = encode_model_with_rig(
@@ -431,7 +422,7 @@ mod tests {
                 settings.band,
             );
             let vectors =
-                rig_vectors(&rig, &[scaled(&light, share)], 3, &Placement::IDENTITY).unwrap();
+                rig_vectors(&rig, &[light.scaled(share)], 3, &Placement::IDENTITY).unwrap();
             let mut here = [[0.0f32; 3]; 9];
             which
                 .iter()

@@ -286,7 +286,7 @@ pub fn predict_rig_shading(
     let in_rig: Vec<aprt_core::Light> = lights
         .iter()
         .zip(&shares)
-        .map(|(l, &s)| crate::lighting::evaluate::scaled(l, s))
+        .map(|(l, &s)| l.scaled(s))
         .collect();
     let vectors = crate::lighting::rig_vectors(&rig, &in_rig, order, &place)?;
     let mut buffer = vec![0.0f32; model.info().rig_lit_weights_len(rig.vectors())];
