@@ -14,7 +14,7 @@ use serde::Serialize;
 
 pub use evaluate::{RigErrors, RigEvaluation, RigSettings, evaluate_rig, rig_errors};
 pub use lights_file::{LightsFileError, light_from_table, parse_lights, read_lights};
-pub use rig_fit::{FittedRig, GreyError, fit_rig, rig_error, rig_vectors};
+pub use rig_fit::{FittedRig, GreyError, fit_rig, rig_vectors};
 pub use rig_kind::{RigKind, RigKindError};
 
 /// One light's share of an [`IrradianceReport`].

@@ -6,12 +6,11 @@
 //! of the bind pose and of its training poses, all in that frame: one matrix serves every
 //! pose, and the samples cover where the surface goes, not only where it rests.
 
-use aprt_core::{
-    AxisKind, IrradianceRig, Light, Placement, PointLight, Rgb, RigLayout, RigShape, irradiance_sh,
-};
+use aprt_core::{AxisKind, IrradianceRig, Light, Placement, PointLight, Rgb, RigLayout, RigShape};
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 
+use super::evaluate::rig_errors;
 use super::rig_kind::RigKind;
 use super::surface_samples::surface_samples;
 use crate::rig::mesh::Mesh;
@@ -110,7 +109,16 @@ impl FittedRig {
                             position: at.map(|x| x as f32),
                             intensity: [1.0; 3],
                         });
-                        rig_error(&rig, &[light], mesh, &vertices, order).max
+                        // A point light outside the bounding sphere is always valid.
+                        rig_errors(
+                            &rig,
+                            mesh,
+                            vertices.iter().copied(),
+                            &[light],
+                            &[1.0],
+                            order,
+                        )
+                        .map_or(f64::INFINITY, |e| e.rig_vs_per_vertex.max)
                     })
                     .fold(0.0, f64::max);
                 [d, worst]
@@ -144,52 +152,6 @@ pub struct GreyError {
     pub mean: f64,
     /// Largest.
     pub max: f64,
-}
-
-/// The rig's error, in grey levels, against the per-vertex SH evaluation of `lights` at the
-/// vertices `which` of `mesh` (root frame = world), unshadowed, at `order`.
-pub fn rig_error(
-    rig: &IrradianceRig<'_>,
-    lights: &[Light],
-    mesh: &Mesh,
-    which: &[usize],
-    order: usize,
-) -> GreyError {
-    let n2 = order * order;
-    let Ok(vectors) = rig_vectors(rig, lights, order, &Placement::IDENTITY) else {
-        return GreyError {
-            mean: f64::INFINITY,
-            max: f64::INFINITY,
-        };
-    };
-    let mut rig_here = vec![[0.0f32; 3]; n2];
-    let mut exact_here = vec![[0.0f32; 3]; n2];
-    let (mut sum, mut max, mut count) = (0.0, 0.0f64, 0usize);
-    for &j in which {
-        let (p, n) = (mesh.positions[j], mesh.normals[j]);
-        rig.lighting_at(&vectors, &Placement::IDENTITY, p, &mut rig_here);
-        exact_here.fill([0.0; 3]);
-        for light in lights {
-            // A vertex on a point light sees nothing finite from it: skip that light there.
-            let _ = light.add_radiance_sh(order, p, &mut exact_here);
-        }
-        let (Ok(a), Ok(b)) = (
-            irradiance_sh(order, &rig_here, n),
-            irradiance_sh(order, &exact_here, n),
-        ) else {
-            continue;
-        };
-        for k in 0..3 {
-            let e = GREY_PER_IRRADIANCE * f64::from((a[k] - b[k]).abs());
-            sum += e;
-            max = max.max(e);
-            count += 1;
-        }
-    }
-    GreyError {
-        mean: sum / count.max(1) as f64,
-        max,
-    }
 }
 
 /// The rig's K SH vectors for `lights` (n² RGB each, vector-major), through the core.
