@@ -19,6 +19,7 @@ pub mod bake;
 pub mod cli;
 pub mod io;
 pub mod lighting;
+pub mod lightmap;
 pub mod model;
 pub mod progress;
 pub mod report;

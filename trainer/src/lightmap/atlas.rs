@@ -1,0 +1,1 @@
+//! The UV atlas: which surface point every texel stands for.

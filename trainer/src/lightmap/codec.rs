@@ -1,0 +1,1 @@
+//! Encoding and compressing a sequence of SH light maps.
