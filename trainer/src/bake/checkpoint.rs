@@ -10,16 +10,61 @@
 //! precision) are not part of the manifest: the baked transfer does not depend on them, so a
 //! resume may change them.
 //!
-//! The bake itself is unchanged: each missing pose goes through
-//! [`crate::bake::bake_pose_progress`], the same code path as [`crate::bake::bake_poses`], and
-//! stored poses are read back as the exact f32 bits that were written.
+//! The bake itself is unchanged: each missing pose goes through its [`BakeTarget`] (for
+//! vertices [`crate::bake::bake_pose_progress`], the same code path as
+//! [`crate::bake::bake_poses`]; for a light map the texels of its atlas), and stored poses are
+//! read back as the exact f32 bits that were written.
 
 use std::path::{Path, PathBuf};
 
 use crate::bake::{BakeError, BakeSettings, bake_pose_progress};
 use crate::io::atomic::write_atomic;
-use crate::progress::Reporter;
+use crate::progress::{BakeProgress, Reporter};
 use crate::rig::mesh::Mesh;
+
+/// What every pose of a checkpoint is baked at: its vertices, or other points of its surface
+/// (the texels of a light map). The description goes into the manifest, so a resume at other
+/// points is refused.
+pub trait BakeTarget: Sync {
+    /// One line naming the points, equal for equal targets (for example the atlas's resolution
+    /// and a fingerprint of its UVs).
+    fn describe(&self) -> String;
+    /// Points baked per pose of `mesh` (the unit of progress; `order²` values each).
+    fn points(&self, mesh: &Mesh) -> usize;
+    /// The transfer at the points on posed `mesh`, advancing `progress` by one per point.
+    fn bake(
+        &self,
+        mesh: &Mesh,
+        settings: &BakeSettings,
+        progress: &dyn BakeProgress,
+    ) -> Result<Vec<f32>, BakeError>;
+}
+
+/// Every vertex of every pose: what `aprt train` bakes.
+pub struct Vertices;
+
+impl BakeTarget for Vertices {
+    fn describe(&self) -> String {
+        "vertices".to_owned()
+    }
+
+    fn points(&self, mesh: &Mesh) -> usize {
+        mesh.vertex_count()
+    }
+
+    fn bake(
+        &self,
+        mesh: &Mesh,
+        settings: &BakeSettings,
+        progress: &dyn BakeProgress,
+    ) -> Result<Vec<f32>, BakeError> {
+        bake_pose_progress(mesh, settings, progress)
+    }
+}
+
+fn vertices_target() -> String {
+    Vertices.describe()
+}
 
 /// Version of the manifest and pose-file layout; a checkpoint of another version is refused.
 const FORMAT: u32 = 1;
@@ -111,12 +156,15 @@ struct Manifest {
     albedo: f32,
     vertices: usize,
     triangles: usize,
+    /// [`BakeTarget::describe`]; checkpoints from before light maps baked vertices.
+    #[serde(default = "vertices_target")]
+    target: String,
     /// CRC-32 of each pose's positions, normals and triangles, as hex.
     poses: Vec<String>,
 }
 
 impl Manifest {
-    fn new(settings: &BakeSettings, meshes: &[Mesh]) -> Manifest {
+    fn new(settings: &BakeSettings, meshes: &[Mesh], target: &dyn BakeTarget) -> Manifest {
         let first = meshes.first();
         Manifest {
             format: FORMAT,
@@ -126,13 +174,14 @@ impl Manifest {
             albedo: settings.albedo,
             vertices: first.map_or(0, Mesh::vertex_count),
             triangles: first.map_or(0, |m| m.triangles.len()),
+            target: target.describe(),
             poses: meshes.iter().map(fingerprint).collect(),
         }
     }
 
     /// The first field that differs, as (what, was, now).
     fn difference(&self, now: &Manifest) -> Option<(String, String, String)> {
-        let fields: [(&str, String, String); 7] = [
+        let fields: [(&str, String, String); 8] = [
             ("format", self.format.to_string(), now.format.to_string()),
             ("SH order", self.order.to_string(), now.order.to_string()),
             ("rays", self.rays.to_string(), now.rays.to_string()),
@@ -148,6 +197,7 @@ impl Manifest {
                 self.triangles.to_string(),
                 now.triangles.to_string(),
             ),
+            ("baked points", self.target.clone(), now.target.clone()),
         ];
         if let Some((what, was, now)) = fields.into_iter().find(|(_, a, b)| a != b) {
             return Some((what.to_owned(), was, now));
@@ -213,13 +263,24 @@ impl Checkpoint {
         settings: &BakeSettings,
         meshes: &[Mesh],
     ) -> Result<Self, CheckpointError> {
+        Self::open_at(dir, existing, settings, meshes, &Vertices)
+    }
+
+    /// [`Checkpoint::open`] for baking `meshes` at the points of `target`.
+    pub fn open_at(
+        dir: &Path,
+        existing: OnExisting,
+        settings: &BakeSettings,
+        meshes: &[Mesh],
+        target: &dyn BakeTarget,
+    ) -> Result<Self, CheckpointError> {
         settings
             .validate()
             .map_err(|source| CheckpointError::Bake {
                 name: "settings".to_owned(),
                 source,
             })?;
-        let manifest = Manifest::new(settings, meshes);
+        let manifest = Manifest::new(settings, meshes, target);
         let io = |path: &Path| {
             let path = path.to_owned();
             move |source| CheckpointError::Io { path, source }
@@ -339,7 +400,18 @@ impl Checkpoint {
         name: impl Fn(usize) -> String,
         reporter: &dyn Reporter,
     ) -> Result<Vec<Vec<f32>>, CheckpointError> {
-        let result = self.bake_inner(meshes, name, reporter);
+        self.bake_at(meshes, &Vertices, name, reporter)
+    }
+
+    /// [`Checkpoint::bake`] at the points of `target`, the one the checkpoint was opened for.
+    pub fn bake_at(
+        &mut self,
+        meshes: &[Mesh],
+        target: &dyn BakeTarget,
+        name: impl Fn(usize) -> String,
+        reporter: &dyn Reporter,
+    ) -> Result<Vec<Vec<f32>>, CheckpointError> {
+        let result = self.bake_inner(meshes, target, name, reporter);
         if result.is_err() && !self.holds_poses {
             // Best effort: the original error is the one worth reporting.
             let _ = self.remove();
@@ -350,30 +422,40 @@ impl Checkpoint {
     fn bake_inner(
         &mut self,
         meshes: &[Mesh],
+        target: &dyn BakeTarget,
         name: impl Fn(usize) -> String,
         reporter: &dyn Reporter,
     ) -> Result<Vec<Vec<f32>>, CheckpointError> {
         let count = meshes.len();
         self.check_count(count)?;
+        let described = target.describe();
+        if described != self.manifest.target {
+            return Err(CheckpointError::Mismatch {
+                dir: self.dir.clone(),
+                what: "baked points".to_owned(),
+                was: self.manifest.target.clone(),
+                now: described,
+            });
+        }
         let mut out = Vec::with_capacity(count);
         let (mut progress, mut resumed) = (None, 0);
         for (i, mesh) in meshes.iter().enumerate() {
             self.check_mesh(i, mesh)?;
-            let len = mesh.vertex_count() * self.settings.order * self.settings.order;
+            let points = target.points(mesh);
+            let len = points * self.settings.order * self.settings.order;
             if let Some(stored) = self.load(i, len, reporter)? {
                 resumed += 1;
                 out.push(stored);
                 continue;
             }
-            let progress = progress
-                .get_or_insert_with(|| reporter.bake_progress(mesh.vertex_count() * (count - i)));
+            let progress =
+                progress.get_or_insert_with(|| reporter.bake_progress(points * (count - i)));
             progress.pose(i, count);
-            let transfer =
-                bake_pose_progress(mesh, &self.settings, progress.as_ref()).map_err(|source| {
-                    CheckpointError::Bake {
-                        name: name(i),
-                        source,
-                    }
+            let transfer = target
+                .bake(mesh, &self.settings, progress.as_ref())
+                .map_err(|source| CheckpointError::Bake {
+                    name: name(i),
+                    source,
                 })?;
             self.store(i, &transfer)?;
             self.holds_poses = true;
@@ -598,5 +680,63 @@ mod tests {
             "{message}"
         );
         assert!(!ck.exists());
+    }
+
+    /// Points other than the vertices (a light map's texels): a checkpoint made for one set
+    /// of points is refused for another, and resumes bit-identically for the same.
+    #[test]
+    fn a_checkpoint_remembers_which_points_it_bakes() {
+        struct Centroids;
+        impl BakeTarget for Centroids {
+            fn describe(&self) -> String {
+                "triangle centroids".to_owned()
+            }
+            fn points(&self, mesh: &Mesh) -> usize {
+                mesh.triangles.len()
+            }
+            fn bake(
+                &self,
+                mesh: &Mesh,
+                settings: &BakeSettings,
+                progress: &dyn BakeProgress,
+            ) -> Result<Vec<f32>, BakeError> {
+                let at = |t: &[u32; 3], k: usize| {
+                    t.iter()
+                        .map(|&i| mesh.positions[i as usize][k])
+                        .sum::<f32>()
+                        / 3.0
+                };
+                let centroids: Vec<[f32; 3]> = mesh
+                    .triangles
+                    .iter()
+                    .map(|t| [at(t, 0), at(t, 1), at(t, 2)])
+                    .collect();
+                let up = vec![[0.0, 0.0, 1.0]; centroids.len()];
+                crate::bake::bake_points(mesh, &centroids, &up, settings, progress)
+            }
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let ck = dir.path().join("m.bake");
+        let poses = meshes(2);
+        let mut first = Checkpoint::open(&ck, OnExisting::Refuse, &SETTINGS, &poses).unwrap();
+        first.bake(&poses, pose_name, &Silent).unwrap();
+        let err = Checkpoint::open_at(&ck, OnExisting::Resume, &SETTINGS, &poses, &Centroids)
+            .unwrap_err();
+        assert!(err.to_string().contains("baked points"), "{err}");
+        let other = dir.path().join("c.bake");
+        let mut c =
+            Checkpoint::open_at(&other, OnExisting::Refuse, &SETTINGS, &poses, &Centroids).unwrap();
+        let baked = c.bake_at(&poses, &Centroids, pose_name, &Silent).unwrap();
+        assert_eq!(baked[0].len(), 3 * SETTINGS.order * SETTINGS.order);
+        // Asking the open checkpoint to bake at other points is refused too.
+        assert!(c.bake(&poses, pose_name, &Silent).is_err());
+        let mut resumed =
+            Checkpoint::open_at(&other, OnExisting::Resume, &SETTINGS, &poses, &Centroids).unwrap();
+        assert_eq!(
+            resumed
+                .bake_at(&poses, &Centroids, pose_name, &Silent)
+                .unwrap(),
+            baked
+        );
     }
 }

@@ -254,6 +254,72 @@ pub fn bake_vertices(
     Ok(direct.into_iter().map(|x| x as f32).collect())
 }
 
+/// Transfer at surface points of `mesh` that are not its vertices (the texels of a light map,
+/// `positions[j]` with unit normal `normals[j]`), on the same rays, pattern and occluders as
+/// [`bake_pose`]: sample-major, `order²` values per sample. With bounces, each point's hits
+/// gather the whole mesh's transfer of one bounce fewer: the sum over bounces `1..=B` of the
+/// previous bounce interpolated at the hits equals the (B − 1)-bounce total interpolated there.
+/// `progress` advances by one per point.
+pub fn bake_points(
+    mesh: &Mesh,
+    positions: &[[f32; 3]],
+    normals: &[[f32; 3]],
+    settings: &BakeSettings,
+    progress: &dyn BakeProgress,
+) -> Result<Vec<f32>, BakeError> {
+    let prepared = Prepared::new(mesh, settings)?;
+    if normals.len() != positions.len() {
+        return Err(BakeError::NormalCountMismatch {
+            positions: positions.len(),
+            normals: normals.len(),
+        });
+    }
+    if let Some((vertex, &position)) = positions
+        .iter()
+        .enumerate()
+        .find(|(_, p)| !p.iter().all(|x| x.is_finite()))
+    {
+        return Err(BakeError::NonFinitePosition { vertex, position });
+    }
+    // Normalised as `usable_normals` does, so a point at a vertex bakes that vertex's bits.
+    let unit: Vec<DVec3> = normals
+        .iter()
+        .map(|n| {
+            let n = DVec3::from(n.map(f64::from));
+            let len = n.length();
+            if len.is_finite() && len > 0.0 {
+                n / len
+            } else {
+                DVec3::Z
+            }
+        })
+        .collect();
+    let points = Points {
+        positions,
+        normals: &unit,
+    };
+    if positions.is_empty() || mesh.vertex_count() == 0 {
+        return Ok(vec![0.0; positions.len() * prepared.n2]);
+    }
+    let tracer = Tracer::new(&mesh.positions, &mesh.triangles, Accel::default());
+    let total = if settings.bounces == 0 {
+        prepared
+            .direct_at(&points, &tracer, 0..positions.len(), Hits::Skip, progress)?
+            .0
+    } else {
+        let fewer = BakeSettings {
+            bounces: settings.bounces - 1,
+            ..*settings
+        };
+        let vertices = bake_pose_inner(mesh, &fewer, Accel::default(), &Silent)?;
+        let (direct, hits) =
+            prepared.direct_at(&points, &tracer, 0..positions.len(), Hits::Record, progress)?;
+        let gathered = prepared.gather(&vertices, &hits, &mesh.triangles);
+        direct.iter().zip(&gathered).map(|(d, g)| d + g).collect()
+    };
+    Ok(total.into_iter().map(|x| x as f32).collect())
+}
+
 fn bake_pose_inner(
     mesh: &Mesh,
     settings: &BakeSettings,
@@ -366,6 +432,24 @@ impl<'a> Prepared<'a> {
         hits_wanted: Hits,
         progress: &dyn BakeProgress,
     ) -> Result<(Vec<f64>, Vec<Vec<Hit>>), BakeError> {
+        let points = Points {
+            positions: &self.mesh.positions,
+            normals: &self.normals,
+        };
+        self.direct_at(&points, tracer, vertices, hits_wanted, progress)
+    }
+
+    /// [`Prepared::direct`] at the surface points `points` of the mesh (its vertices, or the
+    /// texels of a light map): sample `j` is shot from `points.positions[j]` around
+    /// `points.normals[j]`, with the pattern rotated by sample `j`'s own angle.
+    fn direct_at(
+        &self,
+        points: &Points<'_>,
+        tracer: &Tracer,
+        vertices: Range<usize>,
+        hits_wanted: Hits,
+        progress: &dyn BakeProgress,
+    ) -> Result<(Vec<f64>, Vec<Vec<Hit>>), BakeError> {
         let n2 = self.n2;
         let mut out = vec![0.0f64; vertices.len() * n2];
         let mut hits: Vec<Vec<Hit>> = if hits_wanted == Hits::Record {
@@ -377,8 +461,8 @@ impl<'a> Prepared<'a> {
         let work =
             |scratch: &mut Scratch, j: usize, t: &mut [f64], vertex_hits: Option<&mut Vec<Hit>>| {
                 let Scratch { dirs, stack } = scratch;
-                let p = DVec3::from(self.mesh.positions[j].map(f64::from));
-                let n = self.normals[j];
+                let p = DVec3::from(points.positions[j].map(f64::from));
+                let n = points.normals[j];
                 let origin = (p + n * self.offset).as_vec3a();
                 let frame = directions::vertex_frame(n, directions::vertex_rotation(j));
                 directions::place_pattern(&self.pattern, &frame, dirs);
@@ -436,28 +520,10 @@ impl<'a> Prepared<'a> {
     /// Adds `B` bounces to the whole-mesh direct transfer, each interpolating the previous
     /// bounce at the recorded hits.
     fn add_bounces(&self, direct: Vec<f64>, hits: &[Vec<Hit>], triangles: &[[u32; 3]]) -> Vec<f64> {
-        let n2 = self.n2;
-        let weight = f64::from(self.settings.albedo) / self.settings.rays as f64;
         let mut total = direct.clone();
         let mut previous = direct;
         for _ in 0..self.settings.bounces {
-            let mut next = vec![0.0f64; previous.len()];
-            next.par_chunks_mut(n2)
-                .zip(hits.par_iter())
-                .for_each(|(t, vertex_hits)| {
-                    for hit in vertex_hits {
-                        let corners = triangles[hit.triangle as usize];
-                        for (&k, &w) in corners.iter().zip(&hit.bary) {
-                            let src = &previous[k as usize * n2..][..n2];
-                            for (acc, &s) in t.iter_mut().zip(src) {
-                                *acc += f64::from(w) * s;
-                            }
-                        }
-                    }
-                    for acc in t.iter_mut() {
-                        *acc *= weight;
-                    }
-                });
+            let next = self.gather(&previous, hits, triangles);
             for (acc, &b) in total.iter_mut().zip(&next) {
                 *acc += b;
             }
@@ -465,6 +531,42 @@ impl<'a> Prepared<'a> {
         }
         total
     }
+
+    /// One bounce at every sample: albedo / rays × the sum over the sample's hits of `source`
+    /// (whole-mesh transfer, vertex-major) interpolated at the hit.
+    fn gather<T: Copy + Into<f64> + Sync>(
+        &self,
+        source: &[T],
+        hits: &[Vec<Hit>],
+        triangles: &[[u32; 3]],
+    ) -> Vec<f64> {
+        let n2 = self.n2;
+        let weight = f64::from(self.settings.albedo) / self.settings.rays as f64;
+        let mut next = vec![0.0f64; hits.len() * n2];
+        next.par_chunks_mut(n2)
+            .zip(hits.par_iter())
+            .for_each(|(t, sample_hits)| {
+                for hit in sample_hits {
+                    let corners = triangles[hit.triangle as usize];
+                    for (&k, &w) in corners.iter().zip(&hit.bary) {
+                        let src = &source[k as usize * n2..][..n2];
+                        for (acc, &s) in t.iter_mut().zip(src) {
+                            *acc += f64::from(w) * s.into();
+                        }
+                    }
+                }
+                for acc in t.iter_mut() {
+                    *acc *= weight;
+                }
+            });
+        next
+    }
+}
+
+/// Where the direct pass shoots from: one position and unit normal per sample.
+struct Points<'p> {
+    positions: &'p [[f32; 3]],
+    normals: &'p [DVec3],
 }
 
 /// One worker thread's buffers, reused for all the vertices it bakes.

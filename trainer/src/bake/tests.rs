@@ -756,3 +756,66 @@ fn near_duplicate_vertices_and_slivers_bake_to_finite_plausible_transfer() {
         assert!(dc(&t, 16, j).is_finite());
     }
 }
+
+/// A light map's texels are baked by the vertex bake's own code: points placed at the vertices
+/// with the vertices' normals give the vertices' transfer bit for bit without bounces, and to
+/// rounding with them (the texel path sums the bounces as one gather of the (B − 1)-bounce
+/// total).
+#[test]
+fn points_at_the_vertices_bake_the_vertices_transfer() {
+    let mesh = floor_and_wall();
+    let direct = settings(3, 64);
+    let at_vertices =
+        |s: &BakeSettings| bake_points(&mesh, &mesh.positions, &mesh.normals, s, &Silent).unwrap();
+    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(
+        bits(&at_vertices(&direct)),
+        bits(&bake_pose(&mesh, &direct).unwrap())
+    );
+    let bounced = BakeSettings {
+        bounces: 2,
+        albedo: 0.7,
+        ..direct
+    };
+    let (points, vertices) = (at_vertices(&bounced), bake_pose(&mesh, &bounced).unwrap());
+    let scale = vertices.iter().fold(0.0f32, |m, x| m.max(x.abs()));
+    for (p, v) in points.iter().zip(&vertices) {
+        assert!((p - v).abs() <= 1e-5 * scale, "{p} vs {v}");
+    }
+    assert_ne!(bits(&points), bits(&at_vertices(&direct)));
+}
+
+/// Points between vertices: the centre of a floor cell sees the upper hemisphere less the
+/// wall, whose share is Lambert's closed form; a bad point or a normal count that does not
+/// match is refused.
+#[test]
+fn points_between_vertices_bake_and_bad_points_are_refused() {
+    let mesh = floor_and_wall();
+    let s = settings(1, 4096);
+    let far = [[-4.5f32, 0.5, 0.0]];
+    let up = [[0.0f32, 0.0, 1.0]];
+    let t = bake_points(&mesh, &far, &up, &s, &Silent).unwrap();
+    let wall = [
+        DVec3::new(1.0, -10.0, 0.0),
+        DVec3::new(1.0, 10.0, 0.0),
+        DVec3::new(1.0, 10.0, 10.05),
+        DVec3::new(1.0, -10.0, 10.05),
+    ];
+    let p = DVec3::from(far[0].map(f64::from));
+    let expect = Y00 * (PI - lambert(p, DVec3::Z, &wall));
+    assert!(
+        (f64::from(t[0]) - expect).abs() < SQUARE_TOL,
+        "{t:?} vs {expect}"
+    );
+    assert!(matches!(
+        bake_points(&mesh, &[[f32::NAN, 0.0, 0.0]], &up, &s, &Silent),
+        Err(BakeError::NonFinitePosition { vertex: 0, .. })
+    ));
+    assert!(matches!(
+        bake_points(&mesh, &far, &[], &s, &Silent),
+        Err(BakeError::NormalCountMismatch { .. })
+    ));
+    // A zero normal falls back to +z rather than NaN.
+    let zero = bake_points(&mesh, &far, &[[0.0; 3]], &s, &Silent).unwrap();
+    assert_eq!(zero, t);
+}

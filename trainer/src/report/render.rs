@@ -154,6 +154,23 @@ pub fn render_scalar(
             vertices: mesh.vertex_count(),
         });
     }
+    render_with(mesh, view, width, height, |triangle, bary| {
+        let t = mesh.triangles[triangle];
+        let v: f32 = (0..3).map(|k| bary[k] * values[t[k] as usize]).sum();
+        colormap.color(v)
+    })
+}
+
+/// [`render_scalar`]'s projection and z-buffer with any colour per pixel: `shade(triangle,
+/// barycentrics)` colours the visible point of `mesh.triangles[triangle]` (a texture lookup
+/// at the interpolated UV, for a light map).
+pub fn render_with(
+    mesh: &Mesh,
+    view: View,
+    width: u32,
+    height: u32,
+    shade: impl Fn(usize, [f32; 3]) -> Rgb<u8>,
+) -> Result<RgbImage, RenderError> {
     if width == 0 || height == 0 {
         return Err(RenderError::EmptyImage { width, height });
     }
@@ -190,9 +207,8 @@ pub fn render_scalar(
         })
         .collect();
     let mut depth = vec![f32::INFINITY; (width * height) as usize];
-    for t in &mesh.triangles {
+    for (index, t) in mesh.triangles.iter().enumerate() {
         let [a, b, c] = t.map(|i| screen[i as usize]);
-        let [va, vb, vc] = t.map(|i| values[i as usize]);
         if !(a.is_finite() && b.is_finite() && c.is_finite()) {
             continue;
         }
@@ -220,7 +236,7 @@ pub fn render_scalar(
                 let slot = &mut depth[(y * width + x) as usize];
                 if z < *slot {
                     *slot = z;
-                    image.put_pixel(x, y, colormap.color(wa * va + wb * vb + wc * vc));
+                    image.put_pixel(x, y, shade(index, [wa, wb, wc]));
                 }
             }
         }
