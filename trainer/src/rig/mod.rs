@@ -156,6 +156,12 @@ pub trait Rig: Sync {
         )?)
     }
 
+    /// The character's up axis in its mesh's frame, unit length: renders turn it to the
+    /// screen's up. The built-in characters are z-up (the default).
+    fn up(&self) -> glam::Vec3 {
+        glam::Vec3::Z
+    }
+
     /// Names of every clip [`Rig::clip`] accepts.
     fn clip_names(&self) -> Vec<String>;
 

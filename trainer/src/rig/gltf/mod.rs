@@ -270,15 +270,6 @@ impl GltfRig {
         &self.joint_names
     }
 
-    /// glTF's world up (+Y) expressed in the rig's frame (the frame of the file's vertex
-    /// data), unit length: e.g. +Z for a file that stores a Z-up mesh under a Y-up node.
-    pub fn up(&self) -> Vec3 {
-        self.skeleton
-            .world_to_mesh
-            .transform_vector3(DVec3::Y)
-            .normalize()
-            .as_vec3()
-    }
 
     /// Animated properties held at rest when posing (translations, scales, non-joint
     /// rotations), with their largest deviation from rest.
@@ -360,6 +351,16 @@ impl GltfRig {
 
 /// The glTF character as a [`Rig`]. Its errors are [`RigError::Gltf`], naming the file.
 impl Rig for GltfRig {
+    /// glTF's world up (+Y) expressed in the rig's frame (the frame of the file's vertex
+    /// data), unit length: e.g. +Z for a file that stores a Z-up mesh under a Y-up node.
+    fn up(&self) -> Vec3 {
+        self.skeleton
+            .world_to_mesh
+            .transform_vector3(DVec3::Y)
+            .normalize()
+            .as_vec3()
+    }
+
     fn angle_names(&self) -> Vec<String> {
         self.angle_names.clone()
     }

@@ -472,6 +472,11 @@ fn frame_step(ratio: f64) -> f64 {
 }
 
 impl Rig for MocapRig {
+    /// BVH is y-up.
+    fn up(&self) -> glam::Vec3 {
+        glam::Vec3::Y
+    }
+
     fn angle_names(&self) -> Vec<String> {
         let mut names = Vec::with_capacity(self.pose_len());
         for e in &self.entries {
