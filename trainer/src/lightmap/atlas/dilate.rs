@@ -31,8 +31,7 @@ impl Rings {
             let grown: Vec<u32> = (0..resolution * resolution)
                 .into_par_iter()
                 .filter(|&t| {
-                    previous[t] == EMPTY
-                        && neighbours(t, resolution).any(|n| previous[n] != EMPTY)
+                    previous[t] == EMPTY && neighbours(t, resolution).any(|n| previous[n] != EMPTY)
                 })
                 .map(|t| t as u32)
                 .collect();

@@ -13,7 +13,7 @@
 //!
 //! **Coverage** ([`raster`]):
 //! - a texel is covered by every triangle whose UV triangle contains its centre, edges
-//!   included (within [`raster::EDGE_TOLERANCE`] of a texel width), with one sample per such
+//!   included (within a hundredth of a texel width), with one sample per such
 //!   triangle at the centre's barycentric coordinates: a centre on an edge shared by two
 //!   triangles gets both, and the map holds their mean, as the paper does for shared edges;
 //! - *conservative* coverage: a texel that a triangle overlaps (with positive area) but whose
@@ -56,7 +56,9 @@ pub const MAX_RESOLUTION: usize = 8192;
 
 /// A character's UVs, per triangle corner so that seams and wrap-around charts (where one
 /// vertex has two UVs) are representable: one entry per triangle of the bind mesh, in `[0,1]²`
-/// with glTF's convention (see the module docs).
+/// with glTF's convention (see the module docs). The atlas does not wrap: a corner outside
+/// `[0,1]²` (glTF allows them, for repeating textures) covers only the texels its triangle
+/// reaches inside the square.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct UvLayout {
     /// The UVs of each triangle's three corners, in the triangle's corner order.
@@ -165,7 +167,10 @@ impl Atlas {
             });
         }
         for (triangle, corners) in layout.corners.iter().enumerate() {
-            if let Some(corner) = corners.iter().position(|c| !c.iter().all(|x| x.is_finite())) {
+            if let Some(corner) = corners
+                .iter()
+                .position(|c| !c.iter().all(|x| x.is_finite()))
+            {
                 return Err(AtlasError::NonFinite {
                     triangle,
                     corner,

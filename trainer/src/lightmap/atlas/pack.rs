@@ -36,7 +36,11 @@ pub struct Placement {
 /// fit: more charts than [`CHART_PADDING`] leaves room for (about 1,600), or a size that is
 /// not a non-negative finite number.
 pub fn shelf_pack(sizes: &[[f64; 2]]) -> Option<Placement> {
-    if sizes.iter().flatten().any(|s| !(s.is_finite() && *s >= 0.0)) {
+    if sizes
+        .iter()
+        .flatten()
+        .any(|s| !(s.is_finite() && *s >= 0.0))
+    {
         return None;
     }
     let largest = sizes.iter().flatten().fold(0.0f64, |m, &s| m.max(s));

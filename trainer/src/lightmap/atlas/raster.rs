@@ -132,7 +132,10 @@ impl UvTriangle {
             let normal = (self.v[(i + 1) % 3] - self.v[i]).perp();
             let project = |p: DVec2| normal.dot(p);
             let tri = self.v.map(project);
-            let (t_lo, t_hi) = (tri[0].min(tri[1]).min(tri[2]), tri[0].max(tri[1]).max(tri[2]));
+            let (t_lo, t_hi) = (
+                tri[0].min(tri[1]).min(tri[2]),
+                tri[0].max(tri[1]).max(tri[2]),
+            );
             let reach = 0.5 * (normal.x.abs() + normal.y.abs());
             let c = project(centre);
             t_hi > c - reach && c + reach > t_lo
@@ -161,7 +164,8 @@ impl UvTriangle {
         let r = resolution as f64;
         let min = self.v[0].min(self.v[1]).min(self.v[2]);
         let max = self.v[0].max(self.v[1]).max(self.v[2]);
-        let range = |lo: f64, hi: f64| lo.floor().clamp(0.0, r) as usize..hi.ceil().clamp(0.0, r) as usize;
+        let range =
+            |lo: f64, hi: f64| lo.floor().clamp(0.0, r) as usize..hi.ceil().clamp(0.0, r) as usize;
         let mut out = Vec::new();
         for y in range(min.y, max.y) {
             for x in range(min.x, max.x) {

@@ -19,9 +19,8 @@ pub(super) fn surface(samples: &[TexelSample], mesh: &Mesh) -> (Vec<[f32; 3]>, V
         .par_iter()
         .map(|s| {
             let t = mesh.triangles[s.triangle as usize];
-            let corner = |data: &[[f32; 3]], k: usize| {
-                glam::Vec3::from(data[t[k] as usize]).as_dvec3()
-            };
+            let corner =
+                |data: &[[f32; 3]], k: usize| glam::Vec3::from(data[t[k] as usize]).as_dvec3();
             let blend = |data: &[[f32; 3]]| {
                 (0..3).fold(DVec3::ZERO, |sum, k| {
                     sum + corner(data, k) * f64::from(s.bary[k])
@@ -32,16 +31,13 @@ pub(super) fn surface(samples: &[TexelSample], mesh: &Mesh) -> (Vec<[f32; 3]>, V
             let normal = (blended.length() > VANISHED)
                 .then(|| blended.normalize())
                 .unwrap_or_else(|| {
-                let p = |k| corner(&mesh.positions, k);
-                (p(1) - p(0))
-                    .cross(p(2) - p(0))
-                    .try_normalize()
-                    .unwrap_or(DVec3::Z)
-            });
-            (
-                position.as_vec3().to_array(),
-                normal.as_vec3().to_array(),
-            )
+                    let p = |k| corner(&mesh.positions, k);
+                    (p(1) - p(0))
+                        .cross(p(2) - p(0))
+                        .try_normalize()
+                        .unwrap_or(DVec3::Z)
+                });
+            (position.as_vec3().to_array(), normal.as_vec3().to_array())
         })
         .unzip()
 }

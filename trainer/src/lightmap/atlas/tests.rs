@@ -16,10 +16,7 @@ fn sample_uv(layout: &UvLayout, s: &TexelSample) -> DVec2 {
 
 fn centre(texel: u32, resolution: usize) -> DVec2 {
     let r = resolution as u32;
-    DVec2::new(
-        f64::from(texel % r) + 0.5,
-        f64::from(texel / r) + 0.5,
-    ) / resolution as f64
+    DVec2::new(f64::from(texel % r) + 0.5, f64::from(texel / r) + 0.5) / resolution as f64
 }
 
 #[test]
@@ -57,13 +54,19 @@ fn quad_samples_are_the_affine_image_of_texel_centres() {
         } else {
             // Conservative coverage: a point of the quad, on its boundary.
             let e = got.truncate();
-            assert!(e.min_element() > -1e-6 && e.max_element() < 1.0 + 1e-6, "{e}");
+            assert!(
+                e.min_element() > -1e-6 && e.max_element() < 1.0 + 1e-6,
+                "{e}"
+            );
             assert!(e.min_element().abs() < 1e-6 || (e.max_element() - 1.0).abs() < 1e-6);
         }
     }
     // The quad's UV area is det M = 0.435 of the map.
     let area = m.determinant() * 64.0 * 64.0;
-    assert!((f64::from(centred) - area).abs() < 0.1 * area, "{centred} vs {area}");
+    assert!(
+        (f64::from(centred) - area).abs() < 0.1 * area,
+        "{centred} vs {area}"
+    );
     assert_eq!(atlas.overlapping_texels(), 0);
 }
 
@@ -166,14 +169,7 @@ fn mirrored_uvs_are_counted_as_overlapping() {
         corners: vec![uv, mirrored],
     };
     let atlas = Atlas::build(&layout, &triangles, 32).unwrap();
-    let single = Atlas::build(
-        &UvLayout {
-            corners: vec![uv],
-        },
-        &triangles[..1],
-        32,
-    )
-    .unwrap();
+    let single = Atlas::build(&UvLayout { corners: vec![uv] }, &triangles[..1], 32).unwrap();
     let inside = single
         .samples()
         .iter()
@@ -290,13 +286,24 @@ fn bad_inputs_are_errors_or_cover_nothing() {
         ],
     };
     let err = Atlas::build(&nan, &[[0, 1, 2], [0, 1, 2]], 8).unwrap_err();
-    assert!(matches!(err, AtlasError::NonFinite { triangle: 1, corner: 1, .. }));
+    assert!(matches!(
+        err,
+        AtlasError::NonFinite {
+            triangle: 1,
+            corner: 1,
+            ..
+        }
+    ));
     assert!(err.to_string().contains("triangle 1"), "{err}");
     // A corner naming a vertex without a UV.
     let missing = UvLayout::from_vertex_uvs(&[[0.0, 0.0]; 2], &tri);
     assert!(matches!(
         Atlas::build(&missing, &tri, 8),
-        Err(AtlasError::NonFinite { triangle: 0, corner: 2, .. })
+        Err(AtlasError::NonFinite {
+            triangle: 0,
+            corner: 2,
+            ..
+        })
     ));
     // Degenerate (collinear, repeated corner), far outside the map, and huge: no panic.
     let odd = UvLayout {
@@ -328,7 +335,10 @@ fn vertex_uvs_list_every_distinct_uv_of_a_seam_vertex() {
     assert_eq!(uvs[1], [[0.5, 0.0]]);
     assert_eq!(uvs[3], [[0.0, 0.5]]);
     assert!(uvs[4].is_empty());
-    assert_eq!(UvLayout::from_vertex_uvs(&[[0.25, 0.75]], &[[0, 0, 0]]).corners, [[[0.25, 0.75]; 3]]);
+    assert_eq!(
+        UvLayout::from_vertex_uvs(&[[0.25, 0.75]], &[[0, 0, 0]]).corners,
+        [[[0.25, 0.75]; 3]]
+    );
 }
 
 #[test]
@@ -352,7 +362,14 @@ fn bilinear_interpolates_between_centres_and_clamps_at_the_edge() {
 
 #[test]
 fn packed_charts_keep_their_padding_inside_the_square() {
-    let sizes = [[0.5, 0.3], [0.2, 0.9], [1.5, 0.1], [0.0, 0.0], [0.3, 0.3], [0.05, 0.4]];
+    let sizes = [
+        [0.5, 0.3],
+        [0.2, 0.9],
+        [1.5, 0.1],
+        [0.0, 0.0],
+        [0.3, 0.3],
+        [0.05, 0.4],
+    ];
     let p = shelf_pack(&sizes).unwrap();
     assert!(p.scale > 0.3, "{}", p.scale);
     let rect = |i: usize| {
@@ -361,7 +378,10 @@ fn packed_charts_keep_their_padding_inside_the_square() {
     };
     for i in 0..sizes.len() {
         let a = rect(i);
-        assert!(a[0] >= 0.0 && a[1] >= 0.0 && a[2] <= 1.0 && a[3] <= 1.0, "{a:?}");
+        assert!(
+            a[0] >= 0.0 && a[1] >= 0.0 && a[2] <= 1.0 && a[3] <= 1.0,
+            "{a:?}"
+        );
         for j in 0..i {
             let b = rect(j);
             let apart = a[0] >= b[2] + pack::CHART_PADDING - 1e-12
