@@ -201,3 +201,40 @@ fn render_posed_frames_on_request() {
         println!("wrote {}", out.display());
     }
 }
+
+/// Fox and CesiumMan carry `TEXCOORD_0`: both load with a finite UV layout that rasterises.
+/// Prints what a 256² atlas covers, how many texels overlapping UVs share, and the build time.
+#[test]
+fn sample_characters_have_uv_layouts_that_rasterise() {
+    use aprt_trainer::lightmap::atlas::Atlas;
+    let Some(dir) = common::assets("sample_characters_have_uv_layouts") else {
+        return;
+    };
+    for file in ["Fox.gltf", "CesiumMan.gltf"] {
+        let rig = GltfRig::load(&gltf(&dir, file), 30.0).unwrap();
+        let triangles = &rig.bind_mesh().triangles;
+        let layout = rig.uv_layout().expect(file);
+        assert_eq!(layout.corners.len(), triangles.len(), "{file}");
+        assert!(
+            layout
+                .corners
+                .iter()
+                .flatten()
+                .flatten()
+                .all(|x| x.is_finite()),
+            "{file}"
+        );
+        let start = std::time::Instant::now();
+        let atlas = Atlas::build(layout, triangles, 256).unwrap();
+        let ms = start.elapsed().as_secs_f64() * 1e3;
+        let covered = atlas.samples().chunk_by(|a, b| a.texel == b.texel).count();
+        eprintln!(
+            "{file}: 256² atlas covers {covered} texels, {} overlapping, built in {ms:.1} ms",
+            atlas.overlapping_texels()
+        );
+        assert!(covered > 256 * 256 / 20, "{file}: {covered} texels");
+        let (points, normals) = atlas.surface(rig.bind_mesh());
+        assert_eq!(points.len(), atlas.samples().len());
+        assert!(normals.iter().flatten().all(|x| x.is_finite()), "{file}");
+    }
+}

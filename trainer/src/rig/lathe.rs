@@ -15,10 +15,31 @@
 //!
 //! Profiles are sampled at a caller-given ring `step` (a length in the mesh's units), so one
 //! builder serves a character in metres and a skeleton in a motion-capture file's units.
+//!
+//! **UV layout** (for SH light maps; [`Body::uv_layout`]). Each part is one rectangular chart,
+//! cut along the seam at angle 0:
+//!
+//! - `u` goes around, `s / segments` at segment `s`; the triangles that close the ring use
+//!   `u = 1` at the seam rather than 0, which is why UVs are per triangle corner;
+//! - `v` goes along the profile, from 0 at the first pole to 1 at the last, in proportion to
+//!   arc length along the profile (axial position against the mean of the two radii);
+//! - a pole's corner in each fan triangle sits at the middle of its segment,
+//!   `u = (s + ½) / segments`, so the fan is a row of separate triangles (a sawtooth), each
+//!   with its own area, instead of collapsing to a point;
+//! - charts are `mean ring circumference × profile length` in the mesh's units (the ring
+//!   polygons' perimeters averaged over the rings), and all share one scale to UV, so texel
+//!   density is uniform over the body; [`crate::lightmap::atlas::shelf_pack`] places them in
+//!   `[0,1]²`, [`crate::lightmap::atlas::pack::CHART_PADDING`] apart (`2·GUTTER + 2` texels at
+//!   256²), so that no chart's gutter reaches another's texels.
+//!
+//! The stretch of a chart is that of a cylinder's unrolling: exact along the shaft of a
+//! capsule, and squeezed around towards the poles, where rings are shorter than the mean.
 
 use std::ops::Range;
 
 use glam::{DVec2, DVec3};
+
+use crate::lightmap::atlas::{UvLayout, shelf_pack};
 
 /// The joint that takes over at axial position `at` along a part, blending over `±half_width`.
 pub(crate) struct Band {
@@ -49,15 +70,42 @@ pub(crate) struct Part {
     pub bands: Vec<Band>,
 }
 
-/// The assembled bind-pose surface: positions, triangles, per-vertex influences, and the
+/// The assembled bind-pose surface: positions, triangles, per-vertex influences, the
 /// triangle range of each part, in the order the parts were given (for per-part closedness
-/// checks).
+/// checks), and the UV charts (see the module docs).
 // Nominally `pub` (the module is crate-private) because `procedural::Spec` names it.
 pub struct Body {
     pub positions: Vec<[f32; 3]>,
     pub triangles: Vec<[u32; 3]>,
     pub influences: Vec<Vec<(u32, f32)>>,
     pub parts: Vec<Range<usize>>,
+    /// Each triangle's corner UVs within its part's chart, in `[0,1]²`.
+    pub chart_uvs: Vec<[[f64; 2]; 3]>,
+    /// Each part's chart size, `[mean circumference, profile length]` in the mesh's units.
+    pub chart_sizes: Vec<[f64; 2]>,
+}
+
+impl Body {
+    /// The charts packed into one layout (see the module docs); `None` only if they do not
+    /// fit ([`shelf_pack`]: more than about 1,600 parts).
+    pub fn uv_layout(&self) -> Option<UvLayout> {
+        let placement = shelf_pack(&self.chart_sizes)?;
+        let mut corners = Vec::with_capacity(self.chart_uvs.len());
+        for ((range, size), offset) in self
+            .parts
+            .iter()
+            .zip(&self.chart_sizes)
+            .zip(&placement.offsets)
+        {
+            let extent = [0, 1].map(|k| placement.scale * size[k]);
+            corners.extend(
+                self.chart_uvs[range.clone()]
+                    .iter()
+                    .map(|c| c.map(|uv| [0, 1].map(|k| (offset[k] + extent[k] * uv[k]) as f32))),
+            );
+        }
+        Some(UvLayout { corners })
+    }
 }
 
 /// Emits `parts` in order: the vertex and triangle order of the mesh.
@@ -67,10 +115,13 @@ pub(crate) fn build(parts: impl IntoIterator<Item = Part>) -> Body {
         triangles: Vec::new(),
         influences: Vec::new(),
         parts: Vec::new(),
+        chart_uvs: Vec::new(),
+        chart_sizes: Vec::new(),
     };
     for part in parts {
         let first_triangle = body.triangles.len();
         emit(&part, &mut body);
+        body.chart_sizes.push(chart_size(&part.lathe));
         body.parts.push(first_triangle..body.triangles.len());
     }
     body
@@ -138,8 +189,14 @@ fn emit(part: &Part, body: &mut Body) {
     let n = lathe.segments as u32;
     let ring = |i: usize, s: u32| base + 1 + i as u32 * n + s % n;
     let last_pole = base + 1 + rings.len() as u32 * n;
+    let v = profile_fractions(lathe);
+    let u = |s: u32| f64::from(s) / f64::from(n);
+    let pole_u = |s: u32| (f64::from(s) + 0.5) / f64::from(n);
+    let last = rings.len() - 1;
     for s in 0..n {
         body.triangles.push([base, ring(0, s + 1), ring(0, s)]);
+        body.chart_uvs
+            .push([[pole_u(s), 0.0], [u(s + 1), v[1]], [u(s), v[1]]]);
         for i in 0..rings.len() - 1 {
             let (a, b, c, d) = (
                 ring(i, s),
@@ -147,15 +204,74 @@ fn emit(part: &Part, body: &mut Body) {
                 ring(i + 1, s + 1),
                 ring(i + 1, s),
             );
+            let (va, vc) = (v[i + 1], v[i + 2]);
             body.triangles.push([a, b, c]);
+            body.chart_uvs
+                .push([[u(s), va], [u(s + 1), va], [u(s + 1), vc]]);
             body.triangles.push([a, c, d]);
+            body.chart_uvs
+                .push([[u(s), va], [u(s + 1), vc], [u(s), vc]]);
         }
-        body.triangles.push([
-            last_pole,
-            ring(rings.len() - 1, s),
-            ring(rings.len() - 1, s + 1),
+        body.triangles
+            .push([last_pole, ring(last, s), ring(last, s + 1)]);
+        body.chart_uvs.push([
+            [pole_u(s), 1.0],
+            [u(s), v[last + 1]],
+            [u(s + 1), v[last + 1]],
         ]);
     }
+}
+
+/// The profile in the (axial, mean radius) plane, where arc length is measured for the
+/// chart's `v` (the mean of the cross-section's two radii stands for the ellipse).
+fn meridian(lathe: &Lathe) -> Vec<DVec2> {
+    let mean_scale = 0.5 * (lathe.scale.0 + lathe.scale.1);
+    let last = lathe.profile.len() - 1;
+    (lathe.profile.iter().enumerate())
+        .map(|(k, &(axial, radius))| {
+            // The poles are on the axis whatever radius the profile lists there.
+            let r = if k == 0 || k == last { 0.0 } else { radius };
+            DVec2::new(axial, r * mean_scale)
+        })
+        .collect()
+}
+
+/// Each profile point's arc length from the first pole, as a fraction of the whole (0 at the
+/// first pole, 1 at the last; evenly spaced if the profile has no length).
+fn profile_fractions(lathe: &Lathe) -> Vec<f64> {
+    let points = meridian(lathe);
+    let mut along = vec![0.0];
+    for pair in points.windows(2) {
+        along.push(along[along.len() - 1] + pair[0].distance(pair[1]));
+    }
+    let total = along[along.len() - 1];
+    let count = (along.len() - 1) as f64;
+    (along.iter().enumerate())
+        .map(|(k, &a)| {
+            if total > 0.0 {
+                a / total
+            } else {
+                k as f64 / count
+            }
+        })
+        .collect()
+}
+
+/// A part's chart size in the mesh's units: the mean perimeter of its ring polygons around,
+/// the profile's arc length along.
+fn chart_size(lathe: &Lathe) -> [f64; 2] {
+    let points = meridian(lathe);
+    let length: f64 = points.windows(2).map(|p| p[0].distance(p[1])).sum();
+    let n = lathe.segments;
+    let ellipse = |s: usize| {
+        let theta = std::f64::consts::TAU * s as f64 / n as f64;
+        DVec2::new(lathe.scale.0 * theta.cos(), lathe.scale.1 * theta.sin())
+    };
+    // The perimeter of a ring of radius r is r times that of the unit ring.
+    let unit: f64 = (0..n).map(|s| ellipse(s).distance(ellipse(s + 1))).sum();
+    let rings = &lathe.profile[1..lathe.profile.len() - 1];
+    let mean_radius = rings.iter().map(|&(_, r)| r.abs()).sum::<f64>() / rings.len() as f64;
+    [unit * mean_radius, length]
 }
 
 /// Number of samples to cover `length` at `step`, at least one.

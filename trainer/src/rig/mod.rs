@@ -33,6 +33,7 @@ pub use procedural::BuiltinRig;
 
 use glam::Mat4;
 
+use crate::lightmap::atlas::UvLayout;
 use character::CharacterError;
 use gltf::GltfError;
 use mannequin::MocapRigError;
@@ -167,4 +168,10 @@ pub trait Rig: Sync {
 
     /// The clip called `name`; the error lists the names that exist.
     fn clip(&self, name: &str) -> Result<Clip, RigError>;
+
+    /// The bind mesh's UVs, per triangle corner, if the character has them: what an SH light
+    /// map is laid out by ([`crate::lightmap::atlas`]).
+    fn uv_layout(&self) -> Option<&UvLayout> {
+        None
+    }
 }

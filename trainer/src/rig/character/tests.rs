@@ -14,6 +14,21 @@ fn character_builds_bit_identically() {
 }
 
 #[test]
+fn character_charts_are_packed_apart() {
+    let c = character();
+    checks::assert_charts_apart(&c, c.parts());
+    // The build stays well under a second at the largest resolution a bake would use.
+    let start = std::time::Instant::now();
+    let layout = c.uv_layout().unwrap();
+    let atlas =
+        crate::lightmap::atlas::Atlas::build(layout, &c.bind_mesh().triangles, 1024).unwrap();
+    let seconds = start.elapsed().as_secs_f64();
+    let covered = atlas.filled().iter().filter(|&&f| f).count();
+    eprintln!("built-in human at 1024²: {seconds:.3} s, {covered} texels filled");
+    assert!(covered > 1024 * 1024 / 8, "{covered}");
+}
+
+#[test]
 fn character_sizes_are_in_range() {
     let c = character();
     let v = c.bind_mesh().vertex_count();

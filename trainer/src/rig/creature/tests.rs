@@ -10,6 +10,12 @@ fn creature() -> Creature {
 }
 
 #[test]
+fn creature_charts_are_packed_apart() {
+    let c = creature();
+    checks::assert_charts_apart(&c, c.parts());
+}
+
+#[test]
 fn creature_builds_bit_identically() {
     checks::assert_builds_bit_identically::<Lizard>();
 }

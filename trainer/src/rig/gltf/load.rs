@@ -14,6 +14,7 @@ use super::animation::{Animation, Track};
 use super::curve::{Curve, Interpolation};
 use super::skeleton::{Skeleton, Trs};
 use super::spec;
+use crate::lightmap::atlas::UvLayout;
 use crate::rig::mesh::{Mesh, area_weighted_normals};
 use crate::rig::skin::Skin;
 
@@ -26,6 +27,8 @@ pub struct Parts {
     /// name is shared).
     pub node_names: Vec<String>,
     pub animations: Vec<Animation>,
+    /// `TEXCOORD_0` per triangle corner, if every skinned primitive has it.
+    pub uv_layout: Option<UvLayout>,
 }
 
 /// Each vertex's `(joint, weight)` influences, as [`Skin::from_influences`] takes them.
@@ -75,7 +78,8 @@ pub fn parse(bytes: &[u8], path: &Path, base: Option<&Path>) -> Result<Parts, Gl
         .map_err(|(node, problem)| invalid(node, problem))?;
     let joint_names: Vec<&str> = joints.iter().map(|&j| node_names[j].as_str()).collect();
     let inverse_bind = inverse_binds(&skin, buffers, &joint_names, path)?;
-    let (bind, influences) = merge_primitives(&skinned, buffers, joints.len(), path)?;
+    let (bind, influences, uvs) = merge_primitives(&skinned, buffers, joints.len(), path)?;
+    let uv_layout = uvs.map(|uvs| UvLayout::from_vertex_uvs(&uvs, &bind.triangles));
     if bind.triangles.is_empty() {
         return Err(invalid(
             "skinned meshes".into(),
@@ -93,6 +97,7 @@ pub fn parse(bytes: &[u8], path: &Path, base: Option<&Path>) -> Result<Parts, Gl
         skeleton,
         animations: animations(doc, buffers, &node_names, path)?,
         node_names,
+        uv_layout,
     })
 }
 
@@ -269,19 +274,21 @@ fn singular(m: &DMat4) -> bool {
 }
 
 /// Every primitive of the skinned nodes merged in order into the bind mesh (vertices in
-/// accessor order), with each vertex's joint influences.
+/// accessor order), with each vertex's joint influences and its `TEXCOORD_0` (`None` unless
+/// every primitive has one: a layout with holes lays nothing out).
 fn merge_primitives(
     skinned: &[gltf::Node],
     buffers: &[gltf::buffer::Data],
     joint_count: usize,
     path: &Path,
-) -> Result<(Mesh, Influences), GltfError> {
+) -> Result<(Mesh, Influences, Option<Vec<[f32; 2]>>), GltfError> {
     let invalid = invalid_in(path);
     let get = |b: gltf::Buffer| buffers.get(b.index()).map(|d| d.0.as_slice());
     let mut positions = Vec::new();
     let mut normals = Vec::new();
     let mut triangles = Vec::new();
     let mut influences: Influences = Vec::new();
+    let mut uvs = Some(Vec::new());
     for node in skinned {
         let mesh = node
             .mesh()
@@ -305,6 +312,10 @@ fn merge_primitives(
             );
             positions.extend(part.positions);
             influences.extend(part.influences);
+            uvs = uvs.zip(part.uvs).map(|(mut all, part)| {
+                all.extend(part);
+                all
+            });
         }
     }
     Ok((
@@ -314,6 +325,7 @@ fn merge_primitives(
             triangles,
         },
         influences,
+        uvs,
     ))
 }
 
@@ -432,6 +444,7 @@ struct Part {
     normals: Option<Vec<[f32; 3]>>,
     triangles: Vec<[u32; 3]>,
     influences: Influences,
+    uvs: Option<Vec<[f32; 2]>>,
 }
 
 fn read_primitive<'a, 's, F>(
@@ -471,11 +484,13 @@ where
     }
     let triangles = triangulate(primitive.mode(), &indices)?;
     let influences = read_influences(primitive, &reader, n, joint_count)?;
+    let uvs = read_uvs(primitive, &reader, n)?;
     Ok(Part {
         positions,
         normals,
         triangles,
         influences,
+        uvs,
     })
 }
 
@@ -524,6 +539,29 @@ where
         })
         .collect::<Result<Vec<_>, _>>()?;
     Ok(Some(unit))
+}
+
+/// The primitive's `TEXCOORD_0` as floats (normalized integers mapped to `[0,1]`), if it has
+/// them (`n` positions). Non-finite values are kept: [`crate::lightmap::atlas::Atlas::build`]
+/// refuses them naming the triangle, while the rig stays usable without a light map.
+fn read_uvs<'a, 's, F>(
+    primitive: &'a gltf::Primitive<'a>,
+    reader: &gltf::mesh::Reader<'a, 's, F>,
+    n: usize,
+) -> Result<Option<Vec<[f32; 2]>>, String>
+where
+    F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
+{
+    if primitive.get(&Semantic::TexCoords(0)).is_none() {
+        return Ok(None);
+    }
+    let uvs: Vec<[f32; 2]> = reader
+        .read_tex_coords(0)
+        .ok_or_else(|| unreadable_attribute(primitive, Semantic::TexCoords(0)))?
+        .into_f32()
+        .collect();
+    check_count(Semantic::TexCoords(0), uvs.len(), n)?;
+    Ok(Some(uvs))
 }
 
 /// Every vertex's `(joint, weight)` influences over all `JOINTS_n`/`WEIGHTS_n` sets (`n`

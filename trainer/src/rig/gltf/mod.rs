@@ -53,6 +53,7 @@ mod load;
 mod skeleton;
 mod spec;
 
+use crate::lightmap::atlas::UvLayout;
 pub(crate) use document::{external_file, read_regular, split as gltf_split};
 use std::path::{Path, PathBuf};
 
@@ -217,6 +218,7 @@ pub struct GltfRig {
     angle_names: Vec<String>,
     animations: Vec<Animation>,
     held: Vec<HeldChannel>,
+    uv_layout: Option<UvLayout>,
 }
 
 impl GltfRig {
@@ -262,6 +264,7 @@ impl GltfRig {
             angle_names,
             animations: parts.animations,
             held,
+            uv_layout: parts.uv_layout,
         })
     }
 
@@ -409,6 +412,11 @@ impl Rig for GltfRig {
             fps: self.fps,
             frames,
         })
+    }
+
+    /// `TEXCOORD_0` of every skinned primitive; `None` if any primitive lacks it.
+    fn uv_layout(&self) -> Option<&UvLayout> {
+        self.uv_layout.as_ref()
     }
 }
 

@@ -47,6 +47,11 @@ const WEIGHTS: &[Component] = &[
     (DataType::U8, true),
     (DataType::U16, true),
 ];
+const TEX_COORDS: &[Component] = &[
+    (DataType::F32, false),
+    (DataType::U8, true),
+    (DataType::U16, true),
+];
 const FLOAT_OR_NORMALIZED: &[Component] = &[
     (DataType::F32, false),
     (DataType::I8, true),
@@ -148,6 +153,7 @@ fn check_primitive(
             Semantic::Positions | Semantic::Normals => (Dimensions::Vec3, FLOAT),
             Semantic::Joints(_) => (Dimensions::Vec4, JOINT_INDICES),
             Semantic::Weights(_) => (Dimensions::Vec4, WEIGHTS),
+            Semantic::TexCoords(0) => (Dimensions::Vec2, TEX_COORDS),
             // Not read by the rig.
             _ => continue,
         };
@@ -383,6 +389,7 @@ fn semantic_name(semantic: &Semantic) -> String {
         Semantic::Normals => "NORMAL".into(),
         Semantic::Joints(set) => format!("JOINTS_{set}"),
         Semantic::Weights(set) => format!("WEIGHTS_{set}"),
+        Semantic::TexCoords(set) => format!("TEXCOORD_{set}"),
         other => format!("{other:?}"),
     }
 }

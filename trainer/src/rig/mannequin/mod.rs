@@ -36,6 +36,7 @@ use glam::{DAffine3, DQuat, DVec3, Mat4};
 
 use crate::bake::MAX_EXTENT;
 use crate::bake::budget::MAX_FRAMES;
+use crate::lightmap::atlas::UvLayout;
 use crate::rig::mesh::Mesh;
 use crate::rig::mocap::{Mocap, MocapError};
 use crate::rig::rotation_vector;
@@ -196,6 +197,8 @@ pub struct MocapRig {
     bind: Mesh,
     skin: Skin,
     parts: Vec<(String, Range<usize>)>,
+    /// The lathe charts, packed (see [`crate::rig::lathe`]).
+    uv_layout: Option<UvLayout>,
 }
 
 /// The largest coordinate of any joint or End Site at rest (NaN or infinite when the offsets
@@ -267,6 +270,7 @@ impl MocapRig {
                 }
             }
         })?;
+        let uv_layout = body.body.uv_layout();
         let bind = Mesh::with_area_weighted_normals(body.body.positions, body.body.triangles);
         let skin = Skin::from_influences(&body.body.influences).unwrap_or_else(|e| {
             unreachable!("lathe weights are positive partitions of unity: {e}")
@@ -290,6 +294,7 @@ impl MocapRig {
             bind,
             skin,
             parts: body.names.into_iter().zip(body.body.parts).collect(),
+            uv_layout,
         })
     }
 
@@ -537,6 +542,11 @@ impl Rig for MocapRig {
             .into());
         }
         Ok(self.clip_range(0..self.mocap.frame_count())?)
+    }
+
+    /// One chart per lathe part (see [`crate::rig::lathe`]).
+    fn uv_layout(&self) -> Option<&UvLayout> {
+        self.uv_layout.as_ref()
     }
 }
 

@@ -65,6 +65,17 @@ fn rig(options: &MocapOptions) -> MocapRig {
 }
 
 #[test]
+fn mannequin_charts_are_packed_apart() {
+    for hat in [true, false] {
+        let r = rig(&MocapOptions {
+            hat,
+            ..MocapOptions::default()
+        });
+        crate::rig::procedural::checks::assert_charts_apart(&r, r.parts());
+    }
+}
+
+#[test]
 fn pose_vector_lists_every_rotating_joint_and_root_translation_on_request() {
     let plain = rig(&MocapOptions::default());
     let names = plain.angle_names();

@@ -8,6 +8,7 @@ use std::ops::Range;
 use glam::Mat4;
 
 use super::skeleton::{Dof, Skeleton, joint_matrices};
+use crate::lightmap::atlas::UvLayout;
 use crate::rig::lathe::Body;
 use crate::rig::mesh::Mesh;
 use crate::rig::skin::{Skin, SkinError};
@@ -81,6 +82,8 @@ pub struct BuiltinRig<S> {
     dofs: Vec<Dof>,
     angles: Vec<JointAngle>,
     parts: Vec<(&'static str, Range<usize>)>,
+    /// The lathe charts, packed ([`Body::uv_layout`]).
+    uv_layout: Option<UvLayout>,
     /// Only a type-level tag: `S` is never stored, so it need not be `Send` or `Sync`.
     spec: PhantomData<fn() -> S>,
 }
@@ -99,6 +102,7 @@ impl<S: Spec> BuiltinRig<S> {
         );
         let (body, names) = S::body(&skeleton);
         let dofs = S::dofs();
+        let uv_layout = body.uv_layout();
         let bind = Mesh::with_area_weighted_normals(body.positions, body.triangles);
         let skin = Skin::from_influences(&body.influences).unwrap_or_else(|e| {
             unreachable!("built-in weights are positive partitions of unity: {e}")
@@ -119,6 +123,7 @@ impl<S: Spec> BuiltinRig<S> {
             dofs,
             angles,
             parts: names.into_iter().zip(body.parts).collect(),
+            uv_layout,
             spec: PhantomData,
         }
     }
@@ -203,6 +208,11 @@ impl<S: Spec> Rig for BuiltinRig<S> {
 
     fn clip(&self, name: &str) -> Result<Clip, RigError> {
         find_clip(self.clips(), name)
+    }
+
+    /// One chart per lathe part (see [`crate::rig::lathe`]).
+    fn uv_layout(&self) -> Option<&UvLayout> {
+        self.uv_layout.as_ref()
     }
 }
 

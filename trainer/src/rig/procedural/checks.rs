@@ -261,3 +261,50 @@ pub(crate) fn assert_angles_move_as_documented<S: Spec>(
         );
     }
 }
+
+/// Asserts that `rig` lays out each of `parts` (name and triangle range of its bind mesh) as a
+/// chart of its own: a UV for every corner, inside `[0,1]²`; no texel centre strictly inside
+/// two triangles at 256²; and, with every sample holding its part's number, bilinear sampling
+/// of the gathered map at every corner returns exactly that number, so the padding keeps each
+/// chart's gutters clear of its neighbours'.
+pub(crate) fn assert_charts_apart<'a>(
+    rig: &dyn Rig,
+    parts: impl Iterator<Item = (&'a str, Range<usize>)>,
+) {
+    use crate::lightmap::atlas::{Atlas, sample_bilinear};
+    let triangles = &rig.bind_mesh().triangles;
+    let layout = rig.uv_layout().expect("a lathe body has a UV layout");
+    assert_eq!(layout.corners.len(), triangles.len());
+    for (t, c) in layout.corners.iter().enumerate() {
+        assert!(
+            c.iter().flatten().all(|x| (0.0..=1.0).contains(x)),
+            "triangle {t}: {c:?}"
+        );
+    }
+    let mut part_of = vec![usize::MAX; triangles.len()];
+    let mut names = Vec::new();
+    for (k, (name, range)) in parts.enumerate() {
+        part_of[range].fill(k);
+        names.push(name);
+    }
+    assert!(part_of.iter().all(|&k| k != usize::MAX));
+    let resolution = 256;
+    let atlas = Atlas::build(layout, triangles, resolution).unwrap();
+    assert_eq!(atlas.overlapping_texels(), 0);
+    let values: Vec<f32> = (atlas.samples().iter())
+        .map(|s| part_of[s.triangle as usize] as f32)
+        .collect();
+    let map = atlas.gather(&values, 1);
+    for (t, corners) in layout.corners.iter().enumerate() {
+        for &uv in corners {
+            let mut out = [0.0];
+            sample_bilinear(&map, resolution, 1, uv, &mut out);
+            let part = part_of[t];
+            assert_eq!(
+                out[0], part as f32,
+                "triangle {t} of {} at {uv:?}",
+                names[part]
+            );
+        }
+    }
+}

@@ -1,1 +1,0 @@
-//! The UV atlas: which surface point every texel stands for.
