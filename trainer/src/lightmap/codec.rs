@@ -1,1 +1,0 @@
-//! Encoding and compressing a sequence of SH light maps.

@@ -1,0 +1,384 @@
+//! The `.shlm` container: writing the sections, and [`ShlmFile`], a validated view that
+//! decodes one frame at a time.
+
+use std::ops::Range;
+
+use super::entropy::{compress, decompress_exact};
+use super::header::{HEADER_LEN, Header, StoredKind};
+use super::shared_exp::{Grouping, SignMode, decode_planes};
+use super::CodecError;
+
+/// Whether frame `f` of `frames` is stored under keyframe interval `interval`: every
+/// `interval`-th frame, and the last, so every in-between has a keyframe on each side.
+pub fn is_keyframe(f: usize, interval: usize, frames: usize) -> bool {
+    f % interval == 0 || f + 1 == frames
+}
+
+/// Writes header, mask, positions, shared section, offset table, chunks and CRC.
+pub fn assemble(
+    mut header: Header,
+    filled: &[bool],
+    positions: &[[f32; 3]],
+    shared: &[Vec<u8>],
+    chunks: &[Vec<u8>],
+    level: i32,
+) -> Result<Vec<u8>, CodecError> {
+    let mut mask = vec![0u8; filled.len().div_ceil(8)];
+    for t in (0..filled.len()).filter(|&t| filled[t]) {
+        mask[t / 8] |= 1 << (t % 8);
+    }
+    let mask = compress(&mask, level)?;
+    let points: Vec<u8> = positions.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+    let points = compress(&points, level)?;
+    let mut shared_section = Vec::new();
+    if !shared.is_empty() {
+        shared_section.extend_from_slice(&u32_len(shared.len())?.to_le_bytes());
+        for blob in shared {
+            shared_section.extend_from_slice(&u32_len(blob.len())?.to_le_bytes());
+        }
+        shared.iter().for_each(|b| shared_section.extend_from_slice(b));
+    }
+    header.sections = [mask.len(), points.len(), shared_section.len()];
+    let mut out = Vec::new();
+    header.write(&mut out)?;
+    for section in [&mask, &points, &shared_section] {
+        out.extend_from_slice(section);
+    }
+    let mut offset = 0u64;
+    out.extend_from_slice(&offset.to_le_bytes());
+    for chunk in chunks {
+        offset += chunk.len() as u64;
+        out.extend_from_slice(&offset.to_le_bytes());
+    }
+    chunks.iter().for_each(|c| out.extend_from_slice(c));
+    let crc = crc32fast::hash(&out);
+    out.extend_from_slice(&crc.to_le_bytes());
+    Ok(out)
+}
+
+fn u32_len(len: usize) -> Result<u32, CodecError> {
+    u32::try_from(len).map_err(|_| CodecError::Input(format!("section of {len} bytes")))
+}
+
+/// A parsed `.shlm` file over its bytes. [`ShlmFile::parse`] validates the header, the
+/// checksum, the offset table, the mask, the positions and the shared PCA basis once;
+/// [`ShlmFile::decode_frame`] then touches only the chunks its frame needs.
+#[derive(Debug)]
+pub struct ShlmFile<'a> {
+    bytes: &'a [u8],
+    header: Header,
+    /// The texel index of each filled texel.
+    texels: Vec<usize>,
+    positions: Vec<[f32; 3]>,
+    /// PCA: the quantised mean, then the components (`T · n²` each); empty otherwise.
+    basis: Vec<Vec<f32>>,
+    /// Where the offset table starts, and the chunk area after it.
+    table: usize,
+    chunk_area: Range<usize>,
+}
+
+impl<'a> ShlmFile<'a> {
+    /// Validates `bytes` as a `.shlm` file. Hostile bytes give an error, never a panic, and
+    /// no allocation exceeds what the header's limits allow.
+    pub fn parse(bytes: &'a [u8]) -> Result<Self, CodecError> {
+        let header = Header::read(bytes)?;
+        let [mask_len, points_len, shared_len] = header.sections;
+        let table_len = (header.frames + 1) * 8;
+        let sections = [mask_len, points_len, shared_len, table_len, 4];
+        let needed = sections.iter().try_fold(HEADER_LEN, |a, &b| a.checked_add(b));
+        let len = bytes.len();
+        match needed {
+            Some(n) if n <= len => {}
+            n => {
+                return Err(CodecError::Truncated {
+                    what: "sections",
+                    needed: n.map_or(u64::MAX, |n| n as u64),
+                    len: len as u64,
+                });
+            }
+        }
+        let (body, stored) = bytes.split_at(len - 4);
+        let stored = u32::from_le_bytes([stored[0], stored[1], stored[2], stored[3]]);
+        let computed = crc32fast::hash(body);
+        if stored != computed {
+            return Err(CodecError::Checksum { stored, computed });
+        }
+        let mask_at = HEADER_LEN;
+        let points_at = mask_at + mask_len;
+        let shared_at = points_at + points_len;
+        let table = shared_at + shared_len;
+        let mut file = ShlmFile {
+            bytes,
+            header,
+            texels: read_mask(&bytes[mask_at..points_at], &header)?,
+            positions: read_positions(&bytes[points_at..shared_at], header.texels)?,
+            basis: Vec::new(),
+            table,
+            chunk_area: table + table_len..len - 4,
+        };
+        file.check_table()?;
+        file.basis = file.read_basis(&bytes[shared_at..table])?;
+        file.check_chunks()?;
+        Ok(file)
+    }
+
+    /// `R`.
+    pub fn resolution(&self) -> usize {
+        self.header.resolution
+    }
+
+    /// SH order `n`.
+    pub fn order(&self) -> usize {
+        self.header.order
+    }
+
+    /// Frames in the clip.
+    pub fn frames(&self) -> usize {
+        self.header.frames
+    }
+
+    /// The `R²` filled flags.
+    pub fn filled(&self) -> Result<Vec<bool>, CodecError> {
+        let mut filled = vec![false; self.header.resolution * self.header.resolution];
+        self.texels.iter().for_each(|&t| filled[t] = true);
+        Ok(filled)
+    }
+
+    /// The bind-pose point of each filled texel, in texel order.
+    pub fn positions(&self) -> Result<Vec<[f32; 3]>, CodecError> {
+        Ok(self.positions.clone())
+    }
+
+    /// `frames × R² × n² × 4`: the raw f32 maps of the whole clip, the ratio's denominator.
+    pub fn raw_bytes(&self) -> u64 {
+        let h = &self.header;
+        (h.frames as u64) * (h.resolution as u64).pow(2) * (h.n2() as u64) * 4
+    }
+
+    /// Decodes frame `k` into `out` (`R² · n²`, texel-major, zero where not filled).
+    pub fn decode_frame(&self, k: usize, out: &mut [f32]) -> Result<(), CodecError> {
+        let h = &self.header;
+        if k >= h.frames {
+            return Err(CodecError::FrameOutOfRange { index: k, frames: h.frames });
+        }
+        let n2 = h.n2();
+        let expected = h.resolution * h.resolution * n2;
+        if out.len() != expected {
+            return Err(CodecError::SizeMismatch {
+                what: "output frame",
+                expected: expected as u64,
+                got: out.len() as u64,
+            });
+        }
+        let compact = self.decode_compact(k)?;
+        if compact.iter().any(|x| !x.is_finite()) {
+            return Err(CodecError::Invalid {
+                what: "frame",
+                message: format!("frame {k} decodes to a non-finite value"),
+            });
+        }
+        out.fill(0.0);
+        for (&t, values) in self.texels.iter().zip(compact.chunks_exact(n2)) {
+            out[t * n2..(t + 1) * n2].copy_from_slice(values);
+        }
+        Ok(())
+    }
+
+    /// The codec and its parameters, for `aprt inspect`.
+    pub fn describe(&self) -> String {
+        let h = &self.header;
+        let kind = match h.kind {
+            StoredKind::Frames => "independent frames".to_string(),
+            StoredKind::Keyframes { interval } => format!("keyframes every {interval}, lerp between"),
+            StoredKind::Pca { components } => format!("PCA over frames, {components} components"),
+        };
+        let p = &h.planes;
+        let sign = match p.sign {
+            SignMode::OffsetScale => "offset per map",
+            SignMode::SignPlane => "sign plane",
+            SignMode::Band0Ratio => "ratios to band 0",
+        };
+        let group = match p.grouping {
+            Grouping::Texel => "one exponent per texel",
+            Grouping::Triples => "one exponent per 3 coefficients",
+        };
+        let delta = if p.spatial_delta { ", spatial delta" } else { "" };
+        format!(
+            "shlm v1: {kind}; shared-exponent {}-bit mantissas, {sign}, {group}{delta}; zstd; \
+             {} frames of {}² texels ({} filled) × {} coefficients",
+            p.mantissa_bits, h.frames, h.resolution, h.texels, h.n2()
+        )
+    }
+
+    /// Frame `k`'s filled texels, `T · n²` values.
+    fn decode_compact(&self, k: usize) -> Result<Vec<f32>, CodecError> {
+        let h = &self.header;
+        match h.kind {
+            StoredKind::Frames => self.decode_planes_chunk(k),
+            StoredKind::Keyframes { interval } => {
+                let before = k - k % interval;
+                if before == k {
+                    return self.decode_planes_chunk(k);
+                }
+                let after = (before + interval).min(h.frames - 1);
+                let (a, b) = (self.decode_planes_chunk(before)?, self.decode_planes_chunk(after)?);
+                let w = (k - before) as f32 / (after - before) as f32;
+                Ok(a.iter().zip(&b).map(|(a, b)| a + (b - a) * w).collect())
+            }
+            StoredKind::Pca { .. } => {
+                let mut out = self.basis[0].clone();
+                for (w, component) in self.weights(k).zip(&self.basis[1..]) {
+                    out.iter_mut().zip(component).for_each(|(o, c)| *o += w * c);
+                }
+                Ok(out)
+            }
+        }
+    }
+
+    /// Decompresses and dequantises frame `k`'s plane set.
+    fn decode_planes_chunk(&self, k: usize) -> Result<Vec<f32>, CodecError> {
+        decode_plane_set(self.chunk(k), &self.header, "frame chunk")
+    }
+
+    /// Frame `k`'s PCA weights (chunk lengths were checked at parse).
+    fn weights(&self, k: usize) -> impl Iterator<Item = f32> + '_ {
+        self.chunk(k)
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    }
+
+    /// Frame `k`'s chunk (the table was checked at parse).
+    fn chunk(&self, k: usize) -> &'a [u8] {
+        let (start, end) = (self.offset(k), self.offset(k + 1));
+        &self.bytes[self.chunk_area.start + start..self.chunk_area.start + end]
+    }
+
+    fn offset(&self, k: usize) -> usize {
+        let b = &self.bytes[self.table + 8 * k..self.table + 8 * k + 8];
+        let mut word = [0u8; 8];
+        word.copy_from_slice(b);
+        usize::try_from(u64::from_le_bytes(word)).unwrap_or(usize::MAX)
+    }
+
+    /// The offset table starts at 0, never goes backwards, and ends at the chunk area's size.
+    fn check_table(&self) -> Result<(), CodecError> {
+        let frames = self.header.frames;
+        let area = self.chunk_area.len();
+        let offsets: Vec<usize> = (0..=frames).map(|k| self.offset(k)).collect();
+        let ordered = offsets.windows(2).all(|w| w[0] <= w[1]);
+        if offsets[0] != 0 || !ordered || offsets[frames] != area {
+            return Err(CodecError::Invalid {
+                what: "frame offset table",
+                message: format!("offsets must rise from 0 to the chunk area's {area} bytes"),
+            });
+        }
+        Ok(())
+    }
+
+    /// Reads the PCA mean and components, or checks the section is empty for other kinds.
+    fn read_basis(&self, section: &[u8]) -> Result<Vec<Vec<f32>>, CodecError> {
+        let StoredKind::Pca { components } = self.header.kind else {
+            return match section.is_empty() {
+                true => Ok(Vec::new()),
+                false => Err(size("shared section", 0, section.len())),
+            };
+        };
+        let count = components + 1;
+        let word = |i: usize| -> Result<usize, CodecError> {
+            let b = section.get(4 * i..4 * i + 4).ok_or(size("shared section", 4 * i + 4, section.len()))?;
+            Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
+        };
+        if word(0)? != count {
+            return Err(size("shared section count", count, word(0)?));
+        }
+        let mut at = 4 * (count + 1);
+        let mut basis = Vec::with_capacity(count);
+        for i in 0..count {
+            let end = at.checked_add(word(i + 1)?).filter(|&e| e <= section.len());
+            let end = end.ok_or(size("shared section", at, section.len()))?;
+            let values = decode_plane_set(&section[at..end], &self.header, "PCA basis")?;
+            if values.iter().any(|x| !x.is_finite()) {
+                return Err(CodecError::Invalid { what: "PCA basis", message: "non-finite".into() });
+            }
+            basis.push(values);
+            at = end;
+        }
+        if at != section.len() {
+            return Err(size("shared section", at, section.len()));
+        }
+        Ok(basis)
+    }
+
+    /// Chunk sizes the kind implies: `4k` bytes of finite weights for PCA, nothing between
+    /// keyframes.
+    fn check_chunks(&self) -> Result<(), CodecError> {
+        let h = &self.header;
+        for k in 0..h.frames {
+            let len = self.chunk(k).len();
+            match h.kind {
+                StoredKind::Pca { components } if len != 4 * components => {
+                    return Err(size("PCA weights chunk", 4 * components, len));
+                }
+                StoredKind::Pca { .. } if self.weights(k).any(|w| !w.is_finite()) => {
+                    return Err(CodecError::Invalid {
+                        what: "PCA weights chunk",
+                        message: format!("frame {k} has a non-finite weight"),
+                    });
+                }
+                StoredKind::Keyframes { interval }
+                    if !is_keyframe(k, interval, h.frames) && len != 0 =>
+                {
+                    return Err(size("in-between frame chunk", 0, len));
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+}
+
+fn size(what: &'static str, expected: usize, got: usize) -> CodecError {
+    CodecError::SizeMismatch { what, expected: expected as u64, got: got as u64 }
+}
+
+/// Decompresses and dequantises one plane set of the header's `T` texels.
+fn decode_plane_set(bytes: &[u8], h: &Header, what: &'static str) -> Result<Vec<f32>, CodecError> {
+    let n2 = h.n2();
+    let expected = h.planes.plane_bytes(h.texels, n2).ok_or(CodecError::Header(
+        "plane set size overflows".into(),
+    ))?;
+    let mut planes = decompress_exact(bytes, expected, what)?;
+    let mut values = vec![0f32; h.texels * n2];
+    decode_planes(&mut planes, n2, &h.planes, &mut values)
+        .map_err(|message| CodecError::Invalid { what, message })?;
+    Ok(values)
+}
+
+/// The bit-packed mask: exactly `T` bits set, none past `R²`.
+fn read_mask(section: &[u8], h: &Header) -> Result<Vec<usize>, CodecError> {
+    let count = h.resolution * h.resolution;
+    let mask = decompress_exact(section, count.div_ceil(8), "filled mask")?;
+    let texels: Vec<usize> = (0..mask.len() * 8)
+        .filter(|&t| mask[t / 8] & (1 << (t % 8)) != 0)
+        .collect();
+    if texels.len() != h.texels || texels.last().is_some_and(|&t| t >= count) {
+        return Err(CodecError::Invalid {
+            what: "filled mask",
+            message: format!("{} bits set (header: {}), or bits past R²", texels.len(), h.texels),
+        });
+    }
+    Ok(texels)
+}
+
+/// `T` finite points.
+fn read_positions(section: &[u8], texels: usize) -> Result<Vec<[f32; 3]>, CodecError> {
+    let bytes = decompress_exact(section, texels * 12, "positions")?;
+    let floats: Vec<f32> = bytes
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
+    if floats.iter().any(|x| !x.is_finite()) {
+        return Err(CodecError::Invalid { what: "positions", message: "non-finite".into() });
+    }
+    Ok(floats.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect())
+}

@@ -1,0 +1,175 @@
+//! The fixed 52-byte header of a `.shlm` file: dimensions, codec parameters, section sizes,
+//! and the limits every reader enforces before trusting them.
+
+use super::shared_exp::{Grouping, PlaneSettings, SignMode};
+use super::{CodecError, CodecKind};
+
+/// The file's first eight bytes.
+pub const MAGIC: &[u8; 8] = b"APRTSHLM";
+/// The layout version this module writes and reads.
+pub const VERSION: u32 = 1;
+/// Header bytes.
+pub const HEADER_LEN: usize = 52;
+/// Largest resolution `R`.
+pub const MAX_RESOLUTION: usize = 8192;
+/// Largest SH order `n`.
+pub const MAX_ORDER: usize = 6;
+/// Largest frame count.
+pub const MAX_FRAMES: usize = 1_000_000;
+
+/// The codec kind as stored: [`CodecKind`] without the encoder-only targets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StoredKind {
+    /// Every frame a plane set.
+    Frames,
+    /// Keyframes every `interval` frames.
+    Keyframes {
+        /// Frames between keyframes.
+        interval: usize,
+    },
+    /// PCA with `components` components.
+    Pca {
+        /// `k`.
+        components: usize,
+    },
+}
+
+/// The parsed header.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Header {
+    /// `R`.
+    pub resolution: usize,
+    /// `n`.
+    pub order: usize,
+    /// `F`.
+    pub frames: usize,
+    /// `T`.
+    pub texels: usize,
+    /// The temporal scheme.
+    pub kind: StoredKind,
+    /// The quantiser.
+    pub planes: PlaneSettings,
+    /// Section sizes: mask, positions, shared.
+    pub sections: [usize; 3],
+}
+
+impl Header {
+    /// `n²`.
+    pub fn n2(&self) -> usize {
+        self.order * self.order
+    }
+
+    /// Appends the 52 header bytes; fails if a field does not fit its `u32`.
+    pub fn write(&self, out: &mut Vec<u8>) -> Result<(), CodecError> {
+        let u32_of = |v: usize, what: &str| {
+            u32::try_from(v).map_err(|_| CodecError::Input(format!("{what} {v} exceeds u32")))
+        };
+        let (kind, param) = match self.kind {
+            StoredKind::Frames => (0u8, 0),
+            StoredKind::Keyframes { interval } => (1, interval),
+            StoredKind::Pca { components } => (2, components),
+        };
+        out.extend_from_slice(MAGIC);
+        for v in [VERSION as usize, self.resolution, self.order, self.frames, self.texels] {
+            out.extend_from_slice(&u32_of(v, "header field")?.to_le_bytes());
+        }
+        let sign = match self.planes.sign {
+            SignMode::OffsetScale => 0,
+            SignMode::SignPlane => 1,
+            SignMode::Band0Ratio => 2,
+        };
+        let grouping = u8::from(self.planes.grouping == Grouping::Triples);
+        let p = &self.planes;
+        out.extend_from_slice(&[kind, sign, grouping, p.mantissa_bits, u8::from(p.spatial_delta)]);
+        out.extend_from_slice(&[0; 3]);
+        out.extend_from_slice(&u32_of(param, "kind parameter")?.to_le_bytes());
+        for len in self.sections {
+            out.extend_from_slice(&u32_of(len, "section")?.to_le_bytes());
+        }
+        Ok(())
+    }
+
+    /// Reads and validates the header: magic, version, limits, codec bytes.
+    pub fn read(bytes: &[u8]) -> Result<Header, CodecError> {
+        if bytes.len() < MAGIC.len() || &bytes[..MAGIC.len()] != MAGIC {
+            return Err(CodecError::BadMagic);
+        }
+        if bytes.len() < HEADER_LEN {
+            return Err(CodecError::Truncated {
+                what: "header",
+                needed: HEADER_LEN as u64,
+                len: bytes.len() as u64,
+            });
+        }
+        let word = |at: usize| u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
+        let version = word(8);
+        if version != VERSION {
+            return Err(CodecError::Version(version));
+        }
+        let field = |at: usize| word(at) as usize;
+        let bad = |m: String| Err(CodecError::Header(m));
+        let (resolution, order, frames, texels) = (field(12), field(16), field(20), field(24));
+        if !(1..=MAX_RESOLUTION).contains(&resolution) {
+            return bad(format!("resolution {resolution} outside 1..={MAX_RESOLUTION}"));
+        }
+        if !(1..=MAX_ORDER).contains(&order) {
+            return bad(format!("SH order {order} outside 1..={MAX_ORDER}"));
+        }
+        if !(1..=MAX_FRAMES).contains(&frames) {
+            return bad(format!("frame count {frames} outside 1..={MAX_FRAMES}"));
+        }
+        if texels > resolution * resolution {
+            return bad(format!("{texels} filled texels in a {resolution}² map"));
+        }
+        let planes = read_planes(&bytes[29..36])?;
+        let param = field(36);
+        let kind = match bytes[28] {
+            0 if param == 0 => StoredKind::Frames,
+            1 if (1..=frames.max(1)).contains(&param) => StoredKind::Keyframes { interval: param },
+            2 if param <= frames => StoredKind::Pca { components: param },
+            k => return bad(format!("codec kind {k} with parameter {param}")),
+        };
+        Ok(Header {
+            resolution,
+            order,
+            frames,
+            texels,
+            kind,
+            planes,
+            sections: [field(40), field(44), field(48)],
+        })
+    }
+}
+
+/// Bytes 29..36: sign mode, grouping, mantissa bits, spatial delta, three zeros.
+fn read_planes(b: &[u8]) -> Result<PlaneSettings, CodecError> {
+    let sign = match b[0] {
+        0 => SignMode::OffsetScale,
+        1 => SignMode::SignPlane,
+        2 => SignMode::Band0Ratio,
+        s => return Err(CodecError::Header(format!("sign mode {s}"))),
+    };
+    let grouping = match b[1] {
+        0 => Grouping::Texel,
+        1 => Grouping::Triples,
+        g => return Err(CodecError::Header(format!("exponent grouping {g}"))),
+    };
+    if !(2..=8).contains(&b[2]) || b[3] > 1 || b[4..7] != [0; 3] {
+        return Err(CodecError::Header(format!("quantiser bytes {:?}", &b[2..7])));
+    }
+    Ok(PlaneSettings {
+        mantissa_bits: b[2],
+        sign,
+        grouping,
+        spatial_delta: b[3] == 1,
+    })
+}
+
+/// The stored form of an encoder's kind, once `k` is known.
+pub fn stored_kind(kind: &CodecKind, components: usize) -> StoredKind {
+    match *kind {
+        CodecKind::Frames => StoredKind::Frames,
+        CodecKind::Keyframes { interval } => StoredKind::Keyframes { interval },
+        CodecKind::Pca { .. } => StoredKind::Pca { components },
+    }
+}

@@ -1,0 +1,132 @@
+//! Encoding and compressing a sequence of SH light maps: the `.shlm` file.
+//!
+//! A frame is `R × R` texels of `n²` transfer coefficients. Each frame's filled texels go
+//! through a shared-exponent (RGBE-style) quantiser ([`shared_exp`]), laid out as byte planes
+//! (one per coefficient map, the paper's tiles, masked texels dropped), delta-coded along the
+//! plane and compressed with zstd. Three ways of using the clip's temporal coherence are
+//! measured by [`compare`]: every frame independent, keyframes with interpolated in-betweens,
+//! and PCA over the frames (the default, which wins on bytes against error by a wide margin).
+//!
+//! # Byte layout (little endian)
+//!
+//! | offset | size | field |
+//! | --- | --- | --- |
+//! | 0 | 8 | magic `APRTSHLM` |
+//! | 8 | 4 | version (1) |
+//! | 12 | 4 | resolution `R` (1..=8192) |
+//! | 16 | 4 | SH order `n` (1..=6); `n2 = n²` |
+//! | 20 | 4 | frames `F` (1..=1 000 000) |
+//! | 24 | 4 | filled texels `T` (≤ `R²`) |
+//! | 28 | 1 | codec kind: 0 frames, 1 keyframes, 2 PCA |
+//! | 29 | 1 | sign mode: 0 offset per map, 1 sign plane, 2 band-0 ratio |
+//! | 30 | 1 | exponent grouping: 0 per texel, 1 triples |
+//! | 31 | 1 | mantissa bits `m` (2..=8) |
+//! | 32 | 1 | spatial delta (0 or 1) |
+//! | 33 | 3 | zero |
+//! | 36 | 4 | kind parameter: keyframe interval `K`, PCA components `k`, or 0 |
+//! | 40 | 4 | mask section bytes |
+//! | 44 | 4 | positions section bytes |
+//! | 48 | 4 | shared section bytes |
+//! | 52 | … | mask: zstd of `⌈R²/8⌉` bytes, texel `t` at bit `t % 8` of byte `t / 8` |
+//! | | … | positions: zstd of `T × 3` f32, bind-pose point of each filled texel in texel order |
+//! | | … | shared: PCA only: `u32` count (`k + 1`), `count` × `u32` lengths, then zstd plane sets of the mean and the `k` components |
+//! | | `8(F+1)` | frame offset table: `u64` offsets into the chunk area, non-decreasing, last = its size |
+//! | | … | chunk area: frame `f`'s chunk is `[off[f], off[f+1])` |
+//! | end−4 | 4 | CRC-32 of every byte before it |
+//!
+//! A chunk is a zstd plane set (kind 0; kind 1 at keyframes `f % K == 0` and the last frame,
+//! empty between them), or `k` f32 weights (kind 2). A plane set of `T` texels is, in order:
+//! `n2` f32 map offsets (sign mode 0 only); `G` exponent planes of `T` bytes (`G = 1`, or
+//! `⌈n2/3⌉` for triples; byte `e + 126`, 0..=254); `n2` mantissa planes of `T` bytes (sign
+//! mode 2: band 0's mantissa, then the ratio planes, `q + 2^(m−1) − 1`); `n2` sign planes of
+//! `⌈T/8⌉` bytes (sign mode 1 only). With spatial delta, exponent and mantissa planes hold
+//! wrapping differences to the previous byte of the same plane.
+
+mod compare;
+mod entropy;
+mod error;
+mod file;
+mod header;
+mod pca;
+mod sequence;
+pub mod shared_exp;
+#[cfg(test)]
+mod tests;
+
+pub use compare::{CodecReport, compare};
+pub use error::CodecError;
+pub use file::ShlmFile;
+pub use sequence::encode;
+pub use shared_exp::{Grouping, PlaneSettings, SignMode};
+
+/// A baked clip of SH light maps, as the bake hands it to the codec.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MapSequence {
+    /// `R`: the maps are `R × R` texels.
+    pub resolution: usize,
+    /// SH order `n`; each texel holds `n²` coefficients.
+    pub order: usize,
+    /// `R²` flags: which texels lie inside a UV chart and hold transfer.
+    pub filled: Vec<bool>,
+    /// The bind-pose surface point of each filled texel, in texel order (stored in the file
+    /// for lighting at runtime).
+    pub positions: Vec<[f32; 3]>,
+    /// Each frame's `R² · n²` coefficients, texel-major (`[texel * n2 + c]`), zero where
+    /// `!filled`.
+    pub frames: Vec<Vec<f32>>,
+}
+
+/// How frames use the clip's temporal coherence.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum CodecKind {
+    /// Every frame its own plane set: any frame decodes alone, nothing shared.
+    Frames,
+    /// A plane set every `interval` frames (and at the last); the frames between are linear
+    /// interpolations of their two keyframes (the paper's §6 suggestion; error grows with
+    /// motion between keyframes).
+    Keyframes {
+        /// Frames from one keyframe to the next (≥ 1).
+        interval: usize,
+    },
+    /// PCA over the frames (the paper's §7 suggestion): a mean and `k` components stored as
+    /// plane sets, `k` f32 weights per frame.
+    Pca {
+        /// The relative error the discarded components may cost (`k` is the smallest that
+        /// meets it, before quantisation).
+        target_error: f32,
+        /// An upper bound on `k`.
+        max_components: usize,
+    },
+}
+
+/// Everything the encoder chooses. The default is the measured winner (see `compare`'s
+/// table in the README): PCA to 1 % with 7-bit mantissas, sign plane, one exponent per texel.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CodecSettings {
+    /// Temporal scheme.
+    pub kind: CodecKind,
+    /// Quantiser: mantissa bits (the quantisation step), sign handling, exponent grouping,
+    /// spatial delta.
+    pub planes: PlaneSettings,
+    /// zstd level (1..=22): higher is smaller and slower to encode; decoding speed barely
+    /// changes.
+    pub zstd_level: i32,
+}
+
+impl Default for CodecSettings {
+    fn default() -> Self {
+        CodecSettings {
+            kind: CodecKind::Pca {
+                target_error: 0.01,
+                max_components: 32,
+            },
+            planes: PlaneSettings {
+                mantissa_bits: 7,
+                sign: SignMode::SignPlane,
+                grouping: Grouping::Texel,
+                spatial_delta: true,
+            },
+            zstd_level: 15,
+        }
+    }
+}
