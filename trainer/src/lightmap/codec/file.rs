@@ -3,15 +3,15 @@
 
 use std::ops::Range;
 
-use super::entropy::{compress, decompress_exact};
+use super::CodecError;
+use super::entropy::{compress, decompress_chunk, decompress_exact};
 use super::header::{HEADER_LEN, Header, StoredKind};
 use super::shared_exp::{Grouping, SignMode, decode_planes};
-use super::CodecError;
 
 /// Whether frame `f` of `frames` is stored under keyframe interval `interval`: every
 /// `interval`-th frame, and the last, so every in-between has a keyframe on each side.
 pub fn is_keyframe(f: usize, interval: usize, frames: usize) -> bool {
-    f % interval == 0 || f + 1 == frames
+    f.is_multiple_of(interval) || f + 1 == frames
 }
 
 /// Writes header, mask, positions, shared section, offset table, chunks and CRC.
@@ -28,7 +28,11 @@ pub fn assemble(
         mask[t / 8] |= 1 << (t % 8);
     }
     let mask = compress(&mask, level)?;
-    let points: Vec<u8> = positions.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+    let points: Vec<u8> = positions
+        .iter()
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
     let points = compress(&points, level)?;
     let mut shared_section = Vec::new();
     if !shared.is_empty() {
@@ -36,7 +40,9 @@ pub fn assemble(
         for blob in shared {
             shared_section.extend_from_slice(&u32_len(blob.len())?.to_le_bytes());
         }
-        shared.iter().for_each(|b| shared_section.extend_from_slice(b));
+        shared
+            .iter()
+            .for_each(|b| shared_section.extend_from_slice(b));
     }
     header.sections = [mask.len(), points.len(), shared_section.len()];
     let mut out = Vec::new();
@@ -85,7 +91,9 @@ impl<'a> ShlmFile<'a> {
         let [mask_len, points_len, shared_len] = header.sections;
         let table_len = (header.frames + 1) * 8;
         let sections = [mask_len, points_len, shared_len, table_len, 4];
-        let needed = sections.iter().try_fold(HEADER_LEN, |a, &b| a.checked_add(b));
+        let needed = sections
+            .iter()
+            .try_fold(HEADER_LEN, |a, &b| a.checked_add(b));
         let len = bytes.len();
         match needed {
             Some(n) if n <= len => {}
@@ -159,7 +167,10 @@ impl<'a> ShlmFile<'a> {
     pub fn decode_frame(&self, k: usize, out: &mut [f32]) -> Result<(), CodecError> {
         let h = &self.header;
         if k >= h.frames {
-            return Err(CodecError::FrameOutOfRange { index: k, frames: h.frames });
+            return Err(CodecError::FrameOutOfRange {
+                index: k,
+                frames: h.frames,
+            });
         }
         let n2 = h.n2();
         let expected = h.resolution * h.resolution * n2;
@@ -189,7 +200,9 @@ impl<'a> ShlmFile<'a> {
         let h = &self.header;
         let kind = match h.kind {
             StoredKind::Frames => "independent frames".to_string(),
-            StoredKind::Keyframes { interval } => format!("keyframes every {interval}, lerp between"),
+            StoredKind::Keyframes { interval } => {
+                format!("keyframes every {interval}, lerp between")
+            }
             StoredKind::Pca { components } => format!("PCA over frames, {components} components"),
         };
         let p = &h.planes;
@@ -202,11 +215,19 @@ impl<'a> ShlmFile<'a> {
             Grouping::Texel => "one exponent per texel",
             Grouping::Triples => "one exponent per 3 coefficients",
         };
-        let delta = if p.spatial_delta { ", spatial delta" } else { "" };
+        let delta = if p.spatial_delta {
+            ", spatial delta"
+        } else {
+            ""
+        };
         format!(
             "shlm v1: {kind}; shared-exponent {}-bit mantissas, {sign}, {group}{delta}; zstd; \
              {} frames of {}² texels ({} filled) × {} coefficients",
-            p.mantissa_bits, h.frames, h.resolution, h.texels, h.n2()
+            p.mantissa_bits,
+            h.frames,
+            h.resolution,
+            h.texels,
+            h.n2()
         )
     }
 
@@ -221,23 +242,37 @@ impl<'a> ShlmFile<'a> {
                     return self.decode_planes_chunk(k);
                 }
                 let after = (before + interval).min(h.frames - 1);
-                let (a, b) = (self.decode_planes_chunk(before)?, self.decode_planes_chunk(after)?);
+                let (a, b) = (
+                    self.decode_planes_chunk(before)?,
+                    self.decode_planes_chunk(after)?,
+                );
                 let w = (k - before) as f32 / (after - before) as f32;
                 Ok(a.iter().zip(&b).map(|(a, b)| a + (b - a) * w).collect())
             }
-            StoredKind::Pca { .. } => {
-                let mut out = self.basis[0].clone();
-                for (w, component) in self.weights(k).zip(&self.basis[1..]) {
-                    out.iter_mut().zip(component).for_each(|(o, c)| *o += w * c);
-                }
-                Ok(out)
+            StoredKind::Pca { .. } => Ok(self.combine(k)),
+        }
+    }
+
+    /// PCA: `mean + Σ_j w_j U_j`, a block at a time so the block stays in L1 while every
+    /// component streams through it once.
+    fn combine(&self, k: usize) -> Vec<f32> {
+        const BLOCK: usize = 2048;
+        let weights: Vec<f32> = self.weights(k).collect();
+        let mut out = self.basis[0].clone();
+        for (b, block) in out.chunks_mut(BLOCK).enumerate() {
+            for (w, component) in weights.iter().zip(&self.basis[1..]) {
+                let part = &component[b * BLOCK..b * BLOCK + block.len()];
+                block.iter_mut().zip(part).for_each(|(o, c)| *o += w * c);
             }
         }
+        out
     }
 
     /// Decompresses and dequantises frame `k`'s plane set.
     fn decode_planes_chunk(&self, k: usize) -> Result<Vec<f32>, CodecError> {
-        decode_plane_set(self.chunk(k), &self.header, "frame chunk")
+        let h = &self.header;
+        let mut planes = decompress_chunk(self.chunk(k), plane_bytes(h)?, "frame chunk")?;
+        dequantise(&mut planes, h, "frame chunk")
     }
 
     /// Frame `k`'s PCA weights (chunk lengths were checked at parse).
@@ -285,7 +320,11 @@ impl<'a> ShlmFile<'a> {
         };
         let count = components + 1;
         let word = |i: usize| -> Result<usize, CodecError> {
-            let b = section.get(4 * i..4 * i + 4).ok_or(size("shared section", 4 * i + 4, section.len()))?;
+            let b = section.get(4 * i..4 * i + 4).ok_or(size(
+                "shared section",
+                4 * i + 4,
+                section.len(),
+            ))?;
             Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
         };
         if word(0)? != count {
@@ -298,7 +337,10 @@ impl<'a> ShlmFile<'a> {
             let end = end.ok_or(size("shared section", at, section.len()))?;
             let values = decode_plane_set(&section[at..end], &self.header, "PCA basis")?;
             if values.iter().any(|x| !x.is_finite()) {
-                return Err(CodecError::Invalid { what: "PCA basis", message: "non-finite".into() });
+                return Err(CodecError::Invalid {
+                    what: "PCA basis",
+                    message: "non-finite".into(),
+                });
             }
             basis.push(values);
             at = end;
@@ -338,18 +380,31 @@ impl<'a> ShlmFile<'a> {
 }
 
 fn size(what: &'static str, expected: usize, got: usize) -> CodecError {
-    CodecError::SizeMismatch { what, expected: expected as u64, got: got as u64 }
+    CodecError::SizeMismatch {
+        what,
+        expected: expected as u64,
+        got: got as u64,
+    }
 }
 
-/// Decompresses and dequantises one plane set of the header's `T` texels.
+/// Decompresses (growing with the data, for the shared section read at parse) and
+/// dequantises one plane set of the header's `T` texels.
 fn decode_plane_set(bytes: &[u8], h: &Header, what: &'static str) -> Result<Vec<f32>, CodecError> {
+    let mut planes = decompress_exact(bytes, plane_bytes(h)?, what)?;
+    dequantise(&mut planes, h, what)
+}
+
+/// The bytes of one plane set.
+fn plane_bytes(h: &Header) -> Result<usize, CodecError> {
+    (h.planes.plane_bytes(h.texels, h.n2()))
+        .ok_or_else(|| CodecError::Header("plane set size overflows".into()))
+}
+
+/// The values of one decompressed plane set.
+fn dequantise(planes: &mut [u8], h: &Header, what: &'static str) -> Result<Vec<f32>, CodecError> {
     let n2 = h.n2();
-    let expected = h.planes.plane_bytes(h.texels, n2).ok_or(CodecError::Header(
-        "plane set size overflows".into(),
-    ))?;
-    let mut planes = decompress_exact(bytes, expected, what)?;
     let mut values = vec![0f32; h.texels * n2];
-    decode_planes(&mut planes, n2, &h.planes, &mut values)
+    decode_planes(planes, n2, &h.planes, &mut values)
         .map_err(|message| CodecError::Invalid { what, message })?;
     Ok(values)
 }
@@ -364,7 +419,11 @@ fn read_mask(section: &[u8], h: &Header) -> Result<Vec<usize>, CodecError> {
     if texels.len() != h.texels || texels.last().is_some_and(|&t| t >= count) {
         return Err(CodecError::Invalid {
             what: "filled mask",
-            message: format!("{} bits set (header: {}), or bits past R²", texels.len(), h.texels),
+            message: format!(
+                "{} bits set (header: {}), or bits past R²",
+                texels.len(),
+                h.texels
+            ),
         });
     }
     Ok(texels)
@@ -378,7 +437,10 @@ fn read_positions(section: &[u8], texels: usize) -> Result<Vec<[f32; 3]>, CodecE
         .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
         .collect();
     if floats.iter().any(|x| !x.is_finite()) {
-        return Err(CodecError::Invalid { what: "positions", message: "non-finite".into() });
+        return Err(CodecError::Invalid {
+            what: "positions",
+            message: "non-finite".into(),
+        });
     }
     Ok(floats.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect())
 }

@@ -70,7 +70,13 @@ impl Header {
             StoredKind::Pca { components } => (2, components),
         };
         out.extend_from_slice(MAGIC);
-        for v in [VERSION as usize, self.resolution, self.order, self.frames, self.texels] {
+        for v in [
+            VERSION as usize,
+            self.resolution,
+            self.order,
+            self.frames,
+            self.texels,
+        ] {
             out.extend_from_slice(&u32_of(v, "header field")?.to_le_bytes());
         }
         let sign = match self.planes.sign {
@@ -80,7 +86,13 @@ impl Header {
         };
         let grouping = u8::from(self.planes.grouping == Grouping::Triples);
         let p = &self.planes;
-        out.extend_from_slice(&[kind, sign, grouping, p.mantissa_bits, u8::from(p.spatial_delta)]);
+        out.extend_from_slice(&[
+            kind,
+            sign,
+            grouping,
+            p.mantissa_bits,
+            u8::from(p.spatial_delta),
+        ]);
         out.extend_from_slice(&[0; 3]);
         out.extend_from_slice(&u32_of(param, "kind parameter")?.to_le_bytes());
         for len in self.sections {
@@ -101,7 +113,9 @@ impl Header {
                 len: bytes.len() as u64,
             });
         }
-        let word = |at: usize| u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
+        let word = |at: usize| {
+            u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]])
+        };
         let version = word(8);
         if version != VERSION {
             return Err(CodecError::Version(version));
@@ -110,7 +124,9 @@ impl Header {
         let bad = |m: String| Err(CodecError::Header(m));
         let (resolution, order, frames, texels) = (field(12), field(16), field(20), field(24));
         if !(1..=MAX_RESOLUTION).contains(&resolution) {
-            return bad(format!("resolution {resolution} outside 1..={MAX_RESOLUTION}"));
+            return bad(format!(
+                "resolution {resolution} outside 1..={MAX_RESOLUTION}"
+            ));
         }
         if !(1..=MAX_ORDER).contains(&order) {
             return bad(format!("SH order {order} outside 1..={MAX_ORDER}"));
@@ -155,7 +171,10 @@ fn read_planes(b: &[u8]) -> Result<PlaneSettings, CodecError> {
         g => return Err(CodecError::Header(format!("exponent grouping {g}"))),
     };
     if !(2..=8).contains(&b[2]) || b[3] > 1 || b[4..7] != [0; 3] {
-        return Err(CodecError::Header(format!("quantiser bytes {:?}", &b[2..7])));
+        return Err(CodecError::Header(format!(
+            "quantiser bytes {:?}",
+            &b[2..7]
+        )));
     }
     Ok(PlaneSettings {
         mantissa_bits: b[2],

@@ -5,7 +5,9 @@
 //! (one per coefficient map, the paper's tiles, masked texels dropped), delta-coded along the
 //! plane and compressed with zstd. Three ways of using the clip's temporal coherence are
 //! measured by [`compare`]: every frame independent, keyframes with interpolated in-betweens,
-//! and PCA over the frames (the default, which wins on bytes against error by a wide margin).
+//! and PCA over the frames (the default, which wins on bytes against error by a wide margin:
+//! a clip of smooth motion lives in a handful of components, and bake noise falls in the
+//! discarded ones).
 //!
 //! # Byte layout (little endian)
 //!
@@ -99,8 +101,11 @@ pub enum CodecKind {
     },
 }
 
-/// Everything the encoder chooses. The default is the measured winner (see `compare`'s
-/// table in the README): PCA to 1 % with 7-bit mantissas, sign plane, one exponent per texel.
+/// Everything the encoder chooses. The default is the measured winner on bytes against error
+/// (`compare` on the synthetic 128², order-4, 40-frame clip of the tests): PCA to a 1 % target
+/// with 8-bit mantissas, an offset per map, one exponent per texel, spatial delta, zstd 15:
+/// 122:1 at 0.93 % relative error, the smallest of every variant at ≤ 1 % (the same PCA with
+/// a sign plane needs 35 % more bytes for the same error; independent frames need 3×).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CodecSettings {
     /// Temporal scheme.
@@ -121,8 +126,8 @@ impl Default for CodecSettings {
                 max_components: 32,
             },
             planes: PlaneSettings {
-                mantissa_bits: 7,
-                sign: SignMode::SignPlane,
+                mantissa_bits: 8,
+                sign: SignMode::OffsetScale,
                 grouping: Grouping::Texel,
                 spatial_delta: true,
             },

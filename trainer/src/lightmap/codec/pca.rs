@@ -23,7 +23,9 @@ pub fn fit(frames: &[Vec<f32>], target_error: f64, max_components: usize) -> Pca
     let dim = frames.first().map_or(0, Vec::len);
     let mut mean = vec![0f64; dim];
     for frame in frames {
-        mean.iter_mut().zip(frame).for_each(|(m, &x)| *m += f64::from(x));
+        mean.iter_mut()
+            .zip(frame)
+            .for_each(|(m, &x)| *m += f64::from(x));
     }
     mean.iter_mut().for_each(|m| *m /= count as f64);
     let centred = |f: usize| frames[f].iter().zip(&mean).map(|(&x, m)| f64::from(x) - m);
@@ -60,7 +62,11 @@ pub fn fit(frames: &[Vec<f32>], target_error: f64, max_components: usize) -> Pca
         })
         .collect();
     let weights = (0..count)
-        .map(|f| kept.iter().map(|&j| eigen.eigenvectors[(f, j)] as f32).collect())
+        .map(|f| {
+            kept.iter()
+                .map(|&j| eigen.eigenvectors[(f, j)] as f32)
+                .collect()
+        })
         .collect();
     Pca {
         mean: mean.iter().map(|&m| m as f32).collect(),
@@ -92,5 +98,8 @@ pub fn refit_weights(
 }
 
 fn dot_f32(a: &[f32], b: &[f32]) -> f64 {
-    a.iter().zip(b).map(|(&x, &y)| f64::from(x) * f64::from(y)).sum()
+    a.iter()
+        .zip(b)
+        .map(|(&x, &y)| f64::from(x) * f64::from(y))
+        .sum()
 }

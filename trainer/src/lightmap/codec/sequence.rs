@@ -14,15 +14,27 @@ pub fn encode(seq: &MapSequence, settings: &CodecSettings) -> Result<Vec<u8>, Co
     let compact: Vec<Vec<f32>> = seq
         .frames
         .iter()
-        .map(|frame| filled.iter().flat_map(|&t| &frame[t * n2..(t + 1) * n2]).copied().collect())
+        .map(|frame| {
+            filled
+                .iter()
+                .flat_map(|&t| &frame[t * n2..(t + 1) * n2])
+                .copied()
+                .collect()
+        })
         .collect();
     let plane_chunk = |values: &[f32]| {
-        compress(&encode_planes(values, n2, &settings.planes), settings.zstd_level)
+        compress(
+            &encode_planes(values, n2, &settings.planes),
+            settings.zstd_level,
+        )
     };
     let frames = compact.len();
     let (components, shared, chunks) = match settings.kind {
         CodecKind::Frames => {
-            let chunks = compact.iter().map(|f| plane_chunk(f)).collect::<Result<_, _>>()?;
+            let chunks = compact
+                .iter()
+                .map(|f| plane_chunk(f))
+                .collect::<Result<_, _>>()?;
             (0, Vec::new(), chunks)
         }
         CodecKind::Keyframes { interval } => {
@@ -30,12 +42,23 @@ pub fn encode(seq: &MapSequence, settings: &CodecSettings) -> Result<Vec<u8>, Co
                 true => plane_chunk(values),
                 false => Ok(Vec::new()),
             };
-            let chunks = compact.iter().enumerate().map(chunk).collect::<Result<_, _>>()?;
+            let chunks = compact
+                .iter()
+                .enumerate()
+                .map(chunk)
+                .collect::<Result<_, _>>()?;
             (0, Vec::new(), chunks)
         }
-        CodecKind::Pca { target_error, max_components } => {
-            encode_pca(&compact, n2, settings, f64::from(target_error), max_components)?
-        }
+        CodecKind::Pca {
+            target_error,
+            max_components,
+        } => encode_pca(
+            &compact,
+            n2,
+            settings,
+            f64::from(target_error),
+            max_components,
+        )?,
     };
     let header = Header {
         resolution: seq.resolution,
@@ -46,8 +69,19 @@ pub fn encode(seq: &MapSequence, settings: &CodecSettings) -> Result<Vec<u8>, Co
         planes: settings.planes,
         sections: [0; 3],
     };
-    assemble(header, &seq.filled, &seq.positions, &shared, &chunks, settings.zstd_level)
+    assemble(
+        header,
+        &seq.filled,
+        &seq.positions,
+        &shared,
+        &chunks,
+        settings.zstd_level,
+    )
 }
+
+/// What a temporal scheme produces: PCA's `k` (0 otherwise), the shared section's blobs, one
+/// chunk per frame.
+type Encoded = (usize, Vec<Vec<u8>>, Vec<Vec<u8>>);
 
 /// The shared plane sets (mean, then components) and the per-frame weight chunks. The weights
 /// are re-fitted against the quantised basis, as the decoder will see it.
@@ -57,7 +91,7 @@ fn encode_pca(
     settings: &CodecSettings,
     target_error: f64,
     max_components: usize,
-) -> Result<(usize, Vec<Vec<u8>>, Vec<Vec<u8>>), CodecError> {
+) -> Result<Encoded, CodecError> {
     let fitted = pca::fit(frames, target_error, max_components);
     let mut shared = Vec::new();
     let mut quantised = Vec::new();
@@ -82,23 +116,38 @@ fn validate(seq: &MapSequence, settings: &CodecSettings) -> Result<(), CodecErro
     let fail = |m: String| Err(CodecError::Input(m));
     let r = seq.resolution;
     if !(1..=MAX_RESOLUTION).contains(&r) || !(1..=MAX_ORDER).contains(&seq.order) {
-        return fail(format!("resolution {r} or order {} out of range", seq.order));
+        return fail(format!(
+            "resolution {r} or order {} out of range",
+            seq.order
+        ));
     }
     if seq.frames.is_empty() || seq.frames.len() > MAX_FRAMES {
         return fail(format!("{} frames (1..={MAX_FRAMES})", seq.frames.len()));
     }
     let texel_values = r * r * seq.order * seq.order;
     if seq.filled.len() != r * r {
-        return fail(format!("filled has {} flags for {r}² texels", seq.filled.len()));
+        return fail(format!(
+            "filled has {} flags for {r}² texels",
+            seq.filled.len()
+        ));
     }
     let count = seq.filled.iter().filter(|&&f| f).count();
     if seq.positions.len() != count || seq.positions.iter().flatten().any(|p| !p.is_finite()) {
-        return fail(format!("{} positions for {count} filled texels, or non-finite", seq.positions.len()));
+        return fail(format!(
+            "{} positions for {count} filled texels, or non-finite",
+            seq.positions.len()
+        ));
     }
     if let Some(f) = seq.frames.iter().position(|f| f.len() != texel_values) {
-        return fail(format!("frame {f} is not {r}² × n² = {texel_values} values"));
+        return fail(format!(
+            "frame {f} is not {r}² × n² = {texel_values} values"
+        ));
     }
-    if let Some(f) = seq.frames.iter().position(|f| f.iter().any(|x| !x.is_finite())) {
+    if let Some(f) = seq
+        .frames
+        .iter()
+        .position(|f| f.iter().any(|x| !x.is_finite()))
+    {
         return fail(format!("frame {f} holds NaN or infinity"));
     }
     let p = &settings.planes;
@@ -107,7 +156,7 @@ fn validate(seq: &MapSequence, settings: &CodecSettings) -> Result<(), CodecErro
         CodecKind::Keyframes { interval } if interval == 0 || interval > seq.frames.len() => {
             fail(format!("keyframe interval {interval} outside 1..=frames"))
         }
-        CodecKind::Pca { target_error, .. } if !(target_error >= 0.0) => {
+        CodecKind::Pca { target_error, .. } if !target_error.is_finite() || target_error < 0.0 => {
             fail(format!("PCA target error {target_error}"))
         }
         _ => Ok(()),

@@ -10,10 +10,22 @@ fn small_files() -> Vec<Vec<u8>> {
     [
         CodecKind::Frames,
         CodecKind::Keyframes { interval: 2 },
-        CodecKind::Pca { target_error: 0.0, max_components: 3 },
+        CodecKind::Pca {
+            target_error: 0.0,
+            max_components: 3,
+        },
     ]
     .into_iter()
-    .map(|kind| encode(&seq, &CodecSettings { kind, ..CodecSettings::default() }).expect("encodes"))
+    .map(|kind| {
+        encode(
+            &seq,
+            &CodecSettings {
+                kind,
+                ..CodecSettings::default()
+            },
+        )
+        .expect("encodes")
+    })
     .collect()
 }
 
@@ -67,15 +79,27 @@ fn named_errors() {
     assert_eq!(ShlmFile::parse(&magic).unwrap_err(), CodecError::BadMagic);
     let mut version = file.clone();
     version[8] = 9;
-    assert_eq!(ShlmFile::parse(&version).unwrap_err(), CodecError::Version(9));
+    assert_eq!(
+        ShlmFile::parse(&version).unwrap_err(),
+        CodecError::Version(9)
+    );
     let mut crc = file.clone();
     let last = crc.len() - 1;
     crc[last] ^= 1;
-    assert!(matches!(ShlmFile::parse(&crc), Err(CodecError::Checksum { .. })));
+    assert!(matches!(
+        ShlmFile::parse(&crc),
+        Err(CodecError::Checksum { .. })
+    ));
     let parsed = ShlmFile::parse(&file).expect("parses");
     let mut out = vec![0f32; 8 * 8 * 4];
-    assert!(matches!(parsed.decode_frame(4, &mut out), Err(CodecError::FrameOutOfRange { index: 4, .. })));
-    assert!(matches!(parsed.decode_frame(0, &mut out[1..]), Err(CodecError::SizeMismatch { .. })));
+    assert!(matches!(
+        parsed.decode_frame(4, &mut out),
+        Err(CodecError::FrameOutOfRange { index: 4, .. })
+    ));
+    assert!(matches!(
+        parsed.decode_frame(0, &mut out[1..]),
+        Err(CodecError::SizeMismatch { .. })
+    ));
 }
 
 /// Headers declaring the largest sizes (and past them), resealed, fail fast and small.
@@ -83,10 +107,10 @@ fn named_errors() {
 fn huge_declared_sizes_are_errors() {
     let file = small_files().remove(2);
     let patches: [(usize, u32); 9] = [
-        (12, 8192),        // resolution at the limit: the mask no longer matches
-        (12, 8193),        // past the limit
-        (16, 7),           // order past the limit
-        (20, 1_000_000),   // a million frames: the offset table is not there
+        (12, 8192),      // resolution at the limit: the mask no longer matches
+        (12, 8193),      // past the limit
+        (16, 7),         // order past the limit
+        (20, 1_000_000), // a million frames: the offset table is not there
         (20, 1_000_001),
         (24, u32::MAX),    // more filled texels than texels
         (36, u32::MAX),    // components
@@ -97,6 +121,9 @@ fn huge_declared_sizes_are_errors() {
         let mut bad = file.clone();
         bad[at..at + 4].copy_from_slice(&value.to_le_bytes());
         reseal(&mut bad);
-        assert!(exercise(&bad).is_err(), "header field at {at} = {value} parsed");
+        assert!(
+            exercise(&bad).is_err(),
+            "header field at {at} = {value} parsed"
+        );
     }
 }

@@ -57,7 +57,10 @@ fn sign_plane_is_within_its_bound() {
                     let bound = (max / (2f64.powi(i32::from(m)) - 0.5)).max(floor(m));
                     for (x, y) in group.iter().zip(&b[at..]) {
                         let err = (f64::from(*x) - f64::from(*y)).abs();
-                        assert!(err <= bound, "m={m} {grouping:?} group {g}: {x} -> {y}, {err} > {bound}");
+                        assert!(
+                            err <= bound,
+                            "m={m} {grouping:?} group {g}: {x} -> {y}, {err} > {bound}"
+                        );
                         assert!(y.is_finite());
                     }
                     at += group.len();
@@ -76,7 +79,9 @@ fn representable_values_are_exact() {
         grouping: Grouping::Texel,
         spatial_delta: true,
     };
-    let values = [1.0, -0.5, 0.25, 0.0, 0.75, -0.0078125, 0.9921875, -0.375, 0.0, 64.0, -32.5, 1.5];
+    let values = [
+        1.0, -0.5, 0.25, 0.0, 0.75, -0.0078125, 0.9921875, -0.375, 0.0, 64.0, -32.5, 1.5,
+    ];
     assert_eq!(round_trip(&values, 4, &settings), values);
 }
 
@@ -84,19 +89,38 @@ fn representable_values_are_exact() {
 /// why it loses to the sign plane on signed bands (the `compare` table measures how much).
 #[test]
 fn offset_per_map_is_within_its_bound() {
-    let values: Vec<f32> = adversarial().into_iter().skip(1).take(3).flatten()
+    let values: Vec<f32> = adversarial()
+        .into_iter()
+        .skip(1)
+        .take(3)
+        .flatten()
         .chain([0.9, -0.4, 0.3, -0.1, 0.5, 0.2, -0.3, 0.05])
         .collect();
     let m = 8;
-    let settings = PlaneSettings { mantissa_bits: m, sign: SignMode::OffsetScale, grouping: Grouping::Texel, spatial_delta: false };
+    let settings = PlaneSettings {
+        mantissa_bits: m,
+        sign: SignMode::OffsetScale,
+        grouping: Grouping::Texel,
+        spatial_delta: false,
+    };
     let back = round_trip(&values, 4, &settings);
     let offsets: Vec<f64> = (0..4)
-        .map(|c| values.iter().skip(c).step_by(4).map(|&x| f64::from(x)).fold(0.0, f64::min))
+        .map(|c| {
+            values
+                .iter()
+                .skip(c)
+                .step_by(4)
+                .map(|&x| f64::from(x))
+                .fold(0.0, f64::min)
+        })
         .collect();
     for (v, b) in values.chunks(4).zip(back.chunks(4)) {
-        let max = (0..4).map(|c| f64::from(v[c]) - offsets[c]).fold(0.0, f64::max);
+        let max = (0..4)
+            .map(|c| f64::from(v[c]) - offsets[c])
+            .fold(0.0, f64::max);
         for c in 0..4 {
-            let bound = (max / (2f64.powi(i32::from(m)) - 0.5)).max(floor(m)) + f64::from(f32::EPSILON) * (max + offsets[c].abs());
+            let bound = (max / (2f64.powi(i32::from(m)) - 0.5)).max(floor(m))
+                + f64::from(f32::EPSILON) * (max + offsets[c].abs());
             let err = (f64::from(v[c]) - f64::from(b[c])).abs();
             assert!(err <= bound, "{} -> {}: {err} > {bound}", v[c], b[c]);
         }
@@ -109,14 +133,23 @@ fn offset_per_map_is_within_its_bound() {
 fn band0_ratio_is_within_its_bound() {
     let order = 4;
     let mut values = Vec::new();
-    for (i, scale) in [1e-30f32, 1e-3, 0.3, 1.0, 7.5, 1e20, 0.0].iter().enumerate() {
+    for (i, scale) in [1e-30f32, 1e-3, 0.3, 1.0, 7.5, 1e20, 0.0]
+        .iter()
+        .enumerate()
+    {
         let mut lobe = [0f32; 16];
         let angle = i as f32;
-        aprt_core::clamped_cosine(order, [angle.cos(), 0.3, angle.sin()], &mut lobe).expect("unit normal");
+        aprt_core::clamped_cosine(order, [angle.cos(), 0.3, angle.sin()], &mut lobe)
+            .expect("unit normal");
         values.extend(lobe.iter().map(|x| x * scale));
     }
     for m in 2..=8u8 {
-        let settings = PlaneSettings { mantissa_bits: m, sign: SignMode::Band0Ratio, grouping: Grouping::Texel, spatial_delta: true };
+        let settings = PlaneSettings {
+            mantissa_bits: m,
+            sign: SignMode::Band0Ratio,
+            grouping: Grouping::Texel,
+            spatial_delta: true,
+        };
         let back = round_trip(&values, 16, &settings);
         let s = f64::from((1u32 << (m - 1)) - 1);
         for (v, b) in values.chunks(16).zip(back.chunks(16)) {
@@ -125,10 +158,21 @@ fn band0_ratio_is_within_its_bound() {
             assert!((c0 - c0_hat).abs() <= bound0, "band 0: {c0} -> {c0_hat}");
             for c in 1..16 {
                 let range = ((2 * aprt_core::band_of(c) + 1) as f64).sqrt();
-                let ratio = if c0 > 0.0 { f64::from(v[c]).abs() / c0 } else { 0.0 };
-                let bound = c0_hat * range / (2.0 * s) * (1.0 + 1e-6) + ratio * (c0 - c0_hat).abs() + floor(m);
+                let ratio = if c0 > 0.0 {
+                    f64::from(v[c]).abs() / c0
+                } else {
+                    0.0
+                };
+                let bound = c0_hat * range / (2.0 * s) * (1.0 + 1e-6)
+                    + ratio * (c0 - c0_hat).abs()
+                    + floor(m);
                 let err = (f64::from(v[c]) - f64::from(b[c])).abs();
-                assert!(err <= bound, "m={m} c={c}: {} -> {}: {err} > {bound}", v[c], b[c]);
+                assert!(
+                    err <= bound,
+                    "m={m} c={c}: {} -> {}: {err} > {bound}",
+                    v[c],
+                    b[c]
+                );
             }
         }
     }

@@ -1,19 +1,23 @@
 //! Round trips of whole clips: constant fields, random access, the target ratio.
 
 use super::synth::clip;
-use crate::lightmap::codec::{
-    CodecKind, CodecSettings, MapSequence, ShlmFile, compare, encode,
-};
+use crate::lightmap::codec::{CodecKind, CodecSettings, MapSequence, ShlmFile, compare, encode};
 
 /// Every temporal scheme, with the default quantiser.
 fn kinds() -> Vec<CodecSettings> {
     [
         CodecKind::Frames,
         CodecKind::Keyframes { interval: 3 },
-        CodecKind::Pca { target_error: 0.01, max_components: 8 },
+        CodecKind::Pca {
+            target_error: 0.01,
+            max_components: 8,
+        },
     ]
     .into_iter()
-    .map(|kind| CodecSettings { kind, ..CodecSettings::default() })
+    .map(|kind| CodecSettings {
+        kind,
+        ..CodecSettings::default()
+    })
     .collect()
 }
 
@@ -50,7 +54,11 @@ fn constant_field_round_trips_within_the_bound() {
         let bound = max / (2f32.powi(i32::from(settings.planes.mantissa_bits)) - 0.5);
         for (decoded, original) in decode_all(&file).iter().zip(&seq.frames) {
             for (d, o) in decoded.iter().zip(original) {
-                assert!((d - o).abs() <= bound * 1.0001, "{:?}: {o} -> {d}", settings.kind);
+                assert!(
+                    (d - o).abs() <= bound * 1.0001,
+                    "{:?}: {o} -> {d}",
+                    settings.kind
+                );
             }
         }
     }
@@ -82,7 +90,10 @@ fn bad_sequences_are_refused() {
     short.frames[2].pop();
     let mut positions = good.clone();
     positions.positions.pop();
-    let empty = MapSequence { frames: Vec::new(), ..good.clone() };
+    let empty = MapSequence {
+        frames: Vec::new(),
+        ..good.clone()
+    };
     for seq in [nan, short, positions, empty] {
         assert!(encode(&seq, &CodecSettings::default()).is_err());
     }
@@ -94,11 +105,19 @@ fn bad_sequences_are_refused() {
 fn default_meets_the_target_and_compare_table() {
     let seq = clip(128, 4, 40, 1e-3);
     let reports = compare(&seq);
-    println!("{:<34} {:>10} {:>8} {:>9} {:>10} {:>9}", "variant", "bytes", "ratio", "rel err", "max abs", "ms/frame");
+    println!(
+        "{:<34} {:>10} {:>8} {:>9} {:>10} {:>9}",
+        "variant", "bytes", "ratio", "rel err", "max abs", "ms/frame"
+    );
     for r in &reports {
         println!(
             "{:<34} {:>10} {:>8.1} {:>8.3}% {:>10.2e} {:>9.3}",
-            r.name, r.bytes, r.ratio, 100.0 * r.relative_error, r.max_abs_error, r.decode_ms_per_frame
+            r.name,
+            r.bytes,
+            r.ratio,
+            100.0 * r.relative_error,
+            r.max_abs_error,
+            r.decode_ms_per_frame
         );
     }
     let bytes = encode(&seq, &CodecSettings::default()).expect("encodes");
@@ -106,7 +125,11 @@ fn default_meets_the_target_and_compare_table() {
     println!("default: {}", file.describe());
     let ratio = file.raw_bytes() as f64 / bytes.len() as f64;
     let error = relative_error(&seq, &decode_all(&file));
-    println!("default: {} bytes, {ratio:.1}:1, {:.3}% relative error", bytes.len(), 100.0 * error);
+    println!(
+        "default: {} bytes, {ratio:.1}:1, {:.3}% relative error",
+        bytes.len(),
+        100.0 * error
+    );
     assert!(ratio >= 30.0 && error <= 0.03, "{ratio}:1 at {error}");
 }
 
@@ -116,12 +139,21 @@ fn default_decodes_256_frames_quickly() {
     let seq = clip(256, 4, 24, 1e-3);
     let bytes = encode(&seq, &CodecSettings::default()).expect("encodes");
     let file = ShlmFile::parse(&bytes).expect("parses");
-    let start = std::time::Instant::now();
+    let mut ms = f64::MAX;
+    let mut out = vec![0f32; 256 * 256 * 16];
+    for k in 0..seq.frames.len() {
+        let start = std::time::Instant::now();
+        file.decode_frame(k, &mut out).expect("decodes");
+        ms = ms.min(start.elapsed().as_secs_f64() * 1e3);
+    }
     let decoded = decode_all(&file);
-    let ms = start.elapsed().as_secs_f64() * 1e3 / seq.frames.len() as f64;
     let ratio = file.raw_bytes() as f64 / bytes.len() as f64;
     let error = relative_error(&seq, &decoded);
-    println!("256² order 4, 24 frames: {} bytes, {ratio:.1}:1, {:.3}%, {ms:.2} ms/frame", bytes.len(), 100.0 * error);
+    println!(
+        "256² order 4, 24 frames: {} bytes, {ratio:.1}:1, {:.3}%, {ms:.2} ms/frame (fastest)",
+        bytes.len(),
+        100.0 * error
+    );
     assert!(error <= 0.03 && ratio >= 30.0);
 }
 

@@ -11,7 +11,10 @@ struct Lcg(u64);
 
 impl Lcg {
     fn next(&mut self) -> f32 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         ((self.0 >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
     }
 }
@@ -46,10 +49,10 @@ pub fn clip(resolution: usize, order: usize, frames: usize, noise: f32) -> MapSe
     let mut filled = vec![false; resolution * resolution];
     let mut positions = Vec::new();
     let mut normals = Vec::new();
-    for t in 0..resolution * resolution {
+    for (t, flag) in filled.iter_mut().enumerate() {
         let (u, v) = ((t % resolution) as f32 + 0.5, (t / resolution) as f32 + 0.5);
         if let Some((p, n)) = chart(u / resolution as f32, v / resolution as f32) {
-            filled[t] = true;
+            *flag = true;
             positions.push(p);
             normals.push((t, u / resolution as f32, v / resolution as f32, n));
         }
@@ -73,5 +76,11 @@ pub fn clip(resolution: usize, order: usize, frames: usize, noise: f32) -> MapSe
             map
         })
         .collect();
-    MapSequence { resolution, order, filled, positions, frames }
+    MapSequence {
+        resolution,
+        order,
+        filled,
+        positions,
+        frames,
+    }
 }
