@@ -4,10 +4,16 @@
 //! `i`-th vertex of the returned [`Mesh`] must be the `i`-th `v` line of the file. `tobj` (the
 //! general-purpose OBJ crate) re-indexes vertices by first use in the faces
 //! when it unifies attribute indices, which silently breaks that contract; this reader is
-//! deliberately small instead. Only geometry is read: `v`, `vn` and `f` statements (corner forms
-//! `v`, `v/vt`, `v/vt/vn`, `v//vn`, negative relative indices, polygons fan-triangulated).
-//! Every other statement (`vt`, `o`, `g`, `s`, `usemtl`, `l`, …) is ignored.
+//! deliberately small instead. Only geometry and texture coordinates are read: `v`, `vn`, `vt`
+//! and `f` statements (corner forms `v`, `v/vt`, `v/vt/vn`, `v//vn`, negative relative
+//! indices, polygons fan-triangulated). Every other statement (`o`, `g`, `s`, `usemtl`, `l`,
+//! …) is ignored.
+//!
+//! Texture coordinates become a [`UvLayout`] (per triangle corner, for SH light maps) when
+//! every face corner names one. OBJ's `v` points up (OpenGL's texture origin at the bottom
+//! left); the layout follows glTF's, `v` down, so it holds `1 − v`.
 
+use crate::lightmap::atlas::UvLayout;
 use crate::rig::mesh::{Mesh, area_weighted_normals};
 use glam::DVec3;
 use std::path::{Path, PathBuf};
@@ -60,6 +66,9 @@ pub enum LineError {
     /// A `v` or `vn` statement has fewer than three coordinates.
     #[error("expected 3 coordinates, found {0}")]
     TooFewCoordinates(usize),
+    /// A `vt` statement without coordinates.
+    #[error("a texture coordinate needs at least u")]
+    EmptyTexCoord,
     /// A face has fewer than three corners.
     #[error("a face needs at least 3 corners, found {0}")]
     TooFewCorners(usize),
@@ -75,6 +84,14 @@ pub enum LineError {
         /// The index as written.
         index: i64,
         /// Vertices available to it.
+        count: usize,
+    },
+    /// A face references a texture coordinate that does not exist.
+    #[error("face references texture coordinate {index}, but only {count} are available to it")]
+    MissingTexCoord {
+        /// The index as written.
+        index: i64,
+        /// Texture coordinates available to it.
         count: usize,
     },
     /// A face references a normal that does not exist.
@@ -101,10 +118,22 @@ pub fn read_obj(path: impl AsRef<Path>) -> Result<Mesh, ObjError> {
     parse_obj(&text, path)
 }
 
+/// Reads an OBJ file as [`read_obj`] does, with its texture coordinates as a layout per
+/// triangle corner (`None` unless every face corner has a `vt`; see the module docs).
+pub fn read_obj_with_uvs(path: impl AsRef<Path>) -> Result<(Mesh, Option<UvLayout>), ObjError> {
+    let path = path.as_ref();
+    let text = std::fs::read_to_string(path).map_err(|source| ObjError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    parse_obj_with_uvs(&text, path)
+}
+
 /// One face corner as written: vertex index and optional normal index, with the counts in
 /// effect on its line (negative indices are relative to those).
 struct Corner {
     vertex: i64,
+    texcoord: Option<i64>,
     normal: Option<i64>,
 }
 
@@ -113,6 +142,7 @@ struct Face {
     line: usize,
     corners: Vec<Corner>,
     vertices_so_far: usize,
+    texcoords_so_far: usize,
     normals_so_far: usize,
 }
 
@@ -120,6 +150,11 @@ struct Face {
 /// byte-order mark is skipped (left in, it would hide the first statement and shift every
 /// face index after it).
 pub fn parse_obj(text: &str, path: &Path) -> Result<Mesh, ObjError> {
+    parse_obj_with_uvs(text, path).map(|(mesh, _)| mesh)
+}
+
+/// Parses OBJ text with its texture coordinates; see [`read_obj_with_uvs`].
+pub fn parse_obj_with_uvs(text: &str, path: &Path) -> Result<(Mesh, Option<UvLayout>), ObjError> {
     let text = crate::io::without_bom(text);
     let at = |line: usize| {
         move |kind: LineError| ObjError::Line {
@@ -130,6 +165,7 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<Mesh, ObjError> {
     };
     let mut positions: Vec<[f32; 3]> = Vec::new();
     let mut file_normals: Vec<DVec3> = Vec::new();
+    let mut texcoords: Vec<[f32; 2]> = Vec::new();
     let mut faces: Vec<Face> = Vec::new();
     for (i, raw) in text.lines().enumerate() {
         let line = i + 1;
@@ -137,6 +173,7 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<Mesh, ObjError> {
         let mut words = content.split_whitespace();
         match words.next() {
             Some("v") => positions.push(parse_xyz(words).map_err(at(line))?),
+            Some("vt") => texcoords.push(parse_uv(words).map_err(at(line))?),
             Some("vn") => {
                 let n = parse_xyz(words).map_err(at(line))?;
                 file_normals.push(DVec3::from(n.map(f64::from)).normalize_or_zero());
@@ -153,6 +190,7 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<Mesh, ObjError> {
                     line,
                     corners,
                     vertices_so_far: positions.len(),
+                    texcoords_so_far: texcoords.len(),
                     normals_so_far: file_normals.len(),
                 });
             }
@@ -171,6 +209,7 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<Mesh, ObjError> {
     }
 
     let mut triangles = Vec::new();
+    let mut corner_uvs: Option<Vec<[[f32; 2]; 3]>> = Some(Vec::new());
     let mut normal_sums = vec![DVec3::ZERO; positions.len()];
     for face in &faces {
         let mut resolved = Vec::with_capacity(face.corners.len());
@@ -190,10 +229,27 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<Mesh, ObjError> {
                     .map_err(at(face.line))?;
                 normal_sums[v as usize] += file_normals[k as usize];
             }
-            resolved.push(v);
+            let uv = corner
+                .texcoord
+                .map(|t| {
+                    resolve(t, face.texcoords_so_far, texcoords.len())
+                        .map(|k| texcoords[k as usize])
+                        .ok_or(LineError::MissingTexCoord {
+                            index: t,
+                            count: available(t, face.texcoords_so_far, texcoords.len()),
+                        })
+                })
+                .transpose()
+                .map_err(at(face.line))?;
+            resolved.push((v, uv));
         }
         for k in 1..resolved.len() - 1 {
-            triangles.push([resolved[0], resolved[k], resolved[k + 1]]);
+            let [a, b, c] = [resolved[0], resolved[k], resolved[k + 1]];
+            triangles.push([a.0, b.0, c.0]);
+            corner_uvs = corner_uvs.and_then(|mut uvs| {
+                uvs.push([a.1?, b.1?, c.1?]);
+                Some(uvs)
+            });
         }
     }
 
@@ -208,11 +264,35 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<Mesh, ObjError> {
             }
         })
         .collect();
-    Ok(Mesh {
+    let mesh = Mesh {
         positions,
         normals,
         triangles,
-    })
+    };
+    Ok((mesh, corner_uvs.map(|corners| UvLayout { corners })))
+}
+
+/// A `vt` statement's `u` and `v` (`v` defaults to 0; a `w` must be a number but is ignored),
+/// as the layout stores it: `[u, 1 − v]` (see the module docs).
+fn parse_uv<'a>(words: impl Iterator<Item = &'a str>) -> Result<[f32; 2], LineError> {
+    let mut uv = [0.0f32; 2];
+    let mut count = 0;
+    for word in words {
+        let value: f32 = word
+            .parse()
+            .map_err(|_| LineError::MalformedNumber(word.to_owned()))?;
+        if !value.is_finite() {
+            return Err(LineError::NonFinite(word.to_owned()));
+        }
+        if count < 2 {
+            uv[count] = value;
+        }
+        count += 1;
+    }
+    if count == 0 {
+        return Err(LineError::EmptyTexCoord);
+    }
+    Ok([uv[0], 1.0 - uv[1]])
 }
 
 /// The first three coordinates of a `v`/`vn` statement; extra values (`w`, vertex colours)
@@ -238,8 +318,7 @@ fn parse_xyz<'a>(words: impl Iterator<Item = &'a str>) -> Result<[f32; 3], LineE
     Ok(xyz)
 }
 
-/// `v`, `v/vt`, `v/vt/vn` or `v//vn`. The texture index is checked to be an integer and
-/// otherwise ignored.
+/// `v`, `v/vt`, `v/vt/vn` or `v//vn`.
 fn parse_corner(word: &str) -> Result<Corner, LineError> {
     let parts: Vec<&str> = word.split('/').collect();
     if parts.len() > 3 || parts[0].is_empty() {
@@ -253,11 +332,17 @@ fn parse_corner(word: &str) -> Result<Corner, LineError> {
         }
     };
     let vertex = index(parts[0])?;
-    if let Some(vt) = parts.get(1).filter(|s| !s.is_empty()) {
-        index(vt)?;
-    }
+    let texcoord = parts
+        .get(1)
+        .filter(|s| !s.is_empty())
+        .map(|s| index(s))
+        .transpose()?;
     let normal = parts.get(2).map(|s| index(s)).transpose()?;
-    Ok(Corner { vertex, normal })
+    Ok(Corner {
+        vertex,
+        texcoord,
+        normal,
+    })
 }
 
 /// 0-based index of a 1-based (`> 0`) or relative (`< 0`, counted back from the elements
@@ -332,6 +417,43 @@ mod tests {
         for n in &mesh.normals {
             assert_eq!(*n, [0.0, 0.0, 1.0]);
         }
+    }
+
+    #[test]
+    fn texture_coordinates_give_a_layout_per_corner_with_v_flipped() {
+        let path = Path::new("test.obj");
+        // A quad whose vertex 1 sits on a seam (two texture coordinates), fanned.
+        let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0.25\nvt 1 1\nvt 0 1 0\nvt 0.5\n\
+                    f 1/1 2/2 3/3 4/4\nf 1/5 3/-3 2/-4\n";
+        let (mesh, layout) = parse_obj_with_uvs(text, path).unwrap();
+        let layout = layout.unwrap();
+        assert_eq!(mesh.triangles, [[0, 1, 2], [0, 2, 3], [0, 2, 1]]);
+        assert_eq!(
+            layout.corners,
+            [
+                [[0.0, 1.0], [1.0, 0.75], [1.0, 0.0]],
+                [[0.0, 1.0], [1.0, 0.0], [0.0, 0.0]],
+                [[0.5, 1.0], [1.0, 0.0], [1.0, 0.75]],
+            ]
+        );
+        assert_eq!(
+            layout.vertex_uvs(&mesh.triangles, 4)[0],
+            [[0.0, 1.0], [0.5, 1.0]]
+        );
+        // One corner without a texture coordinate: no layout, the same mesh.
+        let partial = "v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nf 1/1 2/1 3\n";
+        let (mesh, layout) = parse_obj_with_uvs(partial, path).unwrap();
+        assert!(layout.is_none());
+        assert_eq!(mesh, parse(partial).unwrap());
+        assert_eq!(
+            line_error("v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nf 1/1 2/2 3/1\n"),
+            (5, LineError::MissingTexCoord { index: 2, count: 1 })
+        );
+        assert_eq!(line_error("vt\n"), (1, LineError::EmptyTexCoord));
+        assert_eq!(
+            line_error("vt 0 nan\n"),
+            (1, LineError::NonFinite("nan".into()))
+        );
     }
 
     #[test]

@@ -28,15 +28,15 @@ pub(super) fn surface(samples: &[TexelSample], mesh: &Mesh) -> (Vec<[f32; 3]>, V
             };
             let position = blend(&mesh.positions);
             let blended = blend(&mesh.normals);
-            let normal = (blended.length() > VANISHED)
-                .then(|| blended.normalize())
-                .unwrap_or_else(|| {
-                    let p = |k| corner(&mesh.positions, k);
-                    (p(1) - p(0))
-                        .cross(p(2) - p(0))
-                        .try_normalize()
-                        .unwrap_or(DVec3::Z)
-                });
+            let normal = if blended.length() > VANISHED {
+                blended.normalize()
+            } else {
+                let p = |k| corner(&mesh.positions, k);
+                (p(1) - p(0))
+                    .cross(p(2) - p(0))
+                    .try_normalize()
+                    .unwrap_or(DVec3::Z)
+            };
             (position.as_vec3().to_array(), normal.as_vec3().to_array())
         })
         .unzip()

@@ -43,7 +43,7 @@ fn quad_samples_are_the_affine_image_of_texel_centres() {
         assert_eq!(*n, [0.0, 0.0, 1.0]);
         let expect = inverse * (centre(s.texel, 64) - t);
         let inside = expect.min_element() >= 0.0 && expect.max_element() <= 1.0;
-        let got = DVec3::from(glam::Vec3::from(*p).as_dvec3());
+        let got = glam::Vec3::from(*p).as_dvec3();
         if inside {
             centred += 1;
             assert!(

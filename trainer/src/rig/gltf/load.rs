@@ -34,6 +34,9 @@ pub struct Parts {
 /// Each vertex's `(joint, weight)` influences, as [`Skin::from_influences`] takes them.
 type Influences = Vec<Vec<(u32, f32)>>;
 
+/// The merged bind mesh, its influences and its `TEXCOORD_0` (see [`merge_primitives`]).
+type Merged = (Mesh, Influences, Option<Vec<[f32; 2]>>);
+
 /// `kind index "name"`, the way every error names an item.
 pub fn item(kind: &str, index: usize, name: Option<&str>) -> String {
     match name {
@@ -281,7 +284,7 @@ fn merge_primitives(
     buffers: &[gltf::buffer::Data],
     joint_count: usize,
     path: &Path,
-) -> Result<(Mesh, Influences, Option<Vec<[f32; 2]>>), GltfError> {
+) -> Result<Merged, GltfError> {
     let invalid = invalid_in(path);
     let get = |b: gltf::Buffer| buffers.get(b.index()).map(|d| d.0.as_slice());
     let mut positions = Vec::new();

@@ -31,6 +31,7 @@ impl Doc {
         }
         let width = match kind {
             "SCALAR" => 1,
+            "VEC2" => 2,
             "VEC3" => 3,
             "VEC4" => 4,
             "MAT4" => 16,
@@ -552,5 +553,58 @@ fn from_slice_reads_embedded_and_binary_documents_and_refuses_external_buffers()
                 );
             }
         }
+    }
+}
+
+/// Adds `TEXCOORD_0` (`kind` of `component`, `extra` accessor properties) to the primitive.
+fn with_uvs(kind: &str, component: u32, values: &[f64], extra: Value) -> Doc {
+    let mut doc = two_joint_doc();
+    let uvs = doc.accessor(kind, component, values, extra);
+    doc.json["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = uvs.into();
+    doc
+}
+
+#[test]
+fn texcoord_0_gives_the_uv_layout_per_corner() {
+    let (_dir, rig) = load(&two_joint_doc(), Form::Embedded);
+    assert!(
+        rig.unwrap().uv_layout().is_none(),
+        "no TEXCOORD_0, no layout"
+    );
+    // Normalized UNSIGNED_SHORT: 65535 is 1.
+    let doc = with_uvs(
+        "VEC2",
+        5123,
+        &[0., 0., 65535., 0., 0., 65535., 65535., 65535.],
+        json!({"normalized": true}),
+    );
+    let (_dir, rig) = load(&doc, Form::Embedded);
+    let rig = rig.unwrap();
+    let layout = rig.uv_layout().unwrap();
+    assert_eq!(
+        layout.corners,
+        [
+            [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+            [[1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
+        ]
+    );
+    let uvs = layout.vertex_uvs(&rig.bind_mesh().triangles, 4);
+    assert_eq!(uvs[3], [[1.0, 1.0]]);
+}
+
+#[test]
+fn texcoord_0_of_the_wrong_type_or_count_is_refused() {
+    let cases = [
+        with_uvs("VEC3", 5126, &[0.0; 12], Value::Null),
+        with_uvs("VEC2", 5123, &[0.0; 8], Value::Null),
+        with_uvs("VEC2", 5126, &[0.0; 6], Value::Null),
+    ];
+    for (doc, expect) in cases.iter().zip(["VEC3", "UNSIGNED_SHORT", "3 elements"]) {
+        let (_dir, rig) = load(doc, Form::Embedded);
+        let message = rig.unwrap_err().to_string();
+        assert!(
+            message.contains("TEXCOORD_0") && message.contains(expect),
+            "{message}"
+        );
     }
 }
