@@ -1,7 +1,7 @@
-//! SH light maps (Sloan, Kautz and Snyder's per-texel transfer as used by *Real-time Rendering
-//! of Dynamic Objects in Dynamic, Low-frequency Lighting Environments*): each texel of a
-//! character's UV atlas stores n² SH transfer coefficients `T_c(t)`, and any lighting composes
-//! them into an RGB light map, `SHLM(t) = Σ_c L_c T_c(t)`.
+//! SH light maps (Xu, Pattanaik and Hughes, *Real-time Rendering of Dynamic Objects in
+//! Dynamic, Low-frequency Lighting Environments*): precomputed radiance transfer unfolded onto
+//! a character's UV atlas, each texel storing n² SH transfer coefficients `T_c(t)`, which any
+//! lighting composes into an RGB light map, `SHLM(t) = Σ_c L_c T_c(t)`.
 //!
 //! Decoding a compressed map sequence needs an allocator (its entropy stage is zstd), so it
 //! happens outside the core; the composition here takes the decoded coefficients a chunk of
