@@ -19,6 +19,9 @@
 //!   lights, [`ShRotation`] rotates SH vectors.
 //! - [`Light`] (sphere, point, directional) projects into RGB SH radiance with its gradient,
 //!   and gives the exact unshadowed irradiance the SH path ([`irradiance_sh`]) is judged by.
+//! - [`LightMap`] composes SH light maps (n² transfer coefficients per texel) under any
+//!   lighting, a chunk of texels at a time; a light-map model's [`TexelAtlas`] places its rows
+//!   in the map.
 //!
 //! ```
 //! use aprt_core::{LitWeights, Model, PoseWeights, project_directional};
@@ -46,6 +49,7 @@ mod blob;
 mod eval;
 mod irradiance_rig;
 mod light;
+mod lightmap;
 mod math;
 mod model;
 mod rotation;
@@ -55,7 +59,10 @@ pub use blob::format::{
     Basis, Encoding, Frame, MAX_BONES, MAX_COEF_DIMS, MAX_LIT, MAX_POSE_DIMS, MAX_POSE_LEN,
     MAX_VERTICES, SectionKind, VERSION as FORMAT_VERSION, VERTEX_BLOCK,
 };
-pub use blob::{AngleNames, BlobSource, Dim, Error, Input, ModelInfo, SourceError};
+pub use blob::{
+    AngleNames, BlobSource, Dim, Error, Input, MAX_ATLAS_RESOLUTION, ModelInfo, SourceError,
+    TexelAtlas,
+};
 pub use eval::{LitWeights, MAX_POSE_WEIGHTS, PoseWeights};
 pub use irradiance_rig::{
     AxisKind, DEFAULT_BAND, IrradianceRig, MAX_LATTICE, MAX_RIG_SAMPLES, MAX_RIG_TABLE,
@@ -67,6 +74,7 @@ pub use light::{
     SphereLight, Window, apply_window, irradiance_sh, sphere_light_bands,
     sphere_light_derivative_bands,
 };
+pub use lightmap::LightMap;
 pub use model::{Model, StreamedModel};
 pub use rotation::{Rotation, ShRotation};
 pub use sh::{

@@ -3,7 +3,9 @@
 //! the whole blob once and share one evaluator; their per-frame calls take the same
 //! arguments in the same order (inputs, then the first vertex, then the output).
 
-use crate::blob::{AngleNames, BlobSource, Error, ModelInfo, Reader, Resident, Streaming};
+use crate::blob::{
+    AngleNames, BlobSource, Error, ModelInfo, Reader, Resident, Streaming, TexelAtlas,
+};
 use crate::eval::{LitWeights, PoseWeights};
 use crate::irradiance_rig::{IrradianceRig, Placement, RigLitWeights};
 use crate::light::Light;
@@ -34,6 +36,7 @@ pub struct Model<'a> {
     blob: &'a [u8],
     info: ModelInfo,
     rig: Option<IrradianceRig<'a>>,
+    atlas: Option<TexelAtlas<'a>>,
 }
 
 impl<'a> Model<'a> {
@@ -57,13 +60,32 @@ impl<'a> Model<'a> {
             )?),
             None => None,
         };
-        Ok(Model { blob, info, rig })
+        let atlas = match info.texel_atlas {
+            Some(span) => Some(TexelAtlas::parse(
+                &blob[span.offset as usize..(span.offset + span.len) as usize],
+                info.vertices,
+            )?),
+            None => None,
+        };
+        Ok(Model {
+            blob,
+            info,
+            rig,
+            atlas,
+        })
     }
 
     /// The irradiance rig fitted to the character, when the model has one (validated by
     /// [`Model::parse`]).
     pub fn irradiance_rig(&self) -> Option<IrradianceRig<'a>> {
         self.rig
+    }
+
+    /// The texel of every row, when the model is a light-map model that records its atlas
+    /// (validated by [`Model::parse`]): [`TexelAtlas::scatter`] places the rows' shading in the
+    /// R × R map.
+    pub fn texel_atlas(&self) -> Option<TexelAtlas<'a>> {
+        self.atlas
     }
 
     /// The model's dimensions and what its calls need.
@@ -509,6 +531,24 @@ impl<'s, S: BlobSource> StreamedModel<'s, S> {
             Ok(())
         })?;
         IrradianceRig::parse(dst)
+    }
+
+    /// The texel atlas, read into `buf` (at least [`ModelInfo::texel_atlas_bytes`]) and
+    /// validated again (the source may have changed since `open`); `None` when the model
+    /// records none.
+    pub fn texel_atlas<'b>(&mut self, buf: &'b mut [u8]) -> Result<Option<TexelAtlas<'b>>, Error> {
+        let Some(span) = self.info.texel_atlas else {
+            return Ok(None);
+        };
+        let len = span.len as usize;
+        let dst = buf
+            .get_mut(..len)
+            .ok_or(Error::BufferTooSmall { needed: len })?;
+        self.reader().chunks(span.offset, 1, len, |at, bytes| {
+            dst[at..at + bytes.len()].copy_from_slice(bytes);
+            Ok(())
+        })?;
+        TexelAtlas::parse(dst, self.info.vertices).map(Some)
     }
 
     /// As [`Model::light_rig`].

@@ -185,7 +185,85 @@ pub fn exercise(blob: &[u8], probe: &Probe) -> Result<Evaluation, Error> {
     if let Some(rig) = model.irradiance_rig() {
         exercise_rig(&model, &rig, probe, &eval);
     }
+    exercise_atlas(&model, blob, probe, &eval);
     Ok(eval)
+}
+
+/// A model's texel atlas: the streamed reader reads the same atlas, through a buffer of
+/// exactly its size and refuses a smaller one; its indices are increasing and below R²;
+/// scattering the shading puts row `j` on texel `texel(j)`; the probe's row range and a map
+/// of the wrong size are refused with their errors, writing nothing.
+fn exercise_atlas(model: &Model, blob: &[u8], probe: &Probe, eval: &Evaluation) {
+    let info = model.info();
+    let mut least = vec![0u8; info.scratch_bytes()];
+    let mut streamed = StreamedModel::open(Streamed::new(blob), &mut least).unwrap();
+    let mut buf = vec![0u8; info.texel_atlas_bytes()];
+    let read = streamed.texel_atlas(&mut buf).expect("a valid atlas reads");
+    assert_eq!(
+        read,
+        model.texel_atlas(),
+        "streamed and resident atlases differ"
+    );
+    let Some(atlas) = model.texel_atlas() else {
+        return;
+    };
+    let needed = buf.len();
+    assert_eq!(
+        streamed.texel_atlas(&mut buf[..needed - 1]),
+        Err(Error::BufferTooSmall { needed })
+    );
+    let rows = info.vertices();
+    assert_eq!(atlas.rows(), rows);
+    let r = atlas.resolution() as usize;
+    let texels: Vec<usize> = (0..rows)
+        .map(|j| atlas.texel(j).unwrap() as usize)
+        .collect();
+    assert!(texels.windows(2).all(|w| w[0] < w[1]) && texels[rows - 1] < r * r);
+    assert_eq!(
+        atlas.texel(rows),
+        Err(Error::VertexRange {
+            first: rows,
+            count: 1
+        })
+    );
+    let shaded: Vec<[f32; 3]> = eval.shading.iter().map(|&s| [s, -s, 1.0]).collect();
+    let mut map = vec![[f32::NAN; 3]; r * r];
+    atlas.scatter(0, &shaded, &mut map).unwrap();
+    for (t, texel) in map.iter().enumerate() {
+        match texels.binary_search(&t) {
+            Ok(j) => assert_eq!(texel, &shaded[j]),
+            Err(_) => assert!(texel[0].is_nan(), "texel {t} of no row written"),
+        }
+    }
+    let first = probe.first as usize % (rows + 9);
+    let count = probe.count as usize % (rows + 9);
+    let chunk = vec![[0.0f32; 3]; count];
+    let before = map.clone();
+    match first + count <= rows {
+        true => atlas.scatter(first, &chunk, &mut map).unwrap(),
+        false => assert_eq!(
+            atlas.scatter(first, &chunk, &mut map),
+            Err(Error::VertexRange { first, count })
+        ),
+    }
+    assert!(matches!(
+        atlas.scatter(0, &shaded, &mut map[1..]),
+        Err(Error::WrongLength {
+            what: Input::AtlasMap,
+            ..
+        })
+    ));
+    let written = (first + count <= rows) as usize * count;
+    let bits = |t: &[f32; 3]| t.map(f32::to_bits);
+    let changed = map
+        .iter()
+        .zip(&before)
+        .filter(|(a, b)| bits(a) != bits(b))
+        .count();
+    assert!(
+        changed <= written,
+        "{changed} texels changed by {written} rows"
+    );
 }
 
 /// A model's irradiance rig lit by a sphere and a point light placed from the probe: lights

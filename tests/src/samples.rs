@@ -3,7 +3,10 @@
 //! (`cargo test -p aprt-tests --test corpus -- --ignored` writes `fuzz/corpus/`).
 
 use aprt_core::{AxisKind, RigLayout, RigShape};
-use aprt_trainer::{BoneFrames, LinearModel, Precision, encode_model, encode_model_with_rig};
+use aprt_trainer::{
+    BoneFrames, Extras, LinearModel, Precision, encode_model, encode_model_with,
+    encode_model_with_rig,
+};
 
 use crate::{random_model, with_cosines};
 
@@ -76,16 +79,37 @@ pub fn sample_rig() -> Vec<u8> {
     bytes
 }
 
-/// `(name, blob)` of each sample, and a bone-frame model carrying an irradiance rig.
+/// The texel atlas of [`sample_atlas_model`]: a 5 × 5 map, its rows on texels with gaps
+/// between them (the first and last texel included).
+pub const SAMPLE_ATLAS: (u32, [u32; 7]) = (5, [0, 3, 4, 11, 12, 20, 24]);
+
+/// A light-map model (its rows are texels) for [`SAMPLE_ATLAS`].
+pub fn sample_atlas_model() -> LinearModel {
+    random_model(2, SAMPLE_ATLAS.1.len(), 2, 1, None)
+}
+
+/// `(name, blob)` of each sample, a bone-frame model carrying an irradiance rig, and a
+/// light-map model carrying its texel atlas.
 pub fn sample_blobs() -> Vec<(&'static str, Vec<u8>)> {
     let rigged = with_bones(random_model(2, 10, 3, 1, Some(2)), 2);
+    let atlas = Extras {
+        texel_atlas: Some((SAMPLE_ATLAS.0, &SAMPLE_ATLAS.1)),
+        ..Extras::default()
+    };
     sample_models()
         .into_iter()
         .map(|(name, m, p)| (name, encode_model(&m, p).expect("samples are valid")))
-        .chain([(
-            "rig-bones-f32",
-            encode_model_with_rig(&rigged, Precision::F32, Some(&sample_rig()))
-                .expect("samples are valid"),
-        )])
+        .chain([
+            (
+                "rig-bones-f32",
+                encode_model_with_rig(&rigged, Precision::F32, Some(&sample_rig()))
+                    .expect("samples are valid"),
+            ),
+            (
+                "atlas-identity-f32",
+                encode_model_with(&sample_atlas_model(), Precision::F32, &atlas)
+                    .expect("samples are valid"),
+            ),
+        ])
         .collect()
 }

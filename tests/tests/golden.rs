@@ -9,14 +9,32 @@ use aprt_core::{Frame, Model};
 use aprt_tests::decode::decode;
 use aprt_tests::harness::{Probe, exercise};
 use aprt_tests::random_model;
-use aprt_trainer::{BoneFrames, LinearModel, Precision, encode_model};
+use aprt_trainer::{BoneFrames, Extras, LinearModel, Precision, encode_model_with};
 
 fn golden_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../fixtures/golden")
 }
 
-/// `(file name, model, precision)` of each golden blob.
-fn golden_models() -> Vec<(&'static str, LinearModel, Precision)> {
+/// A golden blob: its file name, model, precision and texel atlas (resolution, texels).
+type Golden = (
+    &'static str,
+    LinearModel,
+    Precision,
+    Option<(u32, Vec<u32>)>,
+);
+
+/// The blob's bytes as the writer writes them today.
+fn encode((_, model, precision, atlas): &Golden) -> Vec<u8> {
+    let extras = Extras {
+        texel_atlas: atlas.as_ref().map(|(r, texels)| (*r, &texels[..])),
+        ..Extras::default()
+    };
+    encode_model_with(model, *precision, &extras).unwrap()
+}
+
+/// Each golden blob: a world-frame and a bone-frame model, and a light-map model (its rows
+/// are texels of an 8 × 8 map) with its texel atlas.
+fn golden_models() -> Vec<Golden> {
     let names = |names: &[&str]| names.iter().map(|n| n.to_string()).collect();
     let mut world = random_model(3, 20, 4, 2, Some(3));
     world.angle_names = names(&["hip.x", "hip.y", "hip.z", "knee"]);
@@ -26,18 +44,21 @@ fn golden_models() -> Vec<(&'static str, LinearModel, Precision)> {
         count: 3,
         vertex_bone: (0..24).map(|j| (j / 8) as u16).collect(),
     });
+    let mut lightmap = random_model(2, 12, 3, 1, None);
+    lightmap.angle_names = names(&["jaw", "brow.l", "brow.r"]);
+    let texels = (0..12).map(|j| 9 + 4 * j).collect();
     vec![
-        ("v1-world.aprt", world, Precision::F32),
-        ("v1-bones.aprt", bones, Precision::F16),
+        ("v1-world.aprt", world, Precision::F32, None),
+        ("v1-bones.aprt", bones, Precision::F16, None),
+        ("v1-atlas.aprt", lightmap, Precision::F32, Some((8, texels))),
     ]
 }
 
 #[test]
 #[ignore = "writes fixtures/golden; run when the golden models change"]
 fn write_golden_blobs() {
-    for (name, model, precision) in golden_models() {
-        let blob = encode_model(&model, precision).unwrap();
-        std::fs::write(golden_dir().join(name), blob).unwrap();
+    for golden in golden_models() {
+        std::fs::write(golden_dir().join(golden.0), encode(&golden)).unwrap();
     }
 }
 
@@ -46,7 +67,8 @@ fn write_golden_blobs() {
 /// harness), and is what the writer writes today.
 #[test]
 fn golden_blobs_read_as_written() {
-    for (name, model, precision) in golden_models() {
+    for golden in golden_models() {
+        let (name, model, _, atlas) = &golden;
         let path = golden_dir().join(name);
         let blob = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         let core = Model::parse(&blob).unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -77,9 +99,14 @@ fn golden_blobs_read_as_written() {
         );
         let stored = decode(&blob).unwrap();
         assert_eq!(stored.angle_names, model.angle_names, "{name}");
+        let read = core.texel_atlas().map(|a| {
+            let texels = (0..a.rows()).map(|j| a.texel(j).unwrap()).collect();
+            (a.resolution(), texels)
+        });
+        assert_eq!(read, *atlas, "{name}: texel atlas");
         exercise(&blob, &Probe::GENTLE).unwrap();
         assert!(
-            encode_model(&model, precision).unwrap() == blob,
+            encode(&golden) == blob,
             "{name}: the writer's bytes changed; if that is intended, keep this blob as a \
              compatibility fixture and write the new one under a new name"
         );

@@ -34,7 +34,9 @@ pub use bake::{
     Accel, BakeError, BakeSettings, bake_pose, bake_pose_with, bake_poses, bake_vertices,
 };
 pub use io::obj::{LineError, ObjError, read_obj};
-pub use model::export::{ExportError, Precision, encode_model, encode_model_with_rig};
+pub use model::export::{
+    ExportError, Extras, Precision, encode_model, encode_model_with, encode_model_with_rig,
+};
 pub use model::features::PoseFeatures;
 pub use model::fit::{Alpha, CoefDims, Dims, Fit, FitError, FitOptions, FitReport, fit};
 pub use model::{BoneFrames, LinearModel, ModelFrame, PoseBounds, VertexBasis};

@@ -40,6 +40,11 @@ pub enum Input {
     Positions,
     /// The per-light weights of `shade_lights` (one per light).
     LightWeights,
+    /// The decoded light maps of [`LightMap`](crate::LightMap)'s calls (n² values per texel
+    /// of the chunk).
+    LightMap,
+    /// The R × R map [`TexelAtlas::scatter`](crate::TexelAtlas::scatter) writes into.
+    AtlasMap,
 }
 
 /// Everything that can go wrong reading a blob or evaluating a model.
@@ -146,6 +151,9 @@ pub enum Error {
     BadPoseFeatures,
     /// An irradiance rig's shape, counts, box, radius or error table is not valid.
     BadIrradianceRig,
+    /// The texel-atlas section has a resolution outside 1..=8192, or texel indices that are
+    /// not strictly increasing or not below the resolution squared.
+    BadTexelAtlas,
     /// A call needs the model's irradiance rig and the model has none.
     NoIrradianceRig,
     /// Rig lighting weights were computed for a rig of another size.
@@ -180,6 +188,11 @@ pub enum Error {
     NonFiniteLighting {
         /// Index of the coefficient.
         index: usize,
+    },
+    /// A light-map coefficient is NaN or infinite.
+    NonFiniteLightMap {
+        /// Index of the texel in the call's chunk.
+        texel: usize,
     },
     /// A vertex position is NaN or infinite.
     NonFinitePosition {
@@ -281,6 +294,10 @@ impl core::fmt::Display for Error {
                 f,
                 "irradiance rig has a bad shape, count, box, radius or error table"
             ),
+            Error::BadTexelAtlas => write!(
+                f,
+                "texel atlas needs a resolution in 1..=8192 and increasing texels below its square"
+            ),
             Error::NoIrradianceRig => write!(f, "the model has no irradiance rig"),
             Error::WeightsForOtherRig => {
                 write!(f, "rig lighting weights were computed for another rig")
@@ -301,6 +318,9 @@ impl core::fmt::Display for Error {
             Error::NonFiniteAngle { index } => write!(f, "pose entry {index} is NaN or infinite"),
             Error::NonFiniteLighting { index } => {
                 write!(f, "lighting coefficient {index} is NaN or infinite")
+            }
+            Error::NonFiniteLightMap { texel } => {
+                write!(f, "light map of texel {texel} holds NaN or infinity")
             }
             Error::NonFinitePosition { index } => {
                 write!(f, "vertex position {index} is NaN or infinite")

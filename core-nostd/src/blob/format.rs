@@ -145,13 +145,18 @@ pub enum SectionKind {
     /// own little layout of a 16-byte prelude and f32 arrays, described and validated by
     /// [`IrradianceRig`](crate::IrradianceRig). Readers that predate it skip it.
     IrradianceRig,
+    /// Tag 10, optional: the texel atlas of a light-map model, whose rows are the texels of
+    /// an R × R map: R (`u32`), then each row's texel index `y · R + x` (`u32`, strictly
+    /// increasing, below R²), so an engine can scatter the rows into the map. Read by
+    /// [`TexelAtlas`](crate::TexelAtlas); readers that predate it skip it.
+    TexelAtlas,
     /// A tag this version does not know.
     Unknown(u16),
 }
 
 impl SectionKind {
     /// The kinds this version knows, in tag order.
-    const KNOWN: [SectionKind; 9] = [
+    const KNOWN: [SectionKind; 10] = [
         SectionKind::PoseMean,
         SectionKind::PoseProjection,
         SectionKind::Weights,
@@ -161,12 +166,13 @@ impl SectionKind {
         SectionKind::PoseBounds,
         SectionKind::PoseFeatures,
         SectionKind::IrradianceRig,
+        SectionKind::TexelAtlas,
     ];
 
     /// The kind of a section-table tag.
     pub const fn from_tag(tag: u16) -> SectionKind {
         match tag {
-            1..=9 => Self::KNOWN[tag as usize - 1],
+            1..=10 => Self::KNOWN[tag as usize - 1],
             other => SectionKind::Unknown(other),
         }
     }
@@ -183,6 +189,7 @@ impl SectionKind {
             SectionKind::PoseBounds => 7,
             SectionKind::PoseFeatures => 8,
             SectionKind::IrradianceRig => 9,
+            SectionKind::TexelAtlas => 10,
             SectionKind::Unknown(tag) => tag,
         }
     }

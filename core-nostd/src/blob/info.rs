@@ -43,6 +43,9 @@ pub struct ModelInfo {
     /// The irradiance rig, when the model has one (its bytes checksummed at open, its
     /// contents validated by [`IrradianceRig::parse`](crate::IrradianceRig::parse)).
     pub(crate) irradiance_rig: Option<Span>,
+    /// The texel of every row of a light-map model, when the model has one (validated at
+    /// open).
+    pub(crate) texel_atlas: Option<Span>,
 }
 
 impl ModelInfo {
@@ -156,6 +159,12 @@ impl ModelInfo {
     /// [`StreamedModel::irradiance_rig`](crate::StreamedModel::irradiance_rig) reads it into.
     pub fn irradiance_rig_bytes(&self) -> usize {
         self.irradiance_rig.map_or(0, |s| s.len as usize)
+    }
+
+    /// Bytes of the model's texel atlas (0 without one): what
+    /// [`StreamedModel::texel_atlas`](crate::StreamedModel::texel_atlas) reads it into.
+    pub fn texel_atlas_bytes(&self) -> usize {
+        self.texel_atlas.map_or(0, |s| s.len as usize)
     }
 
     /// Extra leading rows per block: 1 (the bone indices) for bone-frame models, else 0.

@@ -1,6 +1,7 @@
 //! The model blob: its layout, where its bytes come from, and validating it once so that
 //! evaluation can trust every offset and length.
 
+mod atlas;
 mod error;
 pub(crate) mod format;
 mod header;
@@ -9,6 +10,7 @@ mod names;
 mod source;
 mod validate;
 
+pub use atlas::{MAX_ATLAS_RESOLUTION, TexelAtlas};
 pub use error::{Dim, Error, Input};
 #[cfg(feature = "format")]
 pub use header::read_header;

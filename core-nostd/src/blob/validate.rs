@@ -1,6 +1,7 @@
 //! Opening a model: decode the header, validate every dimension, offset and length, and
 //! verify every section's checksum and values once, so evaluation can trust the layout.
 
+use super::atlas::{AtlasCheck, atlas_len};
 use super::format::{
     Basis, Encoding, Frame, MAX_BONES, MAX_COEF_DIMS, MAX_LIT, MAX_POSE_DIMS, MAX_POSE_LEN,
     MAX_SECTIONS, MAX_VERTICES, SECTION_ALIGN, SectionEntry, SectionKind, VERTEX_BLOCK,
@@ -116,6 +117,11 @@ impl ModelInfo {
                     return Err(Error::DuplicateSection { section: kind });
                 }
                 check_irradiance_rig(r, e)?
+            } else if kind == SectionKind::TexelAtlas {
+                if found[slot].is_some() {
+                    return Err(Error::DuplicateSection { section: kind });
+                }
+                check_texel_atlas(r, e, vertices)?
             } else if kind == SectionKind::AngleNames {
                 if found[slot].is_some() {
                     return Err(Error::DuplicateSection { section: kind });
@@ -168,6 +174,7 @@ impl ModelInfo {
             pose_bounds: get(SectionKind::PoseBounds),
             pose_features,
             irradiance_rig: get(SectionKind::IrradianceRig),
+            texel_atlas: get(SectionKind::TexelAtlas),
         };
         info.verify_bones(r)?;
         info.verify_bounds(r)?;
@@ -302,6 +309,34 @@ fn check_irradiance_rig<R: Reader>(r: &mut R, e: &SectionEntry) -> Result<Span, 
             found: e.len,
         },
     })?;
+    Ok(Span {
+        offset: e.offset,
+        len: e.len,
+        encoding: Encoding::F32,
+    })
+}
+
+/// The texel atlas: one `u32` texel per row after the resolution, checksummed and validated
+/// as it streams past ([`AtlasCheck`], which the resident `TexelAtlas::parse` runs too). A
+/// length that is not the row count's is a section-length error. Its encoding byte carries no
+/// meaning.
+fn check_texel_atlas<R: Reader>(
+    r: &mut R,
+    e: &SectionEntry,
+    vertices: usize,
+) -> Result<Span, Error> {
+    let section = SectionKind::TexelAtlas;
+    let expected = atlas_len(vertices).ok_or(Error::LengthOverflow)?;
+    if e.len != expected {
+        return Err(Error::SectionLength {
+            section,
+            expected,
+            found: e.len,
+        });
+    }
+    let mut atlas = AtlasCheck::new();
+    check_crc(r, e, |bytes| atlas.feed(bytes))?;
+    atlas.finish()?;
     Ok(Span {
         offset: e.offset,
         len: e.len,

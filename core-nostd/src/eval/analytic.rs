@@ -9,6 +9,7 @@
 //! nine multiplies per vertex and light, where rotating the SH vector would cost O(n³).
 
 use super::PoseWeights;
+use super::rig::check_positions;
 use crate::blob::format::{Frame, VERTEX_BLOCK};
 use crate::blob::{Error, Input, ModelInfo, Reader};
 use crate::light::Light;
@@ -47,7 +48,7 @@ impl ModelInfo {
         if let Some(index) = weights.iter().position(|w| !(w.is_finite() && *w >= 0.0)) {
             return Err(Error::BadLightWeight { index });
         }
-        self.check_positions(positions, out.len())?;
+        check_positions(positions, out.len())?;
         self.check_range(first, out.len())?;
         self.check_rotations(bones)?;
 

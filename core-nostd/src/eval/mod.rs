@@ -25,6 +25,7 @@ mod rig;
 mod weights;
 
 use kernels::{Decode, RowRef, bone_lane, dot, shade_block, transfer_identity, transfer_stored};
+pub(crate) use rig::check_positions;
 pub use weights::{LitWeights, MAX_POSE_WEIGHTS, PoseWeights};
 use weights::{check_capacity, check_stamp};
 

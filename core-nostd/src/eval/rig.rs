@@ -79,7 +79,7 @@ impl ModelInfo {
         if lit.vectors != rig.vectors() {
             return Err(Error::WeightsForOtherRig);
         }
-        self.check_positions(positions, out.len())?;
+        check_positions(positions, out.len())?;
         self.check_range(first, out.len())?;
         let (width, lit_len) = (self.row_width(), self.lit_weights_len());
         let encoding = self.rows.encoding;
@@ -126,24 +126,20 @@ impl ModelInfo {
             out[lo - first..hi - first].copy_from_slice(&acc[lo - v0..hi - v0]);
         })
     }
+}
 
-    /// Positions must be one per output value, and finite.
-    pub(crate) fn check_positions(
-        &self,
-        positions: &[[f32; 3]],
-        count: usize,
-    ) -> Result<(), Error> {
-        if positions.len() != count {
-            return Err(Error::WrongLength {
-                what: Input::Positions,
-                expected: count,
-                found: positions.len(),
-            });
-        }
-        match positions.iter().position(|p| first_non_finite(p).is_some()) {
-            Some(index) => Err(Error::NonFinitePosition { index }),
-            None => Ok(()),
-        }
+/// Positions must be one per output value (vertex or texel), and finite.
+pub(crate) fn check_positions(positions: &[[f32; 3]], count: usize) -> Result<(), Error> {
+    if positions.len() != count {
+        return Err(Error::WrongLength {
+            what: Input::Positions,
+            expected: count,
+            found: positions.len(),
+        });
+    }
+    match positions.iter().position(|p| first_non_finite(p).is_some()) {
+        Some(index) => Err(Error::NonFinitePosition { index }),
+        None => Ok(()),
     }
 }
 

@@ -5,8 +5,8 @@ use aprt_core::format::{
     padded_vertices,
 };
 use aprt_core::{
-    Basis, Encoding, FORMAT_VERSION, Frame, MAX_BONES, MAX_COEF_DIMS, MAX_LIT, MAX_ORDER,
-    MAX_POSE_DIMS, MAX_POSE_LEN, MAX_VERTICES, SectionKind, VERTEX_BLOCK,
+    Basis, Encoding, FORMAT_VERSION, Frame, MAX_ATLAS_RESOLUTION, MAX_BONES, MAX_COEF_DIMS,
+    MAX_LIT, MAX_ORDER, MAX_POSE_DIMS, MAX_POSE_LEN, MAX_VERTICES, SectionKind, VERTEX_BLOCK,
 };
 
 use crate::model::{BoneFrames, LinearModel, VertexBasis};
@@ -75,6 +75,12 @@ pub enum ExportError {
         "alpha {0:e} cannot be stored: a model records alpha as an f32, so it must be finite, at least 0 and at most 3.4e38, and a positive alpha at least 1.4e-45"
     )]
     Alpha(f64),
+    /// The texel atlas cannot be recorded.
+    #[error("texel atlas: {problem}")]
+    TexelAtlas {
+        /// What is wrong.
+        problem: String,
+    },
     /// The pose-entry names cannot be recorded.
     #[error("angle names: {problem}")]
     AngleNames {
@@ -178,9 +184,20 @@ fn blocked(
     out
 }
 
+/// The optional sections a blob may carry beside the model itself.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Extras<'a> {
+    /// An irradiance rig's bytes (from [`aprt_core::RigLayout::write`]), written as the
+    /// `IrradianceRig` section.
+    pub irradiance_rig: Option<&'a [u8]>,
+    /// A light-map model's atlas: the resolution R and each row's texel index `y · R + x`
+    /// (strictly increasing, below R², one per row), written as the `TexelAtlas` section.
+    pub texel_atlas: Option<(u32, &'a [u32])>,
+}
+
 /// Serialises `model` into a complete blob.
 pub fn encode_model(model: &LinearModel, precision: Precision) -> Result<Vec<u8>, ExportError> {
-    encode_model_with_rig(model, precision, None)
+    encode_model_with(model, precision, &Extras::default())
 }
 
 /// Serialises `model` into a complete blob, with an irradiance rig's bytes (from
@@ -189,6 +206,19 @@ pub fn encode_model_with_rig(
     model: &LinearModel,
     precision: Precision,
     irradiance_rig: Option<&[u8]>,
+) -> Result<Vec<u8>, ExportError> {
+    let extras = Extras {
+        irradiance_rig,
+        ..Extras::default()
+    };
+    encode_model_with(model, precision, &extras)
+}
+
+/// Serialises `model` into a complete blob with the optional sections of `extras`.
+pub fn encode_model_with(
+    model: &LinearModel,
+    precision: Precision,
+    extras: &Extras<'_>,
 ) -> Result<Vec<u8>, ExportError> {
     let (n2, v, a, f, ka) = (
         model.order * model.order,
@@ -313,13 +343,16 @@ pub fn encode_model_with_rig(
             bytes: encode(kind, &flags, a, Encoding::F32)?,
         });
     }
-    if let Some(rig) = irradiance_rig {
+    if let Some(rig) = extras.irradiance_rig {
         table.push(SectionBytes {
             tag: SectionKind::IrradianceRig.tag(),
             required: false,
             encoding: Encoding::F32,
             bytes: rig.to_vec(),
         });
+    }
+    if let Some((resolution, texels)) = extras.texel_atlas {
+        table.push(texel_atlas_section(resolution, texels, v)?);
     }
     assemble(model, basis, frame, &table)
 }
@@ -350,6 +383,50 @@ fn angle_names_section(names: &[String], pose_len: usize) -> Result<SectionBytes
         .collect();
     Ok(SectionBytes {
         tag: SectionKind::AngleNames.tag(),
+        required: false,
+        encoding: Encoding::F32,
+        bytes,
+    })
+}
+
+/// The optional texel-atlas section, refusing what the reader would refuse: a resolution
+/// outside 1..=[`MAX_ATLAS_RESOLUTION`], a row count that is not the model's, indices that
+/// are not strictly increasing or not below R².
+fn texel_atlas_section(
+    resolution: u32,
+    texels: &[u32],
+    rows: usize,
+) -> Result<SectionBytes, ExportError> {
+    let bad = |problem: String| Err(ExportError::TexelAtlas { problem });
+    if !(1..=MAX_ATLAS_RESOLUTION).contains(&resolution) {
+        return bad(format!(
+            "resolution {resolution} is not in 1..={MAX_ATLAS_RESOLUTION}"
+        ));
+    }
+    if texels.len() != rows {
+        return bad(format!("{} texels for {rows} rows", texels.len()));
+    }
+    let squared = u64::from(resolution) * u64::from(resolution);
+    if let Some(row) = texels.iter().position(|&t| u64::from(t) >= squared) {
+        return bad(format!(
+            "row {row}'s texel {} is not below {squared}",
+            texels[row]
+        ));
+    }
+    if let Some(row) = texels.windows(2).position(|w| w[0] >= w[1]) {
+        return bad(format!(
+            "row {}'s texel {} does not follow {}",
+            row + 1,
+            texels[row + 1],
+            texels[row]
+        ));
+    }
+    let bytes = std::iter::once(resolution)
+        .chain(texels.iter().copied())
+        .flat_map(u32::to_le_bytes)
+        .collect();
+    Ok(SectionBytes {
+        tag: SectionKind::TexelAtlas.tag(),
         required: false,
         encoding: Encoding::F32,
         bytes,
@@ -458,6 +535,45 @@ mod tests {
                 assert_eq!(info.pose_dims(), 2);
                 assert_eq!(info.coef_dims(), model.coef_dims());
             }
+        }
+    }
+
+    #[test]
+    fn texel_atlas_round_trips_and_refuses_what_the_reader_would() {
+        let model = tiny(VertexBasis::Identity, 3);
+        let with = |resolution: u32, texels: &[u32]| {
+            let extras = Extras {
+                texel_atlas: Some((resolution, texels)),
+                ..Extras::default()
+            };
+            encode_model_with(&model, Precision::F32, &extras)
+        };
+        let blob = with(4, &[1, 5, 15]).unwrap();
+        let parsed = aprt_core::Model::parse(&blob).unwrap();
+        let atlas = parsed.texel_atlas().unwrap();
+        assert_eq!((atlas.resolution(), atlas.rows()), (4, 3));
+        assert_eq!(atlas.texel(2), Ok(15));
+        let info = crate::model::runtime::describe(&blob).unwrap();
+        assert_eq!(
+            info.texel_atlas.map(|a| (a.resolution, a.rows)),
+            Some((4, 3))
+        );
+        assert!(info.to_string().contains("texel atlas     4 x 4: 3 rows"));
+        for (resolution, texels) in [
+            (0, &[0u32, 1, 2][..]),
+            (MAX_ATLAS_RESOLUTION + 1, &[0, 1, 2]),
+            (4, &[0, 1]),
+            (4, &[0, 1, 16]),
+            (4, &[0, 2, 2]),
+            (4, &[3, 2, 5]),
+        ] {
+            assert!(
+                matches!(
+                    with(resolution, texels),
+                    Err(ExportError::TexelAtlas { .. })
+                ),
+                "{resolution} {texels:?}"
+            );
         }
     }
 

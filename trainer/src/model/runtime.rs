@@ -113,6 +113,17 @@ pub struct BlobInfo {
     pub angle_names: Vec<String>,
     /// The irradiance rig the model carries, if any.
     pub irradiance_rig: Option<RigInfo>,
+    /// The texel atlas of a light-map model (whose rows are texels), if it records one.
+    pub texel_atlas: Option<AtlasInfo>,
+}
+
+/// What `inspect` says of a light-map model's texel atlas.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct AtlasInfo {
+    /// The map is `resolution × resolution` texels.
+    pub resolution: u32,
+    /// Rows of the model, one texel each.
+    pub rows: usize,
 }
 
 /// What `inspect` says of a model's irradiance rig.
@@ -188,6 +199,10 @@ pub fn describe(blob: &[u8]) -> Result<BlobInfo, aprt_core::Error> {
         sections,
         angle_names: model.angle_names().iter().map(str::to_owned).collect(),
         irradiance_rig: model.irradiance_rig().map(|r| RigInfo::of(&r, info)),
+        texel_atlas: model.texel_atlas().map(|a| AtlasInfo {
+            resolution: a.resolution(),
+            rows: a.rows(),
+        }),
     })
 }
 
@@ -240,6 +255,15 @@ impl std::fmt::Display for BlobInfo {
                 f,
                 "  irradiance rig  {}: {} SH vectors from {} samples, {} rig lighting weights",
                 rig.kind, rig.sh_vectors, rig.samples, rig.rig_lit_weights
+            )?;
+        }
+        if let Some(atlas) = &self.texel_atlas {
+            let r = u64::from(atlas.resolution);
+            writeln!(
+                f,
+                "  texel atlas     {r} x {r}: {} rows are texels ({:.1}% of the map)",
+                atlas.rows,
+                100.0 * atlas.rows as f64 / (r * r) as f64
             )?;
         }
         writeln!(f, "  sections:")?;
