@@ -33,7 +33,7 @@ pub use rig::bone_frames;
 pub use bake::{
     Accel, BakeError, BakeSettings, bake_pose, bake_pose_with, bake_poses, bake_vertices,
 };
-pub use io::obj::{LineError, ObjError, read_obj};
+pub use io::obj::{LineError, ObjError, read_obj, read_obj_with_uvs};
 pub use model::export::{
     ExportError, Extras, Precision, encode_model, encode_model_with, encode_model_with_rig,
 };

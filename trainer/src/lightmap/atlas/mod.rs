@@ -11,7 +11,7 @@
 //! texel `(x, y)` covers `u ∈ [x/R, (x+1)/R]`, `v ∈ [y/R, (y+1)/R]`, its centre is
 //! `((x+½)/R, (y+½)/R)` and its index `y·R + x`.
 //!
-//! **Coverage** ([`raster`]):
+//! **Coverage** (`raster.rs`):
 //! - a texel is covered by every triangle whose UV triangle contains its centre, edges
 //!   included (within a hundredth of a texel width), with one sample per such
 //!   triangle at the centre's barycentric coordinates: a centre on an edge shared by two
@@ -23,7 +23,7 @@
 //!   touches holds a value of that island's own surface, not an extrapolation;
 //! - degenerate UV triangles (no area, to f32 precision) cover nothing.
 //!
-//! **Gutters** ([`dilate`]): bilinear sampling at a point on an island's edge reads the 2×2
+//! **Gutters** (`dilate.rs`): bilinear sampling at a point on an island's edge reads the 2×2
 //! texels around it, some of which no triangle touches. [`Atlas::gather`] fills [`GUTTER`]
 //! rings of texels around the covered ones, ring by ring, each texel the mean of its already
 //! filled 8-neighbours. Charts at least `2·GUTTER + 1` texels apart never mix: each island's

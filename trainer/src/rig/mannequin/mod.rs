@@ -544,7 +544,8 @@ impl Rig for MocapRig {
         Ok(self.clip_range(0..self.mocap.frame_count())?)
     }
 
-    /// One chart per lathe part (see [`crate::rig::lathe`]).
+    /// One chart per closed part, packed into the unit square (the lathe layout: `u` around,
+    /// `v` along the profile, uniform texel density, charts padded apart).
     fn uv_layout(&self) -> Option<&UvLayout> {
         self.uv_layout.as_ref()
     }

@@ -210,7 +210,8 @@ impl<S: Spec> Rig for BuiltinRig<S> {
         find_clip(self.clips(), name)
     }
 
-    /// One chart per lathe part (see [`crate::rig::lathe`]).
+    /// One chart per closed part, packed into the unit square (the lathe layout: `u` around,
+    /// `v` along the profile, uniform texel density, charts padded apart).
     fn uv_layout(&self) -> Option<&UvLayout> {
         self.uv_layout.as_ref()
     }
