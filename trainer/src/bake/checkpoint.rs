@@ -712,7 +712,13 @@ mod tests {
                     .map(|t| [at(t, 0), at(t, 1), at(t, 2)])
                     .collect();
                 let up = vec![[0.0, 0.0, 1.0]; centroids.len()];
-                crate::bake::bake_points(mesh, &centroids, &up, settings, progress)
+                crate::bake::bake_points(
+                    mesh,
+                    (&centroids, &up),
+                    crate::bake::PatternRotation::Shared,
+                    settings,
+                    progress,
+                )
             }
         }
         let dir = tempfile::tempdir().unwrap();

@@ -262,8 +262,8 @@ pub fn bake_vertices(
 /// `progress` advances by one per point.
 pub fn bake_points(
     mesh: &Mesh,
-    positions: &[[f32; 3]],
-    normals: &[[f32; 3]],
+    (positions, normals): (&[[f32; 3]], &[[f32; 3]]),
+    rotation: PatternRotation,
     settings: &BakeSettings,
     progress: &dyn BakeProgress,
 ) -> Result<Vec<f32>, BakeError> {
@@ -297,6 +297,7 @@ pub fn bake_points(
     let points = Points {
         positions,
         normals: &unit,
+        rotation,
     };
     if positions.is_empty() || mesh.vertex_count() == 0 {
         return Ok(vec![0.0; positions.len() * prepared.n2]);
@@ -435,6 +436,7 @@ impl<'a> Prepared<'a> {
         let points = Points {
             positions: &self.mesh.positions,
             normals: &self.normals,
+            rotation: PatternRotation::PerPoint,
         };
         self.direct_at(&points, tracer, vertices, hits_wanted, progress)
     }
@@ -464,7 +466,11 @@ impl<'a> Prepared<'a> {
                 let p = DVec3::from(points.positions[j].map(f64::from));
                 let n = points.normals[j];
                 let origin = (p + n * self.offset).as_vec3a();
-                let frame = directions::vertex_frame(n, directions::vertex_rotation(j));
+                let angle = match points.rotation {
+                    PatternRotation::PerPoint => directions::vertex_rotation(j),
+                    PatternRotation::Shared => directions::vertex_rotation(0),
+                };
+                let frame = directions::vertex_frame(n, angle);
                 directions::place_pattern(&self.pattern, &frame, dirs);
                 let mut vertex_hits = vertex_hits;
                 for (d, basis) in dirs.iter().zip(self.local_basis.chunks_exact(n2)) {
@@ -567,6 +573,20 @@ impl<'a> Prepared<'a> {
 struct Points<'p> {
     positions: &'p [[f32; 3]],
     normals: &'p [DVec3],
+    /// The pattern's rotation about the normal: its own per point (the vertex bake: the
+    /// Monte Carlo error decorrelates between neighbours), or one shared by every point.
+    rotation: PatternRotation,
+}
+
+/// How the ray pattern is turned about each point's normal.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PatternRotation {
+    /// Point `j` turns by its own pseudo-random angle, as vertex `j` of the vertex bake does.
+    PerPoint,
+    /// Every point turns by the same angle: points with the same normal and surroundings cast
+    /// the same rays, so the Monte Carlo error varies as smoothly over a light map as the
+    /// geometry does instead of as white noise, which the sequence codec cannot compress.
+    Shared,
 }
 
 /// One worker thread's buffers, reused for all the vertices it bakes.

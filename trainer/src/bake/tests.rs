@@ -765,8 +765,16 @@ fn near_duplicate_vertices_and_slivers_bake_to_finite_plausible_transfer() {
 fn points_at_the_vertices_bake_the_vertices_transfer() {
     let mesh = floor_and_wall();
     let direct = settings(3, 64);
-    let at_vertices =
-        |s: &BakeSettings| bake_points(&mesh, &mesh.positions, &mesh.normals, s, &Silent).unwrap();
+    let at_vertices = |s: &BakeSettings| {
+        bake_points(
+            &mesh,
+            (&mesh.positions, &mesh.normals),
+            PatternRotation::PerPoint,
+            s,
+            &Silent,
+        )
+        .unwrap()
+    };
     let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
     assert_eq!(
         bits(&at_vertices(&direct)),
@@ -794,7 +802,7 @@ fn points_between_vertices_bake_and_bad_points_are_refused() {
     let s = settings(1, 4096);
     let far = [[-4.5f32, 0.5, 0.0]];
     let up = [[0.0f32, 0.0, 1.0]];
-    let t = bake_points(&mesh, &far, &up, &s, &Silent).unwrap();
+    let t = bake_points(&mesh, (&far, &up), PatternRotation::Shared, &s, &Silent).unwrap();
     let wall = [
         DVec3::new(1.0, -10.0, 0.0),
         DVec3::new(1.0, 10.0, 0.0),
@@ -808,14 +816,27 @@ fn points_between_vertices_bake_and_bad_points_are_refused() {
         "{t:?} vs {expect}"
     );
     assert!(matches!(
-        bake_points(&mesh, &[[f32::NAN, 0.0, 0.0]], &up, &s, &Silent),
+        bake_points(
+            &mesh,
+            (&[[f32::NAN, 0.0, 0.0]], &up),
+            PatternRotation::Shared,
+            &s,
+            &Silent
+        ),
         Err(BakeError::NonFinitePosition { vertex: 0, .. })
     ));
     assert!(matches!(
-        bake_points(&mesh, &far, &[], &s, &Silent),
+        bake_points(&mesh, (&far, &[]), PatternRotation::Shared, &s, &Silent),
         Err(BakeError::NormalCountMismatch { .. })
     ));
     // A zero normal falls back to +z rather than NaN.
-    let zero = bake_points(&mesh, &far, &[[0.0; 3]], &s, &Silent).unwrap();
+    let zero = bake_points(
+        &mesh,
+        (&far, &[[0.0; 3]]),
+        PatternRotation::Shared,
+        &s,
+        &Silent,
+    )
+    .unwrap();
     assert_eq!(zero, t);
 }

@@ -4,6 +4,7 @@
 
 mod args;
 mod irradiance_rig;
+mod shlm;
 mod source;
 mod terminal;
 
@@ -64,6 +65,9 @@ pub enum Command {
     Rig(RigArgs),
     /// Regenerate the irradiance-rig study on the built-in creature (docs/rigs).
     RigStudy(RigStudyArgs),
+    /// SH light maps: bake a clip into a compressed light-map sequence, sample it at the
+    /// vertices, inspect it, compose it under lights, or train the pose-driven light-map model.
+    Shlm(shlm::ShlmArgs),
 }
 
 /// Runs one command. An interrupted run (SIGINT, SIGTERM, SIGHUP) leaves no temporary file.
@@ -79,6 +83,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Results(args) => results(&args),
         Command::Rig(args) => irradiance_rig::run(&args),
         Command::RigStudy(args) => rig_study(&args),
+        Command::Shlm(args) => shlm::run(&args),
+
         Command::Light(args) => match args.command {
             LightCommand::Irradiance(args) => light_irradiance(&args),
         },

@@ -287,7 +287,7 @@ impl SourceArgs {
     /// The rig and clips the options name, with the clips `validate` names (`--validate`).
     /// Errors when they name no rig. Notes on what the rig leaves out of a clip go to
     /// `reporter`.
-    fn load(&self, validate: &[String], reporter: &dyn Reporter) -> Result<RigClips> {
+    pub(crate) fn load(&self, validate: &[String], reporter: &dyn Reporter) -> Result<RigClips> {
         self.check_flags()?;
         let Some(source) = self.rig_source() else {
             bail!("no character given: use --builtin, --gltf or --bvh (or --obj-seq with --angles)")

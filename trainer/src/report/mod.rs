@@ -6,6 +6,7 @@ pub mod demo;
 pub mod evaluate;
 pub mod experiment;
 pub mod figures;
+pub mod lightmap_study;
 pub mod plots;
 pub mod render;
 pub mod results;

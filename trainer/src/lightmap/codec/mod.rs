@@ -58,6 +58,7 @@ mod tests;
 pub use compare::{CodecReport, compare};
 pub use error::CodecError;
 pub use file::ShlmFile;
+pub use header::MAGIC;
 pub use sequence::encode;
 pub use shared_exp::{Grouping, PlaneSettings, SignMode};
 

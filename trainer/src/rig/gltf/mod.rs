@@ -273,7 +273,6 @@ impl GltfRig {
         &self.joint_names
     }
 
-
     /// Animated properties held at rest when posing (translations, scales, non-joint
     /// rotations), with their largest deviation from rest.
     pub fn held_channels(&self) -> &[HeldChannel] {

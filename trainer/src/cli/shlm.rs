@@ -1,0 +1,413 @@
+//! `aprt shlm`: SH light maps. Bake a clip into a compressed light-map sequence, read it back
+//! at the vertices (comparable with `aprt simulate`), inspect it, compose it under lights, and
+//! train the pose-driven light-map model.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result, bail};
+use clap::{Args, Subcommand};
+
+use crate::bake::checkpoint::{Checkpoint, OnExisting};
+use crate::cli::args::{BakeArgs, FitArgs, PrecisionArg};
+use crate::cli::source::SourceArgs;
+use crate::cli::terminal::Terminal;
+use crate::cli::{read_file, write_npy};
+use crate::io::atomic::write_atomic;
+use crate::io::outputs::{Input, Output, check};
+use crate::lightmap::bake::{CheckpointSettings, bake_light_maps, uv_layout};
+use crate::lightmap::codec::{CodecSettings, ShlmFile, encode};
+use crate::lightmap::compose::{ComposeSource, save_preview};
+use crate::lightmap::model::{LightMapTraining, predict_maps, train_light_maps};
+use crate::lightmap::sample::at_vertices;
+use crate::lightmap::summary::summarize;
+
+/// `aprt shlm`.
+#[derive(Debug, Args)]
+pub struct ShlmArgs {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: ShlmCommand,
+}
+
+/// The `aprt shlm` commands.
+#[derive(Debug, Subcommand)]
+pub enum ShlmCommand {
+    /// Bake every frame of a clip into SH light maps on the character's UV atlas and write the
+    /// compressed sequence.
+    Bake(ShlmBakeArgs),
+    /// Sample a sequence (or a light-map model) at every vertex's UV into a (frames,
+    /// vertices, n²) float32 .npy, comparable with `aprt simulate`.
+    Eval(ShlmEvalArgs),
+    /// Print a sequence's dimensions, sizes and decode time.
+    Inspect(ShlmInspectArgs),
+    /// Compose a frame's light map under a lights file and write it as a PNG.
+    Compose(ShlmComposeArgs),
+    /// Bake a clip's light maps and fit the pose-driven light-map model to them.
+    Train(ShlmTrainArgs),
+}
+
+/// Atlas resolution and checkpointing, shared by `bake` and `train`.
+#[derive(Debug, Args)]
+pub struct AtlasArgs {
+    /// Atlas width and height in texels.
+    #[arg(long, default_value_t = 256)]
+    pub resolution: usize,
+    /// Checkpoint directory: every baked frame is saved there until the output is written
+    /// (default: OUTPUT.bake beside it).
+    #[arg(long)]
+    pub checkpoint: Option<PathBuf>,
+    /// Continue an interrupted bake from its checkpoint (same inputs and bake settings).
+    #[arg(long)]
+    pub resume: bool,
+}
+
+/// `aprt shlm bake`.
+#[derive(Debug, Args)]
+pub struct ShlmBakeArgs {
+    /// The character and its clip.
+    #[command(flatten)]
+    pub source: SourceArgs,
+    /// Atlas and checkpoint.
+    #[command(flatten)]
+    pub atlas: AtlasArgs,
+    /// Simulation settings.
+    #[command(flatten)]
+    pub bake: BakeArgs,
+    /// Output sequence file (.shlm).
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+/// `aprt shlm eval`.
+#[derive(Debug, Args)]
+pub struct ShlmEvalArgs {
+    /// The sequence (.shlm), or a light-map model (.aprt from `aprt shlm train`).
+    pub input: PathBuf,
+    /// The character and the clip: for a sequence, the clip it was baked from.
+    #[command(flatten)]
+    pub source: SourceArgs,
+    /// Output .npy file, float32 (frames, vertices, n²).
+    #[arg(long)]
+    pub npy: PathBuf,
+    /// Print the relative transfer error ‖eval − truth‖ / ‖truth‖ against this .npy of the
+    /// same shape (the output of `aprt simulate` on the same clip and order).
+    #[arg(long)]
+    pub against: Option<PathBuf>,
+}
+
+/// `aprt shlm inspect`.
+#[derive(Debug, Args)]
+pub struct ShlmInspectArgs {
+    /// The sequence (.shlm).
+    pub input: PathBuf,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `aprt shlm compose`.
+#[derive(Debug, Args)]
+pub struct ShlmComposeArgs {
+    /// The sequence (.shlm), or a light-map model (.aprt from `aprt shlm train`).
+    pub input: PathBuf,
+    /// The character and clip: needed for a model (the pose), optional for a sequence (adds
+    /// the character rendered with the light map beside its per-vertex ray-traced shading).
+    #[command(flatten)]
+    pub source: SourceArgs,
+    /// The frame (of the sequence, or of the clip for a model).
+    #[arg(long, default_value_t = 0)]
+    pub frame: usize,
+    /// The lights (TOML, `[[light]]` tables), each texel lit at its bind-pose position.
+    #[arg(long)]
+    pub lights: PathBuf,
+    /// Output PNG.
+    #[arg(long)]
+    pub png: PathBuf,
+    /// Rays per vertex of the per-vertex reference panel.
+    #[arg(long, default_value_t = 256)]
+    pub rays: usize,
+}
+
+/// `aprt shlm train`.
+#[derive(Debug, Args)]
+pub struct ShlmTrainArgs {
+    /// The character and its training clips.
+    #[command(flatten)]
+    pub source: SourceArgs,
+    /// Atlas and checkpoint.
+    #[command(flatten)]
+    pub atlas: AtlasArgs,
+    /// Simulation settings.
+    #[command(flatten)]
+    pub bake: BakeArgs,
+    /// Model shape.
+    #[command(flatten)]
+    pub fit: FitArgs,
+    /// Output model file.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+/// Runs `aprt shlm`.
+pub fn run(args: &ShlmArgs) -> Result<()> {
+    match &args.command {
+        ShlmCommand::Bake(args) => bake(args),
+        ShlmCommand::Eval(args) => eval(args),
+        ShlmCommand::Inspect(args) => inspect(args),
+        ShlmCommand::Compose(args) => compose(args),
+        ShlmCommand::Train(args) => train(args),
+    }
+}
+
+/// The checkpoint output of a command writing `output`, and the files of a checkpoint being
+/// resumed (inputs, which the output must not land on).
+fn checkpoint_output(atlas: &AtlasArgs, output: &std::path::Path) -> (Output, Vec<Input>) {
+    let checkpoint = match &atlas.checkpoint {
+        Some(dir) => Output::directory(dir, "--checkpoint"),
+        None => Output::directory(
+            Checkpoint::default_dir(output),
+            "the checkpoint directory (-o's path + .bake)",
+        ),
+    };
+    let stored = std::fs::read_dir(&checkpoint.path).into_iter().flatten();
+    let inputs = stored
+        .flatten()
+        .map(|e| Input::new(e.path(), "a file of the checkpoint"))
+        .collect();
+    (checkpoint, inputs)
+}
+
+fn existing(atlas: &AtlasArgs) -> OnExisting {
+    if atlas.resume {
+        OnExisting::Resume
+    } else {
+        OnExisting::Refuse
+    }
+}
+
+fn bake(args: &ShlmBakeArgs) -> Result<()> {
+    let (checkpoint, mut inputs) = checkpoint_output(&args.atlas, &args.output);
+    inputs.extend(args.source.inputs());
+    check(
+        &[Output::file(&args.output, "-o"), checkpoint.clone()],
+        &inputs,
+    )?;
+    let settings = args.bake.settings();
+    settings.validate()?;
+    let (rig, clip) = args.source.rig(&Terminal)?;
+    let what = args
+        .source
+        .origin()
+        .unwrap_or_else(|| "the character".into());
+    let baked = args.source.in_origin(bake_light_maps(
+        rig.as_ref(),
+        &what,
+        &clip,
+        args.atlas.resolution,
+        &settings,
+        &CheckpointSettings {
+            dir: &checkpoint.path,
+            existing: existing(&args.atlas),
+        },
+        &Terminal,
+    ))?;
+    let bytes = encode(&baked.sequence, &CodecSettings::default())?;
+    write_atomic(&args.output, &bytes)
+        .with_context(|| format!("cannot write {}", args.output.display()))?;
+    let summary = summarize(&bytes)?;
+    eprintln!(
+        "wrote {}: {} frames of {r}x{r} texels ({} filled), order {}, {} bytes ({:.1}:1 against {} raw), bake {:.1} s, decode {:.2} ms/frame",
+        args.output.display(),
+        summary.frames,
+        summary.filled_texels,
+        summary.order,
+        summary.bytes,
+        summary.ratio,
+        summary.raw_bytes,
+        baked.seconds,
+        summary.decode_ms_per_frame,
+        r = summary.resolution,
+    );
+    Ok(())
+}
+
+/// A sequence's or a model's maps of every frame of the source's clip: (resolution, order,
+/// maps).
+fn maps_of(
+    input: &std::path::Path,
+    bytes: &[u8],
+    rig: &dyn crate::rig::Rig,
+    clip: &crate::rig::Clip,
+) -> Result<(usize, usize, Vec<Vec<f32>>)> {
+    let name = input.display().to_string();
+    if bytes.starts_with(crate::lightmap::codec::MAGIC) {
+        let file = ShlmFile::parse(bytes).with_context(|| format!("{name}: invalid sequence"))?;
+        if file.frames() != clip.frames.len() {
+            bail!(
+                "{name} holds {} frames, clip {} has {}: give the clip the sequence was baked from",
+                file.frames(),
+                clip.name,
+                clip.frames.len()
+            );
+        }
+        let (r, n2) = (file.resolution(), file.order() * file.order());
+        let maps = (0..file.frames())
+            .map(|k| {
+                let mut map = vec![0.0f32; r * r * n2];
+                file.decode_frame(k, &mut map)
+                    .with_context(|| format!("{name}: frame {k}"))?;
+                Ok(map)
+            })
+            .collect::<Result<_>>()?;
+        return Ok((r, file.order(), maps));
+    }
+    let (r, maps) = predict_maps(bytes, &name, rig, clip)?;
+    let n2 = maps.first().map_or(0, |m| m.len() / (r * r).max(1));
+    Ok((r, (n2 as f64).sqrt().round() as usize, maps))
+}
+
+fn eval(args: &ShlmEvalArgs) -> Result<()> {
+    let mut inputs = vec![Input::new(&args.input, "the light maps")];
+    inputs.extend(args.source.inputs());
+    if let Some(truth) = &args.against {
+        inputs.push(Input::new(truth, "--against"));
+    }
+    check(&[Output::file(&args.npy, "--npy")], &inputs)?;
+    let bytes = read_file(&args.input)?;
+    let (rig, clip) = args.source.rig(&Terminal)?;
+    let what = args
+        .source
+        .origin()
+        .unwrap_or_else(|| "the character".into());
+    let layout = uv_layout(rig.as_ref(), &what)?;
+    let bind = rig.bind_mesh();
+    let uvs = layout.vertex_uvs(&bind.triangles, bind.vertex_count());
+    let (r, order, maps) = maps_of(&args.input, &bytes, rig.as_ref(), &clip)?;
+    let n2 = order * order;
+    let flat: Vec<f32> = maps
+        .iter()
+        .flat_map(|map| at_vertices(map, r, n2, &uvs))
+        .collect();
+    let shape = [maps.len(), bind.vertex_count(), n2];
+    write_npy(&args.npy, &shape, &flat)?;
+    if let Some(path) = &args.against {
+        let (truth_shape, truth) = crate::io::npy::decode_f32(&read_file(path)?)
+            .with_context(|| format!("{}: cannot read", path.display()))?;
+        if truth_shape != shape {
+            bail!(
+                "{} has shape {truth_shape:?}, the evaluation {shape:?}",
+                path.display()
+            );
+        }
+        let error = crate::report::evaluate::relative_error(&[flat], &[truth]);
+        println!(
+            "relative transfer error against {}: {:.2}%",
+            path.display(),
+            100.0 * error
+        );
+    }
+    Ok(())
+}
+
+fn inspect(args: &ShlmInspectArgs) -> Result<()> {
+    check(&[], &[Input::new(&args.input, "the sequence")])?;
+    let bytes = read_file(&args.input)?;
+    let summary =
+        summarize(&bytes).with_context(|| format!("{}: invalid sequence", args.input.display()))?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&summary)?);
+        return Ok(());
+    }
+    let s = &summary;
+    println!("{}", args.input.display());
+    println!(
+        "  {} frames, {r}x{r} texels ({} filled), SH order {}",
+        s.frames,
+        s.filled_texels,
+        s.order,
+        r = s.resolution
+    );
+    println!(
+        "  {} bytes, {:.1}:1 against {} bytes of f32 maps",
+        s.bytes, s.ratio, s.raw_bytes
+    );
+    println!("  codec: {}", s.codec);
+    println!("  decode: {:.3} ms per frame", s.decode_ms_per_frame);
+    Ok(())
+}
+
+fn compose(args: &ShlmComposeArgs) -> Result<()> {
+    let mut inputs = vec![
+        Input::new(&args.input, "the light maps"),
+        Input::new(&args.lights, "the lights file"),
+    ];
+    inputs.extend(args.source.inputs());
+    check(&[Output::file(&args.png, "--png")], &inputs)?;
+    let bytes = read_file(&args.input)?;
+    let lights = crate::lighting::read_lights(&args.lights)?;
+    let character = if args.source.names_rig() {
+        Some(args.source.rig(&Terminal)?)
+    } else {
+        None
+    };
+    let source = ComposeSource {
+        name: &args.input.display().to_string(),
+        bytes: &bytes,
+        character: character.as_ref().map(|(rig, clip)| (rig.as_ref(), clip)),
+        frame: args.frame,
+        rays: args.rays,
+    };
+    let report = save_preview(&args.png, &source, &lights)?;
+    eprintln!("wrote {}: {report}", args.png.display());
+    Ok(())
+}
+
+fn train(args: &ShlmTrainArgs) -> Result<()> {
+    let (checkpoint, mut inputs) = checkpoint_output(&args.atlas, &args.output);
+    inputs.extend(args.source.inputs());
+    check(
+        &[Output::file(&args.output, "-o"), checkpoint.clone()],
+        &inputs,
+    )?;
+    let settings = args.bake.settings();
+    settings.validate()?;
+    let fit = args.fit.options()?;
+    let (rig, clips, _) = args.source.load(&[], &Terminal)?;
+    let what = args
+        .source
+        .origin()
+        .unwrap_or_else(|| "the character".into());
+    let training = LightMapTraining {
+        resolution: args.atlas.resolution,
+        bake: settings,
+        fit: &fit,
+        precision: PrecisionArg::into(args.fit.precision),
+        checkpoint: CheckpointSettings {
+            dir: &checkpoint.path,
+            existing: existing(&args.atlas),
+        },
+    };
+    let trained = args.source.in_origin(train_light_maps(
+        rig.as_ref(),
+        &what,
+        clips,
+        &training,
+        &Terminal,
+    ))?;
+    write_atomic(&args.output, &trained.blob)
+        .with_context(|| format!("cannot write {}", args.output.display()))?;
+    let info = &trained.info;
+    eprintln!(
+        "wrote {}: {} frames, {} texel rows, k_a {}, k_v {}, alpha {:.3e}, {} bytes (bake {:.1} s, fit {:.1} s)",
+        args.output.display(),
+        trained.frames,
+        info.vertices,
+        info.pose_dims,
+        info.coef_dims,
+        info.alpha,
+        info.bytes,
+        trained.seconds.0,
+        trained.seconds.1,
+    );
+    Ok(())
+}

@@ -1,0 +1,164 @@
+//! Baking a clip into SH light maps: every frame's texels (each the surface point and
+//! interpolated normal the atlas gives it, on that frame's posed mesh) baked by the vertex
+//! bake's own code ([`crate::bake::bake_points`]), through a checkpoint like `aprt train`'s.
+
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+
+use super::atlas::{Atlas, UvLayout};
+use super::codec::MapSequence;
+use crate::bake::checkpoint::{BakeTarget, Checkpoint, OnExisting};
+use crate::bake::clip::pose_all;
+use crate::bake::{BakeError, BakeSettings, PatternRotation, bake_points};
+use crate::progress::{BakeProgress, Reporter};
+use crate::rig::mesh::Mesh;
+use crate::rig::{Clip, Rig};
+
+/// The texels of an atlas, as the points a checkpoint bakes.
+pub struct Texels<'a> {
+    atlas: &'a Atlas,
+    /// CRC-32 of the layout's UVs, so a resume with other UVs is refused.
+    uv_crc: u32,
+}
+
+impl<'a> Texels<'a> {
+    /// The texels of `atlas`, built from `layout`.
+    pub fn new(atlas: &'a Atlas, layout: &UvLayout) -> Self {
+        let mut h = crc32fast::Hasher::new();
+        for uv in layout.corners.iter().flatten().flatten() {
+            h.update(&uv.to_le_bytes());
+        }
+        Texels {
+            atlas,
+            uv_crc: h.finalize(),
+        }
+    }
+}
+
+impl BakeTarget for Texels<'_> {
+    fn describe(&self) -> String {
+        let r = self.atlas.resolution();
+        format!(
+            "texels of a {r}x{r} atlas ({} samples, UV CRC {:08x})",
+            self.atlas.samples().len(),
+            self.uv_crc
+        )
+    }
+
+    fn points(&self, _mesh: &Mesh) -> usize {
+        self.atlas.samples().len()
+    }
+
+    fn bake(
+        &self,
+        mesh: &Mesh,
+        settings: &BakeSettings,
+        progress: &dyn BakeProgress,
+    ) -> Result<Vec<f32>, BakeError> {
+        let (positions, normals) = self.atlas.surface(mesh);
+        bake_points(
+            mesh,
+            (&positions, &normals),
+            PatternRotation::Shared,
+            settings,
+            progress,
+        )
+    }
+}
+
+/// Where a light-map bake keeps its finished frames, and what it does with an existing one.
+pub struct CheckpointSettings<'a> {
+    /// The checkpoint directory.
+    pub dir: &'a Path,
+    /// Resume or refuse an existing checkpoint.
+    pub existing: OnExisting,
+}
+
+/// A baked light-map sequence and what the bake measured.
+pub struct BakedMaps {
+    /// The maps, one per frame, with the filled texels and their bind positions.
+    pub sequence: MapSequence,
+    /// The atlas the maps were baked on.
+    pub atlas: Atlas,
+    /// Wall-clock seconds of the bake (resumed frames cost nothing).
+    pub seconds: f64,
+}
+
+/// The rig's UV layout, or the error that says the character has none.
+pub fn uv_layout<'r>(rig: &'r dyn Rig, what: &str) -> Result<&'r UvLayout> {
+    match rig.uv_layout() {
+        Some(layout) => Ok(layout),
+        None => bail!(
+            "{what} has no texture coordinates (glTF TEXCOORD_0, OBJ vt): an SH light map needs a UV atlas"
+        ),
+    }
+}
+
+/// Bakes every frame of `clip` of `rig` at the texels of an atlas of `resolution`² on the
+/// rig's UV layout, through the checkpoint `checkpoint` (removed once every frame is baked).
+/// Overlapping texels (mirrored or overlapping UVs take the mean) are reported to `reporter`.
+pub fn bake_light_maps(
+    rig: &dyn Rig,
+    what: &str,
+    clip: &Clip,
+    resolution: usize,
+    settings: &BakeSettings,
+    checkpoint: &CheckpointSettings<'_>,
+    reporter: &dyn Reporter,
+) -> Result<BakedMaps> {
+    let layout = uv_layout(rig, what)?;
+    let bind = rig.bind_mesh();
+    let atlas = Atlas::build(layout, &bind.triangles, resolution)
+        .with_context(|| format!("{what}: building the {resolution}x{resolution} UV atlas"))?;
+    let overlapping = atlas.overlapping_texels();
+    if overlapping > 0 {
+        reporter.note(&format!(
+            "note: {what}: {overlapping} texels lie on two or more triangles (mirrored or overlapping UVs); they hold the mean of those surface points' transfer"
+        ));
+    }
+    let meshes = pose_all(rig, &clip.name, &clip.frames)?;
+    let target = Texels::new(&atlas, layout);
+    let mut store = Checkpoint::open_at(
+        checkpoint.dir,
+        checkpoint.existing,
+        settings,
+        &meshes,
+        &target,
+    )?;
+    let start = Instant::now();
+    let name = |f: usize| format!("clip {} frame {f}", clip.name);
+    let values = store.bake_at(&meshes, &target, name, reporter)?;
+    let seconds = start.elapsed().as_secs_f64();
+    let n2 = settings.order * settings.order;
+    let frames = values.iter().map(|v| atlas.gather(v, n2)).collect();
+    let sequence = MapSequence {
+        resolution,
+        order: settings.order,
+        filled: atlas.filled(),
+        positions: texel_positions(&atlas, bind),
+        frames,
+    };
+    store.remove()?;
+    Ok(BakedMaps {
+        sequence,
+        atlas,
+        seconds,
+    })
+}
+
+/// The bind-pose surface point of every filled texel, in texel order: where a runtime lights
+/// the texel (the mean over its samples; gutter texels take their neighbours').
+pub fn texel_positions(atlas: &Atlas, bind: &Mesh) -> Vec<[f32; 3]> {
+    let (positions, _) = atlas.surface(bind);
+    let flat: Vec<f32> = positions.into_iter().flatten().collect();
+    let map = atlas.gather(&flat, 3);
+    atlas
+        .filled()
+        .iter()
+        .enumerate()
+        .filter(|&(_, &f)| f)
+        .map(|(t, _)| [map[3 * t], map[3 * t + 1], map[3 * t + 2]])
+        .collect()
+}

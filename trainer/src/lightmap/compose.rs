@@ -1,0 +1,268 @@
+//! Composing light maps under lights (`SHLM = Σ_i L_i · SHLM_i`, through aprt-core, each
+//! texel lit at its bind-pose position) and the preview `aprt shlm compose` writes: the light
+//! map, and with the character the frame rendered with it beside its per-vertex ray-traced
+//! shading and their error.
+
+use std::path::Path;
+
+use anyhow::{Context, Result, bail};
+use aprt_core::{Light, Rgb};
+use image::{Rgb as Pixel, RgbImage, imageops};
+
+use super::atlas::{Atlas, UvLayout, sample_bilinear};
+use super::bake::{texel_positions, uv_layout};
+use super::codec::{MAGIC, ShlmFile};
+use super::model::predict_maps;
+use super::sample::at_vertices;
+use crate::bake::{BakeSettings, bake_pose};
+use crate::report::figures::{PICTURE_VIEW, upright};
+use crate::report::render::{Colormap, render_scalar, render_with, save_png_atomic, side_by_side};
+use crate::rig::mesh::Mesh;
+use crate::rig::{Clip, Rig};
+
+/// Texels composed per call into aprt-core: the fixed buffer an engine would stream through.
+const CHUNK: usize = 4096;
+
+/// What to compose: a sequence file or a light-map model, and the character.
+pub struct ComposeSource<'a> {
+    /// The input's name, for errors.
+    pub name: &'a str,
+    /// Its bytes.
+    pub bytes: &'a [u8],
+    /// The character and clip: a model's poses; for a sequence, the rendered panels.
+    pub character: Option<(&'a dyn Rig, &'a Clip)>,
+    /// The frame.
+    pub frame: usize,
+    /// Rays per vertex of the per-vertex reference.
+    pub rays: usize,
+}
+
+/// One frame's transfer maps with what lighting them needs.
+struct FrameMaps {
+    resolution: usize,
+    order: usize,
+    /// `resolution²` flags: the texels holding transfer.
+    filled: Vec<bool>,
+    /// Bind-pose position of each filled texel, in texel order.
+    positions: Vec<[f32; 3]>,
+    /// `resolution² × n²`, texel-major.
+    map: Vec<f32>,
+}
+
+/// Frame `frame` of a sequence file.
+fn sequence_frame(name: &str, bytes: &[u8], frame: usize) -> Result<FrameMaps> {
+    let file = ShlmFile::parse(bytes).with_context(|| format!("{name}: invalid sequence"))?;
+    if frame >= file.frames() {
+        bail!("--frame {frame}: {name} holds {} frames", file.frames());
+    }
+    let (r, order) = (file.resolution(), file.order());
+    let mut map = vec![0.0f32; r * r * order * order];
+    file.decode_frame(frame, &mut map)?;
+    Ok(FrameMaps {
+        resolution: r,
+        order,
+        filled: file.filled()?,
+        positions: file.positions()?,
+        map,
+    })
+}
+
+/// A light-map model's maps at frame `frame` of the clip, lit at the bind positions of the
+/// rig's atlas at the model's resolution.
+fn model_frame(
+    name: &str,
+    bytes: &[u8],
+    rig: &dyn Rig,
+    clip: &Clip,
+    frame: usize,
+) -> Result<FrameMaps> {
+    let Some(pose) = clip.frames.get(frame) else {
+        bail!(
+            "--frame {frame}: clip {} has {} frames",
+            clip.name,
+            clip.frames.len()
+        );
+    };
+    let one = Clip {
+        frames: vec![pose.clone()],
+        ..clip.clone()
+    };
+    let (r, mut maps) = predict_maps(bytes, name, rig, &one)?;
+    let map = maps.pop().unwrap_or_default();
+    let n2 = map.len() / (r * r).max(1);
+    let layout = uv_layout(rig, name)?;
+    let atlas = Atlas::build(layout, &rig.bind_mesh().triangles, r)?;
+    Ok(FrameMaps {
+        resolution: r,
+        order: (n2 as f64).sqrt().round() as usize,
+        filled: atlas.filled(),
+        positions: texel_positions(&atlas, rig.bind_mesh()),
+        map,
+    })
+}
+
+/// The RGB light map (`resolution²` texels, black where no transfer is) of `maps` under
+/// `lights`: the filled texels streamed through aprt-core [`CHUNK`] at a time.
+fn light_map(maps: &FrameMaps, lights: &[Light]) -> Result<Vec<Rgb>> {
+    let n2 = maps.order * maps.order;
+    let texels: Vec<usize> = (0..maps.filled.len()).filter(|&t| maps.filled[t]).collect();
+    if texels.len() != maps.positions.len() {
+        bail!(
+            "{} filled texels but {} positions",
+            texels.len(),
+            maps.positions.len()
+        );
+    }
+    let composer = aprt_core::LightMap::new(maps.order)?;
+    let mut out = vec![[0.0f32; 3]; maps.filled.len()];
+    let mut transfer = vec![0.0f32; CHUNK * n2];
+    let mut rgb = [[0.0f32; 3]; CHUNK];
+    for (chunk, positions) in texels.chunks(CHUNK).zip(maps.positions.chunks(CHUNK)) {
+        for (i, &t) in chunk.iter().enumerate() {
+            transfer[i * n2..][..n2].copy_from_slice(&maps.map[t * n2..][..n2]);
+        }
+        let k = chunk.len();
+        composer.compose_lights(&transfer[..k * n2], positions, lights, &[], &mut rgb[..k])?;
+        for (&t, &c) in chunk.iter().zip(&rgb[..k]) {
+            out[t] = c;
+        }
+    }
+    Ok(out)
+}
+
+fn luminance(c: Rgb) -> f32 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+/// The light map as a picture, shading 0..1 as black to white per channel, upscaled (nearest)
+/// to the panels' height.
+fn map_image(map: &[Rgb], resolution: usize) -> RgbImage {
+    let r = resolution as u32;
+    let image = RgbImage::from_fn(r, r, |x, y| {
+        let c = map[(y * r + x) as usize];
+        Pixel(c.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8))
+    });
+    let size = PANEL.1.max(r);
+    imageops::resize(&image, size, size, imageops::FilterType::Nearest)
+}
+
+/// Each vertex's shading from its ray-traced transfer on `posed`, each vertex lit at its
+/// bind-pose position as the texels are.
+fn per_vertex_shading(
+    posed: &Mesh,
+    bind: &Mesh,
+    order: usize,
+    rays: usize,
+    lights: &[Light],
+) -> Result<Vec<f32>> {
+    let settings = BakeSettings {
+        order,
+        rays,
+        bounces: 0,
+        albedo: 0.0,
+    };
+    let transfer = bake_pose(posed, &settings)?;
+    let mut rgb = vec![[0.0f32; 3]; bind.vertex_count()];
+    aprt_core::LightMap::new(order)?.compose_lights(
+        &transfer,
+        &bind.positions,
+        lights,
+        &[],
+        &mut rgb,
+    )?;
+    Ok(rgb.into_iter().map(luminance).collect())
+}
+
+/// Panel size, as the other figures'.
+const PANEL: (u32, u32) = (360, 480);
+
+/// The character at the frame rendered with the light map, its per-vertex ray-traced shading,
+/// and 4× their difference at the vertices; and the mean and largest difference in 8-bit
+/// grey levels of the displayed shading (luminance).
+fn character_panels(
+    (rig, clip): (&dyn Rig, &Clip),
+    source: &ComposeSource<'_>,
+    maps: &FrameMaps,
+    lit: &[Rgb],
+    lights: &[Light],
+) -> Result<(Vec<RgbImage>, f64, f64)> {
+    let frame = source.frame;
+    let Some(pose) = clip.frames.get(frame) else {
+        bail!(
+            "--frame {frame}: clip {} has {} frames",
+            clip.name,
+            clip.frames.len()
+        );
+    };
+    let layout: &UvLayout = uv_layout(rig, source.name)?;
+    let bind = rig.bind_mesh();
+    let posed = rig.pose(pose)?;
+    let shown = upright(&posed, rig.up());
+    let r = maps.resolution;
+    let grey: Vec<f32> = lit.iter().map(|&c| luminance(c)).collect();
+    let (w, h) = PANEL;
+    let textured = render_with(&shown, PICTURE_VIEW, w, h, |tri, bary| {
+        let uv = layout.corners[tri];
+        let at = [0, 1].map(|k| (0..3).map(|c| bary[c] * uv[c][k]).sum::<f32>());
+        let mut v = [0.0f32];
+        sample_bilinear(&grey, r, 1, at, &mut v);
+        Colormap::Grey.color(v[0])
+    })?;
+    let truth = per_vertex_shading(&posed, bind, maps.order, source.rays, lights)?;
+    let uvs = layout.vertex_uvs(&bind.triangles, bind.vertex_count());
+    let sampled = at_vertices(&grey, r, 1, &uvs);
+    let errors: Vec<f32> = sampled
+        .iter()
+        .zip(&truth)
+        .map(|(a, b)| (a - b).abs())
+        .collect();
+    let mean = errors.iter().map(|&e| f64::from(e)).sum::<f64>() / errors.len().max(1) as f64;
+    let max = errors.iter().copied().fold(0.0f32, f32::max);
+    let shown_errors: Vec<f32> = errors.iter().map(|e| 4.0 * e).collect();
+    let panels = vec![
+        textured,
+        render_scalar(&shown, &truth, PICTURE_VIEW, w, h, Colormap::Grey)?,
+        render_scalar(
+            &shown,
+            &shown_errors,
+            PICTURE_VIEW,
+            w,
+            h,
+            Colormap::Error { max: 1.0 },
+        )?,
+    ];
+    Ok((panels, 255.0 * mean, 255.0 * f64::from(max)))
+}
+
+/// Writes the preview of `source` under `lights` to `path`: the light map, and with a
+/// character the frame rendered with it | per-vertex ray-traced shading | 4× error. Returns a
+/// line saying what was drawn.
+pub fn save_preview(path: &Path, source: &ComposeSource<'_>, lights: &[Light]) -> Result<String> {
+    let maps = if source.bytes.starts_with(MAGIC) {
+        sequence_frame(source.name, source.bytes, source.frame)?
+    } else {
+        let Some((rig, clip)) = source.character else {
+            bail!(
+                "{} is a model: give its character and clip (--gltf/--bvh/--builtin, --clip) for the pose",
+                source.name
+            );
+        };
+        model_frame(source.name, source.bytes, rig, clip, source.frame)?
+    };
+    let lit = light_map(&maps, lights)?;
+    let mut panels = vec![map_image(&lit, maps.resolution)];
+    let mut line = format!(
+        "frame {} light map, {r}x{r} texels",
+        source.frame,
+        r = maps.resolution
+    );
+    if let Some(character) = source.character {
+        let (more, mean, max) = character_panels(character, source, &maps, &lit, lights)?;
+        panels.extend(more);
+        line.push_str(&format!(
+            " | rendered with it | per-vertex ray-traced | 4x error (at the vertices {mean:.2} grey levels mean, {max:.1} max)"
+        ));
+    }
+    save_png_atomic(path, &side_by_side(&panels))?;
+    Ok(line)
+}

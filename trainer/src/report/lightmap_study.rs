@@ -1,0 +1,558 @@
+//! The light-map comparison (`aprt shlm study`, docs/results/lightmaps): on the real glTF
+//! characters, SH light maps stored as a compressed sequence, the pose-driven light-map model
+//! and the per-vertex pose model, on the same clips — bytes, bake and fit time, decode or
+//! evaluation time per frame, error at the vertices on the training clip and on a novel one
+//! (where the stored sequence can only fall back to its nearest frame).
+
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use nalgebra::DMatrix;
+
+use crate::bake::BakeSettings;
+use crate::bake::checkpoint::OnExisting;
+use crate::bake::clip::{BakedClip, bake_clip};
+use crate::lightmap::bake::{BakedMaps, CheckpointSettings, bake_light_maps, uv_layout};
+use crate::lightmap::codec::{CodecSettings, ShlmFile, encode};
+use crate::lightmap::model::{filled_rows, to_map};
+use crate::lightmap::sample::at_vertices;
+use crate::model::ModelFrame;
+use crate::model::export::{Extras, Precision, encode_model, encode_model_with};
+use crate::model::fit::{FitOptions, fit};
+use crate::model::predict::predict_clip;
+use crate::model::runtime::{describe, predict_transfer};
+use crate::model::train::{ClipSet, fit_clip};
+use crate::progress::Reporter;
+use crate::report::evaluate::{nearest_pose, relative_error};
+use crate::rig::pose_layout::PoseLayout;
+use crate::rig::{Clip, Rig};
+
+/// One character of the study: the clip the stored representations are made from and a novel
+/// clip they are tested on.
+pub struct LightMapCase {
+    /// Heading.
+    pub title: String,
+    /// The character.
+    pub rig: Box<dyn Rig>,
+    /// The clip baked, stored and trained on.
+    pub train: Clip,
+    /// The novel clip.
+    pub test: Clip,
+}
+
+/// One row of a case's table.
+struct Row {
+    method: &'static str,
+    bytes: usize,
+    bake_s: f64,
+    fit_s: Option<f64>,
+    ms_per_frame: f64,
+    train_error: f64,
+    test_error: f64,
+}
+
+/// Per-vertex ground truth of a clip: its transfer per frame and its pose vectors reduced by
+/// `layout`.
+fn truth(
+    case: &LightMapCase,
+    layout: &PoseLayout,
+    clip: &Clip,
+    bake: &BakeSettings,
+    reporter: &dyn Reporter,
+) -> Result<(BakedClip, f64)> {
+    bake_clip(
+        case.rig.as_ref(),
+        layout,
+        &clip.name,
+        clip.frames.clone(),
+        bake,
+        reporter,
+    )
+}
+
+/// Light maps of every frame of `maps`, sampled at every vertex's UVs.
+fn sampled(
+    rig: &dyn Rig,
+    maps: &[Vec<f32>],
+    resolution: usize,
+    n2: usize,
+) -> Result<Vec<Vec<f32>>> {
+    let bind = rig.bind_mesh();
+    let uvs = uv_layout(rig, "the character")?.vertex_uvs(&bind.triangles, bind.vertex_count());
+    Ok(maps
+        .iter()
+        .map(|m| at_vertices(m, resolution, n2, &uvs))
+        .collect())
+}
+
+/// The stored sequence: encode, decode every frame (timed), sample at the vertices; on the
+/// novel clip each frame takes the nearest stored frame's map.
+fn sequence_rows(
+    case: &LightMapCase,
+    baked: &BakedMaps,
+    truths: (&BakedClip, &BakedClip),
+) -> Result<Vec<Row>> {
+    let seq = &baked.sequence;
+    let n2 = seq.order * seq.order;
+    let bytes = encode(seq, &CodecSettings::default())?;
+    let file = ShlmFile::parse(&bytes)?;
+    let mut decoded = Vec::with_capacity(file.frames());
+    let start = Instant::now();
+    for k in 0..file.frames() {
+        let mut map = vec![0.0f32; seq.resolution * seq.resolution * n2];
+        file.decode_frame(k, &mut map)?;
+        decoded.push(map);
+    }
+    let decode_ms = start.elapsed().as_secs_f64() * 1e3 / file.frames().max(1) as f64;
+    let (train, test) = truths;
+    let nearest: Vec<usize> = test
+        .angles
+        .iter()
+        .map(|a| nearest_pose(&train.angles, a))
+        .collect();
+    let mut rows = Vec::new();
+    for (method, maps, size, ms) in [
+        (
+            "SH light maps, f32 sequence",
+            &seq.frames,
+            file.raw_bytes() as usize,
+            0.0,
+        ),
+        (
+            "SH light maps, compressed sequence",
+            &decoded,
+            bytes.len(),
+            decode_ms,
+        ),
+    ] {
+        let at = sampled(case.rig.as_ref(), maps, seq.resolution, n2)?;
+        let novel: Vec<Vec<f32>> = nearest.iter().map(|&k| at[k].clone()).collect();
+        rows.push(Row {
+            method,
+            bytes: size,
+            bake_s: baked.seconds,
+            fit_s: None,
+            ms_per_frame: ms,
+            train_error: relative_error(&at, &train.transfer),
+            test_error: relative_error(&novel, &test.transfer),
+        });
+    }
+    Ok(rows)
+}
+
+/// The pose-driven light-map model fitted to the training clip's maps, evaluated through
+/// aprt-core at both clips' poses and sampled at the vertices.
+fn light_map_model_row(
+    case: &LightMapCase,
+    layout: &PoseLayout,
+    baked: &BakedMaps,
+    truths: (&BakedClip, &BakedClip),
+) -> Result<Row> {
+    let seq = &baked.sequence;
+    let n2 = seq.order * seq.order;
+    let start = Instant::now();
+    let (rows, transfers) = filled_rows(seq);
+    let (train, test) = truths;
+    let a = DMatrix::from_fn(train.angles.len(), layout.names().len(), |i, j| {
+        train.angles[i][j]
+    });
+    let mut fitted = fit(&a, &transfers, seq.order, &FitOptions::default())?;
+    fitted.model.angle_names = layout.names().to_vec();
+    let fit_s = start.elapsed().as_secs_f64();
+    let blob = encode_model_with(
+        &fitted.model,
+        Precision::F16,
+        &Extras {
+            irradiance_rig: None,
+            texel_atlas: Some((seq.resolution as u32, &rows)),
+        },
+    )?;
+    let maps = |angles: &[Vec<f64>]| -> Result<(Vec<Vec<f32>>, f64)> {
+        let start = Instant::now();
+        let predicted = predict_transfer(&blob, angles)?;
+        let ms = start.elapsed().as_secs_f64() * 1e3 / angles.len().max(1) as f64;
+        let full = predicted
+            .iter()
+            .map(|values| to_map(values, &rows, seq.resolution, n2))
+            .collect();
+        Ok((full, ms))
+    };
+    let (train_maps, ms) = maps(&train.angles)?;
+    let (test_maps, _) = maps(&test.angles)?;
+    let rig = case.rig.as_ref();
+    Ok(Row {
+        method: "pose-driven light maps (texel rows, world frame)",
+        bytes: blob.len(),
+        bake_s: baked.seconds,
+        fit_s: Some(fit_s),
+        ms_per_frame: ms,
+        train_error: relative_error(
+            &sampled(rig, &train_maps, seq.resolution, n2)?,
+            &train.transfer,
+        ),
+        test_error: relative_error(
+            &sampled(rig, &test_maps, seq.resolution, n2)?,
+            &test.transfer,
+        ),
+    })
+}
+
+/// The per-vertex pose model (the default: bone frames) on the same training clip.
+fn vertex_model_row(
+    case: &LightMapCase,
+    layout: &PoseLayout,
+    truths: (&BakedClip, &BakedClip),
+    bake_s: f64,
+    order: usize,
+) -> Result<Row> {
+    let (train, test) = truths;
+    let start = Instant::now();
+    let clips = ClipSet {
+        train,
+        rest: None,
+        validation: &[],
+    };
+    let fitted = fit_clip(
+        case.rig.as_ref(),
+        layout,
+        clips,
+        order,
+        &FitOptions::default(),
+        ModelFrame::Bone,
+    )?;
+    let fit_s = start.elapsed().as_secs_f64();
+    let blob = encode_model(&fitted.model, Precision::F16)?;
+    let info = describe(&blob)?;
+    let start = Instant::now();
+    let on_train = predict_clip(&blob, &info, "the model", case.rig.as_ref(), &case.train)?;
+    let ms = start.elapsed().as_secs_f64() * 1e3 / case.train.frames.len().max(1) as f64;
+    let on_test = predict_clip(&blob, &info, "the model", case.rig.as_ref(), &case.test)?;
+    Ok(Row {
+        method: "per-vertex pose model (bone frames)",
+        bytes: blob.len(),
+        bake_s,
+        fit_s: Some(fit_s),
+        ms_per_frame: ms,
+        train_error: relative_error(&on_train, &train.transfer),
+        test_error: relative_error(&on_test, &test.transfer),
+    })
+}
+
+/// Measures one case and returns its markdown section.
+pub fn run_case(
+    case: &LightMapCase,
+    resolution: usize,
+    bake: &BakeSettings,
+    scratch: &Path,
+    reporter: &dyn Reporter,
+) -> Result<String> {
+    let rig = case.rig.as_ref();
+    let layout = PoseLayout::from_training(&rig.angle_names(), &case.train.frames)
+        .with_context(|| format!("clip {}", case.train.name))?;
+    let (train, vertex_bake_s) = truth(case, &layout, &case.train, bake, reporter)?;
+    let (test, _) = truth(case, &layout, &case.test, bake, reporter)?;
+    let checkpoint = CheckpointSettings {
+        dir: &scratch.join("study.bake"),
+        existing: OnExisting::Refuse,
+    };
+    let baked = bake_light_maps(
+        rig,
+        &case.title,
+        &case.train,
+        resolution,
+        bake,
+        &checkpoint,
+        reporter,
+    )?;
+    let truths = (&train, &test);
+    let mut rows = sequence_rows(case, &baked, truths)?;
+    rows.push(light_map_model_row(case, &layout, &baked, truths)?);
+    rows.push(vertex_model_row(
+        case,
+        &layout,
+        truths,
+        vertex_bake_s * case.train.frames.len() as f64,
+        bake.order,
+    )?);
+    Ok(section(case, &baked, &rows))
+}
+
+fn section(case: &LightMapCase, baked: &BakedMaps, rows: &[Row]) -> String {
+    let seq = &baked.sequence;
+    let filled = seq.filled.iter().filter(|&&f| f).count();
+    let mut md = format!(
+        "## {}\n\nStored and trained on `{}` ({} frames), novel clip `{}` ({} frames). Atlas {r}x{r} ({filled} texels filled, {} overlapping), SH order {}.\n\n",
+        case.title,
+        case.train.name,
+        case.train.frames.len(),
+        case.test.name,
+        case.test.frames.len(),
+        baked.atlas.overlapping_texels(),
+        seq.order,
+        r = seq.resolution,
+    );
+    md.push_str("| method | bytes | bake s | fit s | decode or eval ms/frame | error on its clip | error on the novel clip |\n|---|---:|---:|---:|---:|---:|---:|\n");
+    for r in rows {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {:.1} | {} | {:.2} | {:.2}% | {:.2}% |",
+            r.method,
+            r.bytes,
+            r.bake_s,
+            r.fit_s.map_or("–".to_owned(), |s| format!("{s:.1}")),
+            r.ms_per_frame,
+            100.0 * r.train_error,
+            100.0 * r.test_error,
+        );
+    }
+    md
+}
+
+/// How closely a stored sequence reproduces per-vertex ray-traced transfer on the clip it was
+/// baked from (what `aprt shlm eval` against `aprt simulate` measures).
+pub struct Fidelity {
+    /// The clip.
+    pub clip: String,
+    /// Frames.
+    pub frames: usize,
+    /// Relative transfer error of the f32 maps sampled at the vertices (the atlas alone).
+    pub atlas_error: f64,
+    /// Relative transfer error after compression.
+    pub error: f64,
+    /// File size and the f32 maps' size.
+    pub bytes: (usize, u64),
+    /// Median milliseconds to decode a frame.
+    pub decode_ms: f64,
+    /// Seconds the texel bake took.
+    pub bake_s: f64,
+}
+
+/// Bakes `clip` of `case`'s character into light maps and per vertex, and measures the
+/// sequence against the vertices.
+pub fn fidelity(
+    case: &LightMapCase,
+    clip: &Clip,
+    resolution: usize,
+    bake: &BakeSettings,
+    scratch: &Path,
+    reporter: &dyn Reporter,
+) -> Result<Fidelity> {
+    let rig = case.rig.as_ref();
+    let meshes = crate::bake::clip::pose_all(rig, &clip.name, &clip.frames)?;
+    let truth = crate::bake::bake_poses(&meshes, bake, reporter)?;
+    let checkpoint = CheckpointSettings {
+        dir: &scratch.join("fidelity.bake"),
+        existing: OnExisting::Refuse,
+    };
+    let baked = bake_light_maps(
+        rig,
+        &case.title,
+        clip,
+        resolution,
+        bake,
+        &checkpoint,
+        reporter,
+    )?;
+    let seq = &baked.sequence;
+    let n2 = seq.order * seq.order;
+    let bytes = encode(seq, &CodecSettings::default())?;
+    let summary = crate::lightmap::summary::summarize(&bytes)?;
+    let file = ShlmFile::parse(&bytes)?;
+    let decoded = (0..file.frames())
+        .map(|k| {
+            let mut map = vec![0.0f32; seq.resolution * seq.resolution * n2];
+            file.decode_frame(k, &mut map).map(|()| map)
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(Fidelity {
+        clip: clip.name.clone(),
+        frames: clip.frames.len(),
+        atlas_error: relative_error(&sampled(rig, &seq.frames, seq.resolution, n2)?, &truth),
+        error: relative_error(&sampled(rig, &decoded, seq.resolution, n2)?, &truth),
+        bytes: (bytes.len(), file.raw_bytes()),
+        decode_ms: summary.decode_ms_per_frame,
+        bake_s: baked.seconds,
+    })
+}
+
+/// Two directional lights and no environment for the previews, placed from the character's up
+/// axis (scale-free, so they suit a fox in centimetres and a man in metres): a warm key from
+/// above and in front of the camera's side, a cool rim from behind.
+pub fn preview_lights(up: glam::Vec3) -> Vec<aprt_core::Light> {
+    let q = glam::Quat::from_rotation_arc(glam::Vec3::Z, up.normalize());
+    let toward = |x: f32, y: f32, z: f32| (q * glam::Vec3::new(x, y, z)).normalize().to_array();
+    vec![
+        aprt_core::Light::Directional(aprt_core::DirectionalLight {
+            direction: toward(0.5, -0.6, 0.8),
+            irradiance: [0.75, 0.68, 0.6],
+        }),
+        aprt_core::Light::Directional(aprt_core::DirectionalLight {
+            direction: toward(-0.4, 0.8, 0.3),
+            irradiance: [0.15, 0.2, 0.3],
+        }),
+    ]
+}
+
+/// The study's cases on the assets in `assets`: the Fox stored and trained on `Survey`,
+/// tested on `Walk`; CesiumMan on the first two thirds of its clip, tested on the rest. Each
+/// with the clip the fidelity figure is measured on (the Fox's `Walk`, CesiumMan's
+/// whole clip).
+pub fn cases(assets: &Path) -> Result<Vec<(LightMapCase, Clip)>> {
+    use crate::rig::gltf::GltfRig;
+    let gltf = assets.join("gltf");
+    let fox = GltfRig::load(&gltf.join("Fox.gltf"), 30.0)?;
+    let (survey, walk) = (fox.clip("Survey")?, fox.clip("Walk")?);
+    let man = GltfRig::load(&gltf.join("CesiumMan.gltf"), 30.0)?;
+    let whole = man.clip(&man.clip_names()[0])?;
+    let cut = whole.frames.len() * 2 / 3;
+    let part = |name: String, frames: &[Vec<f64>]| Clip {
+        name,
+        fps: whole.fps,
+        frames: frames.to_vec(),
+    };
+    let (train, test) = (
+        part(format!("{} [0, {cut})", whole.name), &whole.frames[..cut]),
+        part(
+            format!("{} [{cut}, {})", whole.name, whole.frames.len()),
+            &whole.frames[cut..],
+        ),
+    );
+    Ok(vec![
+        (
+            LightMapCase {
+                title: "Fox (glTF)".into(),
+                rig: Box::new(fox),
+                train: survey,
+                test: walk.clone(),
+            },
+            walk,
+        ),
+        (
+            LightMapCase {
+                title: "CesiumMan (glTF)".into(),
+                rig: Box::new(man),
+                train,
+                test,
+            },
+            whole,
+        ),
+    ])
+}
+
+/// Runs the study and writes `out/README.md` and a preview per character; returns the
+/// document's path.
+pub fn run(
+    assets: &Path,
+    out: &Path,
+    resolution: usize,
+    bake: &BakeSettings,
+    command: &str,
+    reporter: &dyn Reporter,
+) -> Result<std::path::PathBuf> {
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    let scratch = tempfile::tempdir().context("cannot create a scratch directory")?;
+    let mut fidelity_rows = String::new();
+    let mut sections = String::new();
+    for (case, clip) in cases(assets)? {
+        reporter.note(&format!("{}: fidelity on {}", case.title, clip.name));
+        let f = fidelity(&case, &clip, resolution, bake, scratch.path(), reporter)?;
+        let _ = writeln!(
+            fidelity_rows,
+            "| {} | `{}` | {} | {:.2}% | {:.2}% | {} | {} | {:.1}:1 | {:.2} | {:.1} |",
+            case.title,
+            f.clip,
+            f.frames,
+            100.0 * f.atlas_error,
+            100.0 * f.error,
+            f.bytes.0,
+            f.bytes.1,
+            f.bytes.1 as f64 / f.bytes.0.max(1) as f64,
+            f.decode_ms,
+            f.bake_s,
+        );
+        reporter.note(&format!("{}: comparison", case.title));
+        sections.push_str(&run_case(
+            &case,
+            resolution,
+            bake,
+            scratch.path(),
+            reporter,
+        )?);
+        sections.push('\n');
+        sections.push_str(&preview(
+            &case,
+            &clip,
+            resolution,
+            bake,
+            out,
+            scratch.path(),
+            reporter,
+        )?);
+    }
+    let doc = format!(
+        "# SH light maps against the per-vertex pose model\n\nRegenerate with `{command}`. SH order {}, {} rays per texel and per vertex, atlas {resolution}x{resolution}. Errors are relative transfer errors ‖pred − truth‖ / ‖truth‖ at the vertices against per-vertex ray-traced transfer (`aprt simulate`), over all frames, vertices and coefficients; a light map is read at each vertex's UV bilinearly (`aprt shlm eval`). Times are one run on this machine; decode and evaluation on one core.\n\n## Fidelity of the stored sequence\n\n| character | clip | frames | error, f32 maps | error, compressed | bytes | f32 bytes | ratio | decode ms/frame | bake s |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n{fidelity_rows}\n{sections}",
+        bake.order, bake.rays,
+    );
+    let path = out.join("README.md");
+    crate::io::atomic::write_atomic(&path, doc.as_bytes())
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(path)
+}
+
+/// Writes `out/<id>_lightmap.png`: the light map of the middle frame of `clip` under
+/// [`preview_lights`], the character rendered with it, its per-vertex shading and the error;
+/// returns the markdown that shows it.
+fn preview(
+    case: &LightMapCase,
+    clip: &Clip,
+    resolution: usize,
+    bake: &BakeSettings,
+    out: &Path,
+    scratch: &Path,
+    reporter: &dyn Reporter,
+) -> Result<String> {
+    use crate::lightmap::compose::{ComposeSource, save_preview};
+    let frame = clip.frames.len() / 2;
+    let one = Clip {
+        name: format!("{} frame {frame}", clip.name),
+        fps: clip.fps,
+        frames: vec![clip.frames[frame].clone()],
+    };
+    let checkpoint = CheckpointSettings {
+        dir: &scratch.join("preview.bake"),
+        existing: OnExisting::Refuse,
+    };
+    let rig = case.rig.as_ref();
+    let baked = bake_light_maps(
+        rig,
+        &case.title,
+        &one,
+        resolution,
+        bake,
+        &checkpoint,
+        reporter,
+    )?;
+    let bytes = encode(&baked.sequence, &CodecSettings::default())?;
+    let id: String = case
+        .title
+        .split_whitespace()
+        .next()
+        .unwrap_or("case")
+        .to_lowercase();
+    let file = format!("{id}_lightmap.png");
+    let source = ComposeSource {
+        name: &case.title,
+        bytes: &bytes,
+        character: Some((rig, &one)),
+        frame: 0,
+        rays: bake.rays,
+    };
+    let line = save_preview(&out.join(&file), &source, &preview_lights(rig.up()))?;
+    Ok(format!(
+        "![{title} light map]({file})\n\n*{title}, `{}` frame {frame}: {line}.*\n\n",
+        clip.name,
+        title = case.title,
+    ))
+}
