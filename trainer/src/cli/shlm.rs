@@ -44,6 +44,25 @@ pub enum ShlmCommand {
     Compose(ShlmComposeArgs),
     /// Bake a clip's light maps and fit the pose-driven light-map model to them.
     Train(ShlmTrainArgs),
+    /// Regenerate the light-map comparison on the real glTF characters (docs/results/lightmaps).
+    Study(ShlmStudyArgs),
+}
+
+/// `aprt shlm study`.
+#[derive(Debug, Args)]
+pub struct ShlmStudyArgs {
+    /// Output directory (README.md and the previews).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// The assets directory (with gltf/Fox.gltf and gltf/CesiumMan.gltf).
+    #[arg(long)]
+    pub assets: Option<PathBuf>,
+    /// Atlas width and height in texels.
+    #[arg(long, default_value_t = 256)]
+    pub resolution: usize,
+    /// Simulation settings.
+    #[command(flatten)]
+    pub bake: BakeArgs,
 }
 
 /// Atlas resolution and checkpointing, shared by `bake` and `train`.
@@ -156,6 +175,7 @@ pub fn run(args: &ShlmArgs) -> Result<()> {
         ShlmCommand::Inspect(args) => inspect(args),
         ShlmCommand::Compose(args) => compose(args),
         ShlmCommand::Train(args) => train(args),
+        ShlmCommand::Study(args) => study(args),
     }
 }
 
@@ -195,13 +215,10 @@ fn bake(args: &ShlmBakeArgs) -> Result<()> {
     let settings = args.bake.settings();
     settings.validate()?;
     let (rig, clip) = args.source.rig(&Terminal)?;
-    let what = args
-        .source
-        .origin()
-        .unwrap_or_else(|| "the character".into());
+    let what = "the character";
     let baked = args.source.in_origin(bake_light_maps(
         rig.as_ref(),
-        &what,
+        what,
         &clip,
         args.atlas.resolution,
         &settings,
@@ -275,11 +292,8 @@ fn eval(args: &ShlmEvalArgs) -> Result<()> {
     check(&[Output::file(&args.npy, "--npy")], &inputs)?;
     let bytes = read_file(&args.input)?;
     let (rig, clip) = args.source.rig(&Terminal)?;
-    let what = args
-        .source
-        .origin()
-        .unwrap_or_else(|| "the character".into());
-    let layout = uv_layout(rig.as_ref(), &what)?;
+    let what = "the character";
+    let layout = uv_layout(rig.as_ref(), what)?;
     let bind = rig.bind_mesh();
     let uvs = layout.vertex_uvs(&bind.triangles, bind.vertex_count());
     let (r, order, maps) = maps_of(&args.input, &bytes, rig.as_ref(), &clip)?;
@@ -373,10 +387,7 @@ fn train(args: &ShlmTrainArgs) -> Result<()> {
     settings.validate()?;
     let fit = args.fit.options()?;
     let (rig, clips, _) = args.source.load(&[], &Terminal)?;
-    let what = args
-        .source
-        .origin()
-        .unwrap_or_else(|| "the character".into());
+    let what = "the character";
     let training = LightMapTraining {
         resolution: args.atlas.resolution,
         bake: settings,
@@ -389,7 +400,7 @@ fn train(args: &ShlmTrainArgs) -> Result<()> {
     };
     let trained = args.source.in_origin(train_light_maps(
         rig.as_ref(),
-        &what,
+        what,
         clips,
         &training,
         &Terminal,
@@ -409,5 +420,35 @@ fn train(args: &ShlmTrainArgs) -> Result<()> {
         trained.seconds.0,
         trained.seconds.1,
     );
+    Ok(())
+}
+
+fn study(args: &ShlmStudyArgs) -> Result<()> {
+    let assets = args
+        .assets
+        .clone()
+        .unwrap_or_else(crate::report::results::default_assets);
+    check(
+        &[Output::directory(&args.out, "--out")],
+        &[Input::new(&assets, "the assets directory")],
+    )?;
+    let bake = args.bake.settings();
+    bake.validate()?;
+    let command = format!(
+        "cargo run --release -p aprt-trainer --bin aprt -- shlm study --out {} --resolution {} --order {} --rays {}",
+        args.out.display(),
+        args.resolution,
+        bake.order,
+        bake.rays
+    );
+    let path = crate::report::lightmap_study::run(
+        &assets,
+        &args.out,
+        args.resolution,
+        &bake,
+        &command,
+        &Terminal,
+    )?;
+    eprintln!("wrote {}", path.display());
     Ok(())
 }

@@ -251,11 +251,7 @@ pub fn save_preview(path: &Path, source: &ComposeSource<'_>, lights: &[Light]) -
     };
     let lit = light_map(&maps, lights)?;
     let mut panels = vec![map_image(&lit, maps.resolution)];
-    let mut line = format!(
-        "frame {} light map, {r}x{r} texels",
-        source.frame,
-        r = maps.resolution
-    );
+    let mut line = format!("light map, {r}x{r} texels", r = maps.resolution);
     if let Some(character) = source.character {
         let (more, mean, max) = character_panels(character, source, &maps, &lit, lights)?;
         panels.extend(more);

@@ -155,3 +155,35 @@ pub fn to_map(values: &[f32], texels: &[u32], resolution: usize, n2: usize) -> V
     }
     map
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The rows of a sequence are its filled texels in texel order, and scattering a frame's
+    /// rows gives the frame back, zero where no texel is filled; with n² values per row each
+    /// lands on its texel's slots.
+    #[test]
+    fn rows_are_the_filled_texels_and_scatter_back() {
+        let r = 3;
+        let filled = vec![false, true, true, false, false, true, false, false, true];
+        let frame: Vec<f32> = (0..r * r).map(|t| t as f32).collect();
+        let sequence = MapSequence {
+            resolution: r,
+            order: 1,
+            filled: filled.clone(),
+            positions: vec![[0.0; 3]; 4],
+            frames: vec![frame.clone()],
+        };
+        let (rows, transfers) = filled_rows(&sequence);
+        assert_eq!(rows, vec![1, 2, 5, 8]);
+        assert_eq!(transfers, vec![vec![1.0, 2.0, 5.0, 8.0]]);
+        let expect: Vec<f32> = (0..r * r)
+            .map(|t| if filled[t] { frame[t] } else { 0.0 })
+            .collect();
+        assert_eq!(to_map(&transfers[0], &rows, r, 1), expect);
+        let two = to_map(&[1.0, 2.0, 3.0, 4.0], &[0, 2], r, 2);
+        assert_eq!(&two[..6], &[1.0, 2.0, 0.0, 0.0, 3.0, 4.0]);
+        assert!(two[6..].iter().all(|&v| v == 0.0));
+    }
+}

@@ -19,3 +19,28 @@ pub fn at_vertices(map: &[f32], resolution: usize, n2: usize, uvs: &[Vec<[f32; 2
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A map linear in u and v (values at texel centres) reads back exactly at any UV inside
+    /// the centres' hull: bilinear filtering reproduces linear fields. A vertex on a seam
+    /// (two UVs) takes the mean; a vertex in no triangle gets zeros.
+    #[test]
+    fn linear_maps_read_back_exactly_and_seams_average() {
+        let r = 8;
+        let map: Vec<f32> = (0..r * r)
+            .flat_map(|t| {
+                let (x, y) = ((t % r) as f32 + 0.5, (t / r) as f32 + 0.5);
+                [x / r as f32, 2.0 * y / r as f32]
+            })
+            .collect();
+        let uvs = vec![vec![[0.3, 0.4]], vec![[0.25, 0.5], [0.75, 0.5]], vec![]];
+        let out = at_vertices(&map, r, 2, &uvs);
+        let close = |a: f32, b: f32| (a - b).abs() < 1e-6;
+        assert!(close(out[0], 0.3) && close(out[1], 0.8), "{out:?}");
+        assert!(close(out[2], 0.5) && close(out[3], 1.0), "{out:?}");
+        assert_eq!(&out[4..], &[0.0, 0.0]);
+    }
+}
