@@ -14,13 +14,13 @@
 //! | offset | size | field |
 //! | --- | --- | --- |
 //! | 0 | 8 | magic `APRTSHLM` |
-//! | 8 | 4 | version (1) |
+//! | 8 | 4 | version (2; version 1 is read too: the same layout without sign mode 3) |
 //! | 12 | 4 | resolution `R` (1..=8192) |
 //! | 16 | 4 | SH order `n` (1..=6); `n2 = n²` |
 //! | 20 | 4 | frames `F` (1..=1 000 000) |
 //! | 24 | 4 | filled texels `T` (≤ `R²`) |
 //! | 28 | 1 | codec kind: 0 frames, 1 keyframes, 2 PCA |
-//! | 29 | 1 | sign mode: 0 offset per map, 1 sign plane, 2 band-0 ratio |
+//! | 29 | 1 | sign mode: 0 offset per map, 1 sign plane, 2 band-0 ratio, 3 uniform step |
 //! | 30 | 1 | exponent grouping: 0 per texel, 1 triples |
 //! | 31 | 1 | mantissa bits `m` (2..=8) |
 //! | 32 | 1 | spatial delta (0 or 1) |
@@ -43,6 +43,12 @@
 //! mode 2: band 0's mantissa, then the ratio planes, `q + 2^(m−1) − 1`); `n2` sign planes of
 //! `⌈T/8⌉` bytes (sign mode 1 only). With spatial delta, exponent and mantissa planes hold
 //! wrapping differences to the previous byte of the same plane.
+//!
+//! Sign mode 3 ([`uniform`]) has no exponents: a plane set is `n2` f32 steps (finite, ≥ 0),
+//! `n2` low-byte planes of `T` bytes, then `n2` high-byte planes of `T` bytes, the zigzagged
+//! 16-bit residuals of `round(v / step)` against a median-edge prediction from the texel's
+//! filled left, up and up-left neighbours on the `R × R` grid (grouping and the spatial-delta
+//! byte are ignored).
 
 mod compare;
 mod entropy;
@@ -54,6 +60,7 @@ mod sequence;
 pub mod shared_exp;
 #[cfg(test)]
 mod tests;
+pub mod uniform;
 
 pub use compare::{CodecReport, compare};
 pub use error::CodecError;
