@@ -88,7 +88,7 @@ fn variants() -> Vec<(String, CodecSettings)> {
         "pca 1% m7 sign-plane".into(),
         with(pca(0.01), planes(7, SignMode::SignPlane)),
     ));
-    for (target, bits) in [(0.01, 8), (0.01, 7), (0.015, 6), (0.02, 6), (0.02, 5)] {
+    for (target, bits) in [(0.01, 7), (0.015, 7), (0.015, 6), (0.02, 6), (0.02, 5)] {
         let name = format!("pca {}% uniform m{bits}", target * 100.0);
         out.push((name, with(pca(target), planes(bits, SignMode::Uniform))));
     }
