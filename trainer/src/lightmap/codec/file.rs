@@ -6,7 +6,8 @@ use std::ops::Range;
 use super::CodecError;
 use super::entropy::{compress, decompress_chunk, decompress_exact};
 use super::header::{HEADER_LEN, Header, StoredKind};
-use super::shared_exp::{Grouping, SignMode, decode_planes};
+use super::shared_exp::{Grouping, SignMode, decode_planes_on};
+use super::uniform::Grid;
 
 /// Whether frame `f` of `frames` is stored under keyframe interval `interval`: every
 /// `interval`-th frame, and the last, so every in-between has a keyframe on each side.
@@ -75,6 +76,8 @@ pub struct ShlmFile<'a> {
     header: Header,
     /// The texel index of each filled texel.
     texels: Vec<usize>,
+    /// Their neighbours on the grid (sign mode 3 only; empty otherwise).
+    grid: Grid,
     positions: Vec<[f32; 3]>,
     /// PCA: the quantised mean, then the components (`T · n²` each); empty otherwise.
     basis: Vec<Vec<f32>>,
@@ -115,10 +118,16 @@ impl<'a> ShlmFile<'a> {
         let points_at = mask_at + mask_len;
         let shared_at = points_at + points_len;
         let table = shared_at + shared_len;
+        let texels = read_mask(&bytes[mask_at..points_at], &header)?;
+        let grid = match header.planes.sign {
+            SignMode::Uniform => Grid::new(&texels, header.resolution),
+            _ => Grid::default(),
+        };
         let mut file = ShlmFile {
             bytes,
             header,
-            texels: read_mask(&bytes[mask_at..points_at], &header)?,
+            texels,
+            grid,
             positions: read_positions(&bytes[points_at..shared_at], header.texels)?,
             basis: Vec::new(),
             table,
@@ -210,6 +219,7 @@ impl<'a> ShlmFile<'a> {
             SignMode::OffsetScale => "offset per map",
             SignMode::SignPlane => "sign plane",
             SignMode::Band0Ratio => "ratios to band 0",
+            SignMode::Uniform => "uniform step per map, MED-predicted over the grid",
         };
         let group = match p.grouping {
             Grouping::Texel => "one exponent per texel",
@@ -220,10 +230,17 @@ impl<'a> ShlmFile<'a> {
         } else {
             ""
         };
+        let quantiser = match p.sign {
+            SignMode::Uniform => format!("{sign} (target 2^-{})", p.mantissa_bits),
+            _ => format!(
+                "shared-exponent {}-bit mantissas, {sign}, {group}{delta}",
+                p.mantissa_bits
+            ),
+        };
         format!(
-            "shlm v1: {kind}; shared-exponent {}-bit mantissas, {sign}, {group}{delta}; zstd; \
+            "shlm v{}: {kind}; {quantiser}; zstd; \
              {} frames of {}² texels ({} filled) × {} coefficients",
-            p.mantissa_bits,
+            super::header::VERSION,
             h.frames,
             h.resolution,
             h.texels,
@@ -272,7 +289,7 @@ impl<'a> ShlmFile<'a> {
     fn decode_planes_chunk(&self, k: usize) -> Result<Vec<f32>, CodecError> {
         let h = &self.header;
         let mut planes = decompress_chunk(self.chunk(k), plane_bytes(h)?, "frame chunk")?;
-        dequantise(&mut planes, h, "frame chunk")
+        dequantise(&mut planes, h, &self.grid, "frame chunk")
     }
 
     /// Frame `k`'s PCA weights (chunk lengths were checked at parse).
@@ -335,7 +352,8 @@ impl<'a> ShlmFile<'a> {
         for i in 0..count {
             let end = at.checked_add(word(i + 1)?).filter(|&e| e <= section.len());
             let end = end.ok_or(size("shared section", at, section.len()))?;
-            let values = decode_plane_set(&section[at..end], &self.header, "PCA basis")?;
+            let values =
+                decode_plane_set(&section[at..end], &self.header, &self.grid, "PCA basis")?;
             if values.iter().any(|x| !x.is_finite()) {
                 return Err(CodecError::Invalid {
                     what: "PCA basis",
@@ -389,9 +407,14 @@ fn size(what: &'static str, expected: usize, got: usize) -> CodecError {
 
 /// Decompresses (growing with the data, for the shared section read at parse) and
 /// dequantises one plane set of the header's `T` texels.
-fn decode_plane_set(bytes: &[u8], h: &Header, what: &'static str) -> Result<Vec<f32>, CodecError> {
+fn decode_plane_set(
+    bytes: &[u8],
+    h: &Header,
+    grid: &Grid,
+    what: &'static str,
+) -> Result<Vec<f32>, CodecError> {
     let mut planes = decompress_exact(bytes, plane_bytes(h)?, what)?;
-    dequantise(&mut planes, h, what)
+    dequantise(&mut planes, h, grid, what)
 }
 
 /// The bytes of one plane set.
@@ -401,10 +424,15 @@ fn plane_bytes(h: &Header) -> Result<usize, CodecError> {
 }
 
 /// The values of one decompressed plane set.
-fn dequantise(planes: &mut [u8], h: &Header, what: &'static str) -> Result<Vec<f32>, CodecError> {
+fn dequantise(
+    planes: &mut [u8],
+    h: &Header,
+    grid: &Grid,
+    what: &'static str,
+) -> Result<Vec<f32>, CodecError> {
     let n2 = h.n2();
     let mut values = vec![0f32; h.texels * n2];
-    decode_planes(planes, n2, &h.planes, &mut values)
+    decode_planes_on(planes, n2, &h.planes, grid, &mut values)
         .map_err(|message| CodecError::Invalid { what, message })?;
     Ok(values)
 }

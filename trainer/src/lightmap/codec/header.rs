@@ -7,7 +7,9 @@ use super::{CodecError, CodecKind};
 /// The file's first eight bytes.
 pub const MAGIC: &[u8; 8] = b"APRTSHLM";
 /// The layout version this module writes and reads.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
+/// The oldest layout version this module reads (version 1 lacks sign mode 3).
+pub const MIN_VERSION: u32 = 1;
 /// Header bytes.
 pub const HEADER_LEN: usize = 52;
 /// Largest resolution `R`.
@@ -83,6 +85,7 @@ impl Header {
             SignMode::OffsetScale => 0,
             SignMode::SignPlane => 1,
             SignMode::Band0Ratio => 2,
+            SignMode::Uniform => 3,
         };
         let grouping = u8::from(self.planes.grouping == Grouping::Triples);
         let p = &self.planes;
@@ -117,7 +120,7 @@ impl Header {
             u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]])
         };
         let version = word(8);
-        if version != VERSION {
+        if !(MIN_VERSION..=VERSION).contains(&version) || (version == 1 && bytes[29] == 3) {
             return Err(CodecError::Version(version));
         }
         let field = |at: usize| word(at) as usize;
@@ -163,6 +166,7 @@ fn read_planes(b: &[u8]) -> Result<PlaneSettings, CodecError> {
         0 => SignMode::OffsetScale,
         1 => SignMode::SignPlane,
         2 => SignMode::Band0Ratio,
+        3 => SignMode::Uniform,
         s => return Err(CodecError::Header(format!("sign mode {s}"))),
     };
     let grouping = match b[1] {

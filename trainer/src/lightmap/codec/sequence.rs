@@ -3,7 +3,8 @@
 use super::entropy::compress;
 use super::file::{assemble, is_keyframe};
 use super::header::{Header, MAX_FRAMES, MAX_ORDER, MAX_RESOLUTION, stored_kind};
-use super::shared_exp::{decode_planes, encode_planes};
+use super::shared_exp::{SignMode, decode_planes_on, encode_planes_on};
+use super::uniform::Grid;
 use super::{CodecError, CodecKind, CodecSettings, MapSequence, pca};
 
 /// Encodes the whole clip as a `.shlm` file (layout in the module documentation).
@@ -22,9 +23,13 @@ pub fn encode(seq: &MapSequence, settings: &CodecSettings) -> Result<Vec<u8>, Co
                 .collect()
         })
         .collect();
+    let grid = match settings.planes.sign {
+        SignMode::Uniform => Grid::new(&filled, seq.resolution),
+        _ => Grid::row(filled.len()),
+    };
     let plane_chunk = |values: &[f32]| {
         compress(
-            &encode_planes(values, n2, &settings.planes),
+            &encode_planes_on(values, n2, &settings.planes, &grid, None),
             settings.zstd_level,
         )
     };
@@ -55,6 +60,7 @@ pub fn encode(seq: &MapSequence, settings: &CodecSettings) -> Result<Vec<u8>, Co
         } => encode_pca(
             &compact,
             n2,
+            &grid,
             settings,
             f64::from(target_error),
             max_components,
@@ -88,18 +94,29 @@ type Encoded = (usize, Vec<Vec<u8>>, Vec<Vec<u8>>);
 fn encode_pca(
     frames: &[Vec<f32>],
     n2: usize,
+    grid: &Grid,
     settings: &CodecSettings,
     target_error: f64,
     max_components: usize,
 ) -> Result<Encoded, CodecError> {
     let fitted = pca::fit(frames, target_error, max_components);
+    let steps = uniform_pca_steps(
+        frames,
+        fitted.components.len(),
+        settings.planes.mantissa_bits,
+    );
     let mut shared = Vec::new();
     let mut quantised = Vec::new();
-    for values in std::iter::once(&fitted.mean).chain(&fitted.components) {
-        let mut planes = encode_planes(values, n2, &settings.planes);
+    for (i, values) in std::iter::once(&fitted.mean)
+        .chain(&fitted.components)
+        .enumerate()
+    {
+        let step = (settings.planes.sign == SignMode::Uniform).then_some(steps[usize::from(i > 0)]);
+        let mut planes = encode_planes_on(values, n2, &settings.planes, grid, step);
         shared.push(compress(&planes, settings.zstd_level)?);
         let mut back = vec![0f32; values.len()];
-        decode_planes(&mut planes, n2, &settings.planes, &mut back).map_err(CodecError::Input)?;
+        decode_planes_on(&mut planes, n2, &settings.planes, grid, &mut back)
+            .map_err(CodecError::Input)?;
         quantised.push(back);
     }
     let (mean, components) = quantised.split_at(1);
@@ -109,6 +126,18 @@ fn encode_pca(
         .map(|w| w.iter().flat_map(|x| x.to_le_bytes()).collect())
         .collect();
     Ok((fitted.components.len(), shared, chunks))
+}
+
+/// Sign mode 3's steps for the PCA mean and the components, for a quantisation error of about
+/// `2^−m · ‖X‖` over the clip. A component's error reaches the frames through weights of unit
+/// norm over the clip (its eigenvector), the mean's through every frame, so the error is
+/// about `(k + 1) · D · s² / 12` with the mean's step `s / √F`: the step where a bit buys the
+/// same error in every plane set.
+fn uniform_pca_steps(frames: &[Vec<f32>], k: usize, m: u8) -> [f64; 2] {
+    let total: f64 = frames.iter().flatten().map(|&x| f64::from(x).powi(2)).sum();
+    let dim = frames.first().map_or(1, Vec::len).max(1);
+    let step = 2f64.powi(-i32::from(m)) * (12.0 * total / ((k + 1) * dim) as f64).sqrt();
+    [step / (frames.len().max(1) as f64).sqrt(), step]
 }
 
 /// Refuses sequences the file cannot hold or the reader would refuse.

@@ -27,11 +27,16 @@
 //! map makes the steps nearly uniform over a map, which is what an L2 metric rewards, and wins
 //! on bytes against error (`offset m8` ≈ `sign plane m7` in error at 25–35 % fewer bytes).
 //! Ratios to band 0 win on independent frames of real transfer but fail on PCA components,
-//! which are signed fields rather than non-negative functions. The default is (a) under PCA.
+//! which are signed fields rather than non-negative functions. Of these three, (a) is the best
+//! under PCA; the default is now a fourth, (d) [`SignMode::Uniform`], which drops exponents
+//! for one absolute step per map and a 2-D predictor (on real bakes, PCA 2 %: 61:1 and 93:1
+//! at 2.1–2.3 % against (a) m7's 36:1 and 49:1 at 2.4–2.6 %).
 
 /// The smallest exponent a group gets: below `2^(E_MIN−1)` values flush to steps of
 /// `2^(E_MIN−m)`, which f32 still represents (denormals reach `2^−149`).
 const E_MIN: i32 = -126;
+
+use super::uniform::{self, Grid};
 /// The largest exponent: f32 magnitudes are below `2^128`.
 const E_MAX: i32 = 128;
 /// The stored byte is `e − E_MIN`; 255 is never written and refused on reading.
@@ -52,6 +57,13 @@ pub enum SignMode {
     /// negative band 0 (bake noise) is clamped to 0 and takes its texel's other bands with it.
     /// Only for transfer itself: PCA components are not non-negative (15 % error measured).
     Band0Ratio,
+    /// (d) No exponents: one uniform absolute step per coefficient map (stored as f32), the
+    /// signed integer `round(v / step)` predicted over the `R × R` grid (LOCO-I's median edge
+    /// detector) and its residual stored in two byte planes ([`super::uniform`]). Error
+    /// `≤ step / 2` per value. `mantissa_bits` `m` picks the step for a relative L2 error of
+    /// about `2^−m` of the plane set (PCA picks its own steps from the same `m`); grouping
+    /// and spatial delta do not apply.
+    Uniform,
 }
 
 /// Which coefficients of a texel share one exponent.
@@ -83,6 +95,7 @@ impl PlaneSettings {
     /// Exponent groups per texel.
     fn groups(&self, n2: usize) -> usize {
         match (self.sign, self.grouping) {
+            (SignMode::Uniform, _) => 0,
             (SignMode::Band0Ratio, _) | (_, Grouping::Texel) => 1,
             (_, Grouping::Triples) => n2.div_ceil(3),
         }
@@ -98,12 +111,15 @@ impl PlaneSettings {
 
     /// Bytes of the plane set for `texels` filled texels; `None` on overflow.
     pub fn plane_bytes(&self, texels: usize, n2: usize) -> Option<usize> {
+        if self.sign == SignMode::Uniform {
+            return uniform::plane_bytes(texels, n2);
+        }
         let values = texels.checked_mul(n2)?;
         let exps = texels.checked_mul(self.groups(n2))?;
         let extra = match self.sign {
             SignMode::OffsetScale => n2 * 4,
             SignMode::SignPlane => texels.div_ceil(8).checked_mul(n2)?,
-            SignMode::Band0Ratio => 0,
+            SignMode::Band0Ratio | SignMode::Uniform => 0,
         };
         values.checked_add(exps)?.checked_add(extra)
     }
@@ -146,12 +162,30 @@ fn pow2(k: i32) -> f64 {
 /// `settings`: see the module's layout table.
 pub fn encode_planes(values: &[f32], n2: usize, settings: &PlaneSettings) -> Vec<u8> {
     let texels = values.len() / n2;
+    encode_planes_on(values, n2, settings, &Grid::row(texels), None)
+}
+
+/// [`encode_planes`] with the texels' grid (mode (d) predicts over it) and, for mode (d), an
+/// absolute step chosen by the caller instead of the one `mantissa_bits` implies.
+pub fn encode_planes_on(
+    values: &[f32],
+    n2: usize,
+    settings: &PlaneSettings,
+    grid: &Grid,
+    step: Option<f64>,
+) -> Vec<u8> {
+    let texels = values.len() / n2;
+    if settings.sign == SignMode::Uniform {
+        let step = step.unwrap_or_else(|| uniform::step_for_bits(values, settings.mantissa_bits));
+        return uniform::encode(values, n2, step, grid);
+    }
     let mut out = Vec::with_capacity(settings.plane_bytes(texels, n2).unwrap_or(0));
     match settings.sign {
         SignMode::Band0Ratio => encode_ratio(values, n2, settings.mantissa_bits, &mut out),
         SignMode::OffsetScale | SignMode::SignPlane => {
             encode_magnitudes(values, n2, settings, &mut out)
         }
+        SignMode::Uniform => unreachable!("handled above"),
     }
     if settings.spatial_delta {
         for plane in out[settings.delta_span(texels, n2)].chunks_mut(texels.max(1)) {
@@ -258,7 +292,22 @@ pub fn decode_planes(
     settings: &PlaneSettings,
     out: &mut [f32],
 ) -> Result<(), String> {
+    decode_planes_on(planes, n2, settings, &Grid::row(out.len() / n2.max(1)), out)
+}
+
+/// [`decode_planes`] over the texels' grid (which mode (d) predicts over; it must be the
+/// encoder's).
+pub fn decode_planes_on(
+    planes: &mut [u8],
+    n2: usize,
+    settings: &PlaneSettings,
+    grid: &Grid,
+    out: &mut [f32],
+) -> Result<(), String> {
     let texels = out.len() / n2;
+    if settings.sign == SignMode::Uniform {
+        return uniform::decode(planes, n2, grid, out);
+    }
     if settings.plane_bytes(texels, n2) != Some(planes.len()) || out.len() != texels * n2 {
         return Err("plane set size does not match the header".into());
     }
@@ -286,6 +335,7 @@ pub fn decode_planes(
         SignMode::OffsetScale | SignMode::SignPlane => {
             decode_magnitudes(planes, n2, settings, &scales, out)
         }
+        SignMode::Uniform => unreachable!("handled above"),
     }
 }
 

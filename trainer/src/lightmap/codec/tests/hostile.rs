@@ -4,9 +4,24 @@
 use super::synth::clip;
 use crate::lightmap::codec::{CodecError, CodecKind, CodecSettings, ShlmFile, encode};
 
-/// A small file of each kind.
+/// A small file of each kind, then the uniform quantiser (sign mode 3) under each kind.
 fn small_files() -> Vec<Vec<u8>> {
     let seq = clip(8, 2, 4, 1e-3);
+    let mut files = shlm_files(&seq, CodecSettings::default());
+    let uniform = CodecSettings {
+        planes: crate::lightmap::codec::PlaneSettings {
+            mantissa_bits: 6,
+            sign: crate::lightmap::codec::SignMode::Uniform,
+            ..CodecSettings::default().planes
+        },
+        ..CodecSettings::default()
+    };
+    files.extend(shlm_files(&seq, uniform));
+    files
+}
+
+/// `seq` under each kind, with `base`'s quantiser.
+fn shlm_files(seq: &crate::lightmap::codec::MapSequence, base: CodecSettings) -> Vec<Vec<u8>> {
     [
         CodecKind::Frames,
         CodecKind::Keyframes { interval: 2 },
@@ -16,16 +31,7 @@ fn small_files() -> Vec<Vec<u8>> {
         },
     ]
     .into_iter()
-    .map(|kind| {
-        encode(
-            &seq,
-            &CodecSettings {
-                kind,
-                ..CodecSettings::default()
-            },
-        )
-        .expect("encodes")
-    })
+    .map(|kind| encode(seq, &CodecSettings { kind, ..base }).expect("encodes"))
     .collect()
 }
 
@@ -100,6 +106,57 @@ fn named_errors() {
         parsed.decode_frame(0, &mut out[1..]),
         Err(CodecError::SizeMismatch { .. })
     ));
+}
+
+/// Sign mode 3 needs version 2; a negative or non-finite step is refused.
+#[test]
+fn uniform_fields_are_checked() {
+    for file in &small_files()[3..] {
+        assert_eq!(file[29], 3);
+        assert!(exercise(file).is_ok());
+        let mut old = file.clone();
+        old[8] = 1;
+        reseal(&mut old);
+        assert!(
+            exercise(&old).is_err(),
+            "sign mode 3 in a version-1 file parsed"
+        );
+    }
+    // A one-frame clip of independent frames: its only chunk (the last bytes before the CRC)
+    // starts with the steps of its plane set; rewrite the first step and splice it back.
+    let seq = clip(8, 2, 4, 1e-3);
+    let settings = CodecSettings {
+        kind: CodecKind::Frames,
+        planes: crate::lightmap::codec::PlaneSettings {
+            mantissa_bits: 6,
+            sign: crate::lightmap::codec::SignMode::Uniform,
+            ..CodecSettings::default().planes
+        },
+        ..CodecSettings::default()
+    };
+    for bad_step in [-1.0f32, f32::NAN, f32::INFINITY] {
+        let one = crate::lightmap::codec::MapSequence {
+            frames: seq.frames[..1].to_vec(),
+            ..seq.clone()
+        };
+        let bytes = encode(&one, &settings).expect("encodes");
+        let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
+        let table_at = 52 + (word(40) + word(44) + word(48)) as usize;
+        let (chunk_at, chunk_end) = (table_at + 16, bytes.len() - 4);
+        let mut planes =
+            zstd::bulk::decompress(&bytes[chunk_at..chunk_end], 1 << 20).expect("zstd");
+        planes[..4].copy_from_slice(&bad_step.to_le_bytes());
+        let chunk = zstd::bulk::compress(&planes, 3).expect("zstd");
+        let mut bad = bytes[..chunk_at].to_vec();
+        bad[table_at + 8..chunk_at].copy_from_slice(&(chunk.len() as u64).to_le_bytes());
+        bad.extend_from_slice(&chunk);
+        bad.extend_from_slice(&[0; 4]);
+        reseal(&mut bad);
+        assert!(
+            matches!(exercise(&bad), Err(CodecError::Invalid { .. })),
+            "step {bad_step} decoded"
+        );
+    }
 }
 
 /// Headers declaring the largest sizes (and past them), resealed, fail fast and small.

@@ -177,3 +177,57 @@ fn band0_ratio_is_within_its_bound() {
         }
     }
 }
+
+/// Mode (d): every value within half its map's step (plus the f32 rounding of `q · step`),
+/// over a grid with holes (every predictor case), for given steps and for `m`'s step; the
+/// adversarial values decode finite.
+#[test]
+fn uniform_is_within_half_a_step() {
+    use crate::lightmap::codec::shared_exp::{decode_planes_on, encode_planes_on};
+    use crate::lightmap::codec::uniform::Grid;
+    let r = 9;
+    let texels: Vec<usize> = (0..r * r).filter(|t| (t * 7) % 5 != 1).collect();
+    let grid = Grid::new(&texels, r);
+    let n2 = 4;
+    let smooth: Vec<f32> = texels
+        .iter()
+        .flat_map(|&t| {
+            let (x, y) = ((t % r) as f32, (t / r) as f32);
+            [
+                1.0 + 0.1 * x,
+                -0.3 * y + 0.02 * x * y,
+                (x - y).sin(),
+                1e-4 * x,
+            ]
+        })
+        .collect();
+    let mut adversarial: Vec<f32> = adversarial().into_iter().flatten().collect();
+    adversarial.resize(smooth.len(), 0.5);
+    for values in [smooth, adversarial] {
+        for (m, step) in [(6u8, None), (3, None), (8, Some(1e-3)), (8, Some(0.0))] {
+            let settings = PlaneSettings {
+                mantissa_bits: m,
+                sign: SignMode::Uniform,
+                grouping: Grouping::Texel,
+                spatial_delta: false,
+            };
+            let mut planes = encode_planes_on(&values, n2, &settings, &grid, step);
+            assert_eq!(Some(planes.len()), settings.plane_bytes(texels.len(), n2));
+            let steps: Vec<f64> = planes[..n2 * 4]
+                .chunks_exact(4)
+                .map(|b| f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])))
+                .collect();
+            let mut out = vec![f32::NAN; values.len()];
+            decode_planes_on(&mut planes, n2, &settings, &grid, &mut out).expect("decodes");
+            for (i, (&v, &d)) in values.iter().zip(&out).enumerate() {
+                assert!(d.is_finite(), "{v} -> {d}");
+                if v.abs() > 1e38 {
+                    continue; // clamped so that q · step stays finite
+                }
+                let err = (f64::from(v) - f64::from(d)).abs();
+                let bound = 0.5 * steps[i % n2] + f64::from(v.abs()) * 2e-7 + 1e-45;
+                assert!(err <= bound, "m={m} {step:?}: {v} -> {d}: {err} > {bound}");
+            }
+        }
+    }
+}
