@@ -7,7 +7,7 @@ use super::CodecError;
 use super::entropy::{compress, decompress_chunk, decompress_exact};
 use super::header::{HEADER_LEN, Header, StoredKind};
 use super::shared_exp::{Grouping, SignMode, decode_planes_on};
-use super::uniform::Grid;
+use super::uniform::{self, Grid};
 
 /// Whether frame `f` of `frames` is stored under keyframe interval `interval`: every
 /// `interval`-th frame, and the last, so every in-between has a keyframe on each side.
@@ -81,6 +81,9 @@ pub struct ShlmFile<'a> {
     positions: Vec<[f32; 3]>,
     /// PCA: the quantised mean, then the components (`T · n²` each); empty otherwise.
     basis: Vec<Vec<f32>>,
+    /// PCA under sign mode 3: the components as their steps and integers instead (half the
+    /// bytes of f32 for `combine` to stream); `basis` then holds the mean alone.
+    int_basis: Vec<IntComponent>,
     /// Where the offset table starts, and the chunk area after it.
     table: usize,
     chunk_area: Range<usize>,
@@ -130,11 +133,12 @@ impl<'a> ShlmFile<'a> {
             grid,
             positions: read_positions(&bytes[points_at..shared_at], header.texels)?,
             basis: Vec::new(),
+            int_basis: Vec::new(),
             table,
             chunk_area: table + table_len..len - 4,
         };
         file.check_table()?;
-        file.basis = file.read_basis(&bytes[shared_at..table])?;
+        (file.basis, file.int_basis) = file.read_basis(&bytes[shared_at..table])?;
         file.check_chunks()?;
         Ok(file)
     }
@@ -276,6 +280,27 @@ impl<'a> ShlmFile<'a> {
         const BLOCK: usize = 2048;
         let weights: Vec<f32> = self.weights(k).collect();
         let mut out = self.basis[0].clone();
+        if !self.int_basis.is_empty() {
+            // `w_j · step_jc` once per frame, repeated over a block of texels so the inner
+            // loop is a flat multiply-add of contiguous slices (vectorised).
+            let n2 = self.header.n2().max(1);
+            let block_len = n2 * 128;
+            let coefs: Vec<Vec<f32>> = (weights.iter().zip(&self.int_basis))
+                .map(|(w, comp)| {
+                    let texel: Vec<f32> = comp.steps.iter().map(|s| w * s).collect();
+                    texel.iter().copied().cycle().take(block_len).collect()
+                })
+                .collect();
+            for (b, block) in out.chunks_mut(block_len).enumerate() {
+                for (coef, comp) in coefs.iter().zip(&self.int_basis) {
+                    let part = &comp.q[b * block_len..b * block_len + block.len()];
+                    for ((o, &q), &c) in block.iter_mut().zip(part).zip(coef) {
+                        *o += c * f32::from(q);
+                    }
+                }
+            }
+            return out;
+        }
         for (b, block) in out.chunks_mut(BLOCK).enumerate() {
             for (w, component) in weights.iter().zip(&self.basis[1..]) {
                 let part = &component[b * BLOCK..b * BLOCK + block.len()];
@@ -328,10 +353,10 @@ impl<'a> ShlmFile<'a> {
     }
 
     /// Reads the PCA mean and components, or checks the section is empty for other kinds.
-    fn read_basis(&self, section: &[u8]) -> Result<Vec<Vec<f32>>, CodecError> {
+    fn read_basis(&self, section: &[u8]) -> Result<Basis, CodecError> {
         let StoredKind::Pca { components } = self.header.kind else {
             return match section.is_empty() {
-                true => Ok(Vec::new()),
+                true => Ok((Vec::new(), Vec::new())),
                 false => Err(size("shared section", 0, section.len())),
             };
         };
@@ -349,9 +374,19 @@ impl<'a> ShlmFile<'a> {
         }
         let mut at = 4 * (count + 1);
         let mut basis = Vec::with_capacity(count);
+        let mut int_basis = Vec::new();
         for i in 0..count {
             let end = at.checked_add(word(i + 1)?).filter(|&e| e <= section.len());
             let end = end.ok_or(size("shared section", at, section.len()))?;
+            if i > 0 && self.header.planes.sign == SignMode::Uniform {
+                int_basis.push(read_int_component(
+                    &section[at..end],
+                    &self.header,
+                    &self.grid,
+                )?);
+                at = end;
+                continue;
+            }
             let values =
                 decode_plane_set(&section[at..end], &self.header, &self.grid, "PCA basis")?;
             if values.iter().any(|x| !x.is_finite()) {
@@ -366,7 +401,7 @@ impl<'a> ShlmFile<'a> {
         if at != section.len() {
             return Err(size("shared section", at, section.len()));
         }
-        Ok(basis)
+        Ok((basis, int_basis))
     }
 
     /// Chunk sizes the kind implies: `4k` bytes of finite weights for PCA, nothing between
@@ -395,6 +430,36 @@ impl<'a> ShlmFile<'a> {
         }
         Ok(())
     }
+}
+
+/// The mean and the components as f32, and the components as integers (sign mode 3).
+type Basis = (Vec<Vec<f32>>, Vec<IntComponent>);
+
+/// A PCA component under sign mode 3: `n2` steps and the integers `q` (texel-major).
+#[derive(Debug)]
+struct IntComponent {
+    steps: Vec<f32>,
+    q: Vec<i16>,
+}
+
+/// Reads one sign-mode-3 component: every `q · step` must be finite.
+fn read_int_component(bytes: &[u8], h: &Header, grid: &Grid) -> Result<IntComponent, CodecError> {
+    let what = "PCA basis";
+    let planes = decompress_exact(bytes, plane_bytes(h)?, what)?;
+    let (steps, q) = uniform::decode_ints(&planes, h.n2(), grid)
+        .map_err(|message| CodecError::Invalid { what, message })?;
+    let n2 = h.n2().max(1);
+    let finite = (0..n2).all(|c| {
+        let max = q.iter().skip(c).step_by(n2).map(|q| q.unsigned_abs()).max();
+        (f32::from(max.unwrap_or(0)) * steps[c]).is_finite()
+    });
+    if !finite {
+        return Err(CodecError::Invalid {
+            what,
+            message: "non-finite".into(),
+        });
+    }
+    Ok(IntComponent { steps, q })
 }
 
 fn size(what: &'static str, expected: usize, got: usize) -> CodecError {

@@ -114,15 +114,16 @@ pub enum CodecKind {
 /// uniform step per map ([`SignMode::Uniform`]) at `m = 7` (quantisation error about `2^−7` of
 /// the clip), zstd 15. Measured on real bakes (256², order 4, 256 rays per texel; ratio
 /// against raw f32 maps, relative error of the decoded maps against the f32 maps over filled
-/// texels, median decode time of one frame):
+/// texels, median decode time of one frame on a shared 2-core machine, components combined
+/// from their 16-bit integers):
 ///
 /// | clip | default | PCA 2 %, uniform m6 | PCA 1 %, uniform m7 | PCA 2 %, shared exp. m7 | old default: PCA 1 %, shared exp. m8 |
 /// | --- | --- | --- | --- | --- | --- |
-/// | Fox `Walk`, 23 frames | 41.6:1, 1.44 %, 4.9 ms | 60.9:1, 2.14 % | 38.2:1, 1.06 % | 35.9:1, 2.40 % | 24.5:1, 1.20 % |
-/// | CesiumMan, 59 frames | 58.0:1, 1.64 %, 9.3 ms | 92.6:1, 2.34 % | 44.1:1, 1.18 %, 10.4 ms | 48.9:1, 2.57 % | 22.3:1, 1.31 % |
+/// | Fox `Walk`, 23 frames | 41.6:1, 1.44 %, 5.7 ms | 60.9:1, 2.14 % | 38.2:1, 1.06 % | 35.9:1, 2.40 % | 24.5:1, 1.20 % |
+/// | CesiumMan, 59 frames | 58.0:1, 1.64 %, 8.6 ms | 92.6:1, 2.34 % | 44.1:1, 1.18 %, 12.8 ms | 48.9:1, 2.57 % | 22.3:1, 1.31 % |
 ///
 /// The lowest error that keeps ≥ 30:1 with room to spare and one frame within ~10 ms: a 1 %
-/// target keeps more components (CesiumMan decodes in 10.4 ms) for 0.3 % less error; 2 % and
+/// target keeps more components (CesiumMan: 12.8 ms a frame) for 0.3 % less error; 2 % and
 /// `m = 6` nearly doubles the ratio at 2.1–2.3 %. Bake noise is not low-rank, so the PCA
 /// target, not the quantiser, sets most of the error.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -152,8 +152,26 @@ pub fn encode(values: &[f32], n2: usize, step: f64, grid: &Grid) -> Vec<u8> {
 
 /// Inverts [`encode`] into `out` (`texels · n2` values, texel-major).
 pub fn decode(planes: &[u8], n2: usize, grid: &Grid, out: &mut [f32]) -> Result<(), String> {
+    if out.len() != grid.texels() * n2 {
+        return Err("plane set size does not match the header".into());
+    }
+    let (steps, q) = decode_ints(planes, n2, grid)?;
+    for (texel, ints) in out
+        .chunks_exact_mut(n2.max(1))
+        .zip(q.chunks_exact(n2.max(1)))
+    {
+        for ((v, &q), &step) in texel.iter_mut().zip(ints).zip(&steps) {
+            *v = f32::from(q) * step;
+        }
+    }
+    Ok(())
+}
+
+/// The `n2` steps and the integers `q` (texel-major) of a plane set: what [`decode`]
+/// multiplies. Steps must be finite and ≥ 0, and `|q|` at most what the encoder writes.
+pub fn decode_ints(planes: &[u8], n2: usize, grid: &Grid) -> Result<(Vec<f32>, Vec<i16>), String> {
     let texels = grid.texels();
-    if plane_bytes(texels, n2) != Some(planes.len()) || out.len() != texels * n2 {
+    if plane_bytes(texels, n2) != Some(planes.len()) {
         return Err("plane set size does not match the header".into());
     }
     let (steps, rest) = planes.split_at(n2 * 4);
@@ -166,7 +184,8 @@ pub fn decode(planes: &[u8], n2: usize, grid: &Grid, out: &mut [f32]) -> Result<
     }
     let (low, high) = rest.split_at(texels * n2);
     let mut q = vec![0i32; texels];
-    for (c, &step) in steps.iter().enumerate() {
+    let mut ints = vec![0i16; texels * n2];
+    for c in 0..n2 {
         let (low, high) = (&low[c * texels..], &high[c * texels..]);
         for t in 0..texels {
             let z = u32::from(low[t]) | u32::from(high[t]) << 8;
@@ -174,8 +193,11 @@ pub fn decode(planes: &[u8], n2: usize, grid: &Grid, out: &mut [f32]) -> Result<
             q[t] = predict(&q, grid.neighbours[t]).wrapping_add(r);
         }
         for (t, &v) in q.iter().enumerate() {
-            out[t * n2 + c] = v as f32 * step;
+            if f64::from(v).abs() > Q_MAX {
+                return Err(format!("quantised value {v} out of range"));
+            }
+            ints[t * n2 + c] = v as i16;
         }
     }
-    Ok(())
+    Ok((steps, ints))
 }

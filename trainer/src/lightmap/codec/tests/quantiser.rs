@@ -231,3 +231,27 @@ fn uniform_is_within_half_a_step() {
         }
     }
 }
+
+/// Mode (d) refuses integers past what the encoder writes (`|q| ≤ 2^14 − 1`), so PCA
+/// components fit the decoder's 16-bit storage.
+#[test]
+fn uniform_refuses_out_of_range_integers() {
+    use crate::lightmap::codec::shared_exp::decode_planes_on;
+    use crate::lightmap::codec::uniform::Grid;
+    let settings = PlaneSettings {
+        mantissa_bits: 7,
+        sign: SignMode::Uniform,
+        grouping: Grouping::Texel,
+        spatial_delta: false,
+    };
+    let grid = Grid::row(2);
+    // Residual +16383 twice (zigzag 0x7ffe): the second texel reaches 32766.
+    let mut planes = [1f32.to_le_bytes().as_slice(), &[0xfe, 0xfe, 0x7f, 0x7f]].concat();
+    let mut out = [0f32; 2];
+    assert!(decode_planes_on(&mut planes, 1, &settings, &grid, &mut out).is_err());
+    // Second residual 0 (its low byte at 5, its high byte at 7): both texels 16383, in range.
+    planes[5] = 0;
+    planes[7] = 0;
+    decode_planes_on(&mut planes, 1, &settings, &grid, &mut out).expect("in range");
+    assert_eq!(out, [16383.0, 16383.0]);
+}
