@@ -205,15 +205,24 @@ fn existing(atlas: &AtlasArgs) -> OnExisting {
     }
 }
 
-fn bake(args: &ShlmBakeArgs) -> Result<()> {
-    let (checkpoint, mut inputs) = checkpoint_output(&args.atlas, &args.output);
-    inputs.extend(args.source.inputs());
-    check(
-        &[Output::file(&args.output, "-o"), checkpoint.clone()],
-        &inputs,
-    )?;
-    let settings = args.bake.settings();
+/// What `bake` and `train` check before any work: the output and the checkpoint are none of
+/// the inputs, and the bake settings are valid. Returns the checkpoint directory and settings.
+fn prepare(
+    atlas: &AtlasArgs,
+    output: &std::path::Path,
+    source: &SourceArgs,
+    bake: &BakeArgs,
+) -> Result<(PathBuf, crate::bake::BakeSettings)> {
+    let (checkpoint, mut inputs) = checkpoint_output(atlas, output);
+    inputs.extend(source.inputs());
+    check(&[Output::file(output, "-o"), checkpoint.clone()], &inputs)?;
+    let settings = bake.settings();
     settings.validate()?;
+    Ok((checkpoint.path, settings))
+}
+
+fn bake(args: &ShlmBakeArgs) -> Result<()> {
+    let (checkpoint, settings) = prepare(&args.atlas, &args.output, &args.source, &args.bake)?;
     let (rig, clip) = args.source.rig(&Terminal)?;
     let what = "the character";
     let baked = args.source.in_origin(bake_light_maps(
@@ -223,7 +232,7 @@ fn bake(args: &ShlmBakeArgs) -> Result<()> {
         args.atlas.resolution,
         &settings,
         &CheckpointSettings {
-            dir: &checkpoint.path,
+            dir: &checkpoint,
             existing: existing(&args.atlas),
         },
         &Terminal,
@@ -382,14 +391,7 @@ fn compose(args: &ShlmComposeArgs) -> Result<()> {
 }
 
 fn train(args: &ShlmTrainArgs) -> Result<()> {
-    let (checkpoint, mut inputs) = checkpoint_output(&args.atlas, &args.output);
-    inputs.extend(args.source.inputs());
-    check(
-        &[Output::file(&args.output, "-o"), checkpoint.clone()],
-        &inputs,
-    )?;
-    let settings = args.bake.settings();
-    settings.validate()?;
+    let (checkpoint, settings) = prepare(&args.atlas, &args.output, &args.source, &args.bake)?;
     let fit = args.fit.options()?;
     let (rig, clips, _) = args.source.load(&[], &Terminal)?;
     let what = "the character";
@@ -399,7 +401,7 @@ fn train(args: &ShlmTrainArgs) -> Result<()> {
         fit: &fit,
         precision: PrecisionArg::into(args.fit.precision),
         checkpoint: CheckpointSettings {
-            dir: &checkpoint.path,
+            dir: &checkpoint,
             existing: existing(&args.atlas),
         },
     };

@@ -275,20 +275,7 @@ pub fn parse_obj_with_uvs(text: &str, path: &Path) -> Result<(Mesh, Option<UvLay
 /// A `vt` statement's `u` and `v` (`v` defaults to 0; a `w` must be a number but is ignored),
 /// as the layout stores it: `[u, 1 − v]` (see the module docs).
 fn parse_uv<'a>(words: impl Iterator<Item = &'a str>) -> Result<[f32; 2], LineError> {
-    let mut uv = [0.0f32; 2];
-    let mut count = 0;
-    for word in words {
-        let value: f32 = word
-            .parse()
-            .map_err(|_| LineError::MalformedNumber(word.to_owned()))?;
-        if !value.is_finite() {
-            return Err(LineError::NonFinite(word.to_owned()));
-        }
-        if count < 2 {
-            uv[count] = value;
-        }
-        count += 1;
-    }
+    let (uv, count) = parse_numbers::<2>(words)?;
     if count == 0 {
         return Err(LineError::EmptyTexCoord);
     }
@@ -298,7 +285,19 @@ fn parse_uv<'a>(words: impl Iterator<Item = &'a str>) -> Result<[f32; 2], LineEr
 /// The first three coordinates of a `v`/`vn` statement; extra values (`w`, vertex colours)
 /// must still be numbers but are ignored.
 fn parse_xyz<'a>(words: impl Iterator<Item = &'a str>) -> Result<[f32; 3], LineError> {
-    let mut xyz = [0.0f32; 3];
+    let (xyz, count) = parse_numbers::<3>(words)?;
+    if count < 3 {
+        return Err(LineError::TooFewCoordinates(count));
+    }
+    Ok(xyz)
+}
+
+/// The first `N` of a statement's numbers (zero where there are fewer) and how many it has;
+/// every one must be a finite number.
+fn parse_numbers<'a, const N: usize>(
+    words: impl Iterator<Item = &'a str>,
+) -> Result<([f32; N], usize), LineError> {
+    let mut out = [0.0f32; N];
     let mut count = 0;
     for word in words {
         let value: f32 = word
@@ -307,15 +306,12 @@ fn parse_xyz<'a>(words: impl Iterator<Item = &'a str>) -> Result<[f32; 3], LineE
         if !value.is_finite() {
             return Err(LineError::NonFinite(word.to_owned()));
         }
-        if count < 3 {
-            xyz[count] = value;
+        if count < N {
+            out[count] = value;
         }
         count += 1;
     }
-    if count < 3 {
-        return Err(LineError::TooFewCoordinates(count));
-    }
-    Ok(xyz)
+    Ok((out, count))
 }
 
 /// `v`, `v/vt`, `v/vt/vn` or `v//vn`.
