@@ -110,33 +110,14 @@ impl ModelInfo {
                 check_crc(r, e, |_| {})?;
                 continue;
             };
-            let span = if kind == SectionKind::PoseFeatures {
+            if kind == SectionKind::PoseFeatures {
                 continue; // read and checked by `pose_features`
-            } else if kind == SectionKind::IrradianceRig {
-                if found[slot].is_some() {
-                    return Err(Error::DuplicateSection { section: kind });
-                }
-                check_irradiance_rig(r, e)?
-            } else if kind == SectionKind::TexelAtlas {
-                if found[slot].is_some() {
-                    return Err(Error::DuplicateSection { section: kind });
-                }
-                check_texel_atlas(r, e, vertices)?
-            } else if kind == SectionKind::AngleNames {
-                if found[slot].is_some() {
-                    return Err(Error::DuplicateSection { section: kind });
-                }
-                check_angle_names(r, e, pose_len)?
-            } else if let Some(elems) = expected_elems(kind) {
-                let span = array_span(e, kind, elems?)?;
-                if found[slot].is_some() {
-                    return Err(Error::DuplicateSection { section: kind });
-                }
-                verify_array(r, e, span)?;
-                span
-            } else {
-                // A known section that this basis does not use.
-                check_crc(r, e, |_| {})?;
+            }
+            if found[slot].is_some() {
+                return Err(Error::DuplicateSection { section: kind });
+            }
+            let Some(span) = check_section(r, e, kind, expected_elems(kind), (vertices, pose_len))?
+            else {
                 continue;
             };
             found[slot] = Some(span);
@@ -415,4 +396,33 @@ fn verify_array<R: Reader>(r: &mut R, e: &SectionEntry, span: Span) -> Result<()
         return Err(Error::NonFinite { section });
     }
     Ok(())
+}
+
+/// Validates one known section other than the pose features (read first by
+/// `pose_features`): its span, or `None` for a section this basis does not use (its CRC is
+/// still checked). `elems` is the element count an array section of this basis must hold;
+/// `(vertices, pose_len)` size the atlas and the angle names.
+fn check_section<R: Reader>(
+    r: &mut R,
+    e: &SectionEntry,
+    kind: SectionKind,
+    elems: Option<Result<u64, Error>>,
+    (vertices, pose_len): (usize, usize),
+) -> Result<Option<Span>, Error> {
+    Ok(Some(match kind {
+        SectionKind::IrradianceRig => check_irradiance_rig(r, e)?,
+        SectionKind::TexelAtlas => check_texel_atlas(r, e, vertices)?,
+        SectionKind::AngleNames => check_angle_names(r, e, pose_len)?,
+        _ => match elems {
+            Some(elems) => {
+                let span = array_span(e, kind, elems?)?;
+                verify_array(r, e, span)?;
+                span
+            }
+            None => {
+                check_crc(r, e, |_| {})?;
+                return Ok(None);
+            }
+        },
+    }))
 }

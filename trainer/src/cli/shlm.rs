@@ -14,11 +14,11 @@ use crate::cli::terminal::Terminal;
 use crate::cli::{read_file, write_npy};
 use crate::io::atomic::write_atomic;
 use crate::io::outputs::{Input, Output, check};
-use crate::lightmap::bake::{CheckpointSettings, bake_light_maps, uv_layout};
+use crate::lightmap::bake::{CheckpointSettings, bake_light_maps};
 use crate::lightmap::codec::{CodecSettings, ShlmFile, encode};
 use crate::lightmap::compose::{ComposeSource, save_preview};
 use crate::lightmap::model::{LightMapTraining, predict_maps, train_light_maps};
-use crate::lightmap::sample::at_vertices;
+use crate::lightmap::sample::maps_at_vertices;
 use crate::lightmap::summary::summarize;
 
 /// `aprt shlm`.
@@ -276,20 +276,12 @@ fn maps_of(
                 clip.frames.len()
             );
         }
-        let (r, n2) = (file.resolution(), file.order() * file.order());
-        let maps = (0..file.frames())
-            .map(|k| {
-                let mut map = vec![0.0f32; r * r * n2];
-                file.decode_frame(k, &mut map)
-                    .with_context(|| format!("{name}: frame {k}"))?;
-                Ok(map)
-            })
-            .collect::<Result<_>>()?;
-        return Ok((r, file.order(), maps));
+        let maps = file
+            .decode_all()
+            .with_context(|| format!("{name}: decoding"))?;
+        return Ok((file.resolution(), file.order(), maps));
     }
-    let (r, maps) = predict_maps(bytes, &name, rig, clip)?;
-    let n2 = maps.first().map_or(0, |m| m.len() / (r * r).max(1));
-    Ok((r, (n2 as f64).sqrt().round() as usize, maps))
+    predict_maps(bytes, &name, rig, clip)
 }
 
 fn eval(args: &ShlmEvalArgs) -> Result<()> {
@@ -301,17 +293,10 @@ fn eval(args: &ShlmEvalArgs) -> Result<()> {
     check(&[Output::file(&args.npy, "--npy")], &inputs)?;
     let bytes = read_file(&args.input)?;
     let (rig, clip) = args.source.rig(&Terminal)?;
-    let what = "the character";
-    let layout = uv_layout(rig.as_ref(), what)?;
-    let bind = rig.bind_mesh();
-    let uvs = layout.vertex_uvs(&bind.triangles, bind.vertex_count());
     let (r, order, maps) = maps_of(&args.input, &bytes, rig.as_ref(), &clip)?;
     let n2 = order * order;
-    let flat: Vec<f32> = maps
-        .iter()
-        .flat_map(|map| at_vertices(map, r, n2, &uvs))
-        .collect();
-    let shape = [maps.len(), bind.vertex_count(), n2];
+    let flat: Vec<f32> = maps_at_vertices(rig.as_ref(), &maps, r, n2)?.concat();
+    let shape = [maps.len(), rig.bind_mesh().vertex_count(), n2];
     write_npy(&args.npy, &shape, &flat)?;
     if let Some(path) = &args.against {
         let (truth_shape, truth) = crate::io::npy::decode_f32(&read_file(path)?)

@@ -17,6 +17,7 @@ use super::sample::at_vertices;
 use crate::bake::{BakeSettings, bake_pose};
 use crate::report::figures::{PICTURE_VIEW, upright};
 use crate::report::render::{Colormap, render_scalar, render_with, save_png_atomic, side_by_side};
+use crate::report::rig_frame::luminance;
 use crate::rig::mesh::Mesh;
 use crate::rig::{Clip, Rig};
 
@@ -61,8 +62,8 @@ fn sequence_frame(name: &str, bytes: &[u8], frame: usize) -> Result<FrameMaps> {
     Ok(FrameMaps {
         resolution: r,
         order,
-        filled: file.filled()?,
-        positions: file.positions()?,
+        filled: file.filled(),
+        positions: file.positions().to_vec(),
         map,
     })
 }
@@ -87,14 +88,13 @@ fn model_frame(
         frames: vec![pose.clone()],
         ..clip.clone()
     };
-    let (r, mut maps) = predict_maps(bytes, name, rig, &one)?;
+    let (r, order, mut maps) = predict_maps(bytes, name, rig, &one)?;
     let map = maps.pop().unwrap_or_default();
-    let n2 = map.len() / (r * r).max(1);
     let layout = uv_layout(rig, name)?;
     let atlas = Atlas::build(layout, &rig.bind_mesh().triangles, r)?;
     Ok(FrameMaps {
         resolution: r,
-        order: (n2 as f64).sqrt().round() as usize,
+        order,
         filled: atlas.filled(),
         positions: texel_positions(&atlas, rig.bind_mesh()),
         map,
@@ -128,10 +128,6 @@ fn light_map(maps: &FrameMaps, lights: &[Light]) -> Result<Vec<Rgb>> {
         }
     }
     Ok(out)
-}
-
-fn luminance(c: Rgb) -> f32 {
-    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
 }
 
 /// The light map as a picture, shading 0..1 as black to white per channel, upscaled (nearest)

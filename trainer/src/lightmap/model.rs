@@ -118,13 +118,14 @@ pub fn train_light_maps(
 }
 
 /// The light maps (`resolution`² texels × n², texel-major, zero at unfilled texels) a
-/// light-map model `blob` predicts for every frame of `clip` of `rig`, through aprt-core.
+/// light-map model `blob` predicts for every frame of `clip` of `rig`, through aprt-core, with
+/// the resolution and the SH order.
 pub fn predict_maps(
     blob: &[u8],
     model_name: &str,
     rig: &dyn Rig,
     clip: &Clip,
-) -> Result<(usize, Vec<Vec<f32>>)> {
+) -> Result<(usize, usize, Vec<Vec<f32>>)> {
     let info = describe(blob).with_context(|| format!("{model_name}: invalid model"))?;
     let model = aprt_core::Model::parse(blob)?;
     let Some(atlas) = model.texel_atlas() else {
@@ -138,12 +139,9 @@ pub fn predict_maps(
         .map(|row| atlas.texel(row))
         .collect::<Result<Vec<u32>, _>>()?;
     let r = atlas.resolution() as usize;
-    Ok((
-        r,
-        rows.iter()
-            .map(|values| to_map(values, &texels, r, info.order * info.order))
-            .collect(),
-    ))
+    let n2 = info.order * info.order;
+    let maps = rows.iter().map(|v| to_map(v, &texels, r, n2)).collect();
+    Ok((r, info.order, maps))
 }
 
 /// A model's per-row output (`n2` values per row) scattered onto an `resolution`² map, zero at

@@ -1,7 +1,27 @@
 //! Reading a light map back at the mesh's vertices, so it compares with per-vertex transfer
 //! (`aprt simulate`) value for value.
 
+use anyhow::Result;
+
 use super::atlas::sample_bilinear;
+use super::bake::uv_layout;
+use crate::rig::Rig;
+
+/// Every map of `maps` (`resolution`² texels × `n2`) read at every vertex of `rig`'s bind mesh
+/// ([`at_vertices`] at the UVs of its layout): what `aprt shlm eval` writes.
+pub fn maps_at_vertices(
+    rig: &dyn Rig,
+    maps: &[Vec<f32>],
+    resolution: usize,
+    n2: usize,
+) -> Result<Vec<Vec<f32>>> {
+    let bind = rig.bind_mesh();
+    let uvs = uv_layout(rig, "the character")?.vertex_uvs(&bind.triangles, bind.vertex_count());
+    Ok(maps
+        .iter()
+        .map(|m| at_vertices(m, resolution, n2, &uvs))
+        .collect())
+}
 
 /// Each vertex's transfer from the map (`resolution`² texels, `n2` values each, texel-major):
 /// the bilinear sample at the vertex's UV, averaged over its UVs where it sits on a seam.

@@ -54,7 +54,7 @@ pub fn summarize(bytes: &[u8]) -> Result<Summary> {
         v.sort_by(f64::total_cmp);
         v.get(v.len() / 2).copied().unwrap_or(0.0)
     };
-    let filled = file.filled()?.iter().filter(|&&f| f).count();
+    let filled = file.filled().iter().filter(|&&f| f).count();
     Ok(Summary {
         frames: file.frames(),
         resolution: file.resolution(),

@@ -236,29 +236,7 @@ pub fn encode_model_with(
     if let VertexBasis::Stored { coef_dims, .. } = model.basis {
         limit("coef dims", coef_dims, 1, MAX_COEF_DIMS)?;
     }
-    let frame = match &model.bones {
-        None => Frame::World,
-        Some(b) => {
-            limit("bones", b.count, 1, MAX_BONES)?;
-            check_len(SectionKind::VertexBasis, b.vertex_bone.len(), v)?;
-            if let Some(&bad) = b.vertex_bone.iter().find(|&&x| x as usize >= b.count) {
-                return Err(ExportError::TooLarge {
-                    what: "vertex bone",
-                    value: bad as usize,
-                    max: b.count - 1,
-                });
-            }
-            // The runtime lights every bone's row width of weights per frame.
-            let width = match model.basis {
-                VertexBasis::Stored { coef_dims, .. } => coef_dims,
-                VertexBasis::Identity => n2 * (1 + ka),
-            };
-            limit("bones × lit row width", b.count * width, 1, MAX_LIT)?;
-            Frame::Bones {
-                count: b.count as u16,
-            }
-        }
-    };
+    let frame = frame_of(model, n2 * (1 + ka))?;
     let big = match precision {
         Precision::F32 => Encoding::F32,
         Precision::F16 => Encoding::F16,
@@ -316,6 +294,18 @@ pub fn encode_model_with(
             bytes,
         })
         .collect();
+    table.extend(optional_sections(model, extras)?);
+    assemble(model, basis, frame, &table)
+}
+
+/// The optional sections of `model` and `extras`: angle names, pose bounds, pose features,
+/// the irradiance rig and the texel atlas, each when present.
+fn optional_sections(
+    model: &LinearModel,
+    extras: &Extras<'_>,
+) -> Result<Vec<SectionBytes>, ExportError> {
+    let (a, v) = (model.pose_len, model.vertices);
+    let mut table = Vec::new();
     if !model.angle_names.is_empty() {
         table.push(angle_names_section(&model.angle_names, a)?);
     }
@@ -354,7 +344,37 @@ pub fn encode_model_with(
     if let Some((resolution, texels)) = extras.texel_atlas {
         table.push(texel_atlas_section(resolution, texels, v)?);
     }
-    assemble(model, basis, frame, &table)
+    Ok(table)
+}
+
+/// The blob's frame: world, or bones (checked: every vertex's bone exists, and the weights
+/// the runtime lights per frame, bones × `identity_width` for an identity basis or × k_v,
+/// fit its limit).
+fn frame_of(model: &LinearModel, identity_width: usize) -> Result<Frame, ExportError> {
+    let v = model.vertices;
+    Ok(match &model.bones {
+        None => Frame::World,
+        Some(b) => {
+            limit("bones", b.count, 1, MAX_BONES)?;
+            check_len(SectionKind::VertexBasis, b.vertex_bone.len(), v)?;
+            if let Some(&bad) = b.vertex_bone.iter().find(|&&x| x as usize >= b.count) {
+                return Err(ExportError::TooLarge {
+                    what: "vertex bone",
+                    value: bad as usize,
+                    max: b.count - 1,
+                });
+            }
+            // The runtime lights every bone's row width of weights per frame.
+            let width = match model.basis {
+                VertexBasis::Stored { coef_dims, .. } => coef_dims,
+                VertexBasis::Identity => identity_width,
+            };
+            limit("bones × lit row width", b.count * width, 1, MAX_LIT)?;
+            Frame::Bones {
+                count: b.count as u16,
+            }
+        }
+    })
 }
 
 /// One section ready to lay out.

@@ -14,10 +14,10 @@ use nalgebra::DMatrix;
 use crate::bake::BakeSettings;
 use crate::bake::checkpoint::OnExisting;
 use crate::bake::clip::{BakedClip, bake_clip};
-use crate::lightmap::bake::{BakedMaps, CheckpointSettings, bake_light_maps, uv_layout};
+use crate::lightmap::bake::{BakedMaps, CheckpointSettings, bake_light_maps};
 use crate::lightmap::codec::{CodecSettings, ShlmFile, encode};
 use crate::lightmap::model::{filled_rows, to_map};
-use crate::lightmap::sample::at_vertices;
+use crate::lightmap::sample::maps_at_vertices;
 use crate::model::ModelFrame;
 use crate::model::export::{Extras, Precision, encode_model, encode_model_with};
 use crate::model::fit::{FitOptions, fit};
@@ -53,8 +53,7 @@ struct Row {
     test_error: f64,
 }
 
-/// Per-vertex ground truth of a clip: its transfer per frame and its pose vectors reduced by
-/// `layout`.
+/// Per-vertex ground truth of `clip` of the case's character, with `layout`'s pose vectors.
 fn truth(
     case: &LightMapCase,
     layout: &PoseLayout,
@@ -62,29 +61,15 @@ fn truth(
     bake: &BakeSettings,
     reporter: &dyn Reporter,
 ) -> Result<(BakedClip, f64)> {
+    let frames = clip.frames.clone();
     bake_clip(
         case.rig.as_ref(),
         layout,
         &clip.name,
-        clip.frames.clone(),
+        frames,
         bake,
         reporter,
     )
-}
-
-/// Light maps of every frame of `maps`, sampled at every vertex's UVs.
-fn sampled(
-    rig: &dyn Rig,
-    maps: &[Vec<f32>],
-    resolution: usize,
-    n2: usize,
-) -> Result<Vec<Vec<f32>>> {
-    let bind = rig.bind_mesh();
-    let uvs = uv_layout(rig, "the character")?.vertex_uvs(&bind.triangles, bind.vertex_count());
-    Ok(maps
-        .iter()
-        .map(|m| at_vertices(m, resolution, n2, &uvs))
-        .collect())
 }
 
 /// The stored sequence: encode, decode every frame (timed), sample at the vertices; on the
@@ -98,13 +83,8 @@ fn sequence_rows(
     let n2 = seq.order * seq.order;
     let bytes = encode(seq, &CodecSettings::default())?;
     let file = ShlmFile::parse(&bytes)?;
-    let mut decoded = Vec::with_capacity(file.frames());
     let start = Instant::now();
-    for k in 0..file.frames() {
-        let mut map = vec![0.0f32; seq.resolution * seq.resolution * n2];
-        file.decode_frame(k, &mut map)?;
-        decoded.push(map);
-    }
+    let decoded = file.decode_all()?;
     let decode_ms = start.elapsed().as_secs_f64() * 1e3 / file.frames().max(1) as f64;
     let (train, test) = truths;
     let nearest: Vec<usize> = test
@@ -127,7 +107,7 @@ fn sequence_rows(
             decode_ms,
         ),
     ] {
-        let at = sampled(case.rig.as_ref(), maps, seq.resolution, n2)?;
+        let at = maps_at_vertices(case.rig.as_ref(), maps, seq.resolution, n2)?;
         let novel: Vec<Vec<f32>> = nearest.iter().map(|&k| at[k].clone()).collect();
         rows.push(Row {
             method,
@@ -189,11 +169,11 @@ fn light_map_model_row(
         fit_s: Some(fit_s),
         ms_per_frame: ms,
         train_error: relative_error(
-            &sampled(rig, &train_maps, seq.resolution, n2)?,
+            &maps_at_vertices(rig, &train_maps, seq.resolution, n2)?,
             &train.transfer,
         ),
         test_error: relative_error(
-            &sampled(rig, &test_maps, seq.resolution, n2)?,
+            &maps_at_vertices(rig, &test_maps, seq.resolution, n2)?,
             &test.transfer,
         ),
     })
@@ -360,17 +340,18 @@ pub fn fidelity(
     let bytes = encode(seq, &CodecSettings::default())?;
     let summary = crate::lightmap::summary::summarize(&bytes)?;
     let file = ShlmFile::parse(&bytes)?;
-    let decoded = (0..file.frames())
-        .map(|k| {
-            let mut map = vec![0.0f32; seq.resolution * seq.resolution * n2];
-            file.decode_frame(k, &mut map).map(|()| map)
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    let decoded = file.decode_all()?;
     Ok(Fidelity {
         clip: clip.name.clone(),
         frames: clip.frames.len(),
-        atlas_error: relative_error(&sampled(rig, &seq.frames, seq.resolution, n2)?, &truth),
-        error: relative_error(&sampled(rig, &decoded, seq.resolution, n2)?, &truth),
+        atlas_error: relative_error(
+            &maps_at_vertices(rig, &seq.frames, seq.resolution, n2)?,
+            &truth,
+        ),
+        error: relative_error(
+            &maps_at_vertices(rig, &decoded, seq.resolution, n2)?,
+            &truth,
+        ),
         bytes: (bytes.len(), file.raw_bytes()),
         decode_ms: (summary.decode_ms_per_frame, summary.memcpy_ms_per_frame),
         bake_s: baked.seconds,

@@ -52,7 +52,8 @@ pub fn demo_lights(mesh: &crate::rig::mesh::Mesh) -> Vec<Light> {
     ]
 }
 
-fn luminance(c: Rgb) -> f32 {
+/// Rec. 709 luminance: how an RGB shading is shown in grey.
+pub(crate) fn luminance(c: Rgb) -> f32 {
     0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
 }
 

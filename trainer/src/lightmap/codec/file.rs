@@ -159,21 +159,32 @@ impl<'a> ShlmFile<'a> {
     }
 
     /// The `R²` filled flags.
-    pub fn filled(&self) -> Result<Vec<bool>, CodecError> {
+    pub fn filled(&self) -> Vec<bool> {
         let mut filled = vec![false; self.header.resolution * self.header.resolution];
         self.texels.iter().for_each(|&t| filled[t] = true);
-        Ok(filled)
+        filled
     }
 
     /// The bind-pose point of each filled texel, in texel order.
-    pub fn positions(&self) -> Result<Vec<[f32; 3]>, CodecError> {
-        Ok(self.positions.clone())
+    pub fn positions(&self) -> &[[f32; 3]] {
+        &self.positions
     }
 
     /// `frames × R² × n² × 4`: the raw f32 maps of the whole clip, the ratio's denominator.
     pub fn raw_bytes(&self) -> u64 {
         let h = &self.header;
         (h.frames as u64) * (h.resolution as u64).pow(2) * (h.n2() as u64) * 4
+    }
+
+    /// Every frame decoded, in order (`frames` maps of `R² · n²`).
+    pub fn decode_all(&self) -> Result<Vec<Vec<f32>>, CodecError> {
+        let h = &self.header;
+        (0..h.frames)
+            .map(|k| {
+                let mut map = vec![0.0f32; h.resolution * h.resolution * h.n2()];
+                self.decode_frame(k, &mut map).map(|()| map)
+            })
+            .collect()
     }
 
     /// Decodes frame `k` into `out` (`R² · n²`, texel-major, zero where not filled).
