@@ -255,7 +255,8 @@ impl<'a> ShlmFile<'a> {
         format!(
             "shlm v{}: {kind}; {quantiser}; zstd; \
              {} frames of {}² texels ({} filled) × {} coefficients",
-            super::header::VERSION,
+            // The file's own version (parse checked that the bytes hold one), not the writer's.
+            u32::from_le_bytes([self.bytes[8], self.bytes[9], self.bytes[10], self.bytes[11]]),
             h.frames,
             h.resolution,
             h.texels,
