@@ -124,6 +124,7 @@ fn main() {
         rays: 500,
         bounces: 0,
         albedo: 0.0,
+        shadows: true,
     };
     let v = mesh.vertex_count();
     let rays = (v * settings.rays) as f64;

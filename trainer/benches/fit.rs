@@ -32,6 +32,7 @@ fn main() {
         rays: 32,
         bounces: 0,
         albedo: 0.0,
+        shadows: true,
     };
     let world = bake_poses(&meshes, &settings, &Terminal).expect("the character bakes");
     let transfers = aprt_trainer::bone_frames::change_rig_frames(

@@ -24,6 +24,7 @@ pub mod model;
 pub mod progress;
 pub mod report;
 pub mod rig;
+pub mod scene;
 
 // Module paths the tests, benches and fuzz harnesses use.
 pub use model::{export, runtime};

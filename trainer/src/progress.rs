@@ -18,6 +18,26 @@ pub trait Reporter: Sync {
         let _ = vertices;
         Box::new(Silent)
     }
+
+    /// A progress display over `steps` steps of a long job made of unequal steps (a sweep of
+    /// settings), until [`StepProgress::finish`]. The default displays nothing.
+    fn step_progress(&self, steps: usize) -> Box<dyn StepProgress + '_> {
+        let _ = steps;
+        Box::new(Silent)
+    }
+}
+
+/// The progress of a job of named steps.
+pub trait StepProgress {
+    /// Step `what` begins; the previous one is done.
+    fn step(&self, what: &str);
+    /// Every step is done: the display goes away.
+    fn finish(&self);
+}
+
+impl StepProgress for Silent {
+    fn step(&self, _what: &str) {}
+    fn finish(&self) {}
 }
 
 /// The progress of one bake, pose by pose and vertex by vertex.

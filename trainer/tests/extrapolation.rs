@@ -20,6 +20,7 @@ const SETTINGS: BakeSettings = BakeSettings {
     rays: 32,
     bounces: 0,
     albedo: 0.0,
+    shadows: true,
 };
 
 /// Trains the default model on `frames`, then checks clips of the same frames scaled about the

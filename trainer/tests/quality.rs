@@ -18,6 +18,7 @@ fn default_model_beats_mean_and_nearest_baselines_on_novel_poses() {
         rays: 32,
         bounces: 0,
         albedo: 0.0,
+        shadows: true,
     };
     let bake = |frames: &[Vec<f64>]| {
         let meshes: Vec<_> = frames.iter().map(|a| character.pose(a).unwrap()).collect();

@@ -241,6 +241,7 @@ mod tests {
             rays,
             bounces: 0,
             albedo: 0.5,
+            shadows: true,
         }
     }
 

@@ -154,6 +154,9 @@ struct Manifest {
     rays: usize,
     bounces: usize,
     albedo: f32,
+    /// Checkpoints from before shadowless bakes always cast shadows.
+    #[serde(default = "casts_shadows")]
+    shadows: bool,
     vertices: usize,
     triangles: usize,
     /// [`BakeTarget::describe`]; checkpoints from before light maps baked vertices.
@@ -161,6 +164,10 @@ struct Manifest {
     target: String,
     /// CRC-32 of each pose's positions, normals and triangles, as hex.
     poses: Vec<String>,
+}
+
+fn casts_shadows() -> bool {
+    true
 }
 
 impl Manifest {
@@ -172,6 +179,7 @@ impl Manifest {
             rays: settings.rays,
             bounces: settings.bounces,
             albedo: settings.albedo,
+            shadows: settings.shadows,
             vertices: first.map_or(0, Mesh::vertex_count),
             triangles: first.map_or(0, |m| m.triangles.len()),
             target: target.describe(),
@@ -181,12 +189,13 @@ impl Manifest {
 
     /// The first field that differs, as (what, was, now).
     fn difference(&self, now: &Manifest) -> Option<(String, String, String)> {
-        let fields: [(&str, String, String); 8] = [
+        let fields: [(&str, String, String); 9] = [
             ("format", self.format.to_string(), now.format.to_string()),
             ("SH order", self.order.to_string(), now.order.to_string()),
             ("rays", self.rays.to_string(), now.rays.to_string()),
             ("bounces", self.bounces.to_string(), now.bounces.to_string()),
             ("albedo", self.albedo.to_string(), now.albedo.to_string()),
+            ("shadows", self.shadows.to_string(), now.shadows.to_string()),
             (
                 "vertices",
                 self.vertices.to_string(),
@@ -563,6 +572,7 @@ mod tests {
         rays: 64,
         bounces: 1,
         albedo: 0.5,
+        shadows: true,
     };
 
     #[test]
@@ -630,6 +640,7 @@ mod tests {
             &poses,
             "albedo",
         );
+
         refused(SETTINGS, &poses[..2], "pose count");
         let mut moved = poses.clone();
         moved[2].positions[4][2] += 1e-6;

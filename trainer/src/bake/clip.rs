@@ -109,6 +109,32 @@ impl BakedClip {
         })
     }
 
+    /// This clip with every vertex's transfer cut to SH order `order` (a bake of a higher
+    /// order holds the lower one exactly: the coefficients are independent projections).
+    pub fn truncated(&self, order: usize) -> BakedClip {
+        let m2 = order * order;
+        let v = self.meshes.first().map_or(0, Mesh::vertex_count).max(1);
+        BakedClip {
+            name: self.name.clone(),
+            poses: self.poses.clone(),
+            angles: self.angles.clone(),
+            meshes: self.meshes.clone(),
+            transfer: self
+                .transfer
+                .iter()
+                .map(|t| {
+                    let n2 = t.len() / v;
+                    t.chunks_exact(n2.max(1))
+                        .flat_map(|c| &c[..m2.min(c.len())])
+                        .copied()
+                        .collect()
+                })
+                .collect(),
+            rotations: self.rotations.clone(),
+            parts: self.parts.clone(),
+        }
+    }
+
     /// The clips one after the other, as one training set named by their names joined with
     /// `+`, their parts kept.
     pub fn concat(clips: Vec<BakedClip>) -> BakedClip {

@@ -82,6 +82,10 @@ pub struct BakeSettings {
     /// Diffuse albedo of the surface the bounces reflect from, in `[0, 1]`. Only read when
     /// `bounces > 0`.
     pub albedo: f32,
+    /// Whether the character shadows itself. Without shadows no ray is cast: the transfer is
+    /// the clamped cosine lobe turned to each normal, `Â_l y_lm(n)`, in closed form
+    /// ([`aprt_core::clamped_cosine`]), and nothing occludes, so there is nothing to bounce.
+    pub shadows: bool,
 }
 
 impl Default for BakeSettings {
@@ -92,6 +96,7 @@ impl Default for BakeSettings {
             rays: 500,
             bounces: 0,
             albedo: 0.5,
+            shadows: true,
         }
     }
 }
@@ -108,7 +113,20 @@ impl BakeSettings {
         if self.bounces > 0 && !(0.0..=1.0).contains(&self.albedo) {
             return Err(BakeError::BadAlbedo(self.albedo));
         }
+        if self.bounces > 0 && !self.shadows {
+            return Err(BakeError::BouncesNeedShadows);
+        }
         Ok(())
+    }
+
+    /// Visibility rays the direct pass casts for `points` surface points: none without
+    /// shadows (the bounce passes reuse the direct pass's hits and cast none).
+    pub fn rays_cast(&self, points: usize) -> u64 {
+        if self.shadows {
+            points as u64 * self.rays as u64
+        } else {
+            0
+        }
     }
 }
 
@@ -167,6 +185,12 @@ pub enum BakeError {
         /// Number of vertices.
         vertices: usize,
     },
+    /// Bounces were asked for without shadows: with nothing occluding, no ray hits the
+    /// character, so there is no light to reflect.
+    #[error(
+        "bounces need shadows: without occlusion no ray hits the character, so nothing reflects"
+    )]
+    BouncesNeedShadows,
     /// A partial bake was asked for bounces, which need the transfer of every vertex.
     #[error("bounces need the whole mesh; a vertex-range bake is direct transfer only")]
     BouncesNeedWholeMesh,
@@ -249,6 +273,9 @@ pub fn bake_vertices(
         });
     }
     let prepared = Prepared::new(mesh, settings)?;
+    if !settings.shadows {
+        return prepared.unshadowed(&prepared.normals[vertices], &Silent);
+    }
     let tracer = Tracer::new(&mesh.positions, &mesh.triangles, accel);
     let (direct, _) = prepared.direct(&tracer, vertices, Hits::Skip, &Silent)?;
     Ok(direct.into_iter().map(|x| x as f32).collect())
@@ -299,6 +326,9 @@ pub fn bake_points(
         normals: &unit,
         rotation,
     };
+    if !settings.shadows {
+        return prepared.unshadowed(&unit, progress);
+    }
     if positions.is_empty() || mesh.vertex_count() == 0 {
         return Ok(vec![0.0; positions.len() * prepared.n2]);
     }
@@ -329,6 +359,9 @@ fn bake_pose_inner(
 ) -> Result<Vec<f32>, BakeError> {
     let prepared = Prepared::new(mesh, settings)?;
     let v = mesh.vertex_count();
+    if !settings.shadows {
+        return prepared.unshadowed(&prepared.normals, progress);
+    }
     if v == 0 {
         return Ok(Vec::new());
     }
@@ -422,6 +455,23 @@ impl<'a> Prepared<'a> {
             offset: ORIGIN_OFFSET * diagonal,
             t_min: (T_MIN * diagonal) as f32,
         })
+    }
+
+    /// The unshadowed transfer at unit `normals`, `order²` values each: the clamped cosine
+    /// lobe in closed form, no rays. `progress` advances by one per normal.
+    fn unshadowed(
+        &self,
+        normals: &[DVec3],
+        progress: &dyn BakeProgress,
+    ) -> Result<Vec<f32>, BakeError> {
+        let n2 = self.n2;
+        let mut out = vec![0.0f32; normals.len() * n2];
+        for (t, n) in out.chunks_exact_mut(n2).zip(normals) {
+            let n = n.as_vec3().to_array();
+            aprt_core::clamped_cosine(self.settings.order, n, t).map_err(BakeError::Basis)?;
+        }
+        normals.iter().for_each(|_| progress.vertex_done());
+        Ok(out)
     }
 
     /// Direct transfer of `vertices` (vertex-major f64), and with [`Hits::Record`], for each

@@ -14,6 +14,7 @@ fn settings(order: usize, rays: usize) -> BakeSettings {
         rays,
         bounces: 0,
         albedo: 0.0,
+        shadows: true,
     }
 }
 
@@ -311,6 +312,7 @@ fn one_bounce_off_a_wall_matches_quadrature() {
             rays: 4096,
             bounces: 1,
             albedo: rho,
+            shadows: true,
         },
     )
     .unwrap();
@@ -369,6 +371,7 @@ fn zero_bounces_are_bit_identical_to_direct_transfer() {
         &mesh,
         &BakeSettings {
             albedo: 0.9,
+            shadows: true,
             ..settings(3, 64)
         },
     )
@@ -378,6 +381,7 @@ fn zero_bounces_are_bit_identical_to_direct_transfer() {
         &BakeSettings {
             bounces: 1,
             albedo: 0.0,
+            shadows: true,
             ..settings(3, 64)
         },
     )
@@ -391,6 +395,7 @@ fn zero_bounces_are_bit_identical_to_direct_transfer() {
         &BakeSettings {
             bounces: 2,
             albedo: 0.5,
+            shadows: true,
             ..settings(3, 64)
         },
     )
@@ -406,6 +411,7 @@ fn result_is_bit_identical_for_any_thread_count() {
         rays: 100,
         bounces: 2,
         albedo: 0.7,
+        shadows: true,
     };
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new()
@@ -492,6 +498,7 @@ fn degenerate_geometry_bakes_without_panicking() {
                 rays: 64,
                 bounces,
                 albedo: 0.5,
+                shadows: true,
             },
         )
         .unwrap();
@@ -524,6 +531,7 @@ fn invalid_input_gives_typed_errors() {
             BakeSettings {
                 bounces: 1,
                 albedo: 1.5,
+                shadows: true,
                 ..s
             },
             BakeError::BadAlbedo(1.5),
@@ -537,6 +545,7 @@ fn invalid_input_gives_typed_errors() {
             &BakeSettings {
                 bounces: 1,
                 albedo: f32::NAN,
+                shadows: true,
                 ..s
             }
         ),
@@ -624,6 +633,7 @@ fn vertex_inside_a_closed_cube_has_exactly_zero_transfer() {
             let s = BakeSettings {
                 bounces,
                 albedo: 0.9,
+                shadows: true,
                 ..settings(6, 512)
             };
             let t = bake_pose_with(&mesh, &s, accel).unwrap();
@@ -783,6 +793,7 @@ fn points_at_the_vertices_bake_the_vertices_transfer() {
     let bounced = BakeSettings {
         bounces: 2,
         albedo: 0.7,
+        shadows: true,
         ..direct
     };
     let (points, vertices) = (at_vertices(&bounced), bake_pose(&mesh, &bounced).unwrap());
@@ -839,4 +850,60 @@ fn points_between_vertices_bake_and_bad_points_are_refused() {
     )
     .unwrap();
     assert_eq!(zero, t);
+}
+
+/// Without shadows nothing is traced: a vertex shut inside a closed cube still sees the whole
+/// clamped cosine lobe, whose band norms are the Funk–Hecke constants `Â_l √((2l+1)/4π)`:
+/// √π/2, √(π/3), √(5π)/8, 0 and √π/16 for bands 0 to 4 (odd bands above 1 vanish), and the
+/// lobe points along the normal (`t_1m ∝ y_1m(n)`).
+#[test]
+fn shadowless_transfer_is_the_closed_form_cosine_lobe_even_when_enclosed() {
+    let mut mesh = merge(&cube(DVec3::ZERO, 1.0));
+    let inside = mesh.vertex_count();
+    mesh.positions.push([0.1, -0.2, 0.3]);
+    let n = DVec3::new(0.3, 0.4, 0.5).normalize();
+    mesh.normals.push([0.3, 0.4, 0.5]);
+    let s = BakeSettings {
+        shadows: false,
+        ..settings(6, 512)
+    };
+    assert_eq!(s.rays_cast(mesh.vertex_count()), 0);
+    assert_eq!(settings(6, 512).rays_cast(10), 5120);
+    let t = bake_pose(&mesh, &s).unwrap();
+    let ours = &t[inside * 36..];
+    let norms = [
+        PI.sqrt() / 2.0,
+        (PI / 3.0).sqrt(),
+        (5.0 * PI).sqrt() / 8.0,
+        0.0,
+        PI.sqrt() / 16.0,
+        0.0,
+    ];
+    for (l, expect) in norms.iter().enumerate() {
+        let band = &ours[l * l..(l + 1) * (l + 1)];
+        let norm = band
+            .iter()
+            .map(|&x| f64::from(x).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!((norm - expect).abs() < 2e-6, "band {l}: {norm} vs {expect}");
+    }
+    // Band 1 is (√(π/3)) (n_y, n_z, n_x) up to the basis' sign convention: parallel to n.
+    let b1 = DVec3::new(f64::from(ours[3]), f64::from(ours[1]), f64::from(ours[2]));
+    assert!((b1.normalize().dot(n).abs() - 1.0).abs() < 1e-6, "{b1:?}");
+    // The same transfer at points, and refusing bounces without occluders.
+    let points = bake_points(
+        &mesh,
+        (&mesh.positions[inside..], &mesh.normals[inside..]),
+        PatternRotation::Shared,
+        &s,
+        &Silent,
+    )
+    .unwrap();
+    assert_eq!(points, ours);
+    let bouncing = BakeSettings { bounces: 1, ..s };
+    assert_eq!(
+        bake_pose(&mesh, &bouncing),
+        Err(BakeError::BouncesNeedShadows)
+    );
 }

@@ -31,6 +31,28 @@ pub struct ResultsArgs {
     pub rays: usize,
 }
 
+/// `aprt report`.
+#[derive(Debug, Args)]
+pub struct ReportArgs {
+    /// The scene file (see fixtures/scenes/); its `test` clips are what the report measures on.
+    pub scene: PathBuf,
+    /// Output directory for report.md, report.json and the Pareto plots (PNG and SVG).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Microseconds per frame the recommendation may cost (default: the scene's [budget]).
+    #[arg(long)]
+    pub budget_us: Option<f64>,
+    /// Bytes the recommended model may take (default: the scene's [budget]).
+    #[arg(long)]
+    pub budget_bytes: Option<u64>,
+    /// Write the recommended model here.
+    #[arg(long)]
+    pub write_model: Option<PathBuf>,
+    /// Use every k-th frame of every clip (1 = all; larger is faster).
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u64).range(1..))]
+    pub stride: u64,
+}
+
 /// `aprt rig-study`.
 #[derive(Debug, Args)]
 pub struct RigStudyArgs {
@@ -177,6 +199,19 @@ pub enum FeaturesArg {
 /// `aprt train`.
 #[derive(Debug, Args)]
 pub struct TrainArgs {
+    /// A scene file (see fixtures/scenes/): its character, clips, effects, error target and
+    /// lighting decide what is baked and how the model is stored; only what the scene calls
+    /// for is computed. Replaces the source, bake, --rig, --precision and --world-frame flags.
+    #[arg(long, conflicts_with_all = [
+        "obj_seq", "angles", "builtin", "character", "gltf", "bvh", "clip", "fps", "frames",
+        "mannequin", "no_hat", "root_translation", "validate", "world_frame", "order", "rays",
+        "bounces", "albedo", "rig", "precision",
+    ])]
+    pub scene: Option<PathBuf>,
+    /// With --scene: write what was computed and skipped, and what the full simulation would
+    /// have cost, as JSON (keys rays_cast, bounce_passes, sh_order, skipped, seconds, …).
+    #[arg(long, requires = "scene")]
+    pub report: Option<PathBuf>,
     /// The training poses.
     #[command(flatten)]
     pub source: SourceArgs,
@@ -403,6 +438,7 @@ impl BakeArgs {
             rays: self.rays,
             bounces: self.bounces,
             albedo: self.albedo,
+            shadows: true,
         }
     }
 }

@@ -15,8 +15,8 @@ use clap::{Parser, Subcommand};
 
 pub use args::{
     BakeArgs, DemoArgs, DeringArg, EvalArgs, FitArgs, InspectArgs, IrradianceArgs, LightArgs,
-    LightCommand, PrecisionArg, ResultsArgs, RigArgs, RigStudyArgs, SimulateArgs, TrainArgs,
-    TransferArgs,
+    LightCommand, PrecisionArg, ReportArgs, ResultsArgs, RigArgs, RigStudyArgs, SimulateArgs,
+    TrainArgs, TransferArgs,
 };
 pub use source::SourceArgs;
 pub use terminal::Terminal;
@@ -25,11 +25,13 @@ use crate::bake::budget::Workload;
 use crate::bake::checkpoint::{Checkpoint, OnExisting};
 use crate::io::atomic::write_atomic;
 use crate::io::outputs::{Input, Output, check};
+use crate::io::scene::{Environment, Scene, read_scene};
 use crate::model::ModelFrame;
 use crate::model::predict::{predict_clip, predict_world};
 use crate::model::train::TrainSettings;
 use crate::progress::Reporter;
 use crate::rig::mesh::degenerate_note;
+use crate::scene::train::{SceneTrainOptions, SceneTrainReport, train_scene};
 
 /// Pose-driven precomputed radiance transfer for skinned characters.
 #[derive(Debug, Parser)]
@@ -63,6 +65,9 @@ pub enum Command {
     /// Fit an irradiance rig to a mesh or character and report, for a lights file, which
     /// lights it carries, its error against exact evaluation and its cost per frame.
     Rig(RigArgs),
+    /// Sweep a scene's accuracy knobs and report error against µs per frame and bytes, the
+    /// Pareto-optimal settings and the most accurate one within a budget.
+    Report(ReportArgs),
     /// Regenerate the irradiance-rig study on the built-in creature (docs/rigs).
     RigStudy(RigStudyArgs),
     /// SH light maps: bake a clip into a compressed light-map sequence, sample it at the
@@ -83,6 +88,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Results(args) => results(&args),
         Command::Rig(args) => irradiance_rig::run(&args),
         Command::RigStudy(args) => rig_study(&args),
+        Command::Report(args) => report(&args),
         Command::Shlm(args) => shlm::run(&args),
 
         Command::Light(args) => match args.command {
@@ -239,6 +245,7 @@ fn results(args: &ResultsArgs) -> Result<()> {
             rays: args.rays,
             bounces: 0,
             albedo: 0.0,
+            shadows: true,
         },
         alphas: (-6..=3).map(|e| 10f64.powi(e)).collect(),
     };
@@ -279,6 +286,14 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
 }
 
 fn train(args: &TrainArgs) -> Result<()> {
+    let scene = args.scene.as_deref().map(read_scene).transpose()?;
+    let (source, validate) = match &scene {
+        Some(scene) => (
+            SourceArgs::from_scene(scene, &scene.train)?,
+            scene.validate.clone(),
+        ),
+        None => (args.source.clone(), args.validate.clone()),
+    };
     let checkpoint = match &args.checkpoint {
         Some(dir) => Output::directory(dir, "--checkpoint"),
         None => Output::directory(
@@ -287,33 +302,49 @@ fn train(args: &TrainArgs) -> Result<()> {
         ),
     };
     // A checkpoint being resumed is read too: the model must not land on one of its files.
-    let mut inputs = args.source.inputs();
-    inputs.extend(args.source.validation_inputs(&args.validate));
+    let mut inputs = source.inputs();
+    inputs.extend(source.validation_inputs(&validate));
+    if let Some(scene) = &scene {
+        inputs.extend(scene_inputs(scene));
+    }
     let stored = std::fs::read_dir(&checkpoint.path).into_iter().flatten();
     inputs.extend(
         stored
             .flatten()
             .map(|e| Input::new(e.path(), "a file of the checkpoint")),
     );
-    check(
-        &[Output::file(&args.output, "-o"), checkpoint.clone()],
-        &inputs,
-    )?;
+    let mut outputs = vec![Output::file(&args.output, "-o"), checkpoint.clone()];
+    if let Some(report) = &args.report {
+        outputs.push(Output::file(report, "--report"));
+    }
+    check(&outputs, &inputs)?;
+    let existing = if args.resume {
+        OnExisting::Resume
+    } else {
+        OnExisting::Refuse
+    };
+    if let Some(scene) = &scene {
+        let poses = source.poses(&validate, &Terminal)?;
+        let options = SceneTrainOptions {
+            output: &args.output,
+            checkpoint: checkpoint.path,
+            existing,
+            fit: args.fit.options()?,
+        };
+        let report = source.in_origin(train_scene(scene, poses, options, &Terminal))?;
+        return print_scene_report(&report, args.report.as_deref());
+    }
     let settings = TrainSettings {
         fit: args.fit.options()?,
         bake: args.bake.settings(),
-        precision: args.fit.precision.into(),
+        precision: crate::model::precision::PrecisionChoice::Fixed(args.fit.precision.into()),
         frame: if args.world_frame {
             ModelFrame::World
         } else {
             ModelFrame::Bone
         },
         checkpoint: checkpoint.path,
-        existing: if args.resume {
-            OnExisting::Resume
-        } else {
-            OnExisting::Refuse
-        },
+        existing,
         irradiance_rig: args.rig,
     };
     settings.bake.validate()?;
@@ -333,6 +364,142 @@ fn train(args: &TrainArgs) -> Result<()> {
         info.coef_dims,
         info.alpha,
         info.bytes
+    );
+    Ok(())
+}
+
+/// The files a scene reads besides its character: itself and its environment map.
+fn scene_inputs(scene: &Scene) -> Vec<Input> {
+    let mut inputs = vec![Input::new(&scene.path, "the scene file")];
+    if let Some(Environment::Map(map)) = &scene.environment {
+        inputs.push(Input::new(map, "the scene's environment map"));
+    }
+    inputs
+}
+
+/// Prints what `aprt train --scene` computed and skipped, and writes it as JSON to `json`.
+fn print_scene_report(report: &SceneTrainReport, json: Option<&Path>) -> Result<()> {
+    let full = &report.full_simulation;
+    eprintln!("computed:");
+    for line in &report.computed {
+        eprintln!("  - {line}");
+    }
+    eprintln!("skipped:");
+    for line in &report.skipped {
+        eprintln!("  - {line}");
+    }
+    eprintln!(
+        "wrote {}: {} bytes, SH order {}, {} rays cast, {} bounce passes, {:.1} s ({:.1} s baking, {:.1} s fitting)",
+        report.model.display(),
+        report.bytes,
+        report.sh_order,
+        crate::scene::group(report.rays_cast),
+        report.bounce_passes,
+        report.seconds,
+        report.stages.bake,
+        report.stages.fit
+    );
+    if full.poses_timed == 0 {
+        eprintln!(
+            "the scene needs the full simulation ({}): nothing saved",
+            full.settings
+        );
+    } else {
+        eprintln!(
+            "the full simulation ({}) takes {:.3} s a pose against this scene's {:.4} s ({:.0}x, measured on {} poses): about {:.1} s saved",
+            full.settings,
+            full.seconds_per_pose,
+            full.scene_seconds_per_pose,
+            full.speedup,
+            full.poses_timed,
+            full.saved_seconds
+        );
+    }
+    if let Some(path) = json {
+        let text = serde_json::to_string_pretty(report)? + "\n";
+        write_atomic(path, text.as_bytes())
+            .with_context(|| format!("cannot write {}", path.display()))?;
+        eprintln!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+fn report(args: &ReportArgs) -> Result<()> {
+    use crate::report::sweep::{ReportSettings, SceneClips, document, run};
+    let scene = read_scene(&args.scene)?;
+    let source = SourceArgs::from_scene(&scene, &scene.train)?;
+    let held: Vec<String> = scene.validate.iter().chain(&scene.test).cloned().collect();
+    let mut inputs = source.inputs();
+    inputs.extend(source.validation_inputs(&held));
+    inputs.extend(scene_inputs(&scene));
+    let mut outputs = vec![Output::directory(&args.out, "--out")];
+    if let Some(model) = &args.write_model {
+        outputs.push(Output::file(model, "--write-model"));
+    }
+    check(&outputs, &inputs)?;
+    if !source.names_rig() {
+        bail!(
+            "{}: the report measures on test clips of a character; an OBJ sequence has none",
+            args.scene.display()
+        );
+    }
+    let (rig, clips, mut validation) = source.load(&held, &Terminal)?;
+    let tests = validation.split_off(scene.validate.len());
+    let settings = ReportSettings {
+        budget_us: args.budget_us,
+        budget_bytes: args.budget_bytes,
+        stride: args.stride as usize,
+    };
+    let scene_clips = SceneClips {
+        rig: rig.as_ref(),
+        train: &clips,
+        validation: &validation,
+        tests: &tests,
+    };
+    let report = source.in_origin(run(&scene, &scene_clips, &settings, &Terminal))?;
+    let mut command = format!(
+        "aprt report {} --out {}",
+        args.scene.display(),
+        args.out.display()
+    );
+    if let Some(us) = args.budget_us {
+        command += &format!(" --budget-us {us}");
+    }
+    if let Some(bytes) = args.budget_bytes {
+        command += &format!(" --budget-bytes {bytes}");
+    }
+    if args.stride != 2 {
+        command += &format!(" --stride {}", args.stride);
+    }
+    document::write(&report, &args.out, &command)?;
+    match report.recommended {
+        Some(i) => {
+            let p = &report.points[i];
+            eprintln!(
+                "recommended: {}: {:.2} grey levels RMS, {:.1} us per frame, {} bytes",
+                p.setting.label, p.error, p.us_per_frame, p.bytes
+            );
+            if let Some(model) = &args.write_model {
+                write_atomic(model, &p.blob)
+                    .with_context(|| format!("cannot write {}", model.display()))?;
+                eprintln!("wrote {}", model.display());
+            }
+        }
+        None => {
+            if args.write_model.is_some() {
+                bail!(
+                    "no measured setting fits the budget, so there is no model to write (see {}/report.md)",
+                    args.out.display()
+                );
+            }
+            eprintln!("no measured setting fits the budget");
+        }
+    }
+    eprintln!(
+        "wrote {}/{{report.md, report.json, {p}.png, {p}.svg, {b}.png, {b}.svg}}",
+        args.out.display(),
+        p = document::TIME_PLOT,
+        b = document::BYTES_PLOT
     );
     Ok(())
 }

@@ -10,6 +10,7 @@ use crate::bake::BakeSettings;
 use crate::bake::budget::Workload;
 use crate::bake::clip::pose_all;
 use crate::io::outputs::{Input, gltf_inputs, obj_sequence_inputs};
+use crate::io::scene::{Scene, SceneSource};
 use crate::io::source::{
     BuiltinCharacter, ClipSpec, Poses, RigSource, joined, obj_sequence_meshes,
 };
@@ -93,6 +94,51 @@ type RigClips = (Box<dyn Rig>, Vec<Clip>, Vec<Clip>);
 const GLTF_FPS: f64 = 30.0;
 
 impl SourceArgs {
+    /// The source options a scene's `[source]` stands for, with `clips` as its clips (its
+    /// `train` list, or its `test` list to load those): named clips of a built-in or glTF
+    /// character; for BVH, frame ranges `A..B` of the scene's file or other BVH files (whose
+    /// motion is retargeted onto the scene file's mannequin).
+    pub fn from_scene(scene: &Scene, clips: &[String]) -> Result<SourceArgs> {
+        let mut args = SourceArgs::default();
+        match &scene.source {
+            SceneSource::Builtin(character) => {
+                args.builtin = true;
+                args.character = Some(match character {
+                    BuiltinCharacter::Human => CharacterArg::Human,
+                    BuiltinCharacter::Creature => CharacterArg::Creature,
+                });
+                args.clip = clips.to_vec();
+            }
+            SceneSource::Gltf { path, fps } => {
+                args.gltf = Some(path.clone());
+                args.fps = *fps;
+                args.clip = clips.to_vec();
+            }
+            SceneSource::Bvh(file) => {
+                let ranges: Vec<Result<Range<usize>, String>> =
+                    clips.iter().map(|c| parse_range(c)).collect();
+                if ranges.iter().all(Result::is_ok) {
+                    args.bvh = vec![file.clone()];
+                    args.frames = ranges.into_iter().flatten().collect();
+                } else if ranges.iter().all(Result::is_err) {
+                    let base = scene.path.parent().unwrap_or(std::path::Path::new(""));
+                    args.bvh = clips.iter().map(|c| base.join(c)).collect();
+                    args.mannequin = Some(file.clone());
+                } else {
+                    bail!(
+                        "{}: [source]: clips {clips:?} mix frame ranges of the bvh file with other files; give one or the other",
+                        scene.path.display()
+                    );
+                }
+            }
+            SceneSource::ObjSeq { dir, angles } => {
+                args.obj_seq = Some(dir.clone());
+                args.angles = Some(angles.clone());
+            }
+        }
+        Ok(args)
+    }
+
     /// The files and directories the options read, which no output may be.
     pub fn inputs(&self) -> Vec<Input> {
         let mut inputs = Vec::new();

@@ -4,7 +4,7 @@
 
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::progress::{BakeProgress, Reporter};
+use crate::progress::{BakeProgress, Reporter, StepProgress};
 
 /// Reports to the terminal: what `aprt` prints while it works.
 #[derive(Clone, Copy, Debug, Default)]
@@ -23,6 +23,32 @@ impl Reporter for Terminal {
             bar.set_style(style);
         }
         Box::new(Bar(bar))
+    }
+
+    fn step_progress(&self, steps: usize) -> Box<dyn StepProgress + '_> {
+        let bar = ProgressBar::new(steps as u64);
+        if let Ok(style) = ProgressStyle::with_template(
+            "{msg} [{elapsed_precise}] {wide_bar} {pos}/{len} steps ({eta} left)",
+        ) {
+            bar.set_style(style);
+        }
+        Box::new(Steps(bar))
+    }
+}
+
+/// A job's progress as a bar over its steps, with the current step as its message.
+struct Steps(ProgressBar);
+
+impl StepProgress for Steps {
+    fn step(&self, what: &str) {
+        if !self.0.message().is_empty() {
+            self.0.inc(1);
+        }
+        self.0.set_message(what.to_owned());
+    }
+
+    fn finish(&self) {
+        self.0.finish_and_clear();
     }
 }
 

@@ -6,6 +6,7 @@ pub mod atomic;
 pub mod npy;
 pub mod obj;
 pub mod outputs;
+pub mod scene;
 pub mod source;
 
 /// `text` without the UTF-8 byte-order mark some editors write at the start of a text file

@@ -156,6 +156,7 @@ fn per_vertex_shading(
         rays,
         bounces: 0,
         albedo: 0.0,
+        shadows: true,
     };
     let transfer = bake_pose(posed, &settings)?;
     let mut rgb = vec![[0.0f32; 3]; bind.vertex_count()];

@@ -25,6 +25,16 @@ pub enum Precision {
     F16,
 }
 
+impl Precision {
+    /// The name `--precision` and scene files give it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Precision::F32 => "f32",
+            Precision::F16 => "f16",
+        }
+    }
+}
+
 /// Why a model cannot be written.
 #[derive(Clone, Debug, thiserror::Error, PartialEq)]
 pub enum ExportError {

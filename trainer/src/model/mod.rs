@@ -12,6 +12,7 @@
 pub mod export;
 pub mod features;
 pub mod fit;
+pub mod precision;
 pub mod predict;
 pub mod runtime;
 pub mod train;

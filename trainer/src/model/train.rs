@@ -3,9 +3,12 @@
 //! resumes, fit, write the blob, then remove the checkpoint).
 
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 use anyhow::{Context, Result};
-use aprt_core::{MAX_BONES, MAX_COEF_DIMS, MAX_LIT, MAX_POSE_DIMS, MAX_POSE_LEN, MAX_VERTICES};
+use aprt_core::{
+    MAX_BONES, MAX_COEF_DIMS, MAX_LIT, MAX_POSE_DIMS, MAX_POSE_LEN, MAX_VERTICES, Rotation,
+};
 use nalgebra::DMatrix;
 
 use crate::bake::budget::{BudgetError, Workload};
@@ -17,11 +20,12 @@ use crate::io::source::{Poses, clip_names, joined};
 use crate::lighting::rig_fit::{FIT_POSES, fitting_meshes};
 use crate::lighting::{RigKind, fit_rig};
 use crate::model::ModelFrame;
-use crate::model::export::{ExportError, Precision, check_alpha, encode_model_with_rig};
+use crate::model::export::{ExportError, Precision, check_alpha};
 use crate::model::fit::{
     Alpha, Anchor, Choice, CoefDims, Dims, Fit, FitInput, FitOptions, FitReport, HeldOutKind,
     LOCALITY_RADIUS, Local, PriorKind, REST_DISTANCE_LIMIT, Validation, fit, fit_input,
 };
+use crate::model::precision::{PrecisionChoice, encode_chosen};
 use crate::model::runtime::{BlobInfo, describe};
 use crate::progress::Reporter;
 use crate::rig::bone_frames::{FrameChange, change_frames, dominant_bones};
@@ -118,8 +122,8 @@ pub struct TrainSettings {
     pub bake: BakeSettings,
     /// The model's shape and regularisation.
     pub fit: FitOptions,
-    /// Precision of the blob's large sections.
-    pub precision: Precision,
+    /// Precision of the blob's large sections, or how to choose it.
+    pub precision: PrecisionChoice,
     /// The frame a rig's clip is learned in. Meshes read from files have no bones and always
     /// learn transfer in world space.
     pub frame: ModelFrame,
@@ -418,7 +422,25 @@ pub struct Trained {
     pub selection: Selection,
     /// The written blob, as `aprt inspect` describes it.
     pub info: BlobInfo,
+    /// The precision written, and why.
+    pub precision: (Precision, String),
+    /// Poses baked (training, validation and the rest pose), resumed ones included.
+    pub baked_poses: usize,
+    /// Seconds spent baking (with posing) and fitting (with the rig and encoding).
+    pub seconds: StageSeconds,
 }
+
+/// Wall-clock seconds of the stages of [`train`].
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct StageSeconds {
+    /// Posing and baking every pose, through the checkpoint.
+    pub bake: f64,
+    /// Fitting the model and the irradiance rig, choosing the precision, writing the blob.
+    pub fit: f64,
+}
+
+/// Training poses the automatic precision is measured on at most (evenly spaced).
+const PRECISION_POSES: usize = 16;
 
 /// Bakes every pose (through the checkpoint), fits the model, writes it to `output`
 /// atomically and then removes the checkpoint. Notes (joints left out, bake progress, poses
@@ -430,108 +452,185 @@ pub fn train(
     reporter: &dyn Reporter,
 ) -> Result<Trained> {
     check(&poses, settings)?;
+    let started = Instant::now();
     let rig_section = match &settings.irradiance_rig {
         Some(kind) => Some(fit_irradiance_rig(*kind, &poses, settings.bake.order)?),
         None => None,
     };
-    let (fitted, checkpoint, poses) = match poses {
+    let outcome = match poses {
         Poses::Meshes {
             files,
             meshes,
             angles,
         } => {
             let name = |i: usize| files[i].display().to_string();
+            let baking = Instant::now();
             let (transfers, checkpoint) = bake_checkpointed(&meshes, name, settings, reporter)?;
+            let bake_s = baking.elapsed().as_secs_f64();
             let a = DMatrix::from_fn(angles.len(), angles[0].len(), |i, j| angles[i][j]);
             let fitted = fit(&a, &transfers, settings.bake.order, &settings.fit)?;
-            (fitted, checkpoint, angles.len())
+            let step = angles.len().div_ceil(PRECISION_POSES).max(1);
+            FitOutcome {
+                fitted,
+                checkpoint,
+                poses: angles.len(),
+                baked: meshes.len(),
+                bake_s,
+                measure_on: angles
+                    .iter()
+                    .step_by(step)
+                    .map(|a| (a.clone(), Vec::new()))
+                    .collect(),
+            }
         }
         Poses::Rig {
             rig,
             clips,
             validation,
-        } => {
-            let what = clip_names(&clips);
-            let layout = PoseLayout::from_training(&rig.angle_names(), &training_frames(&clips))
-                .with_context(|| format!("clip {what}"))?;
-            if !layout.dropped().is_empty() {
-                reporter.note(&format!(
-                    "joints that never move in {what} and are left out of the model: {}",
-                    layout.dropped().join(", ")
-                ));
-            }
-            // Training clips, then validation clips, then (for bone-frame models, which are
-            // anchored at it) the rest pose: all baked through one checkpoint.
-            let all: Vec<&Clip> = clips.iter().chain(&validation).collect();
-            let mut meshes = Vec::new();
-            let mut names = Vec::new();
-            for clip in &all {
-                meshes.extend(pose_all(rig.as_ref(), &clip.name, &clip.frames)?);
-                names.extend((0..clip.frames.len()).map(|f| (clip.name.as_str(), f)));
-            }
-            let rest_pose = rig.rest_pose();
-            let anchored = settings.frame == ModelFrame::Bone;
-            if anchored {
-                meshes.push(rig.pose(&rest_pose)?);
-            }
-            let name = |i: usize| match names.get(i) {
-                Some((clip, f)) => format!("clip {clip} frame {f}"),
-                None => "the rest pose".to_owned(),
-            };
-            let (mut transfer, checkpoint) = bake_checkpointed(&meshes, name, settings, reporter)?;
-            let rest = if anchored {
-                let (mesh, t) = (meshes.pop(), transfer.pop());
-                Some(BakedClip::new(
-                    rig.as_ref(),
-                    &layout,
-                    "rest pose",
-                    vec![rest_pose],
-                    mesh.into_iter().collect(),
-                    t.into_iter().collect(),
-                )?)
-            } else {
-                None
-            };
-            let (mut meshes, mut transfer) = (meshes.into_iter(), transfer.into_iter());
-            let mut baked = all
-                .iter()
-                .map(|clip| {
-                    let n = clip.frames.len();
-                    BakedClip::new(
-                        rig.as_ref(),
-                        &layout,
-                        &clip.name,
-                        clip.frames.clone(),
-                        meshes.by_ref().take(n).collect(),
-                        transfer.by_ref().take(n).collect(),
-                    )
-                })
-                .collect::<Result<Vec<_>>>()?;
-            let held = baked.split_off(clips.len());
-            let train = BakedClip::concat(baked);
-            let clips = ClipSet {
-                train: &train,
-                rest: rest.as_ref(),
-                validation: &held,
-            };
-            let fitted = fit_clip(
-                rig.as_ref(),
-                &layout,
-                clips,
-                settings.bake.order,
-                &settings.fit,
-                settings.frame,
-            )?;
-            (fitted, checkpoint, train.poses.len())
-        }
+        } => fit_rig_clips(rig.as_ref(), &clips, &validation, settings, reporter)?,
     };
-    let blob = encode_model_with_rig(&fitted.model, settings.precision, rig_section.as_deref())?;
-    write_atomic(output, &blob).with_context(|| format!("cannot write {}", output.display()))?;
-    checkpoint.remove()?;
+    let chosen = encode_chosen(
+        &outcome.fitted.model,
+        rig_section.as_deref(),
+        &settings.precision,
+        &outcome.measure_on,
+    )?;
+    write_atomic(output, &chosen.blob)
+        .with_context(|| format!("cannot write {}", output.display()))?;
+    if let Some(checkpoint) = outcome.checkpoint {
+        checkpoint.remove()?;
+    }
+    let total = started.elapsed().as_secs_f64();
     Ok(Trained {
-        poses,
-        selection: Selection::of(&fitted.report),
-        info: describe(&blob)?,
+        poses: outcome.poses,
+        selection: Selection::of(&outcome.fitted.report),
+        info: describe(&chosen.blob)?,
+        precision: (chosen.precision, chosen.reason),
+        baked_poses: outcome.baked,
+        seconds: StageSeconds {
+            bake: outcome.bake_s,
+            fit: total - outcome.bake_s,
+        },
+    })
+}
+
+/// A fitted model with what it took.
+struct FitOutcome {
+    fitted: Fit,
+    /// None for closed-form bakes, which keep no checkpoint.
+    checkpoint: Option<Checkpoint>,
+    /// Training poses.
+    poses: usize,
+    /// Poses baked.
+    baked: usize,
+    /// Seconds posing and baking.
+    bake_s: f64,
+    /// Training poses (angles and bone rotations) to measure the precision on.
+    measure_on: Vec<(Vec<f64>, Vec<Rotation>)>,
+}
+
+/// Bakes a character's training and validation clips (and, for bone-frame models, the rest
+/// pose) through one checkpoint and fits the model.
+fn fit_rig_clips(
+    rig: &dyn Rig,
+    clips: &[Clip],
+    validation: &[Clip],
+    settings: &TrainSettings,
+    reporter: &dyn Reporter,
+) -> Result<FitOutcome> {
+    let what = clip_names(clips);
+    let layout = PoseLayout::from_training(&rig.angle_names(), &training_frames(clips))
+        .with_context(|| format!("clip {what}"))?;
+    if !layout.dropped().is_empty() {
+        reporter.note(&format!(
+            "joints that never move in {what} and are left out of the model: {}",
+            layout.dropped().join(", ")
+        ));
+    }
+    // Training clips, then validation clips, then (for bone-frame models, which are
+    // anchored at it) the rest pose: all baked through one checkpoint.
+    let baking = Instant::now();
+    let all: Vec<&Clip> = clips.iter().chain(validation).collect();
+    let mut meshes = Vec::new();
+    let mut names = Vec::new();
+    for clip in &all {
+        meshes.extend(pose_all(rig, &clip.name, &clip.frames)?);
+        names.extend((0..clip.frames.len()).map(|f| (clip.name.as_str(), f)));
+    }
+    let rest_pose = rig.rest_pose();
+    let anchored = settings.frame == ModelFrame::Bone;
+    if anchored {
+        meshes.push(rig.pose(&rest_pose)?);
+    }
+    let baked = meshes.len();
+    let name = |i: usize| match names.get(i) {
+        Some((clip, f)) => format!("clip {clip} frame {f}"),
+        None => "the rest pose".to_owned(),
+    };
+    let (mut transfer, checkpoint) = bake_checkpointed(&meshes, name, settings, reporter)?;
+    let bake_s = baking.elapsed().as_secs_f64();
+    let rest = if anchored {
+        let (mesh, t) = (meshes.pop(), transfer.pop());
+        Some(BakedClip::new(
+            rig,
+            &layout,
+            "rest pose",
+            vec![rest_pose],
+            mesh.into_iter().collect(),
+            t.into_iter().collect(),
+        )?)
+    } else {
+        None
+    };
+    let (mut meshes, mut transfer) = (meshes.into_iter(), transfer.into_iter());
+    let mut baked_clips = all
+        .iter()
+        .map(|clip| {
+            let n = clip.frames.len();
+            BakedClip::new(
+                rig,
+                &layout,
+                &clip.name,
+                clip.frames.clone(),
+                meshes.by_ref().take(n).collect(),
+                transfer.by_ref().take(n).collect(),
+            )
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let held = baked_clips.split_off(clips.len());
+    let train = BakedClip::concat(baked_clips);
+    let set = ClipSet {
+        train: &train,
+        rest: rest.as_ref(),
+        validation: &held,
+    };
+    let fitted = fit_clip(
+        rig,
+        &layout,
+        set,
+        settings.bake.order,
+        &settings.fit,
+        settings.frame,
+    )?;
+    let step = train.angles.len().div_ceil(PRECISION_POSES).max(1);
+    let measure_on = (0..train.angles.len())
+        .step_by(step)
+        .map(|f| {
+            let rotations = if anchored {
+                train.core_rotations(f)
+            } else {
+                Vec::new()
+            };
+            (train.angles[f].clone(), rotations)
+        })
+        .collect();
+    Ok(FitOutcome {
+        fitted,
+        checkpoint,
+        poses: train.poses.len(),
+        baked,
+        bake_s,
+        measure_on,
     })
 }
 
@@ -566,12 +665,18 @@ fn training_frames(clips: &[Clip]) -> Vec<Vec<f64>> {
 
 /// The transfer of every pose of `meshes`, through the checkpoint of `settings` (opened for
 /// these meshes, so a resume with other inputs is refused); `name(i)` names pose `i` in errors.
+/// A shadowless bake is closed form and keeps no checkpoint.
 fn bake_checkpointed(
     meshes: &[Mesh],
     name: impl Fn(usize) -> String,
     settings: &TrainSettings,
     reporter: &dyn Reporter,
-) -> Result<(Vec<Vec<f32>>, Checkpoint)> {
+) -> Result<(Vec<Vec<f32>>, Option<Checkpoint>)> {
+    if !settings.bake.shadows {
+        // Closed form, milliseconds a pose: nothing worth saving for a resume.
+        let transfer = crate::bake::bake_poses(meshes, &settings.bake, reporter)?;
+        return Ok((transfer, None));
+    }
     let mut checkpoint = Checkpoint::open(
         &settings.checkpoint,
         settings.existing,
@@ -585,5 +690,5 @@ fn bake_checkpointed(
         ));
     }
     let transfer = checkpoint.bake(meshes, name, reporter)?;
-    Ok((transfer, checkpoint))
+    Ok((transfer, Some(checkpoint)))
 }

@@ -97,6 +97,7 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
         rays: args.rays,
         bounces: 0,
         albedo: 0.0,
+        shadows: true,
     };
     let training = character.training_clip();
     let layout = PoseLayout::from_training(&character.angle_names(), &training.frames)?;

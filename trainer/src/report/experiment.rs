@@ -400,7 +400,7 @@ fn median_seconds(mut f: impl FnMut()) -> f64 {
 }
 
 /// Per-frame cost through aprt-core on one pose: (shade µs, transfer µs).
-fn time_core(
+pub(crate) fn time_core(
     blob: &[u8],
     angles: &[f64],
     rotations: &[Rotation],
@@ -430,7 +430,7 @@ fn time_core(
 }
 
 /// Multiply-adds per frame for RGB shading of every vertex.
-fn megaops(model: &ModelInfo) -> f64 {
+pub(crate) fn megaops(model: &ModelInfo) -> f64 {
     let (n2, ka, kv, v, a) = (
         model.coeffs() as f64,
         model.pose_dims() as f64,

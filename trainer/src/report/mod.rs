@@ -1,6 +1,6 @@
 //! Measuring and showing models: the paper's experiment (tables against baselines), accuracy
-//! measures, renders and plots, and the two documents built from them (`aprt demo`'s report and
-//! `aprt results`).
+//! measures, renders and plots, the documents built from them (`aprt demo`'s report and
+//! `aprt results`), and the accuracy-against-cost sweep of `aprt report`.
 
 pub mod demo;
 pub mod evaluate;
@@ -12,3 +12,4 @@ pub mod render;
 pub mod results;
 pub mod rig_frame;
 pub mod rig_study;
+pub mod sweep;

@@ -19,6 +19,8 @@ pub struct Series {
     pub points: Vec<(f64, f64)>,
     /// Also mark each point (for sparse curves).
     pub markers: bool,
+    /// Join the points with a line (a scatter of unrelated settings has none).
+    pub line: bool,
 }
 
 /// A plot's axes and labels.
@@ -65,13 +67,51 @@ pub(crate) fn register_font() {
 
 /// Draws `series` on `axes` and writes the PNG to `path`.
 pub fn line_plot(path: &Path, axes: &Axes<'_>, series: &[Series]) -> Result<()> {
+    let (x, y) = ranges(path, axes, series)?;
+    let mut buffer = vec![0u8; (WIDTH * HEIGHT * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buffer, (WIDTH, HEIGHT)).into_drawing_area();
+        draw(&root, axes, series, x, y, keeper(axes))
+            .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        root.present()
+            .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    }
+    let image = image::RgbImage::from_raw(WIDTH, HEIGHT, buffer)
+        .ok_or_else(|| anyhow!("{}: plot buffer has the wrong size", path.display()))?;
+    save_png_atomic(path, &image)?;
+    Ok(())
+}
+
+/// [`line_plot`] as an SVG document at `path` (vector, for documents that zoom).
+pub fn line_plot_svg(path: &Path, axes: &Axes<'_>, series: &[Series]) -> Result<()> {
+    let (x, y) = ranges(path, axes, series)?;
+    let mut text = String::new();
+    {
+        let root = SVGBackend::with_string(&mut text, (WIDTH, HEIGHT)).into_drawing_area();
+        draw(&root, axes, series, x, y, keeper(axes))
+            .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        root.present()
+            .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    }
+    crate::io::atomic::write_atomic(path, text.as_bytes())
+        .map_err(|e| anyhow!("cannot write {}: {e}", path.display()))
+}
+
+/// Whether a point can be drawn on the axes (finite, positive on a log axis).
+fn keeper(axes: &Axes<'_>) -> impl Fn(&(f64, f64)) -> bool {
+    let (log_x, log_y) = (axes.log_x, axes.log_y);
+    move |&(x, y): &(f64, f64)| {
+        x.is_finite() && y.is_finite() && (!log_x || x > 0.0) && (!log_y || y > 0.0)
+    }
+}
+
+/// The x and y ranges that hold every drawable point, padded; an error when there is none.
+fn ranges(path: &Path, axes: &Axes<'_>, series: &[Series]) -> Result<((f64, f64), (f64, f64))> {
     register_font();
-    let keep = |&(x, y): &(f64, f64)| {
-        x.is_finite() && y.is_finite() && (!axes.log_x || x > 0.0) && (!axes.log_y || y > 0.0)
-    };
+    let keep = keeper(axes);
     let points: Vec<(f64, f64)> = series
         .iter()
-        .flat_map(|s| s.points.iter().copied().filter(keep))
+        .flat_map(|s| s.points.iter().copied().filter(&keep))
         .collect();
     if points.is_empty() {
         return Err(anyhow!("{}: nothing to plot", path.display()));
@@ -89,19 +129,10 @@ pub fn line_plot(path: &Path, axes: &Axes<'_>, series: &[Series]) -> Result<()> 
             (lo - pad, hi + pad)
         }
     };
-    let x = range(points.iter().map(|p| p.0).collect(), axes.log_x);
-    let y = range(points.iter().map(|p| p.1).collect(), axes.log_y);
-    let mut buffer = vec![0u8; (WIDTH * HEIGHT * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut buffer, (WIDTH, HEIGHT)).into_drawing_area();
-        draw(&root, axes, series, x, y, keep).map_err(|e| anyhow!("{}: {e}", path.display()))?;
-        root.present()
-            .map_err(|e| anyhow!("{}: {e}", path.display()))?;
-    }
-    let image = image::RgbImage::from_raw(WIDTH, HEIGHT, buffer)
-        .ok_or_else(|| anyhow!("{}: plot buffer has the wrong size", path.display()))?;
-    save_png_atomic(path, &image)?;
-    Ok(())
+    Ok((
+        range(points.iter().map(|p| p.0).collect(), axes.log_x),
+        range(points.iter().map(|p| p.1).collect(), axes.log_y),
+    ))
 }
 
 /// A short tick label: plain decimals for moderate values, `1e-6` style otherwise.
@@ -118,14 +149,17 @@ fn tick(v: &f64) -> String {
 type DrawResult = Result<(), Box<dyn std::error::Error>>;
 
 /// The four axis combinations need four chart types; this picks one and draws into it.
-fn draw(
-    root: &DrawingArea<BitMapBackend<'_>, Shift>,
+fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
     axes: &Axes<'_>,
     series: &[Series],
     x: (f64, f64),
     y: (f64, f64),
     keep: impl Fn(&(f64, f64)) -> bool,
-) -> DrawResult {
+) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
     root.fill(&WHITE)?;
     let mut builder = ChartBuilder::on(root);
     builder
@@ -147,8 +181,9 @@ fn draw(
             for (i, s) in series.iter().enumerate() {
                 let color = COLORS[i % COLORS.len()];
                 let points: Vec<(f64, f64)> = s.points.iter().copied().filter(&keep).collect();
+                let line = if s.line { points.clone() } else { Vec::new() };
                 chart
-                    .draw_series(LineSeries::new(points.clone(), color.stroke_width(2)))?
+                    .draw_series(LineSeries::new(line, color.stroke_width(2)))?
                     .label(s.name.clone())
                     .legend(move |(px, py)| {
                         PathElement::new(vec![(px, py), (px + 20, py)], color.stroke_width(2))
@@ -199,6 +234,7 @@ mod tests {
             name: "pose".into(),
             points: (0..10).map(|k| (k as f64, 0.5f64.powi(k))).collect(),
             markers: true,
+            line: true,
         }];
         line_plot(&path, &axes, &series).unwrap();
         let image = image::open(&path).unwrap();
@@ -207,6 +243,7 @@ mod tests {
             name: "zeros".into(),
             points: vec![(1.0, 0.0)],
             markers: false,
+            line: true,
         }];
         assert!(line_plot(&path, &axes, &none).is_err());
     }

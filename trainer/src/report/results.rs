@@ -403,11 +403,13 @@ fn spectra_plot(path: &Path, title: &str, fitted: &experiment::Fitted) -> Result
                 name: "pose covariance eigenvalues".into(),
                 points: normalised(&report.pose_eigenvalues),
                 markers: true,
+                line: true,
             },
             Series {
                 name: "vertex-coefficient energy σ²".into(),
                 points: normalised(&report.coef_energy),
                 markers: false,
+                line: true,
             },
         ],
     )
@@ -431,12 +433,14 @@ fn alpha_plot(
         name: "train".into(),
         points: sweep.iter().map(|s| (x(s.0), 100.0 * s.1)).collect(),
         markers: true,
+        line: true,
     }];
     for (c, clip) in test_names.iter().enumerate() {
         series.push(Series {
             name: format!("test {clip}"),
             points: sweep.iter().map(|s| (x(s.0), 100.0 * s.2[c])).collect(),
             markers: true,
+            line: true,
         });
     }
     let (lo, hi) = series
@@ -447,6 +451,7 @@ fn alpha_plot(
         name: format!("LOSO choice α = {chosen:.2e}"),
         points: vec![(x(chosen), lo), (x(chosen), hi)],
         markers: false,
+        line: true,
     });
     // Unregularised fits can extrapolate by orders of magnitude: then only a log axis shows
     // the curves near the chosen α.
@@ -495,6 +500,7 @@ fn residual_plots(hist_path: &Path, cdf_path: &Path, title: &str, residuals: &[f
                 .map(|(b, &c)| ((b as f64 + 0.5) * width, c as f64 / (n as f64 * width)))
                 .collect(),
             markers: false,
+            line: true,
         }],
     )?;
     let step = (n / 400).max(1);
@@ -521,6 +527,7 @@ fn residual_plots(hist_path: &Path, cdf_path: &Path, title: &str, residuals: &[f
                 .map(|(i, r)| (*r, (i + 1) as f64 / n as f64))
                 .collect(),
             markers: false,
+            line: true,
         }],
     )
 }

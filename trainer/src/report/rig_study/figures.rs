@@ -66,6 +66,7 @@ pub fn distance_plots(out: &Path, m: &Measured) -> Result<()> {
                 .map(|(&d, a)| (d, value(a)))
                 .collect(),
             markers: true,
+            line: true,
         };
         let mut series: Vec<Series> = m
             .rigs
@@ -92,6 +93,7 @@ pub fn distance_plots(out: &Path, m: &Measured) -> Result<()> {
             name: "1 grey level".into(),
             points: vec![(lo, 1.0), (hi, 1.0)],
             markers: false,
+            line: true,
         });
         let axes = Axes {
             title: plot.title,

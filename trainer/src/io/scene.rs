@@ -1,0 +1,661 @@
+//! The scene file: which character and clips, which effects to simulate at what error, the
+//! budget, and the lighting (an environment and the lights file's `[[light]]` tables). Read by
+//! `aprt train --scene`, `aprt report` and `aprt demo`; planned by [`crate::scene`].
+//!
+//! ```toml
+//! [source]                 # exactly one of: builtin, gltf, bvh, obj_seq (+ angles)
+//! gltf = "Fox.gltf"        # paths relative to the scene file
+//! train = ["Survey"]       # clips (BVH: frame ranges "0..240" of the bvh file, or other files)
+//! test = ["Walk", "Run"]   # clips the report measures on (never trained on)
+//! validate = []            # clips held out of training to choose the model by (optional)
+//!
+//! [effects]
+//! shadows = true           # false: no visibility rays at all
+//! bounces = 0
+//! albedo = 0.6             # of the surfaces bounces reflect from
+//! rays = 256               # directions per vertex
+//! order = "auto"           # or 1..=6; auto: the lowest order that meets error_target
+//! error_target = 1.0       # 8-bit grey levels of shading error
+//! rig = "auto"             # "none", a rig kind ("gradient", "lattice:2x2x2", …) or auto
+//! precision = "auto"       # f32 | f16 | auto
+//! frame = "bone"           # bone | world: the frame the model learns transfer in
+//!
+//! [budget]                 # optional
+//! us_per_frame = 100
+//! bytes = 1_000_000
+//!
+//! [environment]            # optional: sh = [[r, g, b], ...] (1, 4, 9, … coefficients) or
+//! hdr = "studio.hdr"       # an equirectangular .hdr or .exr map, projected to SH
+//!
+//! [[light]]                # the lights file's schema, exactly
+//! kind = "sphere"
+//! position = [0.0, 1.2, 0.8]
+//! radius = 0.1
+//! radiance = [4.0, 3.5, 3.0]
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use aprt_core::{Light, MAX_ORDER};
+use serde::Deserialize;
+
+use crate::io::source::BuiltinCharacter;
+use crate::lighting::{RigKind, light_from_table};
+use crate::model::ModelFrame;
+use crate::model::export::Precision;
+
+/// A scene, validated, with its paths resolved against the scene file's directory.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// The scene file.
+    pub path: PathBuf,
+    /// The character.
+    pub source: SceneSource,
+    /// Training clips (for BVH: frame ranges of the file, or other BVH files).
+    pub train: Vec<String>,
+    /// Clips the report measures on.
+    pub test: Vec<String>,
+    /// Clips held out of training to choose the model by (`aprt train --validate`).
+    pub validate: Vec<String>,
+    /// What to simulate.
+    pub effects: Effects,
+    /// What the runtime may spend.
+    pub budget: Budget,
+    /// The distant lighting, if any.
+    pub environment: Option<Environment>,
+    /// The local and directional lights.
+    pub lights: Vec<Light>,
+}
+
+/// Where the character comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SceneSource {
+    /// A built-in character.
+    Builtin(BuiltinCharacter),
+    /// A glTF character, sampled at `fps` (30 by default).
+    Gltf {
+        /// The .gltf or .glb file.
+        path: PathBuf,
+        /// Sampling rate of its animations.
+        fps: Option<f64>,
+    },
+    /// A mannequin built from a BVH file's skeleton.
+    Bvh(PathBuf),
+    /// A directory of OBJ poses with their joint angles.
+    ObjSeq {
+        /// One OBJ per pose, sorted by name.
+        dir: PathBuf,
+        /// The angles CSV.
+        angles: PathBuf,
+    },
+}
+
+/// A setting the trainer may choose (`"auto"`) or the scene fixes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Choice<T> {
+    /// The trainer chooses, and says why.
+    Auto,
+    /// The scene's value.
+    Fixed(T),
+}
+
+/// The irradiance rig a scene asks for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum RigChoice {
+    /// The cheapest that meets the error target, or none when every light is far enough.
+    Auto,
+    /// No rig.
+    None,
+    /// This kind.
+    Kind(RigKind),
+}
+
+/// The effects to simulate and the error they may cost.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Effects {
+    /// Self-shadowing; without it no ray is cast.
+    pub shadows: bool,
+    /// Inter-reflection bounces.
+    pub bounces: usize,
+    /// Albedo of the surfaces the bounces reflect from.
+    pub albedo: f32,
+    /// Directions per vertex.
+    pub rays: usize,
+    /// SH order.
+    pub order: Choice<usize>,
+    /// The shading error the automatic choices may cost, in 8-bit grey levels.
+    pub error_target: f32,
+    /// The irradiance rig.
+    pub rig: RigChoice,
+    /// Precision of the blob's large sections.
+    pub precision: Choice<Precision>,
+    /// The frame transfer is learned in.
+    pub frame: ModelFrame,
+}
+
+impl Default for Effects {
+    /// Shadows, no bounces, 256 rays, every choice automatic at one grey level, bone frames.
+    fn default() -> Self {
+        Effects {
+            shadows: true,
+            bounces: 0,
+            albedo: 0.6,
+            rays: 256,
+            order: Choice::Auto,
+            error_target: 1.0,
+            rig: RigChoice::Auto,
+            precision: Choice::Auto,
+            frame: ModelFrame::Bone,
+        }
+    }
+}
+
+/// What the runtime may spend per frame and in memory.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Budget {
+    /// Microseconds per frame on one core.
+    pub us_per_frame: Option<f64>,
+    /// Bytes of the model.
+    pub bytes: Option<u64>,
+}
+
+/// The distant lighting.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Environment {
+    /// SH radiance coefficients, RGB, in aprt-core's basis.
+    Sh(Vec<[f32; 3]>),
+    /// An equirectangular .hdr or .exr map.
+    Map(PathBuf),
+}
+
+/// Why a scene file was refused: the file, the item (a `[section] key`, or `light N`) and
+/// what is wrong.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {item}: {message}", path.display())]
+pub struct SceneError {
+    /// The scene file.
+    pub path: PathBuf,
+    /// What is wrong where.
+    pub item: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScene {
+    source: RawSource,
+    #[serde(default)]
+    effects: RawEffects,
+    #[serde(default)]
+    budget: RawBudget,
+    environment: Option<RawEnvironment>,
+    #[serde(default)]
+    light: Vec<toml::Table>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSource {
+    builtin: Option<String>,
+    gltf: Option<String>,
+    bvh: Option<String>,
+    obj_seq: Option<String>,
+    angles: Option<String>,
+    fps: Option<f64>,
+    #[serde(default)]
+    train: Vec<String>,
+    #[serde(default)]
+    test: Vec<String>,
+    #[serde(default)]
+    validate: Vec<String>,
+}
+
+/// A key that is `"auto"` or a value.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum Word {
+    Number(i64),
+    Text(String),
+}
+
+#[derive(Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawEffects {
+    shadows: Option<bool>,
+    bounces: Option<i64>,
+    albedo: Option<f64>,
+    rays: Option<i64>,
+    order: Option<Word>,
+    error_target: Option<f64>,
+    rig: Option<String>,
+    precision: Option<String>,
+    frame: Option<String>,
+}
+
+#[derive(Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawBudget {
+    us_per_frame: Option<f64>,
+    bytes: Option<i64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawEnvironment {
+    sh: Option<Vec<[f64; 3]>>,
+    hdr: Option<String>,
+    exr: Option<String>,
+}
+
+/// Reads and validates a scene file.
+pub fn read_scene(path: &Path) -> Result<Scene, SceneError> {
+    let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+        path: path.to_owned(),
+        item: "file".into(),
+        message: format!("cannot read it: {e}"),
+    })?;
+    parse_scene(&text, path)
+}
+
+/// Parses the text of a scene file; `path` names it in errors and its directory anchors the
+/// relative paths.
+pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
+    let fail = |item: &str, message: String| SceneError {
+        path: path.to_owned(),
+        item: item.to_owned(),
+        message,
+    };
+    let raw: RawScene = toml::from_str(text)
+        .map_err(|e| fail("TOML", e.to_string().trim_end().replace('\n', " ")))?;
+    let base = path.parent().unwrap_or(Path::new(""));
+    let resolve = |p: &str| base.join(p);
+    let source = source(&raw.source, &resolve).map_err(|m| fail("[source]", m))?;
+    let effects = effects(&raw.effects).map_err(|(k, m)| fail(&format!("[effects] {k}"), m))?;
+    let budget = budget(&raw.budget).map_err(|(k, m)| fail(&format!("[budget] {k}"), m))?;
+    let environment = match &raw.environment {
+        None => None,
+        Some(env) => Some(environment(env, &resolve).map_err(|m| fail("[environment]", m))?),
+    };
+    let lights = raw
+        .light
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            light_from_table(t).map_err(|(kind, m)| fail(&format!("light {} ({kind})", i + 1), m))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    if lights.is_empty() && environment.is_none() {
+        return Err(fail(
+            "lighting",
+            "the scene has neither [[light]] tables nor an [environment]: nothing lights it".into(),
+        ));
+    }
+    let s = &raw.source;
+    if s.train.is_empty() && !matches!(source, SceneSource::ObjSeq { .. }) {
+        return Err(fail(
+            "[source] train",
+            "name the training clips (train = [\"…\"])".into(),
+        ));
+    }
+    if let SceneSource::ObjSeq { .. } = source
+        && !(s.train.is_empty() && s.test.is_empty() && s.validate.is_empty())
+    {
+        return Err(fail(
+            "[source] train",
+            "an OBJ sequence is one clip: its OBJ files with their angles; train, test and validate name clips of a character".into(),
+        ));
+    }
+    Ok(Scene {
+        path: path.to_owned(),
+        source,
+        train: s.train.clone(),
+        test: s.test.clone(),
+        validate: s.validate.clone(),
+        effects,
+        budget,
+        environment,
+        lights,
+    })
+}
+
+fn source(raw: &RawSource, resolve: &dyn Fn(&str) -> PathBuf) -> Result<SceneSource, String> {
+    let given: Vec<&str> = [
+        ("builtin", raw.builtin.is_some()),
+        ("gltf", raw.gltf.is_some()),
+        ("bvh", raw.bvh.is_some()),
+        ("obj_seq", raw.obj_seq.is_some()),
+    ]
+    .iter()
+    .filter(|(_, g)| *g)
+    .map(|(k, _)| *k)
+    .collect();
+    if given.len() != 1 {
+        return Err(format!(
+            "give exactly one of builtin, gltf, bvh or obj_seq (found {})",
+            if given.is_empty() {
+                "none".to_owned()
+            } else {
+                given.join(", ")
+            }
+        ));
+    }
+    if raw.angles.is_some() != raw.obj_seq.is_some() {
+        return Err("angles goes with obj_seq, and obj_seq needs angles".into());
+    }
+    if raw.fps.is_some() && raw.gltf.is_none() {
+        return Err("fps resamples a gltf character's animations only".into());
+    }
+    if let Some(fps) = raw.fps
+        && !(fps.is_finite() && fps > 0.0)
+    {
+        return Err(format!("fps {fps}: expected a positive number"));
+    }
+    Ok(match (&raw.builtin, &raw.gltf, &raw.bvh, &raw.obj_seq) {
+        (Some(name), ..) => SceneSource::Builtin(match name.as_str() {
+            "human" => BuiltinCharacter::Human,
+            "creature" => BuiltinCharacter::Creature,
+            other => {
+                return Err(format!(
+                    "builtin = {other:?}: expected \"human\" or \"creature\""
+                ));
+            }
+        }),
+        (_, Some(gltf), ..) => SceneSource::Gltf {
+            path: resolve(gltf),
+            fps: raw.fps,
+        },
+        (_, _, Some(bvh), _) => SceneSource::Bvh(resolve(bvh)),
+        (.., Some(dir)) => SceneSource::ObjSeq {
+            dir: resolve(dir),
+            angles: resolve(raw.angles.as_deref().unwrap_or_default()),
+        },
+        _ => unreachable!("exactly one source was checked above"),
+    })
+}
+
+fn effects(raw: &RawEffects) -> Result<Effects, (&'static str, String)> {
+    let mut e = Effects::default();
+    if let Some(s) = raw.shadows {
+        e.shadows = s;
+    }
+    if let Some(b) = raw.bounces {
+        e.bounces = usize::try_from(b)
+            .ok()
+            .filter(|&b| b <= 8)
+            .ok_or(("bounces", format!("{b}: expected 0 to 8")))?;
+    }
+    if let Some(a) = raw.albedo {
+        if !(0.0..=1.0).contains(&a) {
+            return Err(("albedo", format!("{a}: expected a number in [0, 1]")));
+        }
+        e.albedo = a as f32;
+    }
+    if let Some(r) = raw.rays {
+        e.rays = usize::try_from(r)
+            .ok()
+            .filter(|&r| (1..=crate::bake::MAX_RAYS).contains(&r))
+            .ok_or((
+                "rays",
+                format!("{r}: expected 1 to {}", crate::bake::MAX_RAYS),
+            ))?;
+    }
+    e.order = match &raw.order {
+        None => Choice::Auto,
+        Some(Word::Text(t)) if t == "auto" => Choice::Auto,
+        Some(Word::Number(n)) if (1..=MAX_ORDER as i64).contains(n) => Choice::Fixed(*n as usize),
+        Some(Word::Number(n)) => {
+            return Err((
+                "order",
+                format!("{n}: expected 1 to {MAX_ORDER} or \"auto\""),
+            ));
+        }
+        Some(Word::Text(t)) => {
+            return Err((
+                "order",
+                format!("{t:?}: expected 1 to {MAX_ORDER} or \"auto\""),
+            ));
+        }
+    };
+    if let Some(t) = raw.error_target {
+        if !(t.is_finite() && t > 0.0) {
+            return Err((
+                "error_target",
+                format!("{t}: expected a positive number of grey levels"),
+            ));
+        }
+        e.error_target = t as f32;
+    }
+    e.rig = match raw.rig.as_deref() {
+        None | Some("auto") => RigChoice::Auto,
+        Some("none") => RigChoice::None,
+        Some(kind) => RigChoice::Kind(kind.parse().map_err(|err| ("rig", format!("{err}")))?),
+    };
+    e.precision = match raw.precision.as_deref() {
+        None | Some("auto") => Choice::Auto,
+        Some("f32") => Choice::Fixed(Precision::F32),
+        Some("f16") => Choice::Fixed(Precision::F16),
+        Some(other) => return Err(("precision", format!("{other:?}: expected f32, f16 or auto"))),
+    };
+    e.frame = match raw.frame.as_deref() {
+        None | Some("bone") => ModelFrame::Bone,
+        Some("world") => ModelFrame::World,
+        Some(other) => return Err(("frame", format!("{other:?}: expected bone or world"))),
+    };
+    if e.bounces > 0 && !e.shadows {
+        return Err((
+            "bounces",
+            "bounces need shadows: without occlusion no ray hits the character, so nothing reflects (set bounces = 0 or shadows = true)".into(),
+        ));
+    }
+    Ok(e)
+}
+
+fn budget(raw: &RawBudget) -> Result<Budget, (&'static str, String)> {
+    if let Some(us) = raw.us_per_frame
+        && !(us.is_finite() && us > 0.0)
+    {
+        return Err(("us_per_frame", format!("{us}: expected a positive number")));
+    }
+    let bytes = match raw.bytes {
+        None => None,
+        Some(b) => Some(
+            u64::try_from(b)
+                .ok()
+                .filter(|&b| b > 0)
+                .ok_or(("bytes", format!("{b}: expected a positive number")))?,
+        ),
+    };
+    Ok(Budget {
+        us_per_frame: raw.us_per_frame,
+        bytes,
+    })
+}
+
+fn environment(
+    raw: &RawEnvironment,
+    resolve: &dyn Fn(&str) -> PathBuf,
+) -> Result<Environment, String> {
+    match (&raw.sh, &raw.hdr, &raw.exr) {
+        (Some(sh), None, None) => {
+            let n = sh.len();
+            let order = (1..=MAX_ORDER).find(|o| o * o == n);
+            if order.is_none() {
+                return Err(format!(
+                    "sh has {n} coefficients: expected a square number up to {} (1, 4, 9, …)",
+                    MAX_ORDER * MAX_ORDER
+                ));
+            }
+            if let Some(i) = sh.iter().position(|c| !c.iter().all(|x| x.is_finite())) {
+                return Err(format!("sh coefficient {i} is not finite"));
+            }
+            Ok(Environment::Sh(
+                sh.iter().map(|c| c.map(|x| x as f32)).collect(),
+            ))
+        }
+        (None, Some(map), None) | (None, None, Some(map)) => Ok(Environment::Map(resolve(map))),
+        _ => Err("give exactly one of sh, hdr or exr".into()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Scene, SceneError> {
+        parse_scene(text, Path::new("scenes/fox.toml"))
+    }
+
+    const LIGHT: &str =
+        "[[light]]\nkind = \"directional\"\ndirection = [0, 1, 0]\nirradiance = [1, 1, 1]\n";
+
+    #[test]
+    fn the_documented_example_reads_with_paths_relative_to_the_scene() {
+        let text = format!(
+            "[source]\ngltf = \"Fox.gltf\"\ntrain = [\"Survey\"]\ntest = [\"Walk\", \"Run\"]\n\
+             [effects]\nshadows = true\nbounces = 0\nalbedo = 0.6\norder = \"auto\"\nerror_target = 1.0\nrig = \"auto\"\nprecision = \"auto\"\n\
+             [budget]\nus_per_frame = 100\nbytes = 1_000_000\n\
+             [environment]\nhdr = \"studio.hdr\"\n\
+             [[light]]\nkind = \"sphere\"\nposition = [0.0, 1.2, 0.8]\nradius = 0.1\nradiance = [4.0, 3.5, 3.0]\n"
+        );
+        let scene = parse(&text).unwrap();
+        assert_eq!(
+            scene.source,
+            SceneSource::Gltf {
+                path: PathBuf::from("scenes/Fox.gltf"),
+                fps: None
+            }
+        );
+        assert_eq!(scene.test, ["Walk", "Run"]);
+        assert_eq!(scene.effects, Effects::default());
+        assert_eq!(scene.budget.us_per_frame, Some(100.0));
+        assert_eq!(scene.budget.bytes, Some(1_000_000));
+        assert_eq!(
+            scene.environment,
+            Some(Environment::Map(PathBuf::from("scenes/studio.hdr")))
+        );
+        assert_eq!(scene.lights.len(), 1);
+    }
+
+    #[test]
+    fn fixed_choices_read() {
+        let text = format!(
+            "[source]\nbuiltin = \"creature\"\ntrain = [\"training\"]\n[effects]\nshadows = false\norder = 3\nrig = \"gradient\"\nprecision = \"f16\"\nframe = \"world\"\n{LIGHT}"
+        );
+        let e = parse(&text).unwrap().effects;
+        assert!(!e.shadows);
+        assert_eq!(e.order, Choice::Fixed(3));
+        assert!(matches!(e.rig, RigChoice::Kind(_)));
+        assert_eq!(e.precision, Choice::Fixed(Precision::F16));
+        assert_eq!(e.frame, ModelFrame::World);
+    }
+
+    #[test]
+    fn bad_scenes_name_the_item_and_what_is_wrong() {
+        let base = "[source]\nbuiltin = \"human\"\ntrain = [\"training\"]\n";
+        let cases = [
+            (
+                "[source]\ntrain = [\"a\"]\n".to_owned() + LIGHT,
+                "[source]",
+                "exactly one",
+            ),
+            (
+                "[source]\nbuiltin = \"human\"\ngltf = \"a.gltf\"\ntrain = [\"a\"]\n".to_owned()
+                    + LIGHT,
+                "[source]",
+                "builtin, gltf",
+            ),
+            (
+                format!("{base}[effects]\norder = 7\n{LIGHT}"),
+                "[effects] order",
+                "1 to 6",
+            ),
+            (
+                format!("{base}[effects]\norder = \"high\"\n{LIGHT}"),
+                "[effects] order",
+                "auto",
+            ),
+            (
+                format!("{base}[effects]\nshadows = false\nbounces = 1\n{LIGHT}"),
+                "[effects] bounces",
+                "need shadows",
+            ),
+            (
+                format!("{base}[effects]\nalbedo = 1.5\n{LIGHT}"),
+                "[effects] albedo",
+                "[0, 1]",
+            ),
+            (
+                format!("{base}[effects]\nerror_target = 0\n{LIGHT}"),
+                "error_target",
+                "positive",
+            ),
+            (
+                format!("{base}[effects]\nrig = \"blob\"\n{LIGHT}"),
+                "[effects] rig",
+                "blob",
+            ),
+            (
+                format!("{base}[effects]\nshadow = true\n{LIGHT}"),
+                "TOML",
+                "unknown field",
+            ),
+            (
+                format!("{base}[budget]\nbytes = -3\n{LIGHT}"),
+                "[budget] bytes",
+                "positive",
+            ),
+            (
+                format!("{base}[environment]\nsh = [[1,1,1],[0,0,0]]\n"),
+                "[environment]",
+                "square",
+            ),
+            (
+                format!("{base}[environment]\nsh = [[1,1,1]]\nhdr = \"a.hdr\"\n"),
+                "[environment]",
+                "exactly one",
+            ),
+            (base.to_owned(), "lighting", "nothing lights it"),
+            (
+                format!("{base}[[light]]\nkind = \"sphere\"\nposition = [0, 0, 0]\n"),
+                "light 1 (sphere)",
+                "radius",
+            ),
+            (
+                "[source]\nbuiltin = \"human\"\n".to_owned() + LIGHT,
+                "[source] train",
+                "training clips",
+            ),
+            (
+                "[source]\nbuiltin = \"dog\"\ntrain = [\"a\"]\n".to_owned() + LIGHT,
+                "[source]",
+                "dog",
+            ),
+        ];
+        for (text, item, words) in cases {
+            let err = parse(&text).unwrap_err();
+            let shown = err.to_string();
+            assert!(shown.starts_with("scenes/fox.toml: "), "{shown}");
+            assert!(err.item.contains(item), "{item}: {shown}");
+            assert!(shown.contains(words), "{words}: {shown}");
+        }
+    }
+
+    #[test]
+    fn sh_environments_and_obj_sequences_read() {
+        let text = "[source]\nobj_seq = \"poses\"\nangles = \"poses.csv\"\n[environment]\nsh = [[1, 1, 1], [0, 0.5, 0], [0, 0, 0], [0, 0, 0]]\n";
+        let scene = parse(text).unwrap();
+        assert_eq!(
+            scene.source,
+            SceneSource::ObjSeq {
+                dir: PathBuf::from("scenes/poses"),
+                angles: PathBuf::from("scenes/poses.csv")
+            }
+        );
+        let Some(Environment::Sh(sh)) = scene.environment else {
+            panic!("no SH environment");
+        };
+        assert_eq!(sh.len(), 4);
+        assert!(scene.lights.is_empty());
+    }
+}

@@ -1,0 +1,191 @@
+//! The report's files: report.json, report.md and the Pareto plots (PNG and SVG) of error
+//! against µs per frame and against bytes.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use anyhow::{Context, Result};
+
+use super::{Point, SweepReport};
+use crate::io::atomic::write_atomic;
+use crate::report::plots::{Axes, Series, line_plot, line_plot_svg};
+
+/// The plots' file stems in the output directory.
+pub const TIME_PLOT: &str = "pareto_us";
+/// The error-against-bytes plot.
+pub const BYTES_PLOT: &str = "pareto_bytes";
+
+/// Writes report.json, report.md and the plots into `out`; `command` is how to rerun it.
+pub fn write(report: &SweepReport, out: &Path, command: &str) -> Result<()> {
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    let json = serde_json::to_string_pretty(report)? + "\n";
+    write_atomic(&out.join("report.json"), json.as_bytes())
+        .with_context(|| format!("cannot write {}", out.join("report.json").display()))?;
+    plot(
+        report,
+        out,
+        TIME_PLOT,
+        "µs per frame (aprt-core, one core)",
+        |p| (p.us_per_frame, p.pareto),
+    )?;
+    plot(report, out, BYTES_PLOT, "model bytes", |p| {
+        (p.bytes as f64, p.pareto_bytes)
+    })?;
+    write_atomic(&out.join("report.md"), markdown(report, command).as_bytes())
+        .with_context(|| format!("cannot write {}", out.join("report.md").display()))
+}
+
+/// One Pareto plot: every setting, the front joined, the recommendation ringed.
+fn plot(
+    report: &SweepReport,
+    out: &Path,
+    stem: &str,
+    x: &str,
+    axis: impl Fn(&Point) -> (f64, bool),
+) -> Result<()> {
+    let all: Vec<(f64, f64)> = report.points.iter().map(|p| (axis(p).0, p.error)).collect();
+    let mut front: Vec<(f64, f64)> = report
+        .points
+        .iter()
+        .filter(|p| axis(p).1)
+        .map(|p| (axis(p).0, p.error))
+        .collect();
+    front.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut series = vec![
+        Series {
+            name: "setting".into(),
+            points: all,
+            markers: true,
+            line: false,
+        },
+        Series {
+            name: "Pareto front".into(),
+            points: front,
+            markers: true,
+            line: true,
+        },
+    ];
+    if let Some(i) = report.recommended {
+        let p = &report.points[i];
+        series.push(Series {
+            name: format!("recommended: {}", p.setting.label),
+            points: vec![(axis(p).0, p.error)],
+            markers: true,
+            line: false,
+        });
+    }
+    let axes = Axes {
+        title: "shading error against cost, on the test clips",
+        x,
+        y: "RMS shading error (8-bit grey levels)",
+        log_x: true,
+        log_y: true,
+    };
+    line_plot(&out.join(format!("{stem}.png")), &axes, &series)?;
+    line_plot_svg(&out.join(format!("{stem}.svg")), &axes, &series)
+}
+
+/// The report as markdown.
+pub fn markdown(report: &SweepReport, command: &str) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "# What accuracy costs: {}\n", report.scene.display());
+    let _ = writeln!(
+        s,
+        "Regenerate with `{command}` ({:.0} s). Character: {}. Ground truth: {}. Frames: {}.\n",
+        report.seconds,
+        report.character,
+        report.reference,
+        report
+            .frames
+            .iter()
+            .map(|(n, f)| format!("`{n}` {f}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    let _ = writeln!(
+        s,
+        "The scene's lighting needs SH order {}: {}.\n",
+        report.scene_order.0, report.scene_order.1
+    );
+    let _ = writeln!(
+        s,
+        "**Error** is the RMS shading error on the test clips in 8-bit grey levels (a white Lambertian surface under the scene's lighting projected at the character's centre, radiance 1 = white), against the ground truth at order 6; the transfer error is the paper's relative error ‖pred − truth‖/‖truth‖ over every coefficient of the truth. **µs** is one frame through aprt-core on one core (pose, lighting, shading every vertex), median of 31.\n"
+    );
+    let _ = writeln!(s, "![error against µs per frame]({}.png)\n", TIME_PLOT);
+    let _ = writeln!(s, "![error against bytes]({}.png)\n", BYTES_PLOT);
+    let budget = match report.budget {
+        (None, None) => "no budget".to_owned(),
+        (us, bytes) => [
+            us.map(|u| format!("{u} µs per frame")),
+            bytes.map(|b| format!("{b} bytes")),
+        ]
+        .into_iter()
+        .flatten()
+        .collect::<Vec<_>>()
+        .join(" and "),
+    };
+    match report.recommended {
+        Some(i) => {
+            let p = &report.points[i];
+            let _ = writeln!(
+                s,
+                "**Recommended** within {budget}: **{}**, {:.2} grey levels RMS, {:.1} µs per frame, {} bytes.\n",
+                p.setting.label, p.error, p.us_per_frame, p.bytes
+            );
+        }
+        None => {
+            let _ = writeln!(s, "**No setting fits** within {budget}.\n");
+        }
+    }
+    if let Some(presets) = report.presets {
+        let _ = writeln!(
+            s,
+            "| preset | setting | grey RMS | µs/frame | bytes |\n|---|---|---:|---:|---:|"
+        );
+        for (name, i) in [
+            ("fastest", presets.fastest),
+            ("balanced", presets.balanced),
+            ("best", presets.best),
+        ] {
+            let p = &report.points[i];
+            let _ = writeln!(
+                s,
+                "| `{name}` | {} | {:.2} | {:.1} | {} |",
+                p.setting.label, p.error, p.us_per_frame, p.bytes
+            );
+        }
+        s.push('\n');
+    }
+    let _ = writeln!(
+        s,
+        "## Every setting\n\n★: on the error-against-time front; ◆: on the error-against-bytes front.\n\n| setting | k_a, k_v | grey RMS | grey max | transfer error | µs/frame | transfer µs | Mops | bytes | bake s/frame | fit s |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    );
+    for p in &report.points {
+        let m = &p.measured;
+        let _ = writeln!(
+            s,
+            "| {}{}{} | {}, {} | {:.2} | {:.1} | {:.4} | {:.1} | {:.1} | {:.2} | {} | {:.2} | {:.1} |",
+            p.setting.label,
+            if p.pareto { " ★" } else { "" },
+            if p.pareto_bytes { " ◆" } else { "" },
+            p.setting.fitted.0,
+            p.setting.fitted.1,
+            p.error,
+            m.grey_max,
+            m.transfer_error,
+            p.us_per_frame,
+            m.transfer_us,
+            m.megaops,
+            p.bytes,
+            p.bake_s_per_frame,
+            p.fit_s
+        );
+    }
+    if !report.not_swept.is_empty() {
+        let _ = writeln!(s, "\nNot swept:\n");
+        for line in &report.not_swept {
+            let _ = writeln!(s, "- {line}");
+        }
+    }
+    s
+}

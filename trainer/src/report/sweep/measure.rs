@@ -1,0 +1,85 @@
+//! Measuring one blob against ground truth on the test clips: the paper's relative transfer
+//! error (section 6), the shading error in 8-bit grey levels under the scene's lighting, and
+//! the per-frame cost through aprt-core on one core.
+
+use anyhow::Result;
+
+use crate::bake::clip::BakedClip;
+use crate::lighting::rig_fit::GREY_PER_IRRADIANCE;
+use crate::model::ModelFrame;
+use crate::model::predict::predict_world;
+use crate::report::experiment::{megaops, time_core};
+
+/// The ground truth a blob is measured against.
+pub struct Truth<'a> {
+    /// Test clips baked at the reference settings (order 6).
+    pub tests: &'a [BakedClip],
+    /// The scene's lighting at the character's centre, luminance, order 6 (36 values).
+    pub lighting: &'a [f32],
+    /// Coefficients per vertex of the truth.
+    pub n2: usize,
+}
+
+/// What one blob measured.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct Measured {
+    /// RMS shading error over every test frame and vertex, grey levels.
+    pub grey_rms: f64,
+    /// Largest shading error, grey levels.
+    pub grey_max: f64,
+    /// `‖pred − truth‖ / ‖truth‖` over every frame, vertex and coefficient of the truth (the
+    /// bands a model leaves out count as error).
+    pub transfer_error: f64,
+    /// µs per frame to pose, light and shade every vertex.
+    pub us_per_frame: f64,
+    /// µs per frame for the full per-vertex transfer.
+    pub transfer_us: f64,
+    /// Million multiply-adds per frame for RGB shading.
+    pub megaops: f64,
+}
+
+/// Measures `blob` (a model learned in `frame`) on `truth`.
+pub fn measure(blob: &[u8], frame: ModelFrame, truth: &Truth<'_>) -> Result<Measured> {
+    let info = *aprt_core::Model::parse(blob)?.info();
+    let m2 = info.coeffs();
+    let lighting = &truth.lighting[..m2];
+    let (mut diff, mut norm, mut grey2, mut grey_max, mut count) = (0.0, 0.0, 0.0, 0.0f64, 0usize);
+    for clip in truth.tests {
+        let predicted = predict_world(blob, &clip.angles, &clip.rotations)?;
+        for (p, t) in predicted.iter().zip(&clip.transfer) {
+            for (pv, tv) in p.chunks_exact(m2).zip(t.chunks_exact(truth.n2)) {
+                let mut shade = 0.0f64;
+                let mut exact = 0.0f64;
+                for c in 0..truth.n2 {
+                    let tc = f64::from(tv[c]);
+                    let pc = pv.get(c).map_or(0.0, |&x| f64::from(x));
+                    diff += (pc - tc).powi(2);
+                    norm += tc * tc;
+                    exact += f64::from(truth.lighting[c]) * tc;
+                    if c < m2 {
+                        shade += f64::from(lighting[c]) * pc;
+                    }
+                }
+                let grey = (shade - exact).abs() * GREY_PER_IRRADIANCE;
+                grey2 += grey * grey;
+                grey_max = grey_max.max(grey);
+                count += 1;
+            }
+        }
+    }
+    let timing = &truth.tests[0];
+    let rotations = if frame == ModelFrame::Bone {
+        timing.core_rotations(0)
+    } else {
+        Vec::new()
+    };
+    let (us_per_frame, transfer_us) = time_core(blob, &timing.angles[0], &rotations, lighting)?;
+    Ok(Measured {
+        grey_rms: (grey2 / count.max(1) as f64).sqrt(),
+        grey_max,
+        transfer_error: (diff / norm.max(f64::MIN_POSITIVE)).sqrt(),
+        us_per_frame,
+        transfer_us,
+        megaops: megaops(&info),
+    })
+}

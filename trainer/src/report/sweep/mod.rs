@@ -1,0 +1,495 @@
+//! `aprt report`: what accuracy costs in time. Bakes a scene's clips once at the reference
+//! settings (the scene's effects at SH order 6), then fits and measures a model for each
+//! setting of the accuracy knobs (SH order, k_a, k_v, precision, rays, bounces) on the
+//! scene's test clips, marks the Pareto-optimal settings, and recommends the most accurate
+//! one inside the budget.
+
+pub mod document;
+pub mod measure;
+pub mod pareto;
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use aprt_core::MAX_ORDER;
+
+use crate::bake::BakeSettings;
+use crate::bake::clip::{BakedClip, bake_clip, bake_rest};
+use crate::io::scene::Scene;
+use crate::model::ModelFrame;
+use crate::model::export::{Precision, encode_model};
+use crate::model::fit::{CoefDims, Dims, FitOptions};
+use crate::model::train::{ClipSet, fit_clip};
+use crate::progress::{Reporter, Silent};
+use crate::rig::pose_layout::PoseLayout;
+use crate::rig::{Clip, Rig};
+use crate::scene::lighting::{SceneLighting, luminance};
+use crate::scene::plan_bake;
+use measure::{Measured, Truth, measure};
+use pareto::{Cost, Presets, front, presets, recommend};
+
+/// What `aprt report` is asked for.
+#[derive(Clone, Debug)]
+pub struct ReportSettings {
+    /// Microseconds per frame the recommendation may cost (the scene's `[budget]` otherwise).
+    pub budget_us: Option<f64>,
+    /// Bytes the recommendation may take.
+    pub budget_bytes: Option<u64>,
+    /// Use every `stride`-th frame of every clip.
+    pub stride: usize,
+}
+
+/// The clips of a scene's character, loaded.
+pub struct SceneClips<'a> {
+    /// The character.
+    pub rig: &'a dyn Rig,
+    /// Training clips.
+    pub train: &'a [Clip],
+    /// Clips held out to choose the model by.
+    pub validation: &'a [Clip],
+    /// Clips the report measures on.
+    pub tests: &'a [Clip],
+}
+
+/// One setting of the knobs.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Setting {
+    /// A short name for tables and plots.
+    pub label: String,
+    /// SH order.
+    pub order: usize,
+    /// Pose dimensions k_a asked for (`auto`: chosen by held-out error).
+    pub pose_dims: String,
+    /// Vertex-basis vectors k_v asked for (`auto`: the default energy fraction).
+    pub coef_dims: String,
+    /// k_a and k_v of the fitted model.
+    pub fitted: (usize, usize),
+    /// Precision of the large sections.
+    pub precision: &'static str,
+    /// Rays per vertex of the training bake.
+    pub rays: usize,
+    /// Bounces of the training bake.
+    pub bounces: usize,
+}
+
+/// One measured setting.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Point {
+    /// The setting.
+    pub setting: Setting,
+    /// RMS shading error on the test clips, 8-bit grey levels.
+    pub error: f64,
+    /// µs per frame through aprt-core, one core: pose, light, shade every vertex.
+    pub us_per_frame: f64,
+    /// Bytes of the model.
+    pub bytes: usize,
+    /// On the front of error against µs per frame.
+    pub pareto: bool,
+    /// On the front of error against bytes.
+    pub pareto_bytes: bool,
+    /// Everything measured.
+    pub measured: Measured,
+    /// Bake seconds per training frame (all cores).
+    pub bake_s_per_frame: f64,
+    /// Fit seconds.
+    pub fit_s: f64,
+    /// The model, for `--write-model`.
+    #[serde(skip)]
+    pub blob: Vec<u8>,
+}
+
+/// Everything `aprt report` measured.
+#[derive(Debug, serde::Serialize)]
+pub struct SweepReport {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// The character, its vertex count.
+    pub character: String,
+    /// The reference the errors are measured against.
+    pub reference: String,
+    /// Frames: training, validation, and each test clip's.
+    pub frames: Vec<(String, usize)>,
+    /// The order the scene's lighting needs, and why.
+    pub scene_order: (usize, String),
+    /// The settings, in sweep order.
+    pub points: Vec<Point>,
+    /// Index into `points` of the most accurate setting within the budget.
+    pub recommended: Option<usize>,
+    /// The budget the recommendation was chosen within.
+    pub budget: (Option<f64>, Option<u64>),
+    /// The named presets, indices into `points`.
+    pub presets: Option<Presets>,
+    /// Knobs left out, and why.
+    pub not_swept: Vec<String>,
+    /// Wall-clock seconds of the sweep.
+    pub seconds: f64,
+}
+
+/// A fit to run: its label, the data it learns from and its options.
+struct Candidate {
+    label: String,
+    order: usize,
+    pose_dims: Dims,
+    coef_dims: CoefDims,
+    data: Data,
+}
+
+/// Which bake a candidate learns from.
+#[derive(Clone, Copy, PartialEq)]
+enum Data {
+    /// The reference bake, truncated to the candidate's order.
+    Reference,
+    /// A bake of the training clips with fewer rays.
+    Rays(usize),
+    /// A bake of the training clips with fewer bounces.
+    Bounces(usize),
+}
+
+/// The training, validation and rest clips of one bake.
+struct Baked {
+    train: BakedClip,
+    validation: Vec<BakedClip>,
+    rest: BakedClip,
+    /// Seconds per training frame.
+    seconds: f64,
+}
+
+/// Sweeps the knobs on `scene` and returns the measured points.
+pub fn run(
+    scene: &Scene,
+    clips: &SceneClips<'_>,
+    settings: &ReportSettings,
+    reporter: &dyn Reporter,
+) -> Result<SweepReport> {
+    let started = Instant::now();
+    if clips.tests.is_empty() {
+        bail!(
+            "{}: [source] test names no clips: the report measures on clips never trained on",
+            scene.path.display()
+        );
+    }
+    let rig = clips.rig;
+    let stride = settings.stride.max(1);
+    let strided = |c: &Clip| Clip {
+        name: c.name.clone(),
+        fps: c.fps / stride as f64,
+        frames: c.frames.iter().step_by(stride).cloned().collect(),
+    };
+    let train: Vec<Clip> = clips.train.iter().map(strided).collect();
+    let validation: Vec<Clip> = clips.validation.iter().map(strided).collect();
+    let tests: Vec<Clip> = clips.tests.iter().map(strided).collect();
+    let frames: Vec<Vec<f64>> = train.iter().flat_map(|c| c.frames.clone()).collect();
+    let layout = PoseLayout::from_training(&rig.angle_names(), &frames)?;
+    let lighting = SceneLighting::of(scene)?;
+    let bind = rig.bind_mesh();
+    let plan = plan_bake(scene, &lighting, bind, frames.len());
+    let order = plan.order.order;
+    let e = &scene.effects;
+    let reference = BakeSettings {
+        order: MAX_ORDER,
+        ..plan.bake
+    };
+    let candidates = candidates(scene, order);
+    let progress = reporter.step_progress(candidates.len() + 2);
+    progress.step("baking the reference");
+    let base = bake_set(rig, &layout, &train, &validation, &reference)?;
+    let truth_tests = tests
+        .iter()
+        .map(|c| Ok(bake_clip(rig, &layout, &c.name, c.frames.clone(), &reference, &Silent)?.0))
+        .collect::<Result<Vec<_>>>()?;
+    let sh = lighting.sh_at(MAX_ORDER, crate::scene::train::centre(bind))?;
+    let lum = luminance(&sh);
+    let truth = Truth {
+        tests: &truth_tests,
+        lighting: &lum,
+        n2: MAX_ORDER * MAX_ORDER,
+    };
+    let mut points = Vec::new();
+    let mut extra: Option<(Data, Baked)> = None;
+    for candidate in &candidates {
+        progress.step(&format!("fitting {}", candidate.label));
+        let data = match candidate.data {
+            Data::Reference => truncated(&base, candidate.order),
+            other => {
+                if extra.as_ref().is_none_or(|(d, _)| *d != other) {
+                    let bake = match other {
+                        Data::Rays(rays) => BakeSettings { rays, ..plan.bake },
+                        Data::Bounces(bounces) => BakeSettings {
+                            bounces,
+                            ..plan.bake
+                        },
+                        Data::Reference => unreachable!("handled above"),
+                    };
+                    extra = Some((other, bake_set(rig, &layout, &train, &validation, &bake)?));
+                }
+                let (_, baked) = extra.as_ref().expect("baked above");
+                truncated(baked, candidate.order)
+            }
+        };
+        points.extend(fit_and_measure(
+            rig, &layout, candidate, &data, e.frame, scene, &truth,
+        )?);
+    }
+    progress.step("the Pareto fronts");
+    mark_fronts(&mut points);
+    let budget_us = settings.budget_us.or(scene.budget.us_per_frame);
+    let budget_bytes = settings.budget_bytes.or(scene.budget.bytes);
+    let costs: Vec<Cost> = points.iter().map(cost).collect();
+    let recommended = recommend(&costs, budget_us, budget_bytes.map(|b| b as f64));
+    progress.finish();
+    let mut frame_counts = vec![(
+        train
+            .iter()
+            .map(|c| c.name.as_str())
+            .collect::<Vec<_>>()
+            .join(" + "),
+        frames.len(),
+    )];
+    frame_counts.extend(
+        validation
+            .iter()
+            .chain(&tests)
+            .map(|c| (c.name.clone(), c.frames.len())),
+    );
+    Ok(SweepReport {
+        scene: scene.path.clone(),
+        character: format!(
+            "{} vertices, {} pose entries",
+            bind.vertex_count(),
+            layout.names().len()
+        ),
+        reference: format!(
+            "{}, SH order {MAX_ORDER}, {} rays per vertex, {} bounces, every {stride}th frame",
+            if e.shadows { "shadowed" } else { "unshadowed" },
+            reference.rays,
+            reference.bounces
+        ),
+        frames: frame_counts,
+        scene_order: (order, plan.order.reason.clone()),
+        presets: presets(&costs),
+        points,
+        recommended,
+        budget: (budget_us, budget_bytes),
+        not_swept: not_swept(scene),
+        seconds: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// The knobs' settings to fit: every order with the default shape, then at the scene's order
+/// k_v, k_a, fewer rays and fewer bounces.
+fn candidates(scene: &Scene, order: usize) -> Vec<Candidate> {
+    let at = |label: String, pose_dims, coef_dims, data| Candidate {
+        label,
+        order,
+        pose_dims,
+        coef_dims,
+        data,
+    };
+    let defaults = FitOptions::default();
+    let mut list: Vec<Candidate> = (1..=MAX_ORDER)
+        .map(|n| Candidate {
+            label: format!("order {n}"),
+            order: n,
+            pose_dims: defaults.pose_dims,
+            coef_dims: defaults.coef_dims,
+            data: Data::Reference,
+        })
+        .collect();
+    for k in [4, 8, 16, 32] {
+        list.push(at(
+            format!("order {order}, k_v {k}"),
+            defaults.pose_dims,
+            CoefDims::Count(k),
+            Data::Reference,
+        ));
+    }
+    for k in [1, 2, 4] {
+        list.push(at(
+            format!("order {order}, k_a {k}"),
+            Dims::Count(k),
+            defaults.coef_dims,
+            Data::Reference,
+        ));
+    }
+    let e = &scene.effects;
+    if e.shadows {
+        for rays in [e.rays / 4, e.rays / 2].into_iter().filter(|&r| r >= 4) {
+            list.push(at(
+                format!("order {order}, {rays} rays"),
+                defaults.pose_dims,
+                defaults.coef_dims,
+                Data::Rays(rays),
+            ));
+        }
+    }
+    for bounces in 0..e.bounces {
+        list.push(at(
+            format!("order {order}, {bounces} bounces"),
+            defaults.pose_dims,
+            defaults.coef_dims,
+            Data::Bounces(bounces),
+        ));
+    }
+    list
+}
+
+/// The knobs this sweep leaves alone for `scene`, and why.
+fn not_swept(scene: &Scene) -> Vec<String> {
+    let e = &scene.effects;
+    let mut out = Vec::new();
+    if !e.shadows {
+        out.push("rays: the scene casts no shadows, so its transfer is exact without any".into());
+    }
+    if e.bounces == 0 {
+        out.push("bounces: the scene asks for none, so there is nothing cheaper to try".into());
+    }
+    out.push(
+        "irradiance-rig kinds: compared for the scene's lights by `aprt rig` and `aprt train --scene` (rig = \"auto\"), not in this sweep"
+            .into(),
+    );
+    out.push(
+        "light-map representations: measured by `aprt shlm study` (docs/results/lightmaps), not in this sweep".into(),
+    );
+    out
+}
+
+/// Bakes the training clips (joined), each validation clip and the rest pose with `settings`.
+fn bake_set(
+    rig: &dyn Rig,
+    layout: &PoseLayout,
+    train: &[Clip],
+    validation: &[Clip],
+    settings: &BakeSettings,
+) -> Result<Baked> {
+    let mut seconds = 0.0;
+    let mut frames = 0usize;
+    let mut parts = Vec::new();
+    for clip in train {
+        let (baked, per_frame) = bake_clip(
+            rig,
+            layout,
+            &clip.name,
+            clip.frames.clone(),
+            settings,
+            &Silent,
+        )?;
+        seconds += per_frame * clip.frames.len() as f64;
+        frames += clip.frames.len();
+        parts.push(baked);
+    }
+    let validation = validation
+        .iter()
+        .map(|c| Ok(bake_clip(rig, layout, &c.name, c.frames.clone(), settings, &Silent)?.0))
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Baked {
+        train: BakedClip::concat(parts),
+        validation,
+        rest: bake_rest(rig, layout, settings, &Silent)?,
+        seconds: seconds / frames.max(1) as f64,
+    })
+}
+
+/// `baked` with every clip's transfer cut to `order`.
+fn truncated(baked: &Baked, order: usize) -> Baked {
+    Baked {
+        train: baked.train.truncated(order),
+        validation: baked
+            .validation
+            .iter()
+            .map(|c| c.truncated(order))
+            .collect(),
+        rest: baked.rest.truncated(order),
+        seconds: baked.seconds,
+    }
+}
+
+/// Fits `candidate` on `data` and measures it at every precision.
+fn fit_and_measure(
+    rig: &dyn Rig,
+    layout: &PoseLayout,
+    candidate: &Candidate,
+    data: &Baked,
+    frame: ModelFrame,
+    scene: &Scene,
+    truth: &Truth<'_>,
+) -> Result<Vec<Point>> {
+    let options = FitOptions {
+        pose_dims: candidate.pose_dims,
+        coef_dims: candidate.coef_dims,
+        ..FitOptions::default()
+    };
+    let set = ClipSet {
+        train: &data.train,
+        rest: Some(&data.rest),
+        validation: &data.validation,
+    };
+    let started = Instant::now();
+    let fitted = fit_clip(rig, layout, set, candidate.order, &options, frame)
+        .with_context(|| format!("fitting {}", candidate.label))?;
+    let fit_s = started.elapsed().as_secs_f64();
+    let model = &fitted.model;
+    let mut points = Vec::new();
+    for precision in [Precision::F32, Precision::F16] {
+        let blob = encode_model(model, precision)
+            .with_context(|| format!("writing {} in {}", candidate.label, precision.name()))?;
+        let measured = measure(&blob, frame, truth)?;
+        let info = *aprt_core::Model::parse(&blob)?.info();
+        points.push(Point {
+            setting: Setting {
+                label: format!("{}, {}", candidate.label, precision.name()),
+                order: candidate.order,
+                pose_dims: match candidate.pose_dims {
+                    Dims::Count(k) => k.to_string(),
+                    Dims::Variance(f) => format!("{f} of the variance"),
+                    Dims::All => "all".into(),
+                    Dims::Auto => "auto".into(),
+                },
+                coef_dims: match candidate.coef_dims {
+                    CoefDims::Count(k) => k.to_string(),
+                    CoefDims::Variance(f) => format!("{f} of the energy"),
+                    CoefDims::Full => "full".into(),
+                },
+                fitted: (info.pose_dims(), info.coef_dims()),
+                precision: precision.name(),
+                rays: match candidate.data {
+                    Data::Rays(r) => r,
+                    _ => scene.effects.rays,
+                },
+                bounces: match candidate.data {
+                    Data::Bounces(b) => b,
+                    _ => scene.effects.bounces,
+                },
+            },
+            error: measured.grey_rms,
+            us_per_frame: measured.us_per_frame,
+            bytes: blob.len(),
+            pareto: false,
+            pareto_bytes: false,
+            measured,
+            bake_s_per_frame: data.seconds,
+            fit_s,
+            blob,
+        });
+    }
+    Ok(points)
+}
+
+fn cost(p: &Point) -> Cost {
+    Cost {
+        error: p.error,
+        us: p.us_per_frame,
+        bytes: p.bytes as f64,
+    }
+}
+
+/// Marks each point's membership of the two fronts.
+fn mark_fronts(points: &mut [Point]) {
+    let costs: Vec<Cost> = points.iter().map(cost).collect();
+    let by_time = front(&costs, |c| c.us);
+    let by_bytes = front(&costs, |c| c.bytes);
+    for ((p, t), b) in points.iter_mut().zip(by_time).zip(by_bytes) {
+        p.pareto = t;
+        p.pareto_bytes = b;
+    }
+}

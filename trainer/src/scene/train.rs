@@ -1,0 +1,276 @@
+//! `aprt train --scene`: plan the scene, train what it needs through
+//! [`crate::model::train::train`], and measure what the plan saved against the full
+//! simulation (shadows, every coefficient the runtime holds, the scene's rays and bounces) on
+//! a few of the same poses, in the same run.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use aprt_core::{MAX_ORDER, Rgb};
+
+use super::lighting::SceneLighting;
+use super::rig_choice::{RigDecision, choose_rig};
+use super::{BakePlan, plan_bake};
+use crate::bake::checkpoint::OnExisting;
+use crate::bake::{BakeSettings, bake_poses};
+use crate::io::scene::{Choice, Scene};
+use crate::io::source::{Poses, joined};
+use crate::lighting::rig_fit::{FIT_POSES, fitting_meshes};
+use crate::model::fit::FitOptions;
+use crate::model::precision::PrecisionChoice;
+use crate::model::train::{StageSeconds, TrainSettings, train};
+use crate::progress::{Reporter, Silent};
+use crate::rig::mesh::Mesh;
+
+/// Poses the full simulation is timed on, at most.
+pub const FULL_SIMULATION_POSES: usize = 3;
+
+/// What `aprt train --scene` computed, skipped and spent (`--report FILE.json`).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SceneTrainReport {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// The model written.
+    pub model: PathBuf,
+    /// Visibility rays cast by the bake.
+    pub rays_cast: u64,
+    /// Inter-reflection passes after the direct pass.
+    pub bounce_passes: usize,
+    /// SH order of the model.
+    pub sh_order: usize,
+    /// Why that order.
+    pub sh_order_reason: String,
+    /// Worst unshadowed irradiance error of the scene's lighting at orders 1..=6, grey levels.
+    pub grey_by_order: Vec<f32>,
+    /// The irradiance rig stored and why.
+    pub rig: RigDecision,
+    /// The precision written.
+    pub precision: String,
+    /// Why that precision.
+    pub precision_reason: String,
+    /// What was computed, one sentence each.
+    pub computed: Vec<String>,
+    /// What was skipped, one sentence each.
+    pub skipped: Vec<String>,
+    /// Wall-clock seconds of the whole command, planning included.
+    pub seconds: f64,
+    /// Seconds by stage.
+    pub stages: StageSeconds,
+    /// The full simulation, timed on a few poses of the same run.
+    pub full_simulation: FullSimulation,
+    /// Model bytes.
+    pub bytes: usize,
+}
+
+/// The full simulation's cost, measured on [`FULL_SIMULATION_POSES`] poses and scaled to all.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct FullSimulation {
+    /// What it simulates.
+    pub settings: String,
+    /// Poses it was timed on.
+    pub poses_timed: usize,
+    /// Seconds per pose, measured.
+    pub seconds_per_pose: f64,
+    /// The same for the scene's bake, measured on the same poses just before.
+    pub scene_seconds_per_pose: f64,
+    /// Seconds the full simulation would take for every pose the scene baked.
+    pub seconds: f64,
+    /// Seconds the scene's bake saved over every pose: the two per-pose times' difference
+    /// (0 when the scene needs the full simulation).
+    pub saved_seconds: f64,
+    /// Full simulation over the scene's bake, per pose.
+    pub speedup: f64,
+}
+
+/// Where `aprt train --scene` writes, and how it fits.
+pub struct SceneTrainOptions<'a> {
+    /// The model.
+    pub output: &'a Path,
+    /// The checkpoint directory.
+    pub checkpoint: PathBuf,
+    /// What to do with an existing checkpoint.
+    pub existing: OnExisting,
+    /// The model's shape and regularisation.
+    pub fit: FitOptions,
+}
+
+/// Plans `scene`, trains its model from `poses` into `options.output`, and reports what was
+/// computed and skipped. Notes and progress go to `reporter`.
+pub fn train_scene(
+    scene: &Scene,
+    poses: Poses,
+    options: SceneTrainOptions<'_>,
+    reporter: &dyn Reporter,
+) -> Result<SceneTrainReport> {
+    let started = Instant::now();
+    let lighting = SceneLighting::of(scene)?;
+    let fitting = fitting_surfaces(&poses)?;
+    let bind = &fitting[0];
+    let baked = baked_pose_count(&poses, scene);
+    let plan = plan_bake(scene, &lighting, bind, baked);
+    let order = plan.bake.order;
+    let (rig_kind, rig) = choose_rig(
+        scene.effects.rig,
+        &lighting.lights,
+        &fitting,
+        order,
+        scene.effects.error_target,
+    )?;
+    let precision = match scene.effects.precision {
+        Choice::Fixed(p) => PrecisionChoice::Fixed(p),
+        Choice::Auto => PrecisionChoice::Auto {
+            target: scene.effects.error_target,
+            lighting: channels(&lighting.sh_at(order, centre(bind))?),
+        },
+    };
+    for line in plan.computed.iter().chain(&plan.skipped) {
+        reporter.note(line);
+    }
+    reporter.note(&format!("rig: {}", rig.reason));
+    let full = time_full_simulation(&plan, &fitting[1..], reporter)?;
+    let settings = TrainSettings {
+        bake: plan.bake,
+        fit: options.fit,
+        precision,
+        frame: scene.effects.frame,
+        checkpoint: options.checkpoint,
+        existing: options.existing,
+        irradiance_rig: rig_kind,
+    };
+    let trained = train(poses, options.output, &settings, reporter)?;
+    let poses_baked = trained.baked_poses as f64;
+    let mut computed = plan.computed.clone();
+    let mut skipped = plan.skipped.clone();
+    match rig_kind {
+        Some(_) => computed.push(format!("irradiance rig: {}", rig.reason)),
+        None => skipped.push(format!("irradiance rig: {}", rig.reason)),
+    }
+    computed.push(format!("precision {}", trained.precision.1));
+    Ok(SceneTrainReport {
+        scene: scene.path.clone(),
+        model: options.output.to_owned(),
+        rays_cast: plan.bake.rays_cast(bind.vertex_count()) * trained.baked_poses as u64,
+        bounce_passes: plan.bake.bounces,
+        sh_order: order,
+        sh_order_reason: plan.order.reason.clone(),
+        grey_by_order: plan.order.grey_by_order.clone(),
+        rig,
+        precision: trained.precision.0.name().to_owned(),
+        precision_reason: trained.precision.1.clone(),
+        computed,
+        skipped,
+        seconds: started.elapsed().as_secs_f64(),
+        stages: trained.seconds,
+        full_simulation: FullSimulation {
+            seconds: full.seconds_per_pose * poses_baked,
+            saved_seconds: (full.seconds_per_pose - full.scene_seconds_per_pose) * poses_baked,
+            ..full
+        },
+        bytes: trained.info.bytes,
+    })
+}
+
+/// The bind pose, then up to [`FIT_POSES`] training poses: what the rig is fitted over and
+/// the full simulation is timed on.
+fn fitting_surfaces(poses: &Poses) -> Result<Vec<Mesh>> {
+    match poses {
+        Poses::Rig { rig, clips, .. } => {
+            let clip = joined(clips.clone());
+            fitting_meshes(rig.as_ref(), &clip)
+                .with_context(|| format!("posing clip {}", clip.name))
+        }
+        Poses::Meshes { meshes, .. } => {
+            let step = meshes.len().div_ceil(FIT_POSES).max(1);
+            Ok(std::iter::once(meshes[0].clone())
+                .chain(meshes.iter().step_by(step).cloned())
+                .collect())
+        }
+    }
+}
+
+/// Poses the bake covers: training and validation frames, and the rest pose of bone-frame
+/// character models.
+fn baked_pose_count(poses: &Poses, scene: &Scene) -> usize {
+    match poses {
+        Poses::Meshes { meshes, .. } => meshes.len(),
+        Poses::Rig {
+            clips, validation, ..
+        } => {
+            let frames: usize = clips.iter().chain(validation).map(|c| c.frames.len()).sum();
+            frames + usize::from(scene.effects.frame == crate::model::ModelFrame::Bone)
+        }
+    }
+}
+
+/// Times the scene's bake and then the full simulation on the same few poses.
+fn time_full_simulation(
+    plan: &BakePlan,
+    poses: &[Mesh],
+    reporter: &dyn Reporter,
+) -> Result<FullSimulation> {
+    let full = BakeSettings {
+        order: MAX_ORDER,
+        shadows: true,
+        ..plan.bake
+    };
+    let sample = &poses[..poses.len().min(FULL_SIMULATION_POSES)];
+    let k = sample.len().max(1) as f64;
+    let described = format!(
+        "shadows, SH order {MAX_ORDER}, {} rays, {} bounces",
+        full.rays, full.bounces
+    );
+    if full == plan.bake {
+        reporter.note("the scene needs the full simulation: nothing to save");
+        return Ok(FullSimulation {
+            settings: described,
+            poses_timed: 0,
+            seconds_per_pose: 0.0,
+            scene_seconds_per_pose: 0.0,
+            seconds: 0.0,
+            saved_seconds: 0.0,
+            speedup: 1.0,
+        });
+    }
+    reporter.note(&format!(
+        "timing the full simulation (shadows, order {MAX_ORDER}, {} rays, {} bounces) on {} poses",
+        full.rays,
+        full.bounces,
+        sample.len()
+    ));
+    // Interleaved pose by pose, so the machine's drift falls on both sides alike.
+    let (mut scene_s, mut full_s) = (0.0, 0.0);
+    for mesh in sample {
+        for (settings, total) in [(&plan.bake, &mut scene_s), (&full, &mut full_s)] {
+            let t = Instant::now();
+            bake_poses(std::slice::from_ref(mesh), settings, &Silent)?;
+            *total += t.elapsed().as_secs_f64() / k;
+        }
+    }
+    Ok(FullSimulation {
+        settings: described,
+        poses_timed: sample.len(),
+        seconds_per_pose: full_s,
+        scene_seconds_per_pose: scene_s,
+        seconds: 0.0,
+        saved_seconds: 0.0,
+        speedup: full_s / scene_s.max(1e-9),
+    })
+}
+
+/// The centre of the mesh's bounding box.
+pub fn centre(mesh: &Mesh) -> [f32; 3] {
+    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    for p in &mesh.positions {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    std::array::from_fn(|k| 0.5 * (lo[k] + hi[k]))
+}
+
+/// Each RGB channel of SH lighting as its own vector.
+fn channels(rgb: &[Rgb]) -> [Vec<f32>; 3] {
+    std::array::from_fn(|k| rgb.iter().map(|c| c[k]).collect())
+}
