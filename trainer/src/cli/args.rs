@@ -49,7 +49,7 @@ pub struct ReportArgs {
     #[arg(long)]
     pub write_model: Option<PathBuf>,
     /// Use every k-th frame of every clip (1 = all; larger is faster).
-    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..))]
     pub stride: u64,
 }
 

@@ -468,7 +468,7 @@ fn report(args: &ReportArgs) -> Result<()> {
     if let Some(bytes) = args.budget_bytes {
         command += &format!(" --budget-bytes {bytes}");
     }
-    if args.stride != 2 {
+    if args.stride != 3 {
         command += &format!(" --stride {}", args.stride);
     }
     document::write(&report, &args.out, &command)?;

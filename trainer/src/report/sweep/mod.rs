@@ -25,7 +25,7 @@ use crate::progress::{Reporter, Silent};
 use crate::rig::pose_layout::PoseLayout;
 use crate::rig::{Clip, Rig};
 use crate::scene::lighting::{SceneLighting, luminance};
-use crate::scene::plan_bake;
+use crate::scene::{BakePlan, plan_bake};
 use measure::{Measured, Truth, measure};
 use pareto::{Cost, Presets, front, presets, recommend};
 
@@ -127,7 +127,7 @@ pub struct SweepReport {
 }
 
 /// A fit to run: its label, the data it learns from and its options.
-struct Candidate {
+pub struct Candidate {
     label: String,
     order: usize,
     pose_dims: Dims,
@@ -147,12 +147,85 @@ enum Data {
 }
 
 /// The training, validation and rest clips of one bake.
-struct Baked {
-    train: BakedClip,
-    validation: Vec<BakedClip>,
-    rest: BakedClip,
+pub struct Baked {
+    /// The training clips, joined.
+    pub train: BakedClip,
+    /// The validation clips.
+    pub validation: Vec<BakedClip>,
+    /// The rest pose.
+    pub rest: BakedClip,
     /// Seconds per training frame.
-    seconds: f64,
+    pub seconds: f64,
+}
+
+/// The reference bake every setting is measured against, and what the scene planned.
+pub struct Reference {
+    /// The pose layout of the training frames.
+    pub layout: PoseLayout,
+    /// Training, validation and rest clips at the reference settings.
+    pub base: Baked,
+    /// Test clips at the reference settings: the ground truth.
+    pub tests: Vec<BakedClip>,
+    /// The scene's bake plan (its order, effects and sentences).
+    pub plan: BakePlan,
+    /// The scene's lighting.
+    pub lighting: SceneLighting,
+    /// The reference settings: the scene's effects at SH order 6.
+    pub settings: BakeSettings,
+    /// Every `stride`-th frame of every clip was baked.
+    pub stride: usize,
+}
+
+/// Bakes `clips` (every `stride`-th frame) at the scene's effects and SH order 6.
+pub fn bake_reference(
+    scene: &Scene,
+    clips: &SceneClips<'_>,
+    stride: usize,
+    reporter: &dyn Reporter,
+) -> Result<Reference> {
+    if clips.tests.is_empty() {
+        bail!(
+            "{}: [source] test names no clips: the report measures on clips never trained on",
+            scene.path.display()
+        );
+    }
+    let rig = clips.rig;
+    let stride = stride.max(1);
+    let strided = |c: &Clip| Clip {
+        name: c.name.clone(),
+        fps: c.fps / stride as f64,
+        frames: c.frames.iter().step_by(stride).cloned().collect(),
+    };
+    let train: Vec<Clip> = clips.train.iter().map(strided).collect();
+    let validation: Vec<Clip> = clips.validation.iter().map(strided).collect();
+    let frames: Vec<Vec<f64>> = train.iter().flat_map(|c| c.frames.clone()).collect();
+    let layout = PoseLayout::from_training(&rig.angle_names(), &frames)?;
+    let lighting = SceneLighting::of(scene)?;
+    let plan = plan_bake(scene, &lighting, rig.bind_mesh(), frames.len());
+    let settings = BakeSettings {
+        order: MAX_ORDER,
+        ..plan.bake
+    };
+    reporter.note(&format!(
+        "baking the reference (SH order {MAX_ORDER}, {} rays) on every {stride}th frame",
+        settings.rays
+    ));
+    let base = bake_set(rig, &layout, &train, &validation, &settings)?;
+    let tests = clips
+        .tests
+        .iter()
+        .map(strided)
+        .map(|c| Ok(bake_clip(rig, &layout, &c.name, c.frames, &settings, &Silent)?.0))
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Reference {
+        layout,
+        base,
+        tests,
+        plan,
+        lighting,
+        settings,
+        stride,
+    })
 }
 
 /// Sweeps the knobs on `scene` and returns the measured points.
@@ -163,72 +236,67 @@ pub fn run(
     reporter: &dyn Reporter,
 ) -> Result<SweepReport> {
     let started = Instant::now();
-    if clips.tests.is_empty() {
-        bail!(
-            "{}: [source] test names no clips: the report measures on clips never trained on",
-            scene.path.display()
-        );
-    }
+    let reference = bake_reference(scene, clips, settings.stride, reporter)?;
+    let list = candidates(scene, reference.plan.order.order, Knobs::All);
+    let mut report = sweep(scene, clips, &reference, &list, settings, reporter)?;
+    report.seconds = started.elapsed().as_secs_f64();
+    Ok(report)
+}
+
+/// Fits and measures every candidate against `reference`.
+pub fn sweep(
+    scene: &Scene,
+    clips: &SceneClips<'_>,
+    reference: &Reference,
+    candidates: &[Candidate],
+    settings: &ReportSettings,
+    reporter: &dyn Reporter,
+) -> Result<SweepReport> {
+    let started = Instant::now();
     let rig = clips.rig;
-    let stride = settings.stride.max(1);
-    let strided = |c: &Clip| Clip {
-        name: c.name.clone(),
-        fps: c.fps / stride as f64,
-        frames: c.frames.iter().step_by(stride).cloned().collect(),
-    };
-    let train: Vec<Clip> = clips.train.iter().map(strided).collect();
-    let validation: Vec<Clip> = clips.validation.iter().map(strided).collect();
-    let tests: Vec<Clip> = clips.tests.iter().map(strided).collect();
-    let frames: Vec<Vec<f64>> = train.iter().flat_map(|c| c.frames.clone()).collect();
-    let layout = PoseLayout::from_training(&rig.angle_names(), &frames)?;
-    let lighting = SceneLighting::of(scene)?;
-    let bind = rig.bind_mesh();
-    let plan = plan_bake(scene, &lighting, bind, frames.len());
-    let order = plan.order.order;
     let e = &scene.effects;
-    let reference = BakeSettings {
-        order: MAX_ORDER,
-        ..plan.bake
-    };
-    let candidates = candidates(scene, order);
-    let progress = reporter.step_progress(candidates.len() + 2);
-    progress.step("baking the reference");
-    let base = bake_set(rig, &layout, &train, &validation, &reference)?;
-    let truth_tests = tests
-        .iter()
-        .map(|c| Ok(bake_clip(rig, &layout, &c.name, c.frames.clone(), &reference, &Silent)?.0))
-        .collect::<Result<Vec<_>>>()?;
-    let sh = lighting.sh_at(MAX_ORDER, crate::scene::train::centre(bind))?;
-    let lum = luminance(&sh);
+    let plan = &reference.plan;
+    let bind = rig.bind_mesh();
+    let lum = luminance(
+        &reference
+            .lighting
+            .sh_at(MAX_ORDER, crate::scene::train::centre(bind))?,
+    );
     let truth = Truth {
-        tests: &truth_tests,
+        tests: &reference.tests,
         lighting: &lum,
         n2: MAX_ORDER * MAX_ORDER,
     };
+    let progress = reporter.step_progress(candidates.len() + 1);
     let mut points = Vec::new();
     let mut extra: Option<(Data, Baked)> = None;
-    for candidate in &candidates {
+    for candidate in candidates {
         progress.step(&format!("fitting {}", candidate.label));
         let data = match candidate.data {
-            Data::Reference => truncated(&base, candidate.order),
+            Data::Reference => truncated(&reference.base, candidate.order),
             other => {
                 if extra.as_ref().is_none_or(|(d, _)| *d != other) {
                     let bake = match other {
                         Data::Rays(rays) => BakeSettings { rays, ..plan.bake },
-                        Data::Bounces(bounces) => BakeSettings {
-                            bounces,
-                            ..plan.bake
-                        },
+                        Data::Bounces(bounces) => BakeSettings { bounces, ..plan.bake },
                         Data::Reference => unreachable!("handled above"),
                     };
-                    extra = Some((other, bake_set(rig, &layout, &train, &validation, &bake)?));
+                    let (train, validation) = reference.strided_clips(clips);
+                    let layout = &reference.layout;
+                    extra = Some((other, bake_set(rig, layout, &train, &validation, &bake)?));
                 }
                 let (_, baked) = extra.as_ref().expect("baked above");
                 truncated(baked, candidate.order)
             }
         };
         points.extend(fit_and_measure(
-            rig, &layout, candidate, &data, e.frame, scene, &truth,
+            rig,
+            &reference.layout,
+            candidate,
+            &data,
+            e.frame,
+            scene,
+            &truth,
         )?);
     }
     progress.step("the Pareto fronts");
@@ -238,35 +306,30 @@ pub fn run(
     let costs: Vec<Cost> = points.iter().map(cost).collect();
     let recommended = recommend(&costs, budget_us, budget_bytes.map(|b| b as f64));
     progress.finish();
-    let mut frame_counts = vec![(
-        train
+    let base = &reference.base;
+    let mut frames = vec![(base.train.name.clone(), base.train.angles.len())];
+    frames.extend(
+        base.validation
             .iter()
-            .map(|c| c.name.as_str())
-            .collect::<Vec<_>>()
-            .join(" + "),
-        frames.len(),
-    )];
-    frame_counts.extend(
-        validation
-            .iter()
-            .chain(&tests)
-            .map(|c| (c.name.clone(), c.frames.len())),
+            .chain(&reference.tests)
+            .map(|c| (c.name.clone(), c.angles.len())),
     );
     Ok(SweepReport {
         scene: scene.path.clone(),
         character: format!(
             "{} vertices, {} pose entries",
             bind.vertex_count(),
-            layout.names().len()
+            reference.layout.names().len()
         ),
         reference: format!(
-            "{}, SH order {MAX_ORDER}, {} rays per vertex, {} bounces, every {stride}th frame",
+            "{}, SH order {MAX_ORDER}, {} rays per vertex, {} bounces, every {}th frame",
             if e.shadows { "shadowed" } else { "unshadowed" },
-            reference.rays,
-            reference.bounces
+            reference.settings.rays,
+            reference.settings.bounces,
+            reference.stride
         ),
-        frames: frame_counts,
-        scene_order: (order, plan.order.reason.clone()),
+        frames,
+        scene_order: (plan.order.order, plan.order.reason.clone()),
         presets: presets(&costs),
         points,
         recommended,
@@ -276,9 +339,33 @@ pub fn run(
     })
 }
 
+impl Reference {
+    /// The training and validation clips at the reference's stride.
+    fn strided_clips(&self, clips: &SceneClips<'_>) -> (Vec<Clip>, Vec<Clip>) {
+        let strided = |c: &Clip| Clip {
+            name: c.name.clone(),
+            fps: c.fps / self.stride as f64,
+            frames: c.frames.iter().step_by(self.stride).cloned().collect(),
+        };
+        (
+            clips.train.iter().map(strided).collect(),
+            clips.validation.iter().map(strided).collect(),
+        )
+    }
+}
+
+/// Which knobs a sweep turns.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Knobs {
+    /// Every knob: order, k_v, k_a, rays, bounces.
+    All,
+    /// SH order and k_v only (the demo's short sweep).
+    OrderAndBasis,
+}
+
 /// The knobs' settings to fit: every order with the default shape, then at the scene's order
-/// k_v, k_a, fewer rays and fewer bounces.
-fn candidates(scene: &Scene, order: usize) -> Vec<Candidate> {
+/// k_v and, for [`Knobs::All`], k_a, fewer rays and fewer bounces.
+pub fn candidates(scene: &Scene, order: usize, knobs: Knobs) -> Vec<Candidate> {
     let at = |label: String, pose_dims, coef_dims, data| Candidate {
         label,
         order,
@@ -304,7 +391,10 @@ fn candidates(scene: &Scene, order: usize) -> Vec<Candidate> {
             Data::Reference,
         ));
     }
-    for k in [1, 2, 4] {
+    if knobs == Knobs::OrderAndBasis {
+        return list;
+    }
+    for k in [1, 2] {
         list.push(at(
             format!("order {order}, k_a {k}"),
             Dims::Count(k),
@@ -314,7 +404,7 @@ fn candidates(scene: &Scene, order: usize) -> Vec<Candidate> {
     }
     let e = &scene.effects;
     if e.shadows {
-        for rays in [e.rays / 4, e.rays / 2].into_iter().filter(|&r| r >= 4) {
+        for rays in [e.rays / 4].into_iter().filter(|&r| r >= 4) {
             list.push(at(
                 format!("order {order}, {rays} rays"),
                 defaults.pose_dims,
@@ -391,7 +481,7 @@ fn bake_set(
 }
 
 /// `baked` with every clip's transfer cut to `order`.
-fn truncated(baked: &Baked, order: usize) -> Baked {
+pub fn truncated(baked: &Baked, order: usize) -> Baked {
     Baked {
         train: baked.train.truncated(order),
         validation: baked
