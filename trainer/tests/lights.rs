@@ -1,7 +1,8 @@
 //! `aprt light irradiance` through the real binary: the JSON against the closed forms worked
 //! out here (a fully visible sphere `π L sin²α cos θ`, a point `I/d² cos θ`, a directional
 //! light `E cos θ`, the Ramamoorthi–Hanrahan order-3 factor), and every malformed lights file
-//! refused with the file, the light and what is wrong.
+//! refused with the file, the light and what is wrong. `aprt light env` on a constant map
+//! written here byte by byte, and its refusals.
 
 // Indexed loops over the three channels read like the formulas they check.
 #![allow(clippy::needless_range_loop)]
@@ -208,5 +209,72 @@ fn malformed_lights_files_are_refused() {
             "0,0,1",
         ],
         &["cannot read no-such.toml"],
+    );
+}
+
+/// A Radiance `.hdr` of `width × height` texels of radiance 1 (RGBE `128 128 128 129`: mantissa
+/// 128/256 times 2^(129−128)), uncompressed scanlines (allowed below 8 texels wide).
+fn constant_hdr(width: usize, height: usize) -> Vec<u8> {
+    let mut bytes =
+        format!("#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y {height} +X {width}\n").into_bytes();
+    for _ in 0..width * height {
+        bytes.extend_from_slice(&[128, 128, 128, 129]);
+    }
+    bytes
+}
+
+#[test]
+fn env_projects_a_constant_map_and_refuses_bad_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let sky = dir.path().join("sky.hdr");
+    std::fs::write(&sky, constant_hdr(6, 16)).unwrap();
+    let f = sky.to_str().unwrap();
+    let v = json(&["light", "env", f, "--order", "3", "--json"]);
+    assert_eq!(v["file"].as_str(), Some(f));
+    assert_eq!(
+        (
+            v["order"].as_u64(),
+            v["width"].as_u64(),
+            v["height"].as_u64()
+        ),
+        (Some(3), Some(6), Some(16))
+    );
+    let coefficients = v["coefficients"].as_array().unwrap();
+    assert_eq!(coefficients.len(), 9);
+    let c0 = (4.0 * std::f64::consts::PI).sqrt();
+    for (i, c) in coefficients.iter().enumerate() {
+        for k in 0..3 {
+            let got = c[k].as_f64().unwrap();
+            // Band 1 cancels between mirrored rows; band 2 keeps the centre rule's error on 16
+            // rows (y_20 and y_22 have a part symmetric about +Y), within the unit tests'
+            // centre_rule_bound (π⁴·√(5/4π)·4/(6·16²) < 0.16).
+            let (want, tolerance) = match i {
+                0 => (c0, 1e-6 * c0),
+                1..=3 => (0.0, 1e-5),
+                _ => (0.0, 0.16),
+            };
+            assert!(
+                (got - want).abs() <= tolerance,
+                "coefficient {i}: {got} vs {want}"
+            );
+        }
+    }
+    let text = String::from_utf8(succeed(&["light", "env", f, "--order", "2"])).unwrap();
+    assert!(
+        text.contains("6x16") && text.contains("l=0 m=+0  3.544908"),
+        "{text}"
+    );
+
+    let cut = dir.path().join("cut.hdr");
+    std::fs::write(&cut, &constant_hdr(6, 16)[..60]).unwrap();
+    refuse(
+        &["light", "env", cut.to_str().unwrap(), "--order", "2"],
+        &["cut.hdr", "Radiance HDR"],
+    );
+    let png = dir.path().join("sky.png");
+    std::fs::write(&png, b"not a map").unwrap();
+    refuse(
+        &["light", "env", png.to_str().unwrap(), "--order", "2"],
+        &["sky.png", "unknown extension"],
     );
 }

@@ -297,6 +297,22 @@ pub struct LightArgs {
 pub enum LightCommand {
     /// Irradiance at a point from a lights file, through SH and exactly (unshadowed).
     Irradiance(IrradianceArgs),
+    /// Project an equirectangular .hdr or .exr environment map to SH radiance.
+    Env(EnvArgs),
+}
+
+/// `aprt light env`.
+#[derive(Debug, Args)]
+pub struct EnvArgs {
+    /// The map: equirectangular, .hdr (Radiance RGBE) or .exr (OpenEXR), row 0 at +Y, the
+    /// centre column facing +X (three.js's and Blender's convention).
+    pub file: PathBuf,
+    /// SH order of the projection (order² RGB coefficients).
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=6))]
+    pub order: u8,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// `aprt light irradiance`.

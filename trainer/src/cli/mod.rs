@@ -14,9 +14,9 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 
 pub use args::{
-    BakeArgs, DemoArgs, DeringArg, EvalArgs, FitArgs, InspectArgs, IrradianceArgs, LightArgs,
-    LightCommand, PrecisionArg, ReportArgs, ResultsArgs, RigArgs, RigStudyArgs, SimulateArgs,
-    TrainArgs, TransferArgs,
+    BakeArgs, DemoArgs, DeringArg, EnvArgs, EvalArgs, FitArgs, InspectArgs, IrradianceArgs,
+    LightArgs, LightCommand, PrecisionArg, ReportArgs, ResultsArgs, RigArgs, RigStudyArgs,
+    SimulateArgs, TrainArgs, TransferArgs,
 };
 pub use source::SourceArgs;
 pub use terminal::Terminal;
@@ -60,7 +60,8 @@ pub enum Command {
     Inspect(InspectArgs),
     /// Regenerate the results document on the real glTF characters and BVH motion capture.
     Results(ResultsArgs),
-    /// Lights: irradiance at a point from a lights file, through SH and exactly.
+    /// Lights: irradiance at a point from a lights file, through SH and exactly; environment
+    /// maps projected to SH.
     Light(LightArgs),
     /// Fit an irradiance rig to a mesh or character and report, for a lights file, which
     /// lights it carries, its error against exact evaluation and its cost per frame.
@@ -93,6 +94,7 @@ pub fn run(cli: Cli) -> Result<()> {
 
         Command::Light(args) => match args.command {
             LightCommand::Irradiance(args) => light_irradiance(&args),
+            LightCommand::Env(args) => light_env(&args),
         },
     }
 }
@@ -137,6 +139,45 @@ fn light_irradiance(args: &IrradianceArgs) -> Result<()> {
         "  8-bit grey levels    {:.2} {:.2} {:.2}  (white Lambertian surface, 255 |SH - exact| / pi)",
         g[0], g[1], g[2]
     );
+    Ok(())
+}
+
+/// What `aprt light env --json` prints.
+#[derive(serde::Serialize)]
+struct EnvReport<'a> {
+    file: &'a Path,
+    order: usize,
+    width: usize,
+    height: usize,
+    coefficients: Vec<[f32; 3]>,
+}
+
+fn light_env(args: &EnvArgs) -> Result<()> {
+    let order = usize::from(args.order);
+    let image = crate::lighting::read_equirect(&args.file)?;
+    let coefficients = image.project(order)?;
+    if args.json {
+        let report = EnvReport {
+            file: &args.file,
+            order,
+            width: image.width,
+            height: image.height,
+            coefficients,
+        };
+        println!("{}", serde_json::to_string_pretty(&report)?);
+        return Ok(());
+    }
+    println!(
+        "{}: {}x{} equirectangular, SH order {order} ({} RGB coefficients, +Y up)",
+        args.file.display(),
+        image.width,
+        image.height,
+        coefficients.len()
+    );
+    let bands = (0..order as i32).flat_map(|l| (-l..=l).map(move |m| (l, m)));
+    for ((l, m), [r, g, b]) in bands.zip(&coefficients) {
+        println!("  l={l} m={m:+}  {r:.6} {g:.6} {b:.6}");
+    }
     Ok(())
 }
 

@@ -1,8 +1,10 @@
-//! Lighting from *Irradiance Rigs* (Yuan, Nowrouzezahrai and Sloan): the lights file, and
-//! irradiance at a point through the SH path next to the exact closed form. The formulas live in
-//! `aprt_core` (`Light`), so engines and the trainer evaluate the same ones. (In the trainer,
-//! `rig/` is the skinned character; paper 2's lighting rigs are called irradiance rigs here.)
+//! Lighting from *Irradiance Rigs* (Yuan, Nowrouzezahrai and Sloan): the lights file,
+//! environment maps projected to SH, and irradiance at a point through the SH path next to the
+//! exact closed form. The formulas live in `aprt_core` (`Light`), so engines and the trainer
+//! evaluate the same ones. (In the trainer, `rig/` is the skinned character; paper 2's lighting
+//! rigs are called irradiance rigs here.)
 
+pub mod env_map;
 pub mod evaluate;
 pub mod lights_file;
 pub mod rig_fit;
@@ -12,6 +14,9 @@ pub mod surface_samples;
 use aprt_core::{Light, LightError, MAX_COEFFS, Rgb, Window, apply_window, irradiance_sh};
 use serde::Serialize;
 
+pub use env_map::{
+    EnvMapError, EnvironmentImage, project_equirect, read_environment, read_equirect,
+};
 pub use evaluate::{RigErrors, RigEvaluation, RigSettings, evaluate_rig, rig_errors};
 pub use lights_file::{LightsFileError, light_from_table, parse_lights, read_lights};
 pub use rig_fit::{FittedRig, GreyError, fit_rig, rig_vectors};

@@ -22,7 +22,7 @@ impl SceneLighting {
         let environment = match &scene.environment {
             None => Vec::new(),
             Some(Environment::Sh(sh)) => sh.clone(),
-            Some(Environment::Map(path)) => pending_env_map(path, MAX_ORDER)
+            Some(Environment::Map(path)) => crate::lighting::read_environment(path, MAX_ORDER)
                 .with_context(|| format!("{}: [environment]", scene.path.display()))?,
         };
         Ok(SceneLighting {
@@ -93,9 +93,4 @@ pub fn luminance(rgb: &[Rgb]) -> Vec<f32> {
     rgb.iter()
         .map(|&c| crate::report::rig_frame::luminance(c))
         .collect()
-}
-
-// TEMPORARY until the env-map branch merges.
-fn pending_env_map(path: &std::path::Path, _order: usize) -> Result<Vec<Rgb>> {
-    anyhow::bail!("{}: environment maps are not read yet", path.display())
 }

@@ -278,7 +278,10 @@ pub fn sweep(
                 if extra.as_ref().is_none_or(|(d, _)| *d != other) {
                     let bake = match other {
                         Data::Rays(rays) => BakeSettings { rays, ..plan.bake },
-                        Data::Bounces(bounces) => BakeSettings { bounces, ..plan.bake },
+                        Data::Bounces(bounces) => BakeSettings {
+                            bounces,
+                            ..plan.bake
+                        },
                         Data::Reference => unreachable!("handled above"),
                     };
                     let (train, validation) = reference.strided_clips(clips);
