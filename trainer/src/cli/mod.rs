@@ -22,12 +22,12 @@ pub use source::SourceArgs;
 pub use terminal::Terminal;
 
 use crate::bake::budget::Workload;
-use crate::bake::checkpoint::{Checkpoint, OnExisting};
+use crate::bake::checkpoint::{Checkpoint, OnExisting, ShardBaked};
 use crate::io::atomic::write_atomic;
 use crate::io::outputs::{Input, Output, check};
 use crate::model::ModelFrame;
 use crate::model::predict::{predict_clip, predict_world};
-use crate::model::train::TrainSettings;
+use crate::model::train::{Outcome, TrainSettings};
 use crate::progress::Reporter;
 use crate::rig::mesh::degenerate_note;
 
@@ -278,6 +278,19 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
     )
 }
 
+/// Prints what a shard of `command` baked, and what finishes the bake.
+fn shard_done(baked: &ShardBaked, command: &str) {
+    eprintln!("{baked}");
+    let next = if baked.stored == baked.frames {
+        "every frame is baked"
+    } else {
+        "when every shard is done"
+    };
+    eprintln!(
+        "{next}: run {command} with the same arguments and --resume instead of --shard (over the merged checkpoint, if the shards baked into separate directories)"
+    );
+}
+
 fn train(args: &TrainArgs) -> Result<()> {
     let checkpoint = match &args.checkpoint {
         Some(dir) => Output::directory(dir, "--checkpoint"),
@@ -315,12 +328,19 @@ fn train(args: &TrainArgs) -> Result<()> {
             OnExisting::Refuse
         },
         irradiance_rig: args.rig,
+        shard: args.shard,
     };
     settings.bake.validate()?;
     let poses = args.source.poses(&args.validate, &Terminal)?;
     args.source
         .in_origin(crate::model::train::check(&poses, &settings))?;
-    let trained = crate::model::train::train(poses, &args.output, &settings, &Terminal)?;
+    let trained = match crate::model::train::train(poses, &args.output, &settings, &Terminal)? {
+        Outcome::Trained(trained) => trained,
+        Outcome::Shard(baked) => {
+            shard_done(&baked, "aprt train");
+            return Ok(());
+        }
+    };
     let info = &trained.info;
     for line in trained.selection.lines() {
         eprintln!("{line}");

@@ -2,6 +2,7 @@
 //! `aprt train` end to end (bake every pose through a checkpoint, so an interrupted run
 //! resumes, fit, write the blob, then remove the checkpoint).
 
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
@@ -9,8 +10,9 @@ use aprt_core::{MAX_BONES, MAX_COEF_DIMS, MAX_LIT, MAX_POSE_DIMS, MAX_POSE_LEN, 
 use nalgebra::DMatrix;
 
 use crate::bake::budget::{BudgetError, Workload};
-use crate::bake::checkpoint::{Checkpoint, OnExisting};
+use crate::bake::checkpoint::{Checkpoint, OnExisting, ShardBaked, Vertices};
 use crate::bake::clip::{BakedClip, pose_all};
+use crate::bake::shard::Shard;
 use crate::bake::{BakeError, BakeSettings};
 use crate::io::atomic::write_atomic;
 use crate::io::source::{Poses, clip_names, joined};
@@ -130,6 +132,11 @@ pub struct TrainSettings {
     /// An irradiance rig to fit to the character and store in the blob (its optional
     /// `IrradianceRig` section), so an engine lights the model from a handful of SH vectors.
     pub irradiance_rig: Option<RigKind>,
+    /// Bake only this shard's share of the frames into the checkpoint and stop: a bake farm's
+    /// machines each bake one shard, and a final run without it fits the model from the
+    /// merged checkpoint (`docs/bake-farm.md`). A shard always joins a checkpoint of the same
+    /// inputs and settings, whatever `existing` says, since its fellow shards share it.
+    pub shard: Option<Shard>,
 }
 
 /// A model option that no bake could make valid.
@@ -409,6 +416,15 @@ fn features_name(cosines: bool) -> &'static str {
     if cosines { "cosines" } else { "angles" }
 }
 
+/// What [`train`] did: fit and write the model, or bake one shard of it.
+#[derive(Debug)]
+pub enum Outcome {
+    /// The model was written.
+    Trained(Trained),
+    /// One shard was baked into the checkpoint ([`TrainSettings::shard`]); nothing was fitted.
+    Shard(ShardBaked),
+}
+
 /// What [`train`] wrote.
 #[derive(Debug)]
 pub struct Trained {
@@ -422,14 +438,18 @@ pub struct Trained {
 
 /// Bakes every pose (through the checkpoint), fits the model, writes it to `output`
 /// atomically and then removes the checkpoint. Notes (joints left out, bake progress, poses
-/// resumed) go to `reporter`.
+/// resumed) go to `reporter`. With [`TrainSettings::shard`] it only bakes that shard's share
+/// of the poses into the checkpoint, and writes nothing else.
 pub fn train(
     poses: Poses,
     output: &Path,
     settings: &TrainSettings,
     reporter: &dyn Reporter,
-) -> Result<Trained> {
+) -> Result<Outcome> {
     check(&poses, settings)?;
+    if let Some(shard) = settings.shard {
+        return bake_shard(&poses, shard, settings, reporter).map(Outcome::Shard);
+    }
     let rig_section = match &settings.irradiance_rig {
         Some(kind) => Some(fit_irradiance_rig(*kind, &poses, settings.bake.order)?),
         None => None,
@@ -460,24 +480,12 @@ pub fn train(
                     layout.dropped().join(", ")
                 ));
             }
-            // Training clips, then validation clips, then (for bone-frame models, which are
-            // anchored at it) the rest pose: all baked through one checkpoint.
             let all: Vec<&Clip> = clips.iter().chain(&validation).collect();
-            let mut meshes = Vec::new();
-            let mut names = Vec::new();
-            for clip in &all {
-                meshes.extend(pose_all(rig.as_ref(), &clip.name, &clip.frames)?);
-                names.extend((0..clip.frames.len()).map(|f| (clip.name.as_str(), f)));
-            }
             let rest_pose = rig.rest_pose();
             let anchored = settings.frame == ModelFrame::Bone;
-            if anchored {
-                meshes.push(rig.pose(&rest_pose)?);
-            }
-            let name = |i: usize| match names.get(i) {
-                Some((clip, f)) => format!("clip {clip} frame {f}"),
-                None => "the rest pose".to_owned(),
-            };
+            let (mut meshes, names) =
+                rig_poses(rig.as_ref(), &all, anchored.then_some(&rest_pose[..]))?;
+            let name = |i: usize| names[i].clone();
             let (mut transfer, checkpoint) = bake_checkpointed(&meshes, name, settings, reporter)?;
             let rest = if anchored {
                 let (mesh, t) = (meshes.pop(), transfer.pop());
@@ -528,11 +536,63 @@ pub fn train(
     let blob = encode_model_with_rig(&fitted.model, settings.precision, rig_section.as_deref())?;
     write_atomic(output, &blob).with_context(|| format!("cannot write {}", output.display()))?;
     checkpoint.remove()?;
-    Ok(Trained {
+    Ok(Outcome::Trained(Trained {
         poses,
         selection: Selection::of(&fitted.report),
         info: describe(&blob)?,
-    })
+    }))
+}
+
+/// Every pose a rig's model is baked at, in checkpoint order, with its name for errors: the
+/// frames of `clips` (the training clips, then the validation clips), then, for bone-frame
+/// models (anchored at it), the rest pose `rest`.
+fn rig_poses(
+    rig: &dyn Rig,
+    clips: &[&Clip],
+    rest: Option<&[f64]>,
+) -> Result<(Vec<Mesh>, Vec<String>)> {
+    let mut meshes = Vec::new();
+    let mut names = Vec::new();
+    for clip in clips {
+        meshes.extend(pose_all(rig, &clip.name, &clip.frames)?);
+        names.extend((0..clip.frames.len()).map(|f| format!("clip {} frame {f}", clip.name)));
+    }
+    if let Some(rest) = rest {
+        meshes.push(rig.pose(rest)?);
+        names.push("the rest pose".to_owned());
+    }
+    Ok((meshes, names))
+}
+
+/// Bakes `shard`'s share of the poses [`train`] would bake into the checkpoint of
+/// `settings`, started or joined (the shards share it); fits nothing, and leaves the
+/// irradiance rig to the final run.
+fn bake_shard(
+    poses: &Poses,
+    shard: Shard,
+    settings: &TrainSettings,
+    reporter: &dyn Reporter,
+) -> Result<ShardBaked> {
+    let (meshes, names) = match poses {
+        Poses::Meshes { files, meshes, .. } => {
+            let names = files.iter().map(|f| f.display().to_string()).collect();
+            (Cow::Borrowed(meshes.as_slice()), names)
+        }
+        Poses::Rig {
+            rig,
+            clips,
+            validation,
+        } => {
+            let all: Vec<&Clip> = clips.iter().chain(validation).collect();
+            let rest = (settings.frame == ModelFrame::Bone).then(|| rig.rest_pose());
+            let (meshes, names) = rig_poses(rig.as_ref(), &all, rest.as_deref())?;
+            (Cow::Owned(meshes), names)
+        }
+    };
+    let (ck, bake) = (&settings.checkpoint, &settings.bake);
+    let mut checkpoint = Checkpoint::open(ck, OnExisting::Resume, bake, &meshes)?;
+    let name = |i: usize| names[i].clone();
+    Ok(checkpoint.bake_shard(&meshes, &Vertices, shard, name, reporter)?)
 }
 
 /// The bytes of an irradiance rig of `kind` fitted to the poses' surfaces (a character's bind
