@@ -335,7 +335,7 @@ fn train(args: &TrainArgs) -> Result<()> {
     args.source
         .in_origin(crate::model::train::check(&poses, &settings))?;
     let trained = match crate::model::train::train(poses, &args.output, &settings, &Terminal)? {
-        Outcome::Trained(trained) => trained,
+        Outcome::Trained(trained) => *trained,
         Outcome::Shard(baked) => {
             shard_done(&baked, "aprt train");
             return Ok(());

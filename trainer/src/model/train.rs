@@ -419,8 +419,8 @@ fn features_name(cosines: bool) -> &'static str {
 /// What [`train`] did: fit and write the model, or bake one shard of it.
 #[derive(Debug)]
 pub enum Outcome {
-    /// The model was written.
-    Trained(Trained),
+    /// The model was written (boxed: a shard's outcome is a fraction of its size).
+    Trained(Box<Trained>),
     /// One shard was baked into the checkpoint ([`TrainSettings::shard`]); nothing was fitted.
     Shard(ShardBaked),
 }
@@ -536,11 +536,11 @@ pub fn train(
     let blob = encode_model_with_rig(&fitted.model, settings.precision, rig_section.as_deref())?;
     write_atomic(output, &blob).with_context(|| format!("cannot write {}", output.display()))?;
     checkpoint.remove()?;
-    Ok(Outcome::Trained(Trained {
+    Ok(Outcome::Trained(Box::new(Trained {
         poses,
         selection: Selection::of(&fitted.report),
         info: describe(&blob)?,
-    }))
+    })))
 }
 
 /// Every pose a rig's model is baked at, in checkpoint order, with its name for errors: the
