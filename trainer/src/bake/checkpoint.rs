@@ -19,7 +19,7 @@
 //! machines at once on a shared volume: the manifest depends only on the inputs and settings,
 //! so every shard writes the same bytes, and it is created with [`write_new`] (the first
 //! shard's appears whole, the others find it and compare); each pose file has one shard
-//! that writes it; and a shard never removes anything ([`Checkpoint::bake_shard`]). The
+//! that writes it; and a shard never removes the checkpoint ([`Checkpoint::bake_shard`]). The
 //! shards' directories may equally be baked apart and copied together: a pose file is the
 //! same wherever it was baked.
 
