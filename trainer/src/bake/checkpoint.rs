@@ -14,11 +14,20 @@
 //! vertices [`crate::bake::bake_pose_progress`], the same code path as
 //! [`crate::bake::bake_poses`]; for a light map the texels of its atlas), and stored poses are
 //! read back as the exact f32 bits that were written.
+//!
+//! Shards of a bake farm ([`crate::bake::shard`]) share one checkpoint, perhaps from several
+//! machines at once on a shared volume: the manifest depends only on the inputs and settings,
+//! so every shard writes the same bytes, and it is created with [`write_new`] (the first
+//! shard's appears whole, the others find it and compare); each pose file has one shard
+//! that writes it; and a shard never removes the checkpoint ([`Checkpoint::bake_shard`]). The
+//! shards' directories may equally be baked apart and copied together: a pose file is the
+//! same wherever it was baked.
 
 use std::path::{Path, PathBuf};
 
+use crate::bake::shard::Shard;
 use crate::bake::{BakeError, BakeSettings, bake_pose_progress};
-use crate::io::atomic::write_atomic;
+use crate::io::atomic::{write_atomic, write_new};
 use crate::progress::{BakeProgress, Reporter};
 use crate::rig::mesh::Mesh;
 
@@ -137,6 +146,39 @@ pub enum CheckpointError {
     },
 }
 
+/// What one shard of a bake farm did ([`Checkpoint::bake_shard`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ShardBaked {
+    /// The shard.
+    pub shard: Shard,
+    /// Its frames it baked now.
+    pub baked: usize,
+    /// Its frames that were already in the checkpoint (from an earlier attempt of the shard).
+    pub resumed: usize,
+    /// Frames of every shard in the checkpoint now.
+    pub stored: usize,
+    /// Frames of the whole bake.
+    pub frames: usize,
+    /// The checkpoint directory.
+    pub dir: PathBuf,
+}
+
+impl std::fmt::Display for ShardBaked {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "shard {} baked {} of its {} frames ({} were already there); {} of {} frames are now in {}",
+            self.shard,
+            self.baked,
+            self.baked + self.resumed,
+            self.resumed,
+            self.stored,
+            self.frames,
+            self.dir.display()
+        )
+    }
+}
+
 /// What [`Checkpoint::open`] does with a checkpoint that is already there.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum OnExisting {
@@ -239,6 +281,47 @@ fn fingerprint(mesh: &Mesh) -> String {
     format!("{:08x}", h.finalize())
 }
 
+/// The error of an operation on `path`.
+fn io(path: &Path) -> impl FnOnce(std::io::Error) -> CheckpointError {
+    let path = path.to_owned();
+    move |source| CheckpointError::Io { path, source }
+}
+
+/// Whether a file called `name` is one a checkpoint writes: the manifest, a pose file, or a
+/// temporary of an interrupted or ongoing write (of this or an earlier version).
+fn checkpoint_file(name: &str) -> bool {
+    name == MANIFEST
+        || (name.starts_with("pose-") && name.ends_with(".bin"))
+        || crate::io::atomic::temporary_owner(name).is_some()
+        || name.starts_with(".tmp")
+}
+
+/// Starts a checkpoint in `dir` by writing its manifest `json`, unless a process sharing the
+/// directory (a shard started at the same moment) has just written one; returns whether this
+/// call did. The directory is created if missing; one holding anything but a manifest and
+/// temporaries (which may be another shard's manifest being written) is not ours to fill.
+fn start(dir: &Path, json: &[u8]) -> Result<bool, CheckpointError> {
+    let manifest_path = dir.join(MANIFEST);
+    match std::fs::read_dir(dir) {
+        Ok(entries) => {
+            let foreign = entries.flatten().any(|e| {
+                let name = e.file_name();
+                let name = name.to_str().unwrap_or("");
+                name != MANIFEST && crate::io::atomic::temporary_owner(name).is_none()
+            });
+            // Pose files appear only after a manifest, which the listing may have missed.
+            if foreign && !manifest_path.exists() {
+                return Err(CheckpointError::NotACheckpoint { dir: dir.into() });
+            }
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            std::fs::create_dir_all(dir).map_err(io(dir))?;
+        }
+        Err(e) => return Err(io(dir)(e)),
+    }
+    write_new(&manifest_path, json).map_err(io(&manifest_path))
+}
+
 /// An open checkpoint directory whose manifest matches the current inputs.
 #[derive(Debug)]
 pub struct Checkpoint {
@@ -265,7 +348,8 @@ impl Checkpoint {
     /// scripts may always pass `--resume`. An existing checkpoint is continued only with
     /// [`OnExisting::Resume`], and only if it was made from the same meshes and settings; with
     /// [`OnExisting::Refuse`] it is an error rather than overwritten, because it may hold hours
-    /// of work.
+    /// of work. Processes may open one directory at the same moment (a bake farm's shards
+    /// with `Resume`): exactly one of them writes the manifest, and the others compare it.
     pub fn open(
         dir: &Path,
         existing: OnExisting,
@@ -290,13 +374,10 @@ impl Checkpoint {
                 source,
             })?;
         let manifest = Manifest::new(settings, meshes, target);
-        let io = |path: &Path| {
-            let path = path.to_owned();
-            move |source| CheckpointError::Io { path, source }
-        };
         let manifest_path = dir.join(MANIFEST);
-        let mut holds_poses = false;
-        if manifest_path.exists() {
+        let json = serde_json::to_vec_pretty(&manifest).expect("manifest serialises");
+        let created = !manifest_path.exists() && start(dir, &json)?;
+        if !created {
             if existing == OnExisting::Refuse {
                 return Err(CheckpointError::Exists { dir: dir.into() });
             }
@@ -314,28 +395,13 @@ impl Checkpoint {
                     now,
                 });
             }
-            holds_poses = true;
-        } else {
-            match std::fs::read_dir(dir) {
-                Ok(mut entries) => {
-                    if entries.next().is_some() {
-                        return Err(CheckpointError::NotACheckpoint { dir: dir.into() });
-                    }
-                }
-                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-                    std::fs::create_dir_all(dir).map_err(io(dir))?;
-                }
-                Err(e) => return Err(io(dir)(e)),
-            }
-            let json = serde_json::to_vec_pretty(&manifest).expect("manifest serialises");
-            write_atomic(&manifest_path, &json).map_err(io(&manifest_path))?;
         }
         Ok(Checkpoint {
             dir: dir.into(),
             settings: *settings,
             manifest,
-            holds_poses,
-            created: !holds_poses,
+            holds_poses: !created,
+            created,
         })
     }
 
@@ -436,6 +502,59 @@ impl Checkpoint {
         reporter: &dyn Reporter,
     ) -> Result<Vec<Vec<f32>>, CheckpointError> {
         let count = meshes.len();
+        let mut out = Vec::with_capacity(count);
+        let all = |_| true;
+        let resumed = self.bake_where(meshes, target, all, name, reporter, |t| out.push(t))?;
+        if resumed > 0 {
+            reporter.note(&format!(
+                "resumed {resumed} of {count} poses from {}",
+                self.dir.display()
+            ));
+        }
+        Ok(out)
+    }
+
+    /// Shard `shard`'s share of the poses of `meshes` at the points of `target` (the meshes
+    /// and target the checkpoint was opened for): those not yet stored are baked, exactly as
+    /// [`Checkpoint::bake_at`] bakes them, and stored; nothing is kept in memory.
+    ///
+    /// Other shards may be baking into the same directory at the same moment, so a shard
+    /// writes only its own pose files and, unlike [`Checkpoint::bake_at`], never removes the
+    /// checkpoint, even when its bake fails: other shards' poses may be in it.
+    pub fn bake_shard(
+        &mut self,
+        meshes: &[Mesh],
+        target: &dyn BakeTarget,
+        shard: Shard,
+        name: impl Fn(usize) -> String,
+        reporter: &dyn Reporter,
+    ) -> Result<ShardBaked, CheckpointError> {
+        let mine = |i| shard.holds(i);
+        let resumed = self.bake_where(meshes, target, mine, name, reporter, drop)?;
+        let frames = meshes.len();
+        Ok(ShardBaked {
+            shard,
+            baked: shard.share(frames) - resumed,
+            resumed,
+            stored: (0..frames).filter(|&i| self.pose_path(i).exists()).count(),
+            frames,
+            dir: self.dir.clone(),
+        })
+    }
+
+    /// The poses of `meshes` that `selected` picks, in order, each handed to `keep`: stored
+    /// ones read back, missing ones baked and stored as soon as each is done. Returns how many
+    /// were read back.
+    fn bake_where(
+        &mut self,
+        meshes: &[Mesh],
+        target: &dyn BakeTarget,
+        selected: impl Fn(usize) -> bool,
+        name: impl Fn(usize) -> String,
+        reporter: &dyn Reporter,
+        mut keep: impl FnMut(Vec<f32>),
+    ) -> Result<usize, CheckpointError> {
+        let count = meshes.len();
         self.check_count(count)?;
         let described = target.describe();
         if described != self.manifest.target {
@@ -446,19 +565,20 @@ impl Checkpoint {
                 now: described,
             });
         }
-        let mut out = Vec::with_capacity(count);
         let (mut progress, mut resumed) = (None, 0);
-        for (i, mesh) in meshes.iter().enumerate() {
+        for (i, mesh) in meshes.iter().enumerate().filter(|&(i, _)| selected(i)) {
             self.check_mesh(i, mesh)?;
             let points = target.points(mesh);
             let len = points * self.settings.order * self.settings.order;
             if let Some(stored) = self.load(i, len, reporter)? {
                 resumed += 1;
-                out.push(stored);
+                keep(stored);
                 continue;
             }
-            let progress =
-                progress.get_or_insert_with(|| reporter.bake_progress(points * (count - i)));
+            let progress = progress.get_or_insert_with(|| {
+                let left = (i..count).filter(|&j| selected(j)).count();
+                reporter.bake_progress(points * left)
+            });
             progress.pose(i, count);
             let transfer = target
                 .bake(mesh, &self.settings, progress.as_ref())
@@ -468,18 +588,12 @@ impl Checkpoint {
                 })?;
             self.store(i, &transfer)?;
             self.holds_poses = true;
-            out.push(transfer);
+            keep(transfer);
         }
         if let Some(progress) = progress {
             progress.finish();
         }
-        if resumed > 0 {
-            reporter.note(&format!(
-                "resumed {resumed} of {count} poses from {}",
-                self.dir.display()
-            ));
-        }
-        Ok(out)
+        Ok(resumed)
     }
 
     /// The meshes given to [`Checkpoint::bake`] must be the ones the checkpoint was opened for.
@@ -514,18 +628,10 @@ impl Checkpoint {
     /// writes), then the directory if that left it empty: a directory named with
     /// `--checkpoint` may hold other files, and those are the user's.
     pub fn remove(&self) -> Result<(), CheckpointError> {
-        let io = |path: &Path| {
-            let path = path.to_owned();
-            move |source| CheckpointError::Io { path, source }
-        };
         for entry in std::fs::read_dir(&self.dir).map_err(io(&self.dir))? {
             let path = entry.map_err(io(&self.dir))?.path();
             let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
-            let ours = name == MANIFEST
-                || (name.starts_with("pose-") && name.ends_with(".bin"))
-                || crate::io::atomic::temporary_owner(name).is_some()
-                || name.starts_with(".tmp"); // temporaries of earlier versions
-            if ours {
+            if checkpoint_file(name) {
                 std::fs::remove_file(&path).map_err(io(&path))?;
             }
         }
@@ -691,6 +797,47 @@ mod tests {
             "{message}"
         );
         assert!(!ck.exists());
+    }
+
+    /// Three shards started at the same moment into one directory: one of them writes the
+    /// manifest, every one bakes only its own poses, and the merged checkpoint reads back as
+    /// the unsharded bake. A shard never removes what others stored.
+    #[test]
+    fn concurrent_shards_fill_one_checkpoint_with_the_unsharded_bake() {
+        let dir = tempfile::tempdir().unwrap();
+        let ck = dir.path().join("ck");
+        let poses = meshes(7);
+        let reference = bake_poses(&poses, &SETTINGS, &Silent).unwrap();
+        let baked: Vec<ShardBaked> = std::thread::scope(|scope| {
+            let shards: Vec<_> = (0..3)
+                .map(|i| {
+                    let (ck, poses) = (&ck, &poses);
+                    scope.spawn(move || {
+                        let shard = Shard::new(i, 3).unwrap();
+                        let mut c =
+                            Checkpoint::open(ck, OnExisting::Resume, &SETTINGS, poses).unwrap();
+                        c.bake_shard(poses, &Vertices, shard, pose_name, &Silent)
+                            .unwrap()
+                    })
+                })
+                .collect();
+            shards.into_iter().map(|s| s.join().unwrap()).collect()
+        });
+        let own: Vec<usize> = baked.iter().map(|b| b.baked).collect();
+        assert_eq!(own, [3, 2, 2]);
+        assert!(baked.iter().all(|b| b.frames == 7 && b.resumed == 0));
+        assert_eq!(baked.iter().map(|b| b.stored).max(), Some(7));
+        let names: Vec<String> = std::fs::read_dir(&ck)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        assert_eq!(names.len(), 8, "{names:?}");
+        // A failing shard (other meshes) leaves the others' poses alone.
+        let mut moved = poses.clone();
+        moved[0].positions[4][2] += 1e-3;
+        assert!(Checkpoint::open(&ck, OnExisting::Resume, &SETTINGS, &moved).is_err());
+        let mut all = Checkpoint::open(&ck, OnExisting::Resume, &SETTINGS, &poses).unwrap();
+        assert_eq!(all.bake(&poses, pose_name, &Silent).unwrap(), reference);
     }
 
     /// Points other than the vertices (a light map's texels): a checkpoint made for one set

@@ -41,6 +41,7 @@ pub mod budget;
 pub mod checkpoint;
 pub mod clip;
 mod directions;
+pub mod shard;
 #[cfg(test)]
 mod tests;
 mod tracer;

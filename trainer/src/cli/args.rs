@@ -245,6 +245,11 @@ pub struct TrainArgs {
     /// the model, so an engine lights it from a handful of SH vectors (see `aprt rig`).
     #[arg(long)]
     pub rig: Option<crate::lighting::RigKind>,
+    /// Bake only shard I of N (frames f with f % N == I, 0-based) into the checkpoint and
+    /// stop; when every shard is done, the same command with --resume instead fits the model
+    /// (see docs/bake-farm.md).
+    #[arg(long, value_name = "I/N")]
+    pub shard: Option<crate::bake::shard::Shard>,
 }
 
 /// `aprt simulate`.

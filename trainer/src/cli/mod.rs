@@ -22,16 +22,16 @@ pub use source::SourceArgs;
 pub use terminal::Terminal;
 
 use crate::bake::budget::Workload;
-use crate::bake::checkpoint::{Checkpoint, OnExisting};
+use crate::bake::checkpoint::{Checkpoint, OnExisting, ShardBaked};
 use crate::io::atomic::write_atomic;
 use crate::io::outputs::{Input, Output, check};
 use crate::io::scene::{Environment, Scene, read_scene};
 use crate::model::ModelFrame;
 use crate::model::predict::{predict_clip, predict_world};
-use crate::model::train::TrainSettings;
+use crate::model::train::{Outcome, TrainSettings};
 use crate::progress::Reporter;
 use crate::rig::mesh::degenerate_note;
-use crate::scene::train::{SceneTrainOptions, SceneTrainReport, train_scene};
+use crate::scene::train::{SceneOutcome, SceneTrainOptions, SceneTrainReport, train_scene};
 
 /// Pose-driven precomputed radiance transfer for skinned characters.
 #[derive(Debug, Parser)]
@@ -326,6 +326,19 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
     )
 }
 
+/// Prints what a shard of `command` baked, and what finishes the bake.
+fn shard_done(baked: &ShardBaked, command: &str) {
+    eprintln!("{baked}");
+    let next = if baked.stored == baked.frames {
+        "every frame is baked"
+    } else {
+        "when every shard is done"
+    };
+    eprintln!(
+        "{next}: run {command} with the same arguments and --resume instead of --shard (over the merged checkpoint, if the shards baked into separate directories)"
+    );
+}
+
 fn train(args: &TrainArgs) -> Result<()> {
     let scene = args.scene.as_deref().map(read_scene).transpose()?;
     let (source, validate) = match &scene {
@@ -371,9 +384,15 @@ fn train(args: &TrainArgs) -> Result<()> {
             checkpoint: checkpoint.path,
             existing,
             fit: args.fit.options()?,
+            shard: args.shard,
         };
-        let report = source.in_origin(train_scene(scene, poses, options, &Terminal))?;
-        return print_scene_report(&report, args.report.as_deref());
+        return match source.in_origin(train_scene(scene, poses, options, &Terminal))? {
+            SceneOutcome::Trained(report) => print_scene_report(&report, args.report.as_deref()),
+            SceneOutcome::Shard(baked) => {
+                shard_done(&baked, "aprt train --scene");
+                Ok(())
+            }
+        };
     }
     let settings = TrainSettings {
         fit: args.fit.options()?,
@@ -387,12 +406,19 @@ fn train(args: &TrainArgs) -> Result<()> {
         checkpoint: checkpoint.path,
         existing,
         irradiance_rig: args.rig,
+        shard: args.shard,
     };
     settings.bake.validate()?;
     let poses = args.source.poses(&args.validate, &Terminal)?;
     args.source
         .in_origin(crate::model::train::check(&poses, &settings))?;
-    let trained = crate::model::train::train(poses, &args.output, &settings, &Terminal)?;
+    let trained = match crate::model::train::train(poses, &args.output, &settings, &Terminal)? {
+        Outcome::Trained(trained) => *trained,
+        Outcome::Shard(baked) => {
+            shard_done(&baked, "aprt train");
+            return Ok(());
+        }
+    };
     let info = &trained.info;
     for line in trained.selection.lines() {
         eprintln!("{line}");

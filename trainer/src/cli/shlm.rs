@@ -8,13 +8,14 @@ use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand};
 
 use crate::bake::checkpoint::{Checkpoint, OnExisting};
+use crate::bake::shard::Shard;
 use crate::cli::args::{BakeArgs, FitArgs, PrecisionArg};
 use crate::cli::source::SourceArgs;
 use crate::cli::terminal::Terminal;
-use crate::cli::{read_file, write_npy};
+use crate::cli::{read_file, shard_done, write_npy};
 use crate::io::atomic::write_atomic;
 use crate::io::outputs::{Input, Output, check};
-use crate::lightmap::bake::{CheckpointSettings, bake_light_maps};
+use crate::lightmap::bake::{CheckpointSettings, bake_light_map_shard, bake_light_maps};
 use crate::lightmap::codec::{CodecSettings, ShlmFile, encode};
 use crate::lightmap::compose::{ComposeSource, save_preview};
 use crate::lightmap::model::{LightMapTraining, predict_maps, train_light_maps};
@@ -95,6 +96,11 @@ pub struct ShlmBakeArgs {
     /// Output sequence file (.shlm).
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Bake only shard I of N (frames f with f % N == I, 0-based) into the checkpoint and
+    /// stop; when every shard is done, the same command with --resume instead writes the
+    /// sequence (see docs/bake-farm.md).
+    #[arg(long, value_name = "I/N")]
+    pub shard: Option<Shard>,
 }
 
 /// `aprt shlm eval`.
@@ -225,11 +231,25 @@ fn bake(args: &ShlmBakeArgs) -> Result<()> {
     let (checkpoint, settings) = prepare(&args.atlas, &args.output, &args.source, &args.bake)?;
     let (rig, clip) = args.source.rig(&Terminal)?;
     let what = "the character";
+    let resolution = args.atlas.resolution;
+    if let Some(shard) = args.shard {
+        let baked = args.source.in_origin(bake_light_map_shard(
+            rig.as_ref(),
+            what,
+            &clip,
+            resolution,
+            &settings,
+            (&checkpoint, shard),
+            &Terminal,
+        ))?;
+        shard_done(&baked, "aprt shlm bake");
+        return Ok(());
+    }
     let baked = args.source.in_origin(bake_light_maps(
         rig.as_ref(),
         what,
         &clip,
-        args.atlas.resolution,
+        resolution,
         &settings,
         &CheckpointSettings {
             dir: &checkpoint,

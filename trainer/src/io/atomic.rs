@@ -66,6 +66,30 @@ const NAME_IN_TEMP: usize = 96;
 /// never a partial one. A symlink is written through to the file it names; anything else
 /// that is not a regular file is refused with [`OutputError`] (inside the `io::Error`).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    write_whole(path, bytes, Publish::Replace).map(drop)
+}
+
+/// Writes `bytes` to `path` atomically unless a file is already there; returns whether this
+/// call created it. For a file that several processes may create at the same moment, perhaps
+/// on different machines sharing a volume (the manifest of a checkpoint that a bake farm's
+/// shards share): exactly one creates it, and every other finds it whole and leaves it
+/// alone. Unlike [`write_atomic`] it removes no stale temporaries, because a process id read
+/// from a shared volume may name a live process on another machine.
+pub fn write_new(path: &Path, bytes: &[u8]) -> std::io::Result<bool> {
+    write_whole(path, bytes, Publish::IfAbsent)
+}
+
+/// How [`write_whole`] puts its temporary in place.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Publish {
+    /// Over whatever is there, after removing the stale temporaries of the same output.
+    Replace,
+    /// Only where nothing is there.
+    IfAbsent,
+}
+
+/// [`write_atomic`] and [`write_new`]: a temporary beside the target, renamed into place.
+fn write_whole(path: &Path, bytes: &[u8], publish: Publish) -> std::io::Result<bool> {
     let target = output_target(path)?;
     let name = target
         .file_name()
@@ -74,7 +98,9 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    remove_stale_temporaries(dir, name);
+    if publish == Publish::Replace {
+        remove_stale_temporaries(dir, name);
+    }
     let prefix = temp_prefix(name);
     let mut tmp = tempfile::Builder::new()
         .prefix(&prefix)
@@ -94,8 +120,16 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     // The rename and the signal handler's clean-up exclude each other: once a signal is being
     // handled, this blocks until the process ends, so no output appears after it.
     let _lock = pending();
-    tmp.persist(&target).map_err(|e| e.error)?;
-    Ok(())
+    match publish {
+        Publish::Replace => tmp.persist(&target).map(drop),
+        // A refused temporary is removed as the error drops it.
+        Publish::IfAbsent => match tmp.persist_noclobber(&target) {
+            Err(e) if e.error.kind() == std::io::ErrorKind::AlreadyExists => return Ok(false),
+            persisted => persisted.map(drop),
+        },
+    }
+    .map_err(|e| e.error)?;
+    Ok(true)
 }
 
 /// The file a write to `path` replaces: `path` itself, or the file its symlinks name (which
@@ -312,6 +346,24 @@ mod tests {
                 0o644
             );
         }
+    }
+
+    /// The first writer creates the file; later ones leave it whole, even while a temporary
+    /// of a process that has ended lies beside it (on a shared volume it may be another
+    /// machine's, being written).
+    #[test]
+    fn a_new_file_is_created_once_and_never_replaced() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("manifest.json");
+        let other = dir
+            .path()
+            .join(format!(".manifest.json.aprt-{}-abcdef.tmp", u32::MAX - 1));
+        std::fs::write(&other, b"in flight").unwrap();
+        assert!(write_new(&path, b"first").unwrap());
+        assert!(!write_new(&path, b"second").unwrap());
+        assert_eq!(std::fs::read(&path).unwrap(), b"first");
+        assert!(other.exists());
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
     }
 
     #[test]

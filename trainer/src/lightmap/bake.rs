@@ -1,6 +1,7 @@
 //! Baking a clip into SH light maps: every frame's texels (each the surface point and
 //! interpolated normal the atlas gives it, on that frame's posed mesh) baked by the vertex
-//! bake's own code ([`crate::bake::bake_points`]), through a checkpoint like `aprt train`'s.
+//! bake's own code ([`crate::bake::bake_points`]), through a checkpoint like `aprt train`'s,
+//! which a bake farm's shards may share ([`bake_light_map_shard`]).
 
 use std::path::Path;
 use std::time::Instant;
@@ -9,8 +10,9 @@ use anyhow::{Context, Result, bail};
 
 use super::atlas::{Atlas, UvLayout};
 use super::codec::MapSequence;
-use crate::bake::checkpoint::{BakeTarget, Checkpoint, OnExisting};
+use crate::bake::checkpoint::{BakeTarget, Checkpoint, OnExisting, ShardBaked};
 use crate::bake::clip::pose_all;
+use crate::bake::shard::Shard;
 use crate::bake::{BakeError, BakeSettings, PatternRotation, bake_points};
 use crate::progress::{BakeProgress, Reporter};
 use crate::rig::mesh::Mesh;
@@ -108,17 +110,7 @@ pub fn bake_light_maps(
     checkpoint: &CheckpointSettings<'_>,
     reporter: &dyn Reporter,
 ) -> Result<BakedMaps> {
-    let layout = uv_layout(rig, what)?;
-    let bind = rig.bind_mesh();
-    let atlas = Atlas::build(layout, &bind.triangles, resolution)
-        .with_context(|| format!("{what}: building the {resolution}x{resolution} UV atlas"))?;
-    let overlapping = atlas.overlapping_texels();
-    if overlapping > 0 {
-        reporter.note(&format!(
-            "note: {what}: {overlapping} texels lie on two or more triangles (mirrored or overlapping UVs); they hold the mean of those surface points' transfer"
-        ));
-    }
-    let meshes = pose_all(rig, &clip.name, &clip.frames)?;
+    let (layout, atlas, meshes) = atlas_and_meshes(rig, what, clip, resolution, reporter)?;
     let target = Texels::new(&atlas, layout);
     let mut store = Checkpoint::open_at(
         checkpoint.dir,
@@ -128,8 +120,7 @@ pub fn bake_light_maps(
         &target,
     )?;
     let start = Instant::now();
-    let name = |f: usize| format!("clip {} frame {f}", clip.name);
-    let values = store.bake_at(&meshes, &target, name, reporter)?;
+    let values = store.bake_at(&meshes, &target, frame_name(clip), reporter)?;
     let seconds = start.elapsed().as_secs_f64();
     let n2 = settings.order * settings.order;
     let frames = values.iter().map(|v| atlas.gather(v, n2)).collect();
@@ -137,7 +128,7 @@ pub fn bake_light_maps(
         resolution,
         order: settings.order,
         filled: atlas.filled(),
-        positions: texel_positions(&atlas, bind),
+        positions: texel_positions(&atlas, rig.bind_mesh()),
         frames,
     };
     store.remove()?;
@@ -146,6 +137,52 @@ pub fn bake_light_maps(
         atlas,
         seconds,
     })
+}
+
+/// Bakes `shard`'s share of the frames [`bake_light_maps`] bakes into the checkpoint directory
+/// `dir` (the pair is the shard's place in the farm), started or joined (the shards share
+/// it), and stops: a final [`bake_light_maps`] with [`OnExisting::Resume`] over the merged
+/// checkpoint writes the sequence.
+pub fn bake_light_map_shard(
+    rig: &dyn Rig,
+    what: &str,
+    clip: &Clip,
+    resolution: usize,
+    settings: &BakeSettings,
+    (dir, shard): (&Path, Shard),
+    reporter: &dyn Reporter,
+) -> Result<ShardBaked> {
+    let (layout, atlas, meshes) = atlas_and_meshes(rig, what, clip, resolution, reporter)?;
+    let target = Texels::new(&atlas, layout);
+    let mut store = Checkpoint::open_at(dir, OnExisting::Resume, settings, &meshes, &target)?;
+    Ok(store.bake_shard(&meshes, &target, shard, frame_name(clip), reporter)?)
+}
+
+/// What a light-map bake of `clip` works on: the rig's UV layout, its atlas of
+/// `resolution`² texels (overlapping texels reported to `reporter`), and the posed meshes.
+fn atlas_and_meshes<'r>(
+    rig: &'r dyn Rig,
+    what: &str,
+    clip: &Clip,
+    resolution: usize,
+    reporter: &dyn Reporter,
+) -> Result<(&'r UvLayout, Atlas, Vec<Mesh>)> {
+    let layout = uv_layout(rig, what)?;
+    let atlas = Atlas::build(layout, &rig.bind_mesh().triangles, resolution)
+        .with_context(|| format!("{what}: building the {resolution}x{resolution} UV atlas"))?;
+    let overlapping = atlas.overlapping_texels();
+    if overlapping > 0 {
+        reporter.note(&format!(
+            "note: {what}: {overlapping} texels lie on two or more triangles (mirrored or overlapping UVs); they hold the mean of those surface points' transfer"
+        ));
+    }
+    let meshes = pose_all(rig, &clip.name, &clip.frames)?;
+    Ok((layout, atlas, meshes))
+}
+
+/// How frame `f` of `clip` is named in errors.
+fn frame_name(clip: &Clip) -> impl Fn(usize) -> String + '_ {
+    |f| format!("clip {} frame {f}", clip.name)
 }
 
 /// The bind-pose surface point of every filled texel, in texel order: where a runtime lights

@@ -2,6 +2,7 @@
 //! `aprt train` end to end (bake every pose through a checkpoint, so an interrupted run
 //! resumes, fit, write the blob, then remove the checkpoint).
 
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -12,8 +13,10 @@ use aprt_core::{
 use nalgebra::DMatrix;
 
 use crate::bake::budget::{BudgetError, Workload};
-use crate::bake::checkpoint::{Checkpoint, OnExisting};
+pub use crate::bake::checkpoint::ShardBaked;
+use crate::bake::checkpoint::{Checkpoint, OnExisting, Vertices};
 use crate::bake::clip::{BakedClip, pose_all};
+use crate::bake::shard::Shard;
 use crate::bake::{BakeError, BakeSettings};
 use crate::io::atomic::write_atomic;
 use crate::io::source::{Poses, clip_names, joined};
@@ -134,6 +137,11 @@ pub struct TrainSettings {
     /// An irradiance rig to fit to the character and store in the blob (its optional
     /// `IrradianceRig` section), so an engine lights the model from a handful of SH vectors.
     pub irradiance_rig: Option<RigKind>,
+    /// Bake only this shard's share of the frames into the checkpoint and stop: a bake farm's
+    /// machines each bake one shard, and a final run without it fits the model from the
+    /// merged checkpoint (`docs/bake-farm.md`). A shard always joins a checkpoint of the same
+    /// inputs and settings, whatever `existing` says, since its fellow shards share it.
+    pub shard: Option<Shard>,
 }
 
 /// A model option that no bake could make valid.
@@ -413,6 +421,15 @@ fn features_name(cosines: bool) -> &'static str {
     if cosines { "cosines" } else { "angles" }
 }
 
+/// What [`train`] did: fit and write the model, or bake one shard of it.
+#[derive(Debug)]
+pub enum Outcome {
+    /// The model was written (boxed: a shard's outcome is a fraction of its size).
+    Trained(Box<Trained>),
+    /// One shard was baked into the checkpoint ([`TrainSettings::shard`]); nothing was fitted.
+    Shard(ShardBaked),
+}
+
 /// What [`train`] wrote.
 #[derive(Debug)]
 pub struct Trained {
@@ -444,14 +461,23 @@ const PRECISION_POSES: usize = 16;
 
 /// Bakes every pose (through the checkpoint), fits the model, writes it to `output`
 /// atomically and then removes the checkpoint. Notes (joints left out, bake progress, poses
-/// resumed) go to `reporter`.
+/// resumed) go to `reporter`. With [`TrainSettings::shard`] it only bakes that shard's share
+/// of the poses into the checkpoint, and writes nothing else.
 pub fn train(
     poses: Poses,
     output: &Path,
     settings: &TrainSettings,
     reporter: &dyn Reporter,
-) -> Result<Trained> {
+) -> Result<Outcome> {
     check(&poses, settings)?;
+    if let Some(shard) = settings.shard {
+        if !settings.bake.shadows {
+            anyhow::bail!(
+                "--shard {shard}: a shadowless bake is the closed-form cosine lobe, milliseconds a pose, and keeps no checkpoint to merge: run it in one piece"
+            );
+        }
+        return bake_shard(&poses, shard, settings, reporter).map(Outcome::Shard);
+    }
     let started = Instant::now();
     let rig_section = match &settings.irradiance_rig {
         Some(kind) => Some(fit_irradiance_rig(*kind, &poses, settings.bake.order)?),
@@ -501,7 +527,7 @@ pub fn train(
         checkpoint.remove()?;
     }
     let total = started.elapsed().as_secs_f64();
-    Ok(Trained {
+    Ok(Outcome::Trained(Box::new(Trained {
         poses: outcome.poses,
         selection: Selection::of(&outcome.fitted.report),
         info: describe(&chosen.blob)?,
@@ -511,7 +537,7 @@ pub fn train(
             bake: outcome.bake_s,
             fit: total - outcome.bake_s,
         },
-    })
+    })))
 }
 
 /// A fitted model with what it took.
@@ -551,22 +577,11 @@ fn fit_rig_clips(
     // anchored at it) the rest pose: all baked through one checkpoint.
     let baking = Instant::now();
     let all: Vec<&Clip> = clips.iter().chain(validation).collect();
-    let mut meshes = Vec::new();
-    let mut names = Vec::new();
-    for clip in &all {
-        meshes.extend(pose_all(rig, &clip.name, &clip.frames)?);
-        names.extend((0..clip.frames.len()).map(|f| (clip.name.as_str(), f)));
-    }
     let rest_pose = rig.rest_pose();
     let anchored = settings.frame == ModelFrame::Bone;
-    if anchored {
-        meshes.push(rig.pose(&rest_pose)?);
-    }
+    let (mut meshes, names) = rig_poses(rig, &all, anchored.then_some(&rest_pose[..]))?;
     let baked = meshes.len();
-    let name = |i: usize| match names.get(i) {
-        Some((clip, f)) => format!("clip {clip} frame {f}"),
-        None => "the rest pose".to_owned(),
-    };
+    let name = |i: usize| names[i].clone();
     let (mut transfer, checkpoint) = bake_checkpointed(&meshes, name, settings, reporter)?;
     let bake_s = baking.elapsed().as_secs_f64();
     let rest = if anchored {
@@ -632,6 +647,58 @@ fn fit_rig_clips(
         bake_s,
         measure_on,
     })
+}
+
+/// Every pose a rig's model is baked at, in checkpoint order, with its name for errors: the
+/// frames of `clips` (the training clips, then the validation clips), then, for bone-frame
+/// models (anchored at it), the rest pose `rest`.
+fn rig_poses(
+    rig: &dyn Rig,
+    clips: &[&Clip],
+    rest: Option<&[f64]>,
+) -> Result<(Vec<Mesh>, Vec<String>)> {
+    let mut meshes = Vec::new();
+    let mut names = Vec::new();
+    for clip in clips {
+        meshes.extend(pose_all(rig, &clip.name, &clip.frames)?);
+        names.extend((0..clip.frames.len()).map(|f| format!("clip {} frame {f}", clip.name)));
+    }
+    if let Some(rest) = rest {
+        meshes.push(rig.pose(rest)?);
+        names.push("the rest pose".to_owned());
+    }
+    Ok((meshes, names))
+}
+
+/// Bakes `shard`'s share of the poses [`train`] would bake into the checkpoint of
+/// `settings`, started or joined (the shards share it); fits nothing, and leaves the
+/// irradiance rig to the final run.
+fn bake_shard(
+    poses: &Poses,
+    shard: Shard,
+    settings: &TrainSettings,
+    reporter: &dyn Reporter,
+) -> Result<ShardBaked> {
+    let (meshes, names) = match poses {
+        Poses::Meshes { files, meshes, .. } => {
+            let names = files.iter().map(|f| f.display().to_string()).collect();
+            (Cow::Borrowed(meshes.as_slice()), names)
+        }
+        Poses::Rig {
+            rig,
+            clips,
+            validation,
+        } => {
+            let all: Vec<&Clip> = clips.iter().chain(validation).collect();
+            let rest = (settings.frame == ModelFrame::Bone).then(|| rig.rest_pose());
+            let (meshes, names) = rig_poses(rig.as_ref(), &all, rest.as_deref())?;
+            (Cow::Owned(meshes), names)
+        }
+    };
+    let (ck, bake) = (&settings.checkpoint, &settings.bake);
+    let mut checkpoint = Checkpoint::open(ck, OnExisting::Resume, bake, &meshes)?;
+    let name = |i: usize| names[i].clone();
+    Ok(checkpoint.bake_shard(&meshes, &Vertices, shard, name, reporter)?)
 }
 
 /// The bytes of an irradiance rig of `kind` fitted to the poses' surfaces (a character's bind

@@ -1,7 +1,9 @@
 //! The irradiance rig a scene needs: none when one SH vector at the character's centre meets
-//! the error target for every light, else the rig kind that is cheapest per frame through
-//! aprt-core (each rig carries the lights it can and leaves the rest per vertex, so every
-//! candidate meets the target; they differ in cost).
+//! the error target for every light, else the rig kind that leaves the fewest lights to be
+//! evaluated per vertex, the one with fewer SH vectors on a tie (each rig carries the lights
+//! it can and leaves the rest per vertex, so every candidate meets the target; they differ in
+//! cost, and the per-vertex lights are what costs). The choice is made on counts, not timings,
+//! so every run of a scene (and every shard of a bake farm) makes the same one.
 
 use anyhow::{Context, Result};
 use aprt_core::Light;
@@ -81,10 +83,11 @@ pub fn choose_rig(
         }
         tried.push((kind, eval.us_per_frame.total, analytic, eval.error_grey.max));
     }
+    // Candidates are in order of SH vectors, and min_by_key keeps the first of equals.
     let (kind, us, analytic, max) = tried
         .iter()
         .copied()
-        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .min_by_key(|t| t.2)
         .expect("at least one candidate");
     let others: Vec<String> = tried
         .iter()
@@ -93,7 +96,7 @@ pub fn choose_rig(
     Ok(decision(
         Some(kind),
         format!(
-            "a {kind} rig: at {us:.0} µs a frame the cheapest through aprt-core of the rigs tried ({}), worst error {max:.2} grey levels with {analytic} light(s) per vertex",
+            "a {kind} rig: the fewest lights left per vertex ({analytic}) of the rigs tried, with the fewest SH vectors among those ({}; measured µs per frame through aprt-core), worst error {max:.2} grey levels, {us:.0} µs a frame",
             others.join(", ")
         ),
     ))

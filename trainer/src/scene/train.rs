@@ -13,13 +13,14 @@ use super::lighting::SceneLighting;
 use super::rig_choice::{RigDecision, choose_rig};
 use super::{BakePlan, plan_bake};
 use crate::bake::checkpoint::OnExisting;
+use crate::bake::shard::Shard;
 use crate::bake::{BakeSettings, bake_poses};
 use crate::io::scene::{Choice, Scene};
 use crate::io::source::{Poses, joined};
 use crate::lighting::rig_fit::{FIT_POSES, fitting_meshes};
 use crate::model::fit::FitOptions;
 use crate::model::precision::PrecisionChoice;
-use crate::model::train::{StageSeconds, TrainSettings, train};
+use crate::model::train::{Outcome, ShardBaked, StageSeconds, TrainSettings, train};
 use crate::progress::{Reporter, Silent};
 use crate::rig::mesh::Mesh;
 
@@ -93,16 +94,28 @@ pub struct SceneTrainOptions<'a> {
     pub existing: OnExisting,
     /// The model's shape and regularisation.
     pub fit: FitOptions,
+    /// Bake only this shard of the poses into the checkpoint and stop (a bake farm).
+    pub shard: Option<Shard>,
+}
+
+/// What `aprt train --scene` did: trained the model, or baked one shard of it.
+pub enum SceneOutcome {
+    /// The model was written.
+    Trained(Box<SceneTrainReport>),
+    /// One shard was baked.
+    Shard(ShardBaked),
 }
 
 /// Plans `scene`, trains its model from `poses` into `options.output`, and reports what was
-/// computed and skipped. Notes and progress go to `reporter`.
+/// computed and skipped. A shard bakes its share with the same plan (every decision is
+/// deterministic, so every shard and the final run agree) and stops. Notes and progress go to
+/// `reporter`.
 pub fn train_scene(
     scene: &Scene,
     poses: Poses,
     options: SceneTrainOptions<'_>,
     reporter: &dyn Reporter,
-) -> Result<SceneTrainReport> {
+) -> Result<SceneOutcome> {
     let started = Instant::now();
     let lighting = SceneLighting::of(scene)?;
     let fitting = fitting_surfaces(&poses)?;
@@ -128,7 +141,10 @@ pub fn train_scene(
         reporter.note(line);
     }
     reporter.note(&format!("rig: {}", rig.reason));
-    let full = time_full_simulation(&plan, &fitting[1..], reporter)?;
+    let full = match options.shard {
+        Some(_) => None,
+        None => Some(time_full_simulation(&plan, &fitting[1..], reporter)?),
+    };
     let settings = TrainSettings {
         bake: plan.bake,
         fit: options.fit,
@@ -137,8 +153,13 @@ pub fn train_scene(
         checkpoint: options.checkpoint,
         existing: options.existing,
         irradiance_rig: rig_kind,
+        shard: options.shard,
     };
-    let trained = train(poses, options.output, &settings, reporter)?;
+    let (trained, full) = match (train(poses, options.output, &settings, reporter)?, full) {
+        (Outcome::Trained(trained), Some(full)) => (trained, full),
+        (Outcome::Shard(baked), _) => return Ok(SceneOutcome::Shard(baked)),
+        (Outcome::Trained(_), None) => unreachable!("only shards skip the timing"),
+    };
     let poses_baked = trained.baked_poses as f64;
     let mut computed = plan.computed.clone();
     let mut skipped = plan.skipped.clone();
@@ -147,7 +168,7 @@ pub fn train_scene(
         None => skipped.push(format!("irradiance rig: {}", rig.reason)),
     }
     computed.push(format!("precision {}", trained.precision.1));
-    Ok(SceneTrainReport {
+    Ok(SceneOutcome::Trained(Box::new(SceneTrainReport {
         scene: scene.path.clone(),
         model: options.output.to_owned(),
         rays_cast: plan.bake.rays_cast(bind.vertex_count()) * trained.baked_poses as u64,
@@ -168,7 +189,7 @@ pub fn train_scene(
             ..full
         },
         bytes: trained.info.bytes,
-    })
+    })))
 }
 
 /// The bind pose, then up to [`FIT_POSES`] training poses: what the rig is fitted over and

@@ -1,0 +1,289 @@
+//! Bake farms through the real binary: `aprt train --shard I/N` bakes one share of the frames
+//! into the checkpoint, and `--resume` over the shards' merged checkpoint writes the same
+//! model bytes as one unsharded run, whether the shards shared one directory (one after the
+//! other, or all at once) or baked apart and were copied together. `shlm bake` does the same
+//! for light maps; a bad spec and a shard with other bake settings are refused.
+
+use std::path::Path;
+use std::process::Output;
+
+use run::{aprt, refuse, succeed};
+
+mod run;
+
+/// Frames of the clip: with the rest pose (bone-frame models are anchored at it) the
+/// checkpoint holds one more.
+const FRAMES: usize = 8;
+
+fn path(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// A small character, so that every test bakes in a second: a BVH clip of [`FRAMES`] frames
+/// of a four-joint skeleton (a spine and arm bending, a leg swinging), which `aprt` dresses
+/// as a mannequin with UVs. Written into `dir` unless it is there (runs that may be reading
+/// it must not see it rewritten); returns its path.
+fn character(dir: &Path) -> String {
+    let bvh = dir.join("character.bvh");
+    if bvh.exists() {
+        return path(&bvh).to_owned();
+    }
+    let mut text = String::from(
+        "HIERARCHY\nROOT hips\n{\nOFFSET 0 0 0\nCHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n",
+    );
+    let joint = |name: &str, offset: &str, end: &str| {
+        format!(
+            "JOINT {name}\n{{\nOFFSET {offset}\nCHANNELS 3 Zrotation Xrotation Yrotation\n{end}"
+        )
+    };
+    text += &joint("spine", "0 10 0", "");
+    text += &joint("arm", "0 10 0", "End Site\n{\nOFFSET 0 10 0\n}\n}\n}\n");
+    text += &joint("leg", "5 -10 0", "End Site\n{\nOFFSET 0 -10 0\n}\n}\n}\n");
+    text += &format!("MOTION\nFrames: {FRAMES}\nFrame Time: 0.0333333\n");
+    for f in 0..FRAMES {
+        let (a, b, c) = (10.0 * f as f64, 20.0 * (f as f64).sin(), -7.0 * f as f64);
+        let channels = [
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.3 * a,
+            b,
+            0.0,
+            a,
+            c,
+            0.5 * b,
+            c,
+            0.0,
+            b,
+        ];
+        let row: Vec<String> = channels.iter().map(f64::to_string).collect();
+        text += &(row.join(" ") + "\n");
+    }
+    std::fs::write(&bvh, text).unwrap();
+    path(&bvh).to_owned()
+}
+
+/// `aprt train` of the character in `dir`, cheaply baked, writing `model`, then `extra`.
+fn train(model: &Path, extra: &[&str]) -> Vec<String> {
+    let bvh = character(model.parent().unwrap());
+    let mut args: Vec<String> = [
+        "train",
+        "--bvh",
+        &bvh,
+        "--order",
+        "2",
+        "--rays",
+        "16",
+        "--coef-dims",
+        "4",
+        "-o",
+        path(model),
+    ]
+    .map(str::to_owned)
+    .to_vec();
+    args.extend(extra.iter().map(|s| s.to_string()));
+    args
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Runs `args`, asserting success; returns stderr.
+fn succeed_noting(args: &[String]) -> String {
+    let out = aprt(args);
+    assert!(out.status.success(), "{args:?} failed:\n{}", stderr(&out));
+    stderr(&out)
+}
+
+/// The unsharded model's bytes.
+fn reference(dir: &Path) -> Vec<u8> {
+    let model = dir.join("reference.aprt");
+    succeed(&train(&model, &[]));
+    std::fs::read(model).unwrap()
+}
+
+/// `--resume` over the checkpoint `ck` loads every frame, bakes none, writes `reference`'s
+/// bytes and removes the checkpoint.
+fn resume_matches(dir: &Path, ck: &Path, reference: &[u8]) {
+    let model = dir.join("merged.aprt");
+    let err = succeed_noting(&train(&model, &["--checkpoint", path(ck), "--resume"]));
+    let poses = FRAMES + 1;
+    assert!(
+        err.contains(&format!("resumed {poses} of {poses} poses")),
+        "{err}"
+    );
+    assert!(
+        std::fs::read(&model).unwrap() == reference,
+        "the model of the merged shards differs from the unsharded one"
+    );
+    assert!(!ck.exists(), "checkpoint left after the model was written");
+}
+
+#[test]
+fn three_shards_in_one_checkpoint_resume_to_the_bytes_of_one_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let reference = reference(dir.path());
+    let ck = dir.path().join("ck");
+    let model = dir.path().join("model.aprt");
+    let poses = FRAMES + 1;
+    for (i, stored) in [(0, 3), (1, 6), (2, 9)] {
+        let shard = format!("{i}/3");
+        let err = succeed_noting(&train(
+            &model,
+            &["--checkpoint", path(&ck), "--shard", &shard],
+        ));
+        assert!(
+            err.contains(&format!(
+                "shard {shard} baked 3 of its 3 frames (0 were already there); {stored} of {poses} frames are now in"
+            )),
+            "{err}"
+        );
+        assert!(!model.exists(), "a shard wrote the model");
+    }
+    // A shard run again (a retried array task) bakes nothing.
+    let err = succeed_noting(&train(
+        &model,
+        &["--checkpoint", path(&ck), "--shard", "1/3"],
+    ));
+    assert!(
+        err.contains("shard 1/3 baked 0 of its 3 frames (3 were already there)"),
+        "{err}"
+    );
+    resume_matches(dir.path(), &ck, &reference);
+}
+
+#[test]
+fn shards_baked_apart_and_copied_together_resume_to_the_bytes_of_one_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let reference = reference(dir.path());
+    let ck = dir.path().join("ck");
+    std::fs::create_dir(&ck).unwrap();
+    let mut manifests = Vec::new();
+    for i in 0..3 {
+        let own = dir.path().join(format!("ck{i}"));
+        let model = dir.path().join(format!("model{i}.aprt"));
+        let shard = format!("{i}/3");
+        succeed(&train(
+            &model,
+            &["--checkpoint", path(&own), "--shard", &shard],
+        ));
+        // As `cp ck0/* ck1/* ck2/* ck/` would.
+        for entry in std::fs::read_dir(&own).unwrap() {
+            let entry = entry.unwrap().path();
+            std::fs::copy(&entry, ck.join(entry.file_name().unwrap())).unwrap();
+        }
+        manifests.push(std::fs::read(own.join("manifest.json")).unwrap());
+    }
+    assert!(manifests.iter().all(|m| *m == manifests[0]));
+    resume_matches(dir.path(), &ck, &reference);
+}
+
+#[test]
+fn shards_started_at_once_share_one_checkpoint() {
+    let dir = tempfile::tempdir().unwrap();
+    let reference = reference(dir.path());
+    let ck = dir.path().join("ck");
+    let model = dir.path().join("model.aprt");
+    let runs: Vec<Output> = std::thread::scope(|scope| {
+        let shards: Vec<_> = (0..3)
+            .map(|i| {
+                let args = train(
+                    &model,
+                    &["--checkpoint", path(&ck), "--shard", &format!("{i}/3")],
+                );
+                scope.spawn(move || aprt(&args))
+            })
+            .collect();
+        shards.into_iter().map(|s| s.join().unwrap()).collect()
+    });
+    for out in &runs {
+        assert!(out.status.success(), "{}", stderr(out));
+    }
+    resume_matches(dir.path(), &ck, &reference);
+}
+
+#[test]
+fn bad_specs_and_other_settings_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("model.aprt");
+    let ck = dir.path().join("ck");
+    // Refused by the argument parser, before anything is read or written.
+    for (spec, says) in [
+        (
+            "3/3",
+            "the index must be below the count (0-based: shards 0/3 to 2/3)",
+        ),
+        ("0/0", "the count must be at least 1"),
+        ("1-3", "expected INDEX/COUNT"),
+    ] {
+        let out = aprt(&train(&model, &["--shard", spec]));
+        let err = stderr(&out);
+        let quoted = format!("invalid value '{spec}' for '--shard <I/N>': {says}");
+        assert!(!out.status.success() && err.contains(&quoted), "{err}");
+    }
+    assert!(!dir.path().join("model.aprt.bake").exists());
+    succeed(&train(
+        &model,
+        &["--checkpoint", path(&ck), "--shard", "0/2"],
+    ));
+    let mut other = train(&model, &["--checkpoint", path(&ck), "--shard", "1/2"]);
+    let rays = other.iter().position(|a| a == "--rays").unwrap();
+    other[rays + 1] = "32".to_owned();
+    refuse(&other, &["rays (checkpoint: 16, now: 32)"]);
+    let pose_files = std::fs::read_dir(&ck).unwrap().count() - 1;
+    assert_eq!(pose_files, 5, "the refused shard touched the checkpoint");
+}
+
+/// `shlm bake` of the character in `dir` at a small atlas, writing `output`, then `extra`.
+fn shlm_bake(output: &Path, extra: &[&str]) -> Vec<String> {
+    let bvh = character(output.parent().unwrap());
+    let mut args: Vec<String> = [
+        "shlm",
+        "bake",
+        "--bvh",
+        &bvh,
+        "--resolution",
+        "32",
+        "--order",
+        "2",
+        "--rays",
+        "16",
+        "-o",
+        path(output),
+    ]
+    .map(str::to_owned)
+    .to_vec();
+    args.extend(extra.iter().map(|s| s.to_string()));
+    args
+}
+
+#[test]
+fn sharded_light_maps_resume_to_the_bytes_of_one_bake() {
+    let dir = tempfile::tempdir().unwrap();
+    let reference = dir.path().join("reference.shlm");
+    succeed(&shlm_bake(&reference, &[]));
+    let output = dir.path().join("maps.shlm");
+    let ck = dir.path().join("ck");
+    for shard in ["0/3", "1/3", "2/3"] {
+        let err = succeed_noting(&shlm_bake(
+            &output,
+            &["--checkpoint", path(&ck), "--shard", shard],
+        ));
+        assert!(err.contains(&format!("shard {shard} baked")), "{err}");
+        assert!(!output.exists(), "a shard wrote the sequence");
+    }
+    let err = succeed_noting(&shlm_bake(
+        &output,
+        &["--checkpoint", path(&ck), "--resume"],
+    ));
+    assert!(
+        err.contains(&format!("resumed {FRAMES} of {FRAMES} poses")),
+        "{err}"
+    );
+    assert!(std::fs::read(&output).unwrap() == std::fs::read(&reference).unwrap());
+    assert!(!ck.exists());
+}
