@@ -40,7 +40,7 @@ pub struct ReportArgs {
     #[arg(long)]
     pub out: PathBuf,
     /// Microseconds per frame the recommendation may cost (default: the scene's [budget]).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub budget_us: Option<f64>,
     /// Bytes the recommended model may take (default: the scene's [budget]).
     #[arg(long)]
@@ -70,12 +70,12 @@ pub struct DemoArgs {
     /// Output directory for model.aprt, report.md, report.json and the PNG renders.
     #[arg(long, default_value = "aprt-demo")]
     pub out: PathBuf,
-    /// SH order of the demo model.
-    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u8).range(1..=6))]
-    pub order: u8,
-    /// Directions per vertex for the ground-truth bakes.
-    #[arg(long, default_value_t = 128)]
-    pub rays: usize,
+    /// SH order of the demo model (default: the order the built-in scene's lighting needs).
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=6))]
+    pub order: Option<u8>,
+    /// Directions per vertex for the ground-truth bakes (default: the built-in scene's, 128).
+    #[arg(long)]
+    pub rays: Option<usize>,
     /// Use every k-th frame of the clips (1 = all 250 training frames; larger is faster).
     #[arg(long, default_value_t = 2)]
     pub stride: usize,
@@ -444,7 +444,7 @@ impl DemoArgs {
         }
         Ok(DemoSettings {
             out: self.out.clone(),
-            order: self.order as usize,
+            order: self.order.map(usize::from),
             rays: self.rays,
             stride: self.stride,
         })

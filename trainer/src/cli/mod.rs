@@ -186,7 +186,7 @@ fn demo(args: &DemoArgs) -> Result<()> {
     let markdown = crate::report::demo::run(&args.settings()?, &Terminal)?;
     print!("{markdown}");
     eprintln!(
-        "wrote {}/{{model.aprt, report.md, report.json, novel_pose.png, baselines.png, rig_frame.png}}",
+        "wrote {}/{{model.aprt, report.md, report.json, novel_pose.png, baselines.png, rig_frame.png, sweep/}}",
         args.out.display()
     );
     Ok(())
@@ -493,6 +493,11 @@ fn print_scene_report(report: &SceneTrainReport, json: Option<&Path>) -> Result<
 
 fn report(args: &ReportArgs) -> Result<()> {
     use crate::report::sweep::{ReportSettings, SceneClips, document, run};
+    if let Some(us) = args.budget_us
+        && !(us.is_finite() && us > 0.0)
+    {
+        bail!("--budget-us {us}: expected a positive number of microseconds per frame");
+    }
     let scene = read_scene(&args.scene)?;
     let source = SourceArgs::from_scene(&scene, &scene.train)?;
     let held: Vec<String> = scene.validate.iter().chain(&scene.test).cloned().collect();

@@ -9,8 +9,9 @@ use glam::Vec3;
 use std::path::{Path, PathBuf};
 
 use crate::bake::BakeSettings;
-use crate::bake::clip::{BakedClip, bake_clip};
+use crate::bake::clip::BakedClip;
 use crate::io::atomic::write_atomic;
+use crate::io::scene::{Scene, parse_scene};
 use crate::lighting::rig_fit::FIT_POSES;
 use crate::lighting::{RigKind, fit_rig};
 use crate::model::export::{Precision, encode_model_with_rig};
@@ -21,9 +22,9 @@ use crate::report::figures::{
     ErrorPanel, picture_lighting, save_model_frame, save_panels, shade_with,
 };
 use crate::report::rig_frame::{RigFrame, demo_lights, save_rig_frame};
+use crate::report::sweep::{self, SceneClips};
 use crate::rig::character::Character;
 use crate::rig::mesh::Mesh;
-use crate::rig::pose_layout::PoseLayout;
 use crate::rig::{Clip, Rig};
 
 /// The rig the demo's model carries: the paper's mixed rig turned to a standing figure, three
@@ -57,6 +58,12 @@ pub struct Report {
     pub irradiance_rig: String,
     /// The rig-lit frame of the novel pose.
     pub rig_frame: RigFrame,
+    /// What the built-in scene called for, one sentence each.
+    pub computed: Vec<String>,
+    /// What it did not, one sentence each.
+    pub skipped: Vec<String>,
+    /// The short sweep's recommendation within the scene's budget (sweep/report.md).
+    pub recommended: Option<String>,
 }
 
 /// What the demo is asked for.
@@ -64,17 +71,23 @@ pub struct Report {
 pub struct DemoSettings {
     /// Directory for model.aprt, report.md, report.json and the PNG renders.
     pub out: PathBuf,
-    /// SH order of the model and the ground truth.
-    pub order: usize,
-    /// Directions per vertex for the ground-truth bakes.
-    pub rays: usize,
+    /// SH order of the model (default: the order the built-in scene's lighting needs).
+    pub order: Option<usize>,
+    /// Directions per vertex for the ground-truth bakes (default: the scene's).
+    pub rays: Option<usize>,
     /// Use every `stride`-th frame of the clips (1 = all).
     pub stride: usize,
 }
 
-/// Every `stride`-th frame of a clip.
-fn strided(clip: &Clip, stride: usize) -> Vec<Vec<f64>> {
-    clip.frames.iter().step_by(stride.max(1)).cloned().collect()
+/// The built-in scene the demo runs (fixtures/scenes/builtin.toml, compiled in).
+pub const BUILTIN_SCENE: &str = include_str!("../../../fixtures/scenes/builtin.toml");
+
+/// The built-in scene, parsed.
+pub fn builtin_scene() -> Result<Scene> {
+    Ok(parse_scene(
+        BUILTIN_SCENE,
+        Path::new("fixtures/scenes/builtin.toml"),
+    )?)
 }
 
 /// Runs the demo, writes its files into `args.out` and returns the report as markdown (the
@@ -82,39 +95,51 @@ fn strided(clip: &Clip, stride: usize) -> Vec<Vec<f64>> {
 pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
     let out = &args.out;
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
-    let order = args.order;
+    let mut scene = builtin_scene()?;
+    if let Some(rays) = args.rays {
+        scene.effects.rays = rays;
+    }
     let character = Character::builtin();
     let bind = character.bind_mesh();
+    let named = |names: &[String]| -> Result<Vec<Clip>> {
+        names.iter().map(|n| Ok(character.clip(n)?)).collect()
+    };
+    let (train_clips, validation_clips, test_clips) = (
+        named(&scene.train)?,
+        named(&scene.validate)?,
+        named(&scene.test)?,
+    );
+    let clips = SceneClips {
+        rig: &character,
+        train: &train_clips,
+        validation: &validation_clips,
+        tests: &test_clips,
+    };
+    let reference = sweep::bake_reference(&scene, &clips, args.stride, reporter)?;
+    let plan = &reference.plan;
+    for line in plan.computed.iter().chain(&plan.skipped) {
+        reporter.note(line);
+    }
+    let order = args.order.unwrap_or(plan.order.order);
     reporter.note(&format!(
         "aprt demo: built-in character, {} vertices, {} triangles, {} joint angles; order {order}, {} rays",
         bind.vertex_count(),
         bind.triangles.len(),
         character.pose_len(),
-        args.rays
+        scene.effects.rays
     ));
-    let settings = BakeSettings {
-        order,
-        rays: args.rays,
-        bounces: 0,
-        albedo: 0.0,
-        shadows: true,
-    };
-    let training = character.training_clip();
-    let layout = PoseLayout::from_training(&character.angle_names(), &training.frames)?;
-    let (train, bake_s, validation, tests) = bake_clips(
-        &character,
-        &layout,
-        &training,
-        &settings,
-        args.stride,
-        reporter,
-    )?;
+    let settings = BakeSettings { order, ..plan.bake };
+    let layout = &reference.layout;
+    let baked = sweep::truncated(&reference.base, order);
+    let (train, bake_s) = (&baked.train, baked.seconds);
+    let validation = &baked.validation[0];
+    let tests: Vec<BakedClip> = reference.tests.iter().map(|t| t.truncated(order)).collect();
     let lighting = picture_lighting(order, Vec3::new(0.5, -0.8, 0.9));
     let result = experiment::run(
         &character,
-        &layout,
-        &train,
-        std::slice::from_ref(&validation),
+        layout,
+        train,
+        std::slice::from_ref(validation),
         &tests,
         &standard_configs(),
         &settings,
@@ -140,9 +165,10 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
 
     let test = &tests[0];
     let frame = test.angles.len() / 2;
-    save_pictures(out, &blob, &train, test, frame, &lighting)?;
+    save_pictures(out, &blob, train, test, frame, &lighting)?;
     let lights = demo_lights(&test.meshes[frame]);
     let rig_frame = save_rig_frame(&out.join("rig_frame.png"), &blob, test, frame, &lights)?;
+    let recommended = cost_sweep(&scene, &clips, &reference, order, out, reporter)?;
 
     let report = Report {
         character: format!(
@@ -151,7 +177,10 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
             character.pose_len()
         ),
         order,
-        rays: args.rays,
+        rays: scene.effects.rays,
+        computed: plan.computed.clone(),
+        skipped: plan.skipped.clone(),
+        recommended,
         train_clip: train.name.clone(),
         train_frames: train.angles.len(),
         validation_clip: (validation.name.clone(), validation.angles.len()),
@@ -174,35 +203,32 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
     Ok(markdown)
 }
 
-/// `training` (with its bake's seconds per frame), the validation clip and the novel clips of
-/// the built-in character, every `stride`-th frame of each, baked.
-fn bake_clips(
-    character: &Character,
-    layout: &PoseLayout,
-    training: &Clip,
-    settings: &BakeSettings,
-    stride: usize,
+/// The demo's short sweep (every order, then k_v at the model's order, f32 and f16) on the
+/// reference bake, written to `out/sweep/`; returns the recommendation within the scene's
+/// budget.
+fn cost_sweep(
+    scene: &Scene,
+    clips: &SceneClips<'_>,
+    reference: &sweep::Reference,
+    order: usize,
+    out: &Path,
     reporter: &dyn Reporter,
-) -> Result<(BakedClip, f64, BakedClip, Vec<BakedClip>)> {
-    let (train, bake_s) = bake_clip(
-        character,
-        layout,
-        &training.name,
-        strided(training, stride),
-        settings,
-        reporter,
-    )?;
-    let bake = |clip: Clip| {
-        let poses = strided(&clip, stride);
-        Ok(bake_clip(character, layout, &clip.name, poses, settings, reporter)?.0)
+) -> Result<Option<String>> {
+    let list = sweep::candidates(scene, order, sweep::Knobs::OrderAndBasis);
+    let settings = sweep::ReportSettings {
+        budget_us: None,
+        budget_bytes: None,
+        stride: reference.stride,
     };
-    let validation = bake(character.validation_clip())?;
-    let tests = character
-        .novel_clips()
-        .into_iter()
-        .map(bake)
-        .collect::<Result<Vec<_>>>()?;
-    Ok((train, bake_s, validation, tests))
+    let report = sweep::sweep(scene, clips, reference, &list, &settings, reporter)?;
+    sweep::document::write(&report, &out.join("sweep"), "aprt demo")?;
+    Ok(report.recommended.map(|i| {
+        let p = &report.points[i];
+        format!(
+            "{}: {:.2} grey levels RMS, {:.1} µs per frame, {} bytes",
+            p.setting.label, p.error, p.us_per_frame, p.bytes
+        )
+    }))
 }
 
 /// Pictures of frame `frame` of `test` in `out`: ground truth | `blob`'s prediction | 4× error
@@ -263,6 +289,23 @@ impl Report {
             s,
             "Bake: {:.2} s per frame on all cores. One frame of f32 PRT is {} bytes.\n",
             self.bake_s_per_frame, self.frame_prt_bytes
+        );
+        let _ = writeln!(
+            s,
+            "## What the scene called for\n\nThe built-in scene (fixtures/scenes/builtin.toml) computed:\n"
+        );
+        for line in &self.computed {
+            let _ = writeln!(s, "- {line}");
+        }
+        let _ = writeln!(s, "\nand skipped:\n");
+        for line in &self.skipped {
+            let _ = writeln!(s, "- {line}");
+        }
+        let _ = writeln!(
+            s,
+            "\n## What accuracy costs\n\nEvery SH order, then k_v at order {}, each in f32 and f16, measured on the test clips against the order-6 ground truth ([the sweep's report](sweep/report.md); `aprt report` sweeps every knob). Recommended within the scene's budget: {}.\n\n![shading error against µs per frame, the Pareto front joined](sweep/pareto_us.png)\n",
+            self.order,
+            self.recommended.as_deref().unwrap_or("nothing fits")
         );
         let _ = writeln!(s, "{}\n", experiment::TABLE_LEGEND);
         let names: Vec<String> = self.test_clips.iter().map(|(n, _)| n.clone()).collect();

@@ -71,3 +71,50 @@ pub fn read_npy(path: &Path) -> (Vec<usize>, Vec<f32>) {
     assert_eq!(data.len(), shape.iter().product::<usize>(), "{header}");
     (shape, data)
 }
+
+/// A small character, so that every test bakes in a second: a BVH clip of `frames` frames
+/// of a four-joint skeleton (a spine and arm bending, a leg swinging), which `aprt` dresses
+/// as a mannequin with UVs. Written into `dir` unless it is there (runs that may be reading
+/// it must not see it rewritten); returns its path.
+pub fn tiny_character(dir: &Path, frames: usize) -> String {
+    let bvh = dir.join("character.bvh");
+    if bvh.exists() {
+        return bvh.to_str().unwrap().to_owned();
+    }
+    let mut text = String::from(
+        "HIERARCHY\nROOT hips\n{\nOFFSET 0 0 0\nCHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n",
+    );
+    let joint = |name: &str, offset: &str, end: &str| {
+        format!(
+            "JOINT {name}\n{{\nOFFSET {offset}\nCHANNELS 3 Zrotation Xrotation Yrotation\n{end}"
+        )
+    };
+    text += &joint("spine", "0 10 0", "");
+    text += &joint("arm", "0 10 0", "End Site\n{\nOFFSET 0 10 0\n}\n}\n}\n");
+    text += &joint("leg", "5 -10 0", "End Site\n{\nOFFSET 0 -10 0\n}\n}\n}\n");
+    text += &format!("MOTION\nFrames: {frames}\nFrame Time: 0.0333333\n");
+    for f in 0..frames {
+        let (a, b, c) = (10.0 * f as f64, 20.0 * (f as f64).sin(), -7.0 * f as f64);
+        let channels = [
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.3 * a,
+            b,
+            0.0,
+            a,
+            c,
+            0.5 * b,
+            c,
+            0.0,
+            b,
+        ];
+        let row: Vec<String> = channels.iter().map(f64::to_string).collect();
+        text += &(row.join(" ") + "\n");
+    }
+    std::fs::write(&bvh, text).unwrap();
+    bvh.to_str().unwrap().to_owned()
+}

@@ -1,0 +1,191 @@
+//! Scenes through the real binary: `aprt train --scene` computes only what the scene calls for
+//! and says so in `--report`; `aprt report` sweeps the knobs, marks the fronts and recommends
+//! the most accurate setting within the budget; bad scenes are refused naming the item.
+
+use std::path::Path;
+
+use run::{aprt, refuse, succeed, tiny_character};
+
+mod run;
+
+/// Frames of the small character's clip: trained on the first 8, tested on the rest.
+const FRAMES: usize = 12;
+
+fn path(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// Writes a scene for the small character in `dir` with `effects` (lines of `[effects]`).
+fn scene(dir: &Path, name: &str, effects: &str) -> String {
+    tiny_character(dir, FRAMES);
+    let text = format!(
+        "[source]\nbvh = \"character.bvh\"\ntrain = [\"0..8\"]\ntest = [\"8..12\"]\n\
+         [effects]\nrays = 32\nerror_target = 4.0\n{effects}\n\
+         [environment]\nsh = [[0.6, 0.6, 0.6], [0.0, 0.3, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]\n\
+         [[light]]\nkind = \"directional\"\ndirection = [0.3, 0.9, 0.2]\nirradiance = [0.2, 0.2, 0.2]\n"
+    );
+    let file = dir.join(name);
+    std::fs::write(&file, text).unwrap();
+    path(&file).to_owned()
+}
+
+fn json(file: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(file).unwrap()).unwrap()
+}
+
+/// Without shadows no ray is cast, no checkpoint is kept, and the report says what was
+/// skipped; the same scene with shadows casts vertices × rays × poses rays, and the shadowless
+/// bake is many times faster than the full simulation timed in the same run.
+#[test]
+fn a_shadowless_scene_casts_no_rays_and_reports_what_it_skipped() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let off = scene(d, "off.toml", "shadows = false\nrig = \"none\"\n");
+    let on = scene(d, "on.toml", "shadows = true\nrig = \"none\"\n");
+    for (file, tag) in [(&off, "off"), (&on, "on")] {
+        let model = d.join(format!("{tag}.aprt"));
+        let report = d.join(format!("{tag}.json"));
+        succeed(&[
+            "train",
+            "--scene",
+            file,
+            "-o",
+            path(&model),
+            "--report",
+            path(&report),
+        ]);
+        assert!(model.exists() && !d.join(format!("{tag}.aprt.bake")).exists());
+    }
+    let (off, on) = (json(&d.join("off.json")), json(&d.join("on.json")));
+    for key in [
+        "rays_cast",
+        "bounce_passes",
+        "sh_order",
+        "skipped",
+        "seconds",
+    ] {
+        assert!(off.get(key).is_some() && on.get(key).is_some(), "{key}");
+    }
+    assert_eq!(off["rays_cast"], 0);
+    assert_eq!(off["bounce_passes"], 0);
+    let skipped = off["skipped"].to_string();
+    assert!(skipped.contains("visibility rays"), "{skipped}");
+    assert!(skipped.contains("bounces = 0"), "{skipped}");
+    assert!(skipped.contains("irradiance rig"), "{skipped}");
+    // Shadowed: every vertex of every pose (training frames and the rest pose) casts rays.
+    let rays = on["rays_cast"].as_u64().unwrap();
+    assert!(rays > 0 && rays % 32 == 0 && rays % 9 == 0, "{rays}");
+    assert!(on["computed"].to_string().contains("shadows"));
+    // The smooth environment and a faint sun need order 3 at 4 grey levels, or less.
+    assert!(
+        off["sh_order"].as_u64().unwrap() <= 3,
+        "{}",
+        off["sh_order_reason"]
+    );
+    let speedup = off["full_simulation"]["speedup"].as_f64().unwrap();
+    assert!(speedup > 5.0, "shadowless bake only {speedup}x faster");
+}
+
+/// The sweep writes its files, every point has the documented keys, the fronts are
+/// undominated, and the recommendation is the most accurate point within `--budget-us`.
+#[test]
+fn the_report_recommends_the_most_accurate_point_within_the_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let file = scene(d, "scene.toml", "shadows = true\n");
+    let out = d.join("report");
+    let model = d.join("best.aprt");
+    // A budget every setting meets, then one that only part of them meet.
+    succeed(&["report", &file, "--out", path(&out), "--stride", "1"]);
+    let all = json(&out.join("report.json"));
+    let points = all["points"].as_array().unwrap();
+    assert!(points.len() >= 20, "{}", points.len());
+    let us: Vec<f64> = points
+        .iter()
+        .map(|p| p["us_per_frame"].as_f64().unwrap())
+        .collect();
+    let mut sorted = us.clone();
+    sorted.sort_by(f64::total_cmp);
+    let budget = sorted[sorted.len() / 2];
+    succeed(&[
+        "report",
+        &file,
+        "--out",
+        path(&out),
+        "--stride",
+        "1",
+        "--budget-us",
+        &budget.to_string(),
+        "--write-model",
+        path(&model),
+    ]);
+    let report = json(&out.join("report.json"));
+    let points = report["points"].as_array().unwrap();
+    for p in points {
+        for key in ["setting", "error", "us_per_frame", "bytes", "pareto"] {
+            assert!(p.get(key).is_some(), "{key}");
+        }
+    }
+    let error = |p: &serde_json::Value| p["error"].as_f64().unwrap();
+    let cost = |p: &serde_json::Value| p["us_per_frame"].as_f64().unwrap();
+    let i = report["recommended"].as_u64().unwrap() as usize;
+    assert!(cost(&points[i]) <= budget);
+    for p in points.iter().filter(|p| cost(p) <= budget) {
+        assert!(error(&points[i]) <= error(p));
+    }
+    for (a, p) in points.iter().enumerate() {
+        let dominated = points.iter().any(|q| {
+            error(q) <= error(p) && cost(q) <= cost(p) && (error(q) < error(p) || cost(q) < cost(p))
+        });
+        assert_eq!(p["pareto"].as_bool().unwrap(), !dominated, "point {a}");
+    }
+    for f in [
+        "report.md",
+        "pareto_us.png",
+        "pareto_us.svg",
+        "pareto_bytes.png",
+        "pareto_bytes.svg",
+    ] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("![error against µs per frame](pareto_us.png)"));
+    assert_eq!(
+        std::fs::read(&model).unwrap().len() as u64,
+        points[i]["bytes"].as_u64().unwrap()
+    );
+    succeed(&["inspect", path(&model)]);
+}
+
+/// A bad scene is refused before any work, naming the file and the item.
+#[test]
+fn bad_scenes_are_refused_naming_the_file_and_the_item() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let file = scene(d, "bad.toml", "shadows = false\nbounces = 2\n");
+    let model = d.join("m.aprt");
+    refuse(
+        &["train", "--scene", &file, "-o", path(&model)],
+        &["bad.toml", "[effects] bounces", "need shadows"],
+    );
+    assert!(!model.exists());
+    let file = scene(d, "flags.toml", "");
+    let clash = aprt(&["train", "--scene", &file, "-o", path(&model), "--rays", "8"]);
+    let said = String::from_utf8_lossy(&clash.stderr);
+    assert!(!clash.status.success());
+    assert!(
+        said.contains("'--scene <SCENE>' cannot be used with '--rays <RAYS>'"),
+        "{said}"
+    );
+    refuse(
+        &[
+            "report",
+            &file,
+            "--out",
+            path(&d.join("r")),
+            "--budget-us",
+            "-1",
+        ],
+        &["--budget-us"],
+    );
+}
