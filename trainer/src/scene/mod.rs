@@ -80,11 +80,13 @@ pub fn plan_bake(scene: &Scene, lighting: &SceneLighting, bind: &Mesh, poses: us
     }
     let unused = MAX_ORDER * MAX_ORDER - order.order * order.order;
     if unused > 0 {
+        let bands = match order.order {
+            n if n + 1 == MAX_ORDER => format!("band {n}"),
+            n => format!("bands {n} to {}", MAX_ORDER - 1),
+        };
         skipped.push(format!(
-            "{unused} of the {} coefficients the runtime holds (bands {} to {}): neither baked nor stored",
-            MAX_ORDER * MAX_ORDER,
-            order.order,
-            MAX_ORDER - 1
+            "{unused} of the {} coefficients the runtime holds ({bands}): neither baked nor stored",
+            MAX_ORDER * MAX_ORDER
         ));
     }
     BakePlan {

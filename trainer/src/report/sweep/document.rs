@@ -79,7 +79,7 @@ fn plot(
         x,
         y: "RMS shading error (8-bit grey levels)",
         log_x: true,
-        log_y: true,
+        log_y: false,
     };
     line_plot(&out.join(format!("{stem}.png")), &axes, &series)?;
     line_plot_svg(&out.join(format!("{stem}.svg")), &axes, &series)

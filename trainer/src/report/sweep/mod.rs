@@ -207,7 +207,7 @@ pub fn bake_reference(
         ..plan.bake
     };
     reporter.note(&format!(
-        "baking the reference (SH order {MAX_ORDER}, {} rays) on every {stride}th frame",
+        "baking the reference (SH order {MAX_ORDER}, {} rays) on 1 frame in {stride}",
         settings.rays
     ));
     let base = bake_set(rig, &layout, &train, &validation, &settings)?;
@@ -325,7 +325,7 @@ pub fn sweep(
             reference.layout.names().len()
         ),
         reference: format!(
-            "{}, SH order {MAX_ORDER}, {} rays per vertex, {} bounces, every {}th frame",
+            "{}, SH order {MAX_ORDER}, {} rays per vertex, {} bounces, 1 frame in {}",
             if e.shadows { "shadowed" } else { "unshadowed" },
             reference.settings.rays,
             reference.settings.bounces,
