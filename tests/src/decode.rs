@@ -19,6 +19,8 @@ fn values(blob: &[u8], e: &SectionEntry) -> Option<Vec<f64>> {
             .chunks_exact(2)
             .map(|w| half::f16::from_le_bytes([w[0], w[1]]).to_f64())
             .collect(),
+        // The integers; `decode` applies the scales.
+        Encoding::I8 => bytes.iter().map(|&b| f64::from(b as i8)).collect(),
     })
 }
 
@@ -34,12 +36,25 @@ pub fn decode(blob: &[u8]) -> Option<LinearModel> {
         h.pose_dims as usize,
     );
     let kv = h.coef_dims as usize;
-    let (width, rows) = match h.basis {
-        Basis::Stored => (kv, section(SectionKind::VertexBasis)?),
-        Basis::Identity => (n2 * (1 + ka), section(SectionKind::VertexWeights)?),
+    let (width, rows_entry) = match h.basis {
+        Basis::Stored => (kv, entry(SectionKind::VertexBasis)?),
+        Basis::Identity => (n2 * (1 + ka), entry(SectionKind::VertexWeights)?),
     };
     // Bone-frame models start every block with a row of bone indices.
     let lead = usize::from(matches!(h.frame, Frame::Bones { .. }));
+    let mut rows = values(blob, rows_entry)?;
+    if Encoding::from_tag(rows_entry.encoding)? == Encoding::I8 {
+        // Row r of a vertex is scale_r times its byte as i8; the bone row's bytes are
+        // unsigned.
+        let scales = section(SectionKind::RowScales)?;
+        for (i, x) in rows.iter_mut().enumerate() {
+            let r = i / VERTEX_BLOCK % (lead + width);
+            *x = match r.checked_sub(lead) {
+                None => f64::from(*x as i8 as u8),
+                Some(r) => scales.get(r)? * *x,
+            };
+        }
+    }
     if rows.len() != padded_vertices(v) * (lead + width) {
         return None;
     }

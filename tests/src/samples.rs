@@ -1,5 +1,5 @@
 //! Small valid blobs, one per kind of model (stored or identity basis, world or bone frame,
-//! f32 or f16, angles or cosine features): the starting points of the mutation tests and the seeds of the fuzz corpus
+//! f32, f16 or scaled bytes, angles or cosine features): the starting points of the mutation tests and the seeds of the fuzz corpus
 //! (`cargo test -p aprt-tests --test corpus -- --ignored` writes `fuzz/corpus/`).
 
 use aprt_core::{AxisKind, RigLayout, RigShape};
@@ -47,6 +47,16 @@ pub fn sample_models() -> Vec<(&'static str, LinearModel, Precision)> {
             "cosines-stored-f32",
             with_cosines(random_model(2, 7, 3, 2, Some(2)), &[true, false, true]),
             Precision::F32,
+        ),
+        (
+            "stored-i8",
+            random_model(2, 13, 3, 2, Some(3)),
+            Precision::I8,
+        ),
+        (
+            "bones-identity-i8",
+            with_bones(random_model(2, 9, 2, 1, None), 3),
+            Precision::I8,
         ),
     ]
 }

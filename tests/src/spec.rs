@@ -154,10 +154,11 @@ impl<'a> Arbitrary<'a> for ModelSpec {
                     Vec::new()
                 },
             },
-            precision: if u.arbitrary()? {
-                Precision::F16
-            } else {
-                Precision::F32
+            // Odd bytes f16 as before scaled bytes were drawn, so saved inputs keep theirs.
+            precision: match u.arbitrary::<u8>()? {
+                b if b & 1 == 1 => Precision::F16,
+                b if b & 2 == 2 => Precision::I8,
+                _ => Precision::F32,
             },
         })
     }
@@ -172,25 +173,48 @@ impl ModelSpec {
     /// The model as the blob should store it: the weights and per-vertex rows rounded to the
     /// storage precision, everything else exact.
     pub fn stored(&self) -> LinearModel {
-        let round = |xs: &[f64]| -> Vec<f64> {
-            match self.precision {
-                Precision::F32 => xs.to_vec(),
-                Precision::F16 => xs
-                    .iter()
-                    .map(|&x| half::f16::from_f64(x).to_f64())
-                    .collect(),
+        let m = &self.model;
+        let f16 = |xs: &[f64]| -> Vec<f64> {
+            xs.iter()
+                .map(|&x| half::f16::from_f64(x).to_f64())
+                .collect()
+        };
+        let (weights, basis) = match (self.precision, &m.basis) {
+            (Precision::F32, basis) => (m.weights.clone(), basis.clone()),
+            (Precision::F16, VertexBasis::Identity) => (f16(&m.weights), VertexBasis::Identity),
+            (Precision::F16, VertexBasis::Stored { coef_dims, data }) => (
+                f16(&m.weights),
+                VertexBasis::Stored {
+                    coef_dims: *coef_dims,
+                    data: f16(data),
+                },
+            ),
+            // Identity rows are contiguous per row over the vertices; a stored basis's
+            // vectors are its columns.
+            (Precision::I8, VertexBasis::Identity) => (
+                m.weights.chunks(m.vertices).flat_map(i8_vector).collect(),
+                VertexBasis::Identity,
+            ),
+            (Precision::I8, VertexBasis::Stored { coef_dims, data }) => {
+                let kv = *coef_dims;
+                let columns: Vec<Vec<f64>> = (0..kv)
+                    .map(|k| {
+                        i8_vector(&data.iter().skip(k).step_by(kv).copied().collect::<Vec<_>>())
+                    })
+                    .collect();
+                let data = (0..data.len()).map(|i| columns[i % kv][i / kv]).collect();
+                (
+                    m.weights.clone(),
+                    VertexBasis::Stored {
+                        coef_dims: kv,
+                        data,
+                    },
+                )
             }
         };
-        let m = &self.model;
         LinearModel {
-            weights: round(&m.weights),
-            basis: match &m.basis {
-                VertexBasis::Identity => VertexBasis::Identity,
-                VertexBasis::Stored { coef_dims, data } => VertexBasis::Stored {
-                    coef_dims: *coef_dims,
-                    data: round(data),
-                },
-            },
+            weights,
+            basis,
             alpha: m.alpha as f32 as f64,
             ..m.clone()
         }
@@ -253,9 +277,26 @@ pub fn round_trip(spec: &ModelSpec, probe: &Probe) {
             assert!(near(q, x));
         }
     }
-    let stored_error = |x: f64| match spec.precision {
-        Precision::F32 => 0.0,
-        Precision::F16 => f16_rounding(x),
-    };
-    reference::assert_matches(&spec.model, &eval, stored_error);
+    // Scaled bytes are judged against what the blob stores: their rounding depends on the
+    // vector's scale, not on the value, and `i8_vector` states it exactly.
+    match spec.precision {
+        Precision::F32 => reference::assert_matches(&spec.model, &eval, |_| 0.0),
+        Precision::F16 => reference::assert_matches(&spec.model, &eval, f16_rounding),
+        Precision::I8 => reference::assert_matches(&expect, &eval, |_| 0.0),
+    }
+}
+
+/// One vector stored as scaled bytes, as `FORMAT.md` states it: `s = max |v| / 127` rounded to
+/// f32, each value `s · round(v / s)` (0 when `s` is 0).
+pub fn i8_vector(v: &[f64]) -> Vec<f64> {
+    let s = f64::from((v.iter().fold(0.0f64, |m, x| m.max(x.abs())) / 127.0) as f32);
+    v.iter()
+        .map(|&x| {
+            if s == 0.0 {
+                0.0
+            } else {
+                s * (x / s).round().clamp(-127.0, 127.0)
+            }
+        })
+        .collect()
 }

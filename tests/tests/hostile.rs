@@ -129,6 +129,83 @@ fn a_pose_feature_flag_other_than_0_or_1_is_refused() {
     }
 }
 
+/// Scaled-byte rows are read only with their scales, whose values must be finite; a bone byte
+/// at or past the bone count, a scales section of the wrong length, and scaled bytes in a
+/// section that may not hold them are each refused with their error, checksums matching.
+#[test]
+fn scaled_byte_damage_gets_its_error() {
+    let (_, blob) = sample_blobs()
+        .into_iter()
+        .find(|(name, _)| *name == "bones-identity-i8")
+        .expect("a bone-frame sample in scaled bytes");
+    let info = parse(&blob).expect("the sample is valid");
+    assert_eq!(info.encoding(), aprt_core::Encoding::I8);
+    let header = read_header(&blob).unwrap();
+    let index = |kind: SectionKind| {
+        header
+            .sections
+            .iter()
+            .position(|s| s.kind == kind.tag())
+            .expect("the section")
+    };
+    let (scales, rows) = (
+        header.sections[index(SectionKind::RowScales)],
+        header.sections[index(SectionKind::VertexWeights)],
+    );
+    let section = SectionKind::RowScales;
+    let without = with_header(&blob, |h| {
+        h.sections[index(section)].kind = 99;
+        h.sections[index(section)].required = false;
+    });
+    assert_eq!(parse(&without), Err(Error::MissingSection { section }));
+    let short = with_header(&blob, |h| h.sections[index(section)].len -= 4);
+    assert!(matches!(
+        parse(&reseal(&short)),
+        Err(Error::SectionLength {
+            section: SectionKind::RowScales,
+            ..
+        })
+    ));
+    for bad in [f32::NAN, f32::INFINITY] {
+        let mut edited = blob.clone();
+        let at = scales.offset as usize + 4;
+        edited[at..at + 4].copy_from_slice(&bad.to_le_bytes());
+        assert_eq!(parse(&reseal(&edited)), Err(Error::NonFinite { section }));
+    }
+    // The first block's lead row: one unsigned byte per lane, below the 3 bones.
+    for (bone, expect) in [
+        (2u8, Ok(())),
+        (3, Err(Error::BadBoneIndex)),
+        (255, Err(Error::BadBoneIndex)),
+    ] {
+        let mut edited = blob.clone();
+        edited[rows.offset as usize + 5] = bone;
+        assert_eq!(
+            parse(&reseal(&edited)).map(|_| ()),
+            expect,
+            "bone byte {bone}"
+        );
+    }
+    let (_, stored) = sample_blobs()
+        .into_iter()
+        .find(|(name, _)| *name == "stored-f32")
+        .unwrap();
+    let weights = with_header(&stored, |h| {
+        let e = h
+            .sections
+            .iter_mut()
+            .find(|s| s.kind == SectionKind::Weights.tag())
+            .unwrap();
+        e.encoding = aprt_core::Encoding::I8 as u8;
+    });
+    assert_eq!(
+        parse(&weights),
+        Err(Error::BadEncoding {
+            section: SectionKind::Weights
+        })
+    );
+}
+
 #[test]
 fn crafted_headers_get_the_right_error() {
     let blob = valid_blob();

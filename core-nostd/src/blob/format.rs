@@ -86,6 +86,14 @@ pub enum Encoding {
     F32 = 0,
     /// IEEE 754 binary16, little-endian.
     F16 = 1,
+    /// Signed bytes with one f32 scale per vector, for the per-vertex sections only
+    /// ([`SectionKind::allows_i8`]): value `r` of a vertex row is `scale_r · q` with `q` the
+    /// byte read as `i8`, and the scales are the [`SectionKind::RowScales`] section. The
+    /// evaluator folds `scale_r` into the per-frame weight of row `r` (pose weights for a
+    /// stored basis, `z'` per coefficient for the identity basis), so the per-vertex loops
+    /// read the bytes in place and pay nothing for the scale. In a bone-frame model the lead
+    /// row of every block holds the eight bone indices as unsigned bytes.
+    I8 = 2,
 }
 
 impl Encoding {
@@ -94,6 +102,7 @@ impl Encoding {
         match tag {
             0 => Some(Encoding::F32),
             1 => Some(Encoding::F16),
+            2 => Some(Encoding::I8),
             _ => None,
         }
     }
@@ -103,6 +112,7 @@ impl Encoding {
         match self {
             Encoding::F32 => 4,
             Encoding::F16 => 2,
+            Encoding::I8 => 1,
         }
     }
 }
@@ -150,13 +160,18 @@ pub enum SectionKind {
     /// increasing, below R²), so an engine can scatter the rows into the map. Read by
     /// [`TexelAtlas`](crate::TexelAtlas); readers that predate it skip it.
     TexelAtlas,
+    /// Tag 11, required with an [`Encoding::I8`] per-vertex section (and only read then):
+    /// one f32 scale per value of a vertex row (`row_width` values, finite; the writer stores
+    /// `max_j |v_jr| / 127`, 0 for a zero vector), so the row `r` of vertex `j` is
+    /// `scale_r · q_jr`.
+    RowScales,
     /// A tag this version does not know.
     Unknown(u16),
 }
 
 impl SectionKind {
     /// The kinds this version knows, in tag order.
-    const KNOWN: [SectionKind; 10] = [
+    const KNOWN: [SectionKind; 11] = [
         SectionKind::PoseMean,
         SectionKind::PoseProjection,
         SectionKind::Weights,
@@ -167,12 +182,13 @@ impl SectionKind {
         SectionKind::PoseFeatures,
         SectionKind::IrradianceRig,
         SectionKind::TexelAtlas,
+        SectionKind::RowScales,
     ];
 
     /// The kind of a section-table tag.
     pub const fn from_tag(tag: u16) -> SectionKind {
         match tag {
-            1..=10 => Self::KNOWN[tag as usize - 1],
+            1..=11 => Self::KNOWN[tag as usize - 1],
             other => SectionKind::Unknown(other),
         }
     }
@@ -190,6 +206,7 @@ impl SectionKind {
             SectionKind::PoseFeatures => 8,
             SectionKind::IrradianceRig => 9,
             SectionKind::TexelAtlas => 10,
+            SectionKind::RowScales => 11,
             SectionKind::Unknown(tag) => tag,
         }
     }
@@ -211,6 +228,22 @@ impl SectionKind {
             self,
             SectionKind::Weights | SectionKind::VertexBasis | SectionKind::VertexWeights
         )
+    }
+
+    /// Whether the kind may be stored as scaled bytes ([`Encoding::I8`]): the per-vertex
+    /// sections, whose bytes are most of a blob and are read every frame. The weights stay
+    /// f32 or f16: they are read once per frame and do not grow with the vertex count.
+    pub const fn allows_i8(self) -> bool {
+        matches!(self, SectionKind::VertexBasis | SectionKind::VertexWeights)
+    }
+
+    /// Whether a section of this kind may be stored in `encoding`.
+    pub const fn allows(self, encoding: Encoding) -> bool {
+        match encoding {
+            Encoding::F32 => true,
+            Encoding::F16 => self.allows_f16(),
+            Encoding::I8 => self.allows_i8(),
+        }
     }
 }
 

@@ -35,6 +35,8 @@ pub struct ModelInfo {
     pub(crate) weights: Option<Span>,
     /// Per-vertex rows: the vertex basis (stored) or the vertex weights (identity).
     pub(crate) rows: Span,
+    /// The scale of each row value, when the rows are [`Encoding::I8`].
+    pub(crate) row_scales: Option<Span>,
     pub(crate) angle_names: Option<Span>,
     /// The pose bound, when the model has one.
     pub(crate) pose_bounds: Option<Span>,
@@ -104,7 +106,7 @@ impl ModelInfo {
     pub fn alpha(&self) -> f32 {
         self.alpha
     }
-    /// Encoding of the per-vertex rows (and of the weights, for a stored basis).
+    /// Encoding of the per-vertex rows.
     pub fn encoding(&self) -> Encoding {
         self.rows.encoding
     }
@@ -118,11 +120,13 @@ impl ModelInfo {
     }
 
     /// Values [`PoseWeights`](crate::PoseWeights) must hold for this model: n² k_v for a
-    /// stored basis, 0 for the identity basis (whose pose weights are the projected pose).
+    /// stored basis; for the identity basis 0 (its pose weights are the projected pose), or
+    /// n²(1 + k_a) with [`Encoding::I8`] rows (the projected pose times each row's scale).
     pub fn pose_weights_len(&self) -> usize {
-        match self.basis {
-            Basis::Stored => coeff_count(self.order) * self.coef_dims,
-            Basis::Identity => 0,
+        match (self.basis, self.row_scales) {
+            (Basis::Stored, _) => coeff_count(self.order) * self.coef_dims,
+            (Basis::Identity, None) => 0,
+            (Basis::Identity, Some(_)) => self.row_width(),
         }
     }
 

@@ -51,47 +51,28 @@ impl ModelInfo {
             dim(Dim::PoseDims, h.pose_dims as u64, 0, most)
         };
         let pose_dims = pose_dims_in(most_features)?;
-        let coef_dims = match h.basis {
-            Basis::Stored => dim(Dim::CoefDims, h.coef_dims as u64, 1, MAX_COEF_DIMS as u64)?,
-            Basis::Identity => dim(
-                Dim::CoefDims,
-                h.coef_dims as u64,
-                vertices as u64,
-                vertices as u64,
-            )?,
-        };
+        let coef_dims = coef_dims(h.basis, h.coef_dims, vertices)?;
         let n2 = coeff_count(order);
         let padded = padded_vertices(vertices);
-        let lead = match h.frame {
-            Frame::World => 0,
-            Frame::Bones { count } => {
-                let bones = dim(Dim::Bones, count as u64, 1, MAX_BONES as u64)?;
-                let width = match h.basis {
-                    Basis::Stored => coef_dims,
-                    Basis::Identity => n2 * (1 + pose_dims),
-                };
-                if bones * width > MAX_LIT {
-                    return Err(Error::BadDimension {
-                        what: Dim::Bones,
-                        value: bones as u64,
-                    });
-                }
-                1
-            }
+        let row_width = match h.basis {
+            Basis::Stored => coef_dims,
+            Basis::Identity => n2 * (1 + pose_dims),
         };
+        let lead = lead_rows(h.frame, row_width)?;
         check_no_overlap(&h.sections, decoded.end, r.len())?;
         let (feature_len, pose_features) = pose_features(r, &h.sections, pose_len)?;
         pose_dims_in(feature_len)?;
         // Elements of each array section this basis uses; `None` for the others.
         let expected_elems = |kind: SectionKind| -> Option<Result<u64, Error>> {
             Some(match (kind, h.basis) {
+                (SectionKind::RowScales, _) => product(&[row_width]),
                 (SectionKind::PoseMean, _) => product(&[feature_len]),
                 (SectionKind::PoseProjection, _) => product(&[pose_dims, feature_len]),
                 (SectionKind::PoseBounds, _) => product(&[4, pose_len]),
                 (SectionKind::Weights, Basis::Stored) => product(&[n2, 1 + pose_dims, coef_dims]),
-                (SectionKind::VertexBasis, Basis::Stored) => product(&[padded, lead + coef_dims]),
+                (SectionKind::VertexBasis, Basis::Stored) => product(&[padded, lead + row_width]),
                 (SectionKind::VertexWeights, Basis::Identity) => {
-                    product(&[padded, lead + n2 * (1 + pose_dims)])
+                    product(&[padded, lead + row_width])
                 }
                 _ => return None,
             })
@@ -136,6 +117,11 @@ impl ModelInfo {
             ),
             Basis::Identity => (None, need(SectionKind::VertexWeights)?),
         };
+        // Scaled bytes need their scales; other encodings ignore a scales section.
+        let row_scales = match rows.encoding {
+            Encoding::I8 => Some(need(SectionKind::RowScales)?),
+            Encoding::F32 | Encoding::F16 => None,
+        };
         let info = ModelInfo {
             id: decoded.crc,
             order,
@@ -151,6 +137,7 @@ impl ModelInfo {
             pose_projection: need(SectionKind::PoseProjection)?,
             weights,
             rows,
+            row_scales,
             angle_names: get(SectionKind::AngleNames),
             pose_bounds: get(SectionKind::PoseBounds),
             pose_features,
@@ -186,12 +173,38 @@ impl ModelInfo {
                         .0
                         .iter()
                         .for_each(|x| check(half::f16::from_le_bytes(*x).to_f32())),
+                    Encoding::I8 => bytes.iter().for_each(|&b| check(f32::from(b))),
                 }
                 Ok(())
             })?;
         }
         if ok { Ok(()) } else { Err(Error::BadBoneIndex) }
     }
+}
+
+/// k_v: 1..=[`MAX_COEF_DIMS`] for a stored basis, the vertex count for the identity basis.
+fn coef_dims(basis: Basis, coef_dims: u32, vertices: usize) -> Result<usize, Error> {
+    let (lo, hi) = match basis {
+        Basis::Stored => (1, MAX_COEF_DIMS as u64),
+        Basis::Identity => (vertices as u64, vertices as u64),
+    };
+    dim(Dim::CoefDims, coef_dims as u64, lo, hi)
+}
+
+/// The lead rows of a block in `frame` (1, the bone indices, for bone frames), once the bone
+/// count is in range and every bone's lighting weights (`row_width` each) fit [`MAX_LIT`].
+fn lead_rows(frame: Frame, row_width: usize) -> Result<usize, Error> {
+    let Frame::Bones { count } = frame else {
+        return Ok(0);
+    };
+    let bones = dim(Dim::Bones, count as u64, 1, MAX_BONES as u64)?;
+    if bones * row_width > MAX_LIT {
+        return Err(Error::BadDimension {
+            what: Dim::Bones,
+            value: bones as u64,
+        });
+    }
+    Ok(1)
 }
 
 /// Sections must lie after the header, inside the blob, aligned, and not share bytes.
@@ -346,7 +359,7 @@ fn check_angle_names<R: Reader>(
 /// what the dimensions require.
 fn array_span(e: &SectionEntry, section: SectionKind, elems: u64) -> Result<Span, Error> {
     let encoding = Encoding::from_tag(e.encoding)
-        .filter(|enc| *enc == Encoding::F32 || section.allows_f16())
+        .filter(|enc| section.allows(*enc))
         .ok_or(Error::BadEncoding { section })?;
     let expected = elems
         .checked_mul(encoding.size() as u64)
@@ -386,6 +399,8 @@ fn verify_array<R: Reader>(r: &mut R, e: &SectionEntry, span: Span) -> Result<()
                 .0
                 .iter()
                 .all(|w| half::f16::from_le_bytes(*w).is_finite()),
+            // Every byte is a value; its scale is checked with the scales.
+            Encoding::I8 => true,
         };
         Ok(())
     })?;

@@ -1,7 +1,7 @@
 //! The per-frame kernels: decoding stored values, and the inner loops of shading and
 //! transfer over one block of [`VERTEX_BLOCK`] vertices. Written once for both encodings.
 
-use crate::blob::format::VERTEX_BLOCK;
+use crate::blob::format::{Encoding, VERTEX_BLOCK};
 
 /// Little-endian element encodings, decoded in the hot loops.
 pub(crate) trait Decode: Copy {
@@ -19,6 +19,15 @@ impl Decode for [u8; 2] {
     #[inline(always)]
     fn value(self) -> f32 {
         f16_to_f32(u16::from_le_bytes(self))
+    }
+}
+
+/// A scaled byte ([`Encoding::I8`](crate::Encoding::I8)): the integer, whose scale the caller
+/// has folded into the weight that multiplies it.
+impl Decode for u8 {
+    #[inline(always)]
+    fn value(self) -> f32 {
+        f32::from(self as i8)
     }
 }
 
@@ -73,6 +82,8 @@ pub(crate) fn dot<E: Decode>(row: &[E], q: &[f32]) -> f32 {
 pub(crate) enum RowRef<'a> {
     F32(&'a [[u8; 4]]),
     F16(&'a [[u8; 2]]),
+    /// Scaled bytes, unscaled: the caller applies the scale.
+    I8(&'a [u8]),
 }
 
 impl RowRef<'_> {
@@ -82,6 +93,7 @@ impl RowRef<'_> {
         match self {
             RowRef::F32(r) => out.zip(r).for_each(|(o, x)| *o += s * x.value()),
             RowRef::F16(r) => out.zip(r).for_each(|(o, x)| *o += s * x.value()),
+            RowRef::I8(r) => out.zip(r).for_each(|(o, x)| *o += s * x.value()),
         }
     }
 
@@ -98,8 +110,51 @@ impl RowRef<'_> {
         match self {
             RowRef::F32(r) => sum(r, x, c),
             RowRef::F16(r) => sum(r, x, c),
+            RowRef::I8(r) => sum(r, x, c),
         }
     }
+}
+
+/// Shading of one block of `encoding` bytes (see [`shade_block`]).
+#[inline(always)]
+pub(crate) fn shade_bytes(
+    encoding: Encoding,
+    bytes: &[u8],
+    q: &[f32],
+    width: usize,
+    bones: [usize; VERTEX_BLOCK],
+) -> [f32; VERTEX_BLOCK] {
+    match encoding {
+        Encoding::F32 => shade_block(bytes.as_chunks::<4>().0, q, width, bones),
+        Encoding::F16 => shade_block(bytes.as_chunks::<2>().0, q, width, bones),
+        Encoding::I8 => shade_block(bytes, q, width, bones),
+    }
+}
+
+/// The bone of each lane from a block's lead row of `encoding` bytes, each at most `last`.
+#[inline(always)]
+pub(crate) fn bone_lanes(encoding: Encoding, lead: &[u8], last: usize) -> [usize; VERTEX_BLOCK] {
+    let mut bones = [0usize; VERTEX_BLOCK];
+    match encoding {
+        Encoding::F32 => lead
+            .as_chunks::<4>()
+            .0
+            .iter()
+            .zip(&mut bones)
+            .for_each(|(x, b)| *b = bone_lane(x.value(), last)),
+        Encoding::F16 => lead
+            .as_chunks::<2>()
+            .0
+            .iter()
+            .zip(&mut bones)
+            .for_each(|(x, b)| *b = bone_lane(x.value(), last)),
+        // Unsigned bytes: bone indices up to 255.
+        Encoding::I8 => lead
+            .iter()
+            .zip(&mut bones)
+            .for_each(|(&x, b)| *b = usize::from(x).min(last)),
+    }
+    bones
 }
 
 /// Shading of one block: `out_lane = Σ_r q[bone_lane][r] U[r][lane]`. When the eight vertices
@@ -156,13 +211,34 @@ pub(crate) fn transfer_stored<E: Decode>(block: &[E], w: &[f32], t: &mut [f32]) 
     }
 }
 
-/// Identity basis, one block: `t_lane,c = Σ_i z'_i X[c (1 + k_a) + i][lane]`.
-pub(crate) fn transfer_identity<E: Decode>(block: &[E], z: &[f32], t: &mut [f32]) {
+/// The weights of an identity basis's rows: coefficient c's `1 + k_a` rows
+/// `c (1 + k_a) + i` are multiplied by `of(c)[i]`, which is `z'_i` for every c, or `z'_i`
+/// times the row's scale for scaled-byte rows.
+#[derive(Clone, Copy)]
+pub(crate) struct IdentityWeights<'a> {
+    /// `z'`, or the `n² (1 + k_a)` scaled copies of it.
+    pub(crate) values: &'a [f32],
+    /// 0 when every coefficient shares `z'`, else `1 + k_a`.
+    pub(crate) stride: usize,
+    /// `1 + k_a`.
+    pub(crate) len: usize,
+}
+
+impl<'a> IdentityWeights<'a> {
+    /// The weights of coefficient c's rows.
+    #[inline(always)]
+    pub(crate) fn of(self, c: usize) -> &'a [f32] {
+        &self.values[c * self.stride..][..self.len]
+    }
+}
+
+/// Identity basis, one block: `t_lane,c = Σ_i z_c,i X[c (1 + k_a) + i][lane]`.
+pub(crate) fn transfer_identity<E: Decode>(block: &[E], z: IdentityWeights<'_>, t: &mut [f32]) {
     let n2 = t.len() / VERTEX_BLOCK;
     let rows = block.as_chunks::<VERTEX_BLOCK>().0;
-    for (c, xc) in rows.chunks_exact(z.len()).enumerate().take(n2) {
+    for (c, xc) in rows.chunks_exact(z.len).enumerate().take(n2) {
         let mut acc = [0.0f32; VERTEX_BLOCK];
-        for (x, zi) in xc.iter().zip(z) {
+        for (x, zi) in xc.iter().zip(z.of(c)) {
             for l in 0..VERTEX_BLOCK {
                 acc[l] += zi * x[l].value();
             }

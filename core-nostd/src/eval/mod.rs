@@ -24,7 +24,10 @@ mod kernels;
 mod rig;
 mod weights;
 
-use kernels::{Decode, RowRef, bone_lane, dot, shade_block, transfer_identity, transfer_stored};
+use kernels::{
+    Decode, IdentityWeights, RowRef, bone_lanes, dot, shade_bytes, transfer_identity,
+    transfer_stored,
+};
 pub(crate) use rig::check_positions;
 pub use weights::{LitWeights, MAX_POSE_WEIGHTS, PoseWeights};
 use weights::{check_capacity, check_stamp};
@@ -64,6 +67,10 @@ impl ModelInfo {
                     .chunks_exact(width)
                     .enumerate()
                     .for_each(|(i, r)| f(first + i, RowRef::F16(r))),
+                Encoding::I8 => bytes
+                    .chunks_exact(width)
+                    .enumerate()
+                    .for_each(|(i, r)| f(first + i, RowRef::I8(r))),
             }
             Ok(())
         })
@@ -120,9 +127,56 @@ impl ModelInfo {
                 row.add_scaled(zi, w[c..].iter_mut().step_by(n2))
             })?;
         }
+        self.fold_row_scales(r, pose)?;
         pose.pose_dims = ka;
         pose.stamp = Some(self.id);
         Ok(())
+    }
+
+    /// Folds the scales of scaled-byte rows into the pose weights: row r's stored values are
+    /// `scale_r · q`, so the weight that multiplies row r takes the scale once per frame and
+    /// the per-vertex loops read the bytes as they are. A stored basis scales `w_k^c` (shading
+    /// and transfer both go through it); an identity basis writes `z'_i scale_r` per row.
+    fn fold_row_scales<R: Reader, const N: usize>(
+        &self,
+        r: &mut R,
+        pose: &mut PoseWeights<N>,
+    ) -> Result<(), Error> {
+        let Some(scales) = self.row_scales else {
+            return Ok(());
+        };
+        let (n2, basis) = (self.coeffs(), self.basis);
+        let (z, w) = (&pose.z[..=self.pose_dims], &mut pose.w);
+        r.chunks(scales.offset, 4, self.row_width(), |first, bytes| {
+            for (row, s) in (first..).zip(bytes.as_chunks::<4>().0) {
+                let s = f32::from_le_bytes(*s);
+                match basis {
+                    Basis::Stored => w[row * n2..][..n2].iter_mut().for_each(|x| *x *= s),
+                    Basis::Identity => w[row] = z[row % z.len()] * s,
+                }
+            }
+            Ok(())
+        })
+    }
+
+    /// The weights of an identity basis's rows for this pose (see [`IdentityWeights`]).
+    fn identity_weights<'p, const P: usize>(
+        &self,
+        pose: &'p PoseWeights<P>,
+    ) -> IdentityWeights<'p> {
+        let len = 1 + self.pose_dims;
+        match self.row_scales {
+            Some(_) => IdentityWeights {
+                values: &pose.w[..self.row_width()],
+                stride: len,
+                len,
+            },
+            None => IdentityWeights {
+                values: &pose.z[..len],
+                stride: 0,
+                len,
+            },
+        }
     }
 
     pub(crate) fn light<const P: usize, const L: usize>(
@@ -215,7 +269,7 @@ impl ModelInfo {
     }
 
     /// `q` = the lighting pushed through the pose weights: `s_k = Σ_c L_c w^c_k` (stored
-    /// basis) or `L_c z'_i` (identity basis).
+    /// basis) or `L_c z'_i` (identity basis, times the row's scale for scaled bytes).
     fn push<const P: usize>(&self, pose: &PoseWeights<P>, lighting: &[f32], q: &mut [f32]) {
         match self.basis {
             Basis::Stored => {
@@ -224,9 +278,9 @@ impl ModelInfo {
                 }
             }
             Basis::Identity => {
-                let z = &pose.z[..=self.pose_dims];
-                for (l, qc) in lighting.iter().zip(q.chunks_exact_mut(z.len())) {
-                    for (qi, zi) in qc.iter_mut().zip(z) {
+                let z = self.identity_weights(pose);
+                for (c, (l, qc)) in lighting.iter().zip(q.chunks_exact_mut(z.len)).enumerate() {
+                    for (qi, zi) in qc.iter_mut().zip(z.of(c)) {
                         *qi = l * zi;
                     }
                 }
@@ -260,21 +314,7 @@ impl ModelInfo {
         r.chunks(offset, block_bytes, b1 - b0, |i0, bytes| {
             for (i, block) in bytes.chunks_exact(block_bytes).enumerate() {
                 let (lead, rows) = block.split_at(lead_bytes);
-                let mut bones = [0usize; VERTEX_BLOCK];
-                match encoding {
-                    Encoding::F32 => lead
-                        .as_chunks::<4>()
-                        .0
-                        .iter()
-                        .zip(&mut bones)
-                        .for_each(|(x, b)| *b = bone_lane(x.value(), last_bone)),
-                    Encoding::F16 => lead
-                        .as_chunks::<2>()
-                        .0
-                        .iter()
-                        .zip(&mut bones)
-                        .for_each(|(x, b)| *b = bone_lane(x.value(), last_bone)),
-                }
+                let bones = bone_lanes(encoding, lead, last_bone);
                 visit((b0 + i0 + i) * VERTEX_BLOCK, bones, rows);
             }
             Ok(())
@@ -310,10 +350,7 @@ impl ModelInfo {
         let encoding = self.rows.encoding;
         let end = first + out.len();
         self.each_block(r, first, out.len(), |v0, bones, bytes| {
-            let lanes = match encoding {
-                Encoding::F32 => shade_block(bytes.as_chunks::<4>().0, q, width, bones),
-                Encoding::F16 => shade_block(bytes.as_chunks::<2>().0, q, width, bones),
-            };
+            let lanes = shade_bytes(encoding, bytes, q, width, bones);
             let (lo, hi) = (v0.max(first), (v0 + VERTEX_BLOCK).min(end));
             let dst = &mut out[lo - first..hi - first];
             if let Ok(whole) = <&mut [f32; VERTEX_BLOCK]>::try_from(&mut *dst) {
@@ -332,13 +369,24 @@ impl ModelInfo {
         bytes: &[u8],
         t: &mut [f32],
     ) {
-        let z = &pose.z[..=self.pose_dims];
-        let w = &pose.w[..self.pose_weights_len()];
-        match (self.basis, self.rows.encoding) {
-            (Basis::Stored, Encoding::F32) => transfer_stored(bytes.as_chunks::<4>().0, w, t),
-            (Basis::Stored, Encoding::F16) => transfer_stored(bytes.as_chunks::<2>().0, w, t),
-            (Basis::Identity, Encoding::F32) => transfer_identity(bytes.as_chunks::<4>().0, z, t),
-            (Basis::Identity, Encoding::F16) => transfer_identity(bytes.as_chunks::<2>().0, z, t),
+        match self.rows.encoding {
+            Encoding::F32 => self.block_transfer_of(pose, bytes.as_chunks::<4>().0, t),
+            Encoding::F16 => self.block_transfer_of(pose, bytes.as_chunks::<2>().0, t),
+            Encoding::I8 => self.block_transfer_of(pose, bytes, t),
+        }
+    }
+
+    /// [`ModelInfo::block_transfer`] over one encoding's values.
+    #[inline(always)]
+    fn block_transfer_of<E: Decode, const P: usize>(
+        &self,
+        pose: &PoseWeights<P>,
+        block: &[E],
+        t: &mut [f32],
+    ) {
+        match self.basis {
+            Basis::Stored => transfer_stored(block, &pose.w[..self.pose_weights_len()], t),
+            Basis::Identity => transfer_identity(block, self.identity_weights(pose), t),
         }
     }
 

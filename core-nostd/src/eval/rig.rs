@@ -5,10 +5,10 @@
 //! with lighting `C_k`: a vertex costs 3 k_v per non-zero `φ_k` (at most eight), never n² k_v,
 //! and its transfer keeps its self-shadowing.
 
-use super::kernels::shade_block;
+use super::kernels::shade_bytes;
 use super::weights::{check_capacity, check_stamp};
 use super::{PoseWeights, first_non_finite};
-use crate::blob::format::{Encoding, VERTEX_BLOCK};
+use crate::blob::format::VERTEX_BLOCK;
 use crate::blob::{Error, Input, ModelInfo, Reader};
 use crate::irradiance_rig::{
     IrradianceRig, MAX_RIG_VECTORS, Placement, RIG_SUPPORT, RigLitWeights, RigWeights,
@@ -114,10 +114,7 @@ impl ModelInfo {
             for (&k, phi_k) in touched[..count].iter().zip(&phi) {
                 let sets = lit.q[3 * k * lit_len..].chunks_exact(lit_len);
                 for (ch, q) in sets.take(3).enumerate() {
-                    let dots = match encoding {
-                        Encoding::F32 => shade_block(bytes.as_chunks::<4>().0, q, width, bones),
-                        Encoding::F16 => shade_block(bytes.as_chunks::<2>().0, q, width, bones),
-                    };
+                    let dots = shade_bytes(encoding, bytes, q, width, bones);
                     for l in 0..VERTEX_BLOCK {
                         acc[l][ch] += phi_k[l] * dots[l];
                     }

@@ -6,8 +6,13 @@ use crate::blob::format::{MAX_COEF_DIMS, MAX_LIT, MAX_POSE_DIMS};
 use crate::blob::{Error, ModelInfo};
 use crate::sh::MAX_COEFFS;
 
-/// Values of the largest pose weights any model needs: n² k_v at the limits.
-pub const MAX_POSE_WEIGHTS: usize = MAX_COEFFS * MAX_COEF_DIMS;
+/// Values of the largest pose weights any model needs at the limits: n² k_v for a stored
+/// basis, n²(1 + k_a) for an identity basis with scaled-byte rows.
+pub const MAX_POSE_WEIGHTS: usize = if MAX_COEF_DIMS > MAX_POSE_DIMS + 1 {
+    MAX_COEFFS * MAX_COEF_DIMS
+} else {
+    MAX_COEFFS * (MAX_POSE_DIMS + 1)
+};
 
 /// The model a set of weights was computed for.
 pub(crate) type Stamp = Option<u32>;
@@ -30,17 +35,18 @@ pub(crate) fn check_capacity(needed: usize, capacity: usize) -> Result<(), Error
 }
 
 /// The pose state of one frame: the projected pose `z' = [1, P(a − μ)]` and, for a stored
-/// basis, the per-coefficient weights `w^c = W^c z'`. Filled by `set_pose`, read by `light`
+/// basis, the per-coefficient weights `w^c = W^c z'` (times each basis vector's scale for
+/// scaled-byte rows; for an identity basis with such rows, `z'` times each row's scale). Filled by `set_pose`, read by `light`
 /// and `transfer`, stamped with the model it was computed for.
 ///
-/// `N` is the capacity in values; the default holds any model (about 14 KiB), and
+/// `N` is the capacity in values; the default holds any model (about 18 KiB), and
 /// [`ModelInfo::pose_weights_len`] tells what a given model needs.
 ///
 /// ```
 /// use aprt_core::{Error, Model, PoseWeights};
 ///
 /// // `new` is a `const fn`: an engine can build the state at compile time in a static of its
-/// // own, behind whatever lock it uses, so the 14 KiB never sit on the stack.
+/// // own, behind whatever lock it uses, so the 18 KiB never sit on the stack.
 /// struct Character {
 ///     pose: PoseWeights,
 /// }
@@ -69,6 +75,7 @@ pub struct PoseWeights<const N: usize = MAX_POSE_WEIGHTS> {
     /// `z' = [1, z]`.
     pub(crate) z: [f32; MAX_POSE_DIMS + 1],
     /// Stored basis: `w[k * n² + c]`, coefficient-contiguous so transfer is a sum of vectors.
+    /// Identity basis with scaled-byte rows: `w[c (1 + k_a) + i] = z'_i scale_{c (1 + k_a) + i}`.
     pub(crate) w: [f32; N],
 }
 

@@ -423,6 +423,10 @@ pub enum PrecisionArg {
     /// absolute below (subnormals; smaller values become 0). Values beyond ±65504 are refused
     /// with [`ExportError::NotRepresentable`], never clamped.
     F16,
+    /// 1 byte per per-vertex value plus one f32 scale per vector (`s = max |v| / 127`), the
+    /// weights f32: each value within `s / 2` of the f64 one, so shading under lighting
+    /// weights `w_k` is within `Σ_k |w_k| s_k / 2` of the f32 model's.
+    I8,
 }
 
 impl From<PrecisionArg> for Precision {
@@ -430,6 +434,7 @@ impl From<PrecisionArg> for Precision {
         match arg {
             PrecisionArg::F32 => Precision::F32,
             PrecisionArg::F16 => Precision::F16,
+            PrecisionArg::I8 => Precision::I8,
         }
     }
 }

@@ -23,6 +23,40 @@ pub enum Precision {
     /// absolute below (subnormals; smaller values become 0). Values beyond ±65504 are refused
     /// with [`ExportError::NotRepresentable`], never clamped.
     F16,
+    /// 1 byte per per-vertex value, the weights f32: each vector of the per-vertex section
+    /// (basis vector k of a stored basis, row `(c, i)` of the identity basis) is stored as
+    /// `s · q` with `s = max |v| / 127` over the vertices and `q` the nearest integer to
+    /// `v / s`, so every value is within `s / 2` of the f64 one (a zero vector stores 0), and
+    /// shading under lighting weights `w_k` is within `Σ_k |w_k| s_k / 2` of the f32 model's
+    /// (plus f32 rounding).
+    I8,
+}
+
+impl Precision {
+    /// The encoding of the weights and of the per-vertex rows.
+    fn encodings(self) -> (Float, Encoding) {
+        match self {
+            Precision::F32 => (Float::F32, Encoding::F32),
+            Precision::F16 => (Float::F16, Encoding::F16),
+            Precision::I8 => (Float::F32, Encoding::I8),
+        }
+    }
+}
+
+/// The float encodings [`encode`] writes; scaled bytes have their own writer, [`encode_i8`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Float {
+    F32,
+    F16,
+}
+
+impl Float {
+    fn encoding(self) -> Encoding {
+        match self {
+            Float::F32 => Encoding::F32,
+            Float::F16 => Encoding::F16,
+        }
+    }
 }
 
 impl Precision {
@@ -125,10 +159,10 @@ fn encode(
     section: SectionKind,
     values: &[f64],
     expected: usize,
-    encoding: Encoding,
+    encoding: Float,
 ) -> Result<Vec<u8>, ExportError> {
     check_len(section, values.len(), expected)?;
-    let mut out = Vec::with_capacity(values.len() * encoding.size());
+    let mut out = Vec::with_capacity(values.len() * encoding.encoding().size());
     for (index, &value) in values.iter().enumerate() {
         let bad = || ExportError::NotRepresentable {
             section,
@@ -136,14 +170,14 @@ fn encode(
             value,
         };
         match encoding {
-            Encoding::F32 => {
+            Float::F32 => {
                 let x = value as f32;
                 if !x.is_finite() {
                     return Err(bad());
                 }
                 out.extend_from_slice(&x.to_le_bytes());
             }
-            Encoding::F16 => {
+            Float::F16 => {
                 let x = half::f16::from_f64(value);
                 if !x.is_finite() {
                     return Err(bad());
@@ -153,6 +187,71 @@ fn encode(
         }
     }
     Ok(out)
+}
+
+/// A blocked per-vertex section (`lead` rows of bone indices, then `width` rows, in every
+/// block of [`VERTEX_BLOCK`] lanes) as scaled bytes, and the f32 scale of each of the
+/// `width` rows: `s_r = max_j |v_jr| / 127` (rounded to f32; 0 for a zero row) and
+/// `q = round(v / s_r)` as `i8`, so `|v − s_r q| ≤ s_r / 2`. Bone indices (below 256) are
+/// stored as unsigned bytes.
+fn encode_i8(
+    section: SectionKind,
+    values: &[f64],
+    lead: usize,
+    width: usize,
+) -> Result<(Vec<u8>, Vec<f64>), ExportError> {
+    let row_of = |index: usize| index / VERTEX_BLOCK % (lead + width);
+    let mut max = vec![0.0f64; width];
+    for (index, &value) in values.iter().enumerate() {
+        if !value.is_finite() {
+            return Err(ExportError::NotRepresentable {
+                section,
+                index,
+                value,
+            });
+        }
+        if let Some(m) = row_of(index).checked_sub(lead).map(|r| &mut max[r]) {
+            *m = m.max(value.abs());
+        }
+    }
+    let scales: Vec<f64> = max.iter().map(|m| f64::from((m / 127.0) as f32)).collect();
+    let bytes = values
+        .iter()
+        .enumerate()
+        .map(|(index, &value)| match row_of(index).checked_sub(lead) {
+            None => value as u8,
+            Some(r) if scales[r] == 0.0 => 0,
+            Some(r) => (value / scales[r]).round().clamp(-127.0, 127.0) as i8 as u8,
+        })
+        .collect();
+    Ok((bytes, scales))
+}
+
+/// The per-vertex section `kind` of `values` (blocked, `lead` bone rows then `width` rows per
+/// block) in `encoding`, followed by its `RowScales` section for scaled bytes.
+fn rows_sections(
+    kind: SectionKind,
+    values: &[f64],
+    (lead, width): (usize, usize),
+    encoding: Encoding,
+) -> Result<Vec<(SectionKind, Encoding, Vec<u8>)>, ExportError> {
+    let float = match encoding {
+        Encoding::F32 => Float::F32,
+        Encoding::F16 => Float::F16,
+        Encoding::I8 => {
+            let (bytes, scales) = encode_i8(kind, values, lead, width)?;
+            let scales = encode(SectionKind::RowScales, &scales, width, Float::F32)?;
+            return Ok(vec![
+                (kind, Encoding::I8, bytes),
+                (SectionKind::RowScales, Encoding::F32, scales),
+            ]);
+        }
+    };
+    Ok(vec![(
+        kind,
+        encoding,
+        encode(kind, values, values.len(), float)?,
+    )])
 }
 
 fn check_len(section: SectionKind, found: usize, expected: usize) -> Result<(), ExportError> {
@@ -247,15 +346,13 @@ pub fn encode_model_with(
         limit("coef dims", coef_dims, 1, MAX_COEF_DIMS)?;
     }
     let frame = frame_of(model, n2 * (1 + ka))?;
-    let big = match precision {
-        Precision::F32 => Encoding::F32,
-        Precision::F16 => Encoding::F16,
-    };
+    let (weights, rows) = precision.encodings();
+    let lead = usize::from(model.bones.is_some());
     let mut sections: Vec<(SectionKind, Encoding, Vec<u8>)> = vec![
         (
             SectionKind::PoseMean,
             Encoding::F32,
-            encode(SectionKind::PoseMean, &model.pose_mean, f, Encoding::F32)?,
+            encode(SectionKind::PoseMean, &model.pose_mean, f, Float::F32)?,
         ),
         (
             SectionKind::PoseProjection,
@@ -264,7 +361,7 @@ pub fn encode_model_with(
                 SectionKind::PoseProjection,
                 &model.pose_projection,
                 ka * f,
-                Encoding::F32,
+                Float::F32,
             )?,
         ),
     ];
@@ -275,23 +372,23 @@ pub fn encode_model_with(
                 SectionKind::Weights,
                 &model.weights,
                 n2 * (ka + 1) * kv,
-                big,
+                weights,
             )?;
-            sections.push((SectionKind::Weights, big, w));
+            sections.push((SectionKind::Weights, weights.encoding(), w));
             check_len(SectionKind::VertexBasis, data.len(), v * kv)?;
             let u = blocked(v, kv, model.bones.as_ref(), |j, k| data[j * kv + k]);
-            let u = encode(SectionKind::VertexBasis, &u, u.len(), big)?;
-            sections.push((SectionKind::VertexBasis, big, u));
+            let kind = SectionKind::VertexBasis;
+            sections.extend(rows_sections(kind, &u, (lead, kv), rows)?);
             Basis::Stored
         }
         VertexBasis::Identity => {
             let width = n2 * (ka + 1);
             check_len(SectionKind::VertexWeights, model.weights.len(), width * v)?;
-            let rows = blocked(v, width, model.bones.as_ref(), |j, r| {
+            let x = blocked(v, width, model.bones.as_ref(), |j, r| {
                 model.weights[r * v + j]
             });
-            let rows = encode(SectionKind::VertexWeights, &rows, rows.len(), big)?;
-            sections.push((SectionKind::VertexWeights, big, rows));
+            let kind = SectionKind::VertexWeights;
+            sections.extend(rows_sections(kind, &x, (lead, width), rows)?);
             Basis::Identity
         }
     };
@@ -325,7 +422,7 @@ fn optional_sections(
             tag: kind.tag(),
             required: true,
             encoding: Encoding::F32,
-            bytes: encode(kind, &bounds.rows(), 4 * a, Encoding::F32)?,
+            bytes: encode(kind, &bounds.rows(), 4 * a, Float::F32)?,
         });
     }
     if !model.features().is_angles() {
@@ -340,7 +437,7 @@ fn optional_sections(
             tag: kind.tag(),
             required: true,
             encoding: Encoding::F32,
-            bytes: encode(kind, &flags, a, Encoding::F32)?,
+            bytes: encode(kind, &flags, a, Float::F32)?,
         });
     }
     if let Some(rig) = extras.irradiance_rig {
@@ -556,7 +653,7 @@ mod tests {
             2,
         );
         for model in [stored, tiny(VertexBasis::Identity, 3)] {
-            for precision in [Precision::F32, Precision::F16] {
+            for precision in [Precision::F32, Precision::F16, Precision::I8] {
                 let blob = encode_model(&model, precision).unwrap();
                 let parsed = aprt_core::Model::parse(&blob).unwrap();
                 let info = parsed.info();
@@ -564,7 +661,23 @@ mod tests {
                 assert_eq!(info.vertices(), 3);
                 assert_eq!(info.pose_dims(), 2);
                 assert_eq!(info.coef_dims(), model.coef_dims());
+                assert_eq!(info.encoding(), precision.encodings().1);
             }
+            // `aprt inspect` names the rows' encoding and lists the scales beside them.
+            let blob = encode_model(&model, Precision::I8).unwrap();
+            let described = crate::model::runtime::describe(&blob).unwrap();
+            let encodings: Vec<(&str, &str)> = described
+                .sections
+                .iter()
+                .map(|s| (s.kind.as_str(), s.encoding.as_str()))
+                .collect();
+            assert!(encodings.contains(&("RowScales", "f32")), "{encodings:?}");
+            assert!(
+                encodings
+                    .iter()
+                    .any(|&(k, e)| k.starts_with("Vertex") && e == "i8"),
+                "{encodings:?}"
+            );
         }
     }
 

@@ -171,6 +171,7 @@ pub fn describe(blob: &[u8]) -> Result<BlobInfo, aprt_core::Error> {
             encoding: match Encoding::from_tag(e.encoding) {
                 Some(Encoding::F32) => "f32".into(),
                 Some(Encoding::F16) => "f16".into(),
+                Some(Encoding::I8) => "i8".into(),
                 None => format!("unknown({})", e.encoding),
             },
             offset: e.offset,
