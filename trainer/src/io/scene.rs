@@ -17,7 +17,7 @@
 //! order = "auto"           # or 1..=6; auto: the lowest order that meets error_target
 //! error_target = 1.0       # 8-bit grey levels of shading error
 //! rig = "auto"             # "none", a rig kind ("gradient", "lattice:2x2x2", …) or auto
-//! precision = "auto"       # f32 | f16 | auto
+//! precision = "auto"       # f32 | f16 | i8 | auto
 //! frame = "bone"           # bone | world: the frame the model learns transfer in
 //!
 //! [budget]                 # optional
@@ -435,7 +435,13 @@ fn effects(raw: &RawEffects) -> Result<Effects, (&'static str, String)> {
         None | Some("auto") => Choice::Auto,
         Some("f32") => Choice::Fixed(Precision::F32),
         Some("f16") => Choice::Fixed(Precision::F16),
-        Some(other) => return Err(("precision", format!("{other:?}: expected f32, f16 or auto"))),
+        Some("i8") => Choice::Fixed(Precision::I8),
+        Some(other) => {
+            return Err((
+                "precision",
+                format!("{other:?}: expected f32, f16, i8 or auto"),
+            ));
+        }
     };
     e.frame = match raw.frame.as_deref() {
         None | Some("bone") => ModelFrame::Bone,

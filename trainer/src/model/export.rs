@@ -65,6 +65,7 @@ impl Precision {
         match self {
             Precision::F32 => "f32",
             Precision::F16 => "f16",
+            Precision::I8 => "i8",
         }
     }
 }

@@ -13,7 +13,7 @@ use crate::model::runtime::predict_shading;
 pub const QUANTISATION_SHARE: f32 = 0.25;
 
 /// The precisions tried before f32, smallest first.
-pub const SMALLER: [Precision; 1] = [Precision::F16];
+pub const SMALLER: [Precision; 2] = [Precision::I8, Precision::F16];
 
 /// The precision of a blob: fixed, or the smallest that costs at most
 /// [`QUANTISATION_SHARE`] of `target` grey levels against f32 under `lighting` (one SH channel

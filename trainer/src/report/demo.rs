@@ -203,7 +203,7 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
     Ok(markdown)
 }
 
-/// The demo's short sweep (every order, then k_v at the model's order, f32 and f16) on the
+/// The demo's short sweep (every order, then k_v at the model's order, f32, f16 and i8) on the
 /// reference bake, written to `out/sweep/`; returns the recommendation within the scene's
 /// budget.
 fn cost_sweep(
@@ -303,7 +303,7 @@ impl Report {
         }
         let _ = writeln!(
             s,
-            "\n## What accuracy costs\n\nEvery SH order, then k_v at order {}, each in f32 and f16, measured on the test clips against the order-6 ground truth ([the sweep's report](sweep/report.md); `aprt report` sweeps every knob). Recommended within the scene's budget: {}.\n\n![shading error against µs per frame, the Pareto front joined](sweep/pareto_us.png)\n",
+            "\n## What accuracy costs\n\nEvery SH order, then k_v at order {}, each in f32, f16 and i8, measured on the test clips against the order-6 ground truth ([the sweep's report](sweep/report.md); `aprt report` sweeps every knob). Recommended within the scene's budget: {}.\n\n![shading error against µs per frame, the Pareto front joined](sweep/pareto_us.png)\n",
             self.order,
             self.recommended.as_deref().unwrap_or("nothing fits")
         );

@@ -1,6 +1,6 @@
 //! `aprt report`: what accuracy costs in time. Bakes a scene's clips once at the reference
 //! settings (the scene's effects at SH order 6), then fits and measures a model for each
-//! setting of the accuracy knobs (SH order, k_a, k_v, precision, rays, bounces) on the
+//! setting of the accuracy knobs (SH order, k_a, k_v, precision f32/f16/i8, rays, bounces) on the
 //! scene's test clips, marks the Pareto-optimal settings, and recommends the most accurate
 //! one inside the budget.
 
@@ -523,7 +523,7 @@ fn fit_and_measure(
     let fit_s = started.elapsed().as_secs_f64();
     let model = &fitted.model;
     let mut points = Vec::new();
-    for precision in [Precision::F32, Precision::F16] {
+    for precision in [Precision::F32, Precision::F16, Precision::I8] {
         let blob = encode_model(model, precision)
             .with_context(|| format!("writing {} in {}", candidate.label, precision.name()))?;
         let measured = measure(&blob, frame, truth)?;
