@@ -69,6 +69,7 @@ fn i8_shading_is_within_its_bound_of_f32() {
         rays: 32,
         bounces: 0,
         albedo: 0.0,
+        shadows: true,
     };
     let train: Vec<Vec<f64>> = character
         .training_clip()

@@ -189,3 +189,45 @@ fn bad_scenes_are_refused_naming_the_file_and_the_item() {
         &["--budget-us"],
     );
 }
+
+/// A scene's bake farm: three shards into one checkpoint, then `--resume`, write the same
+/// model bytes as one run of the scene (every decision of the plan is deterministic).
+#[test]
+fn a_scene_sharded_three_ways_trains_the_same_bytes_as_one_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let file = scene(d, "farm.toml", "shadows = true\n");
+    let whole = d.join("whole.aprt");
+    succeed(&["train", "--scene", &file, "-o", path(&whole)]);
+    let farmed = d.join("farmed.aprt");
+    for shard in ["0/3", "1/3", "2/3"] {
+        succeed(&[
+            "train",
+            "--scene",
+            &file,
+            "-o",
+            path(&farmed),
+            "--shard",
+            shard,
+        ]);
+        assert!(!farmed.exists(), "a shard writes no model");
+    }
+    succeed(&["train", "--scene", &file, "-o", path(&farmed), "--resume"]);
+    assert_eq!(
+        std::fs::read(&whole).unwrap(),
+        std::fs::read(&farmed).unwrap()
+    );
+    let shadowless = scene(d, "farm-off.toml", "shadows = false\n");
+    refuse(
+        &[
+            "train",
+            "--scene",
+            &shadowless,
+            "-o",
+            path(&farmed),
+            "--shard",
+            "0/2",
+        ],
+        &["--shard 0/2", "closed-form"],
+    );
+}
