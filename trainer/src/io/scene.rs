@@ -517,14 +517,12 @@ mod tests {
 
     #[test]
     fn the_documented_example_reads_with_paths_relative_to_the_scene() {
-        let text = format!(
-            "[source]\ngltf = \"Fox.gltf\"\ntrain = [\"Survey\"]\ntest = [\"Walk\", \"Run\"]\n\
+        let text = "[source]\ngltf = \"Fox.gltf\"\ntrain = [\"Survey\"]\ntest = [\"Walk\", \"Run\"]\n\
              [effects]\nshadows = true\nbounces = 0\nalbedo = 0.6\norder = \"auto\"\nerror_target = 1.0\nrig = \"auto\"\nprecision = \"auto\"\n\
              [budget]\nus_per_frame = 100\nbytes = 1_000_000\n\
              [environment]\nhdr = \"studio.hdr\"\n\
-             [[light]]\nkind = \"sphere\"\nposition = [0.0, 1.2, 0.8]\nradius = 0.1\nradiance = [4.0, 3.5, 3.0]\n"
-        );
-        let scene = parse(&text).unwrap();
+             [[light]]\nkind = \"sphere\"\nposition = [0.0, 1.2, 0.8]\nradius = 0.1\nradiance = [4.0, 3.5, 3.0]\n";
+        let scene = parse(text).unwrap();
         assert_eq!(
             scene.source,
             SceneSource::Gltf {
