@@ -39,10 +39,10 @@ pub struct ReportArgs {
     /// Output directory for report.md, report.json and the Pareto plots (PNG and SVG).
     #[arg(long)]
     pub out: PathBuf,
-    /// Microseconds per frame the recommendation may cost (default: the scene's [budget]).
+    /// Microseconds per frame the recommendation may cost (default: the scene's `[budget]`).
     #[arg(long, allow_negative_numbers = true)]
     pub budget_us: Option<f64>,
-    /// Bytes the recommended model may take (default: the scene's [budget]).
+    /// Bytes the recommended model may take (default: the scene's `[budget]`).
     #[arg(long)]
     pub budget_bytes: Option<u64>,
     /// Write the recommended model here.
