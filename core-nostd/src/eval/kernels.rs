@@ -1,5 +1,18 @@
 //! The per-frame kernels: decoding stored values, and the inner loops of shading and
-//! transfer over one block of [`VERTEX_BLOCK`] vertices. Written once for both encodings.
+//! transfer over one block of [`VERTEX_BLOCK`] vertices. Written once for the three encodings.
+//!
+//! What vectorises (x86-64 SSE2 asm of `Model::shade_rig`, which inlines `shade_block` for
+//! all three encodings: `mulps`/`addps` in the eight-lane loops, `cvtdq2ps` after
+//! shift-based sign extension for i8, the f16 decode as `pand`/`pslld`/`mulps`): the
+//! single-bone shading loop and both transfer kernels; the mixed-bone shading path is
+//! per-lane scalar. Portable code only: the core stays `forbid(unsafe_code)`.
+//!
+//! `cargo bench -p aprt-tests --bench eval` (11.5k vertices, order 6, PCA(8,22); ratios to a
+//! memcpy of the same row bytes, medians of 15 interleaved rounds; 2 shared, noisy cores, so
+//! absolute times moved up to 5x between runs). Transfer, before → after these kernels:
+//! f32 43.0x → 34.3x, f16 124.8x → 84.6x, i8 362x → 157x; full linear f32 0.86x → 0.82x.
+//! Shading after: f32 3.5x, f16 6.1x, i8 31.5x memcpy (before 1.5x, 5.1x, 11.9x in a run
+//! whose memcpy was slower): no shading gain is established on this machine.
 
 use crate::blob::format::{Encoding, MAX_COEF_DIMS, VERTEX_BLOCK};
 
