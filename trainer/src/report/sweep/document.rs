@@ -74,11 +74,16 @@ fn plot(
             line: false,
         });
     }
+    // A log axis draws its ticks at powers of ten: use it only when the costs span a decade.
+    let (lo, hi) = report.points.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), p| {
+        let x = axis(p).0;
+        (lo.min(x), hi.max(x))
+    });
     let axes = Axes {
         title: "shading error against cost, on the test clips",
         x,
         y: "RMS shading error (8-bit grey levels)",
-        log_x: true,
+        log_x: hi > 10.0 * lo,
         log_y: false,
     };
     line_plot(&out.join(format!("{stem}.png")), &axes, &series)?;
