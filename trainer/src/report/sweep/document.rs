@@ -75,10 +75,13 @@ fn plot(
         });
     }
     // A log axis draws its ticks at powers of ten: use it only when the costs span a decade.
-    let (lo, hi) = report.points.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), p| {
-        let x = axis(p).0;
-        (lo.min(x), hi.max(x))
-    });
+    let (lo, hi) = report
+        .points
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), p| {
+            let x = axis(p).0;
+            (lo.min(x), hi.max(x))
+        });
     let axes = Axes {
         title: "shading error against cost, on the test clips",
         x,
