@@ -473,7 +473,7 @@ fn print_scene_report(report: &SceneTrainReport, json: Option<&Path>) -> Result<
         );
     } else {
         eprintln!(
-            "the full simulation ({}) takes {:.3} s a pose against this scene's {:.4} s ({:.0}x, measured on {} poses): about {:.1} s saved",
+            "the full simulation ({}) takes {:.3} s a pose against this scene's {:.4} s ({:.1}x, measured on {} poses): about {:.1} s saved",
             full.settings,
             full.seconds_per_pose,
             full.scene_seconds_per_pose,

@@ -645,6 +645,24 @@ mod tests {
         }
     }
 
+    /// Every example in fixtures/scenes reads, and its paths resolve against its directory.
+    #[test]
+    fn every_fixture_scene_reads() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures/scenes");
+        let mut read = 0;
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "toml") {
+                let scene = read_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+                if let SceneSource::Gltf { path: gltf, .. } = &scene.source {
+                    assert!(gltf.starts_with(&dir), "{}", gltf.display());
+                }
+                read += 1;
+            }
+        }
+        assert!(read >= 5, "{read} scenes");
+    }
+
     #[test]
     fn sh_environments_and_obj_sequences_read() {
         let text = "[source]\nobj_seq = \"poses\"\nangles = \"poses.csv\"\n[environment]\nsh = [[1, 1, 1], [0, 0.5, 0], [0, 0, 0], [0, 0, 0]]\n";
