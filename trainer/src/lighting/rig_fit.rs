@@ -168,7 +168,7 @@ pub fn rig_vectors(
 
 /// The box around `meshes` (centre, half-widths; a flat axis gets a millimetre) and the
 /// largest distance of a vertex from its centre.
-fn bounds(meshes: &[&Mesh]) -> ([f64; 3], [f64; 3], f64) {
+pub(crate) fn bounds(meshes: &[&Mesh]) -> ([f64; 3], [f64; 3], f64) {
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
     for p in meshes.iter().flat_map(|m| &m.positions) {
         for k in 0..3 {

@@ -705,7 +705,18 @@ fn bake_shard(
 /// pose and training poses in its root frame; up to [`FIT_POSES`] of the meshes read from
 /// files), its error table computed at `order` on the first of them.
 fn fit_irradiance_rig(kind: RigKind, poses: &Poses, order: usize) -> Result<Vec<u8>> {
-    let meshes = match poses {
+    let meshes = fitting_surfaces(poses)?;
+    let refs: Vec<&Mesh> = meshes.iter().collect();
+    let mut fitted = fit_rig(kind, &refs, None);
+    fitted.tabulate(&meshes[0], order);
+    Ok(fitted.bytes())
+}
+
+/// The surfaces an irradiance rig is fitted over: a character's bind pose and up to
+/// [`FIT_POSES`] training poses in its root frame, or up to [`FIT_POSES`] of the meshes read
+/// from files (the first first).
+pub fn fitting_surfaces(poses: &Poses) -> Result<Vec<Mesh>> {
+    Ok(match poses {
         Poses::Meshes { meshes, .. } => {
             let step = meshes.len().div_ceil(FIT_POSES).max(1);
             meshes.iter().step_by(step).cloned().collect()
@@ -715,11 +726,7 @@ fn fit_irradiance_rig(kind: RigKind, poses: &Poses, order: usize) -> Result<Vec<
             fitting_meshes(rig.as_ref(), &clip)
                 .with_context(|| format!("posing clip {} to fit the irradiance rig", clip.name))?
         }
-    };
-    let refs: Vec<&Mesh> = meshes.iter().collect();
-    let mut fitted = fit_rig(kind, &refs, None);
-    fitted.tabulate(&meshes[0], order);
-    Ok(fitted.bytes())
+    })
 }
 
 /// Every frame of the training clips, in order.

@@ -5,7 +5,8 @@ use anyhow::{Context, Result};
 use aprt_core::{Light, MAX_COEFFS, MAX_ORDER, Rgb, irradiance_sh};
 
 use crate::io::scene::{Environment, Scene};
-use crate::lighting::rig_fit::GREY_PER_IRRADIANCE;
+use crate::lighting::rig_fit::{GREY_PER_IRRADIANCE, bounds};
+use crate::rig::mesh::Mesh;
 
 /// A scene's lighting, ready to project.
 #[derive(Clone, Debug, Default)]
@@ -45,6 +46,13 @@ impl SceneLighting {
                 .map_err(|e| anyhow::anyhow!("light {}: {e}", i + 1))?;
         }
         Ok(out)
+    }
+
+    /// SH radiance of `order` at the centre of `mesh`'s bounding box (where an engine without
+    /// a rig projects the lights).
+    pub fn sh_at_centre(&self, order: usize, mesh: &Mesh) -> Result<Vec<Rgb>> {
+        let (centre, _, _) = bounds(&[mesh]);
+        self.sh_at(order, centre.map(|x| x as f32))
     }
 
     /// Irradiance at `at` on `normal` through SH of `order`, and exactly (the environment at

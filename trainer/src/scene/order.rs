@@ -28,12 +28,17 @@ pub struct OrderChoice {
     pub grey_by_order: Vec<f32>,
 }
 
+/// The vertices the check visits: at most [`MAX_POINTS`], evenly spaced by index.
+fn points(mesh: &Mesh) -> std::iter::StepBy<std::ops::Range<usize>> {
+    let step = mesh.vertex_count().div_ceil(MAX_POINTS).max(1);
+    (0..mesh.vertex_count()).step_by(step)
+}
+
 /// The worst truncation error at `order` over the points, and the part (0: the environment,
 /// `i`: light `i`) whose own error is the largest there.
 fn worst_error(lighting: &SceneLighting, mesh: &Mesh, order: usize) -> (f32, usize, usize) {
-    let step = mesh.vertex_count().div_ceil(MAX_POINTS).max(1);
     let (mut worst, mut culprit, mut skipped) = (0.0f32, 0usize, 0usize);
-    for j in (0..mesh.vertex_count()).step_by(step) {
+    for j in points(mesh) {
         let Some(parts) = lighting.irradiance_parts(order, mesh.positions[j], mesh.normals[j])
         else {
             skipped += 1;
@@ -87,9 +92,7 @@ pub fn choose_order(lighting: &SceneLighting, mesh: &Mesh, target: f32) -> Order
         .map(|n| worst_error(lighting, mesh, n))
         .collect();
     let grey_by_order: Vec<f32> = errors.iter().map(|e| e.0).collect();
-    let visited = mesh
-        .vertex_count()
-        .div_ceil(mesh.vertex_count().div_ceil(MAX_POINTS).max(1));
+    let visited = points(mesh).len();
     let skipped = match errors[0].2 {
         0 => String::new(),
         s => format!("; {s} vertices where a light cannot be evaluated are left out"),

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use aprt_core::{MAX_ORDER, Rgb};
 
 use super::lighting::SceneLighting;
@@ -16,11 +16,12 @@ use crate::bake::checkpoint::OnExisting;
 use crate::bake::shard::Shard;
 use crate::bake::{BakeSettings, bake_poses};
 use crate::io::scene::{Choice, Scene};
-use crate::io::source::{Poses, joined};
-use crate::lighting::rig_fit::{FIT_POSES, fitting_meshes};
+use crate::io::source::Poses;
 use crate::model::fit::FitOptions;
 use crate::model::precision::PrecisionChoice;
-use crate::model::train::{Outcome, ShardBaked, StageSeconds, TrainSettings, train};
+use crate::model::train::{
+    Outcome, ShardBaked, StageSeconds, TrainSettings, fitting_surfaces, train,
+};
 use crate::progress::{Reporter, Silent};
 use crate::rig::mesh::Mesh;
 
@@ -134,7 +135,7 @@ pub fn train_scene(
         Choice::Fixed(p) => PrecisionChoice::Fixed(p),
         Choice::Auto => PrecisionChoice::Auto {
             target: scene.effects.error_target,
-            lighting: channels(&lighting.sh_at(order, centre(bind))?),
+            lighting: channels(&lighting.sh_at_centre(order, bind)?),
         },
     };
     for line in plan.computed.iter().chain(&plan.skipped) {
@@ -143,7 +144,7 @@ pub fn train_scene(
     reporter.note(&format!("rig: {}", rig.reason));
     let full = match options.shard {
         Some(_) => None,
-        None => Some(time_full_simulation(&plan, &fitting[1..], reporter)?),
+        None => Some(time_full_simulation(&plan, &fitting, baked, reporter)?),
     };
     let settings = TrainSettings {
         bake: plan.bake,
@@ -160,7 +161,6 @@ pub fn train_scene(
         (Outcome::Shard(baked), _) => return Ok(SceneOutcome::Shard(baked)),
         (Outcome::Trained(_), None) => unreachable!("only shards skip the timing"),
     };
-    let poses_baked = trained.baked_poses as f64;
     let mut computed = plan.computed.clone();
     let mut skipped = plan.skipped.clone();
     match rig_kind {
@@ -183,31 +183,9 @@ pub fn train_scene(
         skipped,
         seconds: started.elapsed().as_secs_f64(),
         stages: trained.seconds,
-        full_simulation: FullSimulation {
-            seconds: full.seconds_per_pose * poses_baked,
-            saved_seconds: (full.seconds_per_pose - full.scene_seconds_per_pose) * poses_baked,
-            ..full
-        },
+        full_simulation: full,
         bytes: trained.info.bytes,
     })))
-}
-
-/// The bind pose, then up to [`FIT_POSES`] training poses: what the rig is fitted over and
-/// the full simulation is timed on.
-fn fitting_surfaces(poses: &Poses) -> Result<Vec<Mesh>> {
-    match poses {
-        Poses::Rig { rig, clips, .. } => {
-            let clip = joined(clips.clone());
-            fitting_meshes(rig.as_ref(), &clip)
-                .with_context(|| format!("posing clip {}", clip.name))
-        }
-        Poses::Meshes { meshes, .. } => {
-            let step = meshes.len().div_ceil(FIT_POSES).max(1);
-            Ok(std::iter::once(meshes[0].clone())
-                .chain(meshes.iter().step_by(step).cloned())
-                .collect())
-        }
-    }
 }
 
 /// Poses the bake covers: training and validation frames, and the rest pose of bone-frame
@@ -224,10 +202,12 @@ fn baked_pose_count(poses: &Poses, scene: &Scene) -> usize {
     }
 }
 
-/// Times the scene's bake and then the full simulation on the same few poses.
+/// Times the scene's bake and the full simulation on the same few of `poses`, and scales
+/// both to the `baked` poses of the scene.
 fn time_full_simulation(
     plan: &BakePlan,
     poses: &[Mesh],
+    baked: usize,
     reporter: &dyn Reporter,
 ) -> Result<FullSimulation> {
     let full = BakeSettings {
@@ -273,22 +253,10 @@ fn time_full_simulation(
         poses_timed: sample.len(),
         seconds_per_pose: full_s,
         scene_seconds_per_pose: scene_s,
-        seconds: 0.0,
-        saved_seconds: 0.0,
+        seconds: full_s * baked as f64,
+        saved_seconds: (full_s - scene_s) * baked as f64,
         speedup: full_s / scene_s.max(1e-9),
     })
-}
-
-/// The centre of the mesh's bounding box.
-pub fn centre(mesh: &Mesh) -> [f32; 3] {
-    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-    for p in &mesh.positions {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    std::array::from_fn(|k| 0.5 * (lo[k] + hi[k]))
 }
 
 /// Each RGB channel of SH lighting as its own vector.

@@ -191,13 +191,7 @@ pub fn bake_reference(
     }
     let rig = clips.rig;
     let stride = stride.max(1);
-    let strided = |c: &Clip| Clip {
-        name: c.name.clone(),
-        fps: c.fps / stride as f64,
-        frames: c.frames.iter().step_by(stride).cloned().collect(),
-    };
-    let train: Vec<Clip> = clips.train.iter().map(strided).collect();
-    let validation: Vec<Clip> = clips.validation.iter().map(strided).collect();
+    let (train, validation) = strided_clips(clips, stride);
     let frames: Vec<Vec<f64>> = train.iter().flat_map(|c| c.frames.clone()).collect();
     let layout = PoseLayout::from_training(&rig.angle_names(), &frames)?;
     let lighting = SceneLighting::of(scene)?;
@@ -214,7 +208,7 @@ pub fn bake_reference(
     let tests = clips
         .tests
         .iter()
-        .map(strided)
+        .map(|c| strided(c, stride))
         .map(|c| Ok(bake_clip(rig, &layout, &c.name, c.frames, &settings, &Silent)?.0))
         .collect::<Result<Vec<_>>>()?;
     Ok(Reference {
@@ -257,11 +251,7 @@ pub fn sweep(
     let e = &scene.effects;
     let plan = &reference.plan;
     let bind = rig.bind_mesh();
-    let lum = luminance(
-        &reference
-            .lighting
-            .sh_at(MAX_ORDER, crate::scene::train::centre(bind))?,
-    );
+    let lum = luminance(&reference.lighting.sh_at_centre(MAX_ORDER, bind)?);
     let truth = Truth {
         tests: &reference.tests,
         lighting: &lum,
@@ -284,7 +274,7 @@ pub fn sweep(
                         },
                         Data::Reference => unreachable!("handled above"),
                     };
-                    let (train, validation) = reference.strided_clips(clips);
+                    let (train, validation) = strided_clips(clips, reference.stride);
                     let layout = &reference.layout;
                     extra = Some((other, bake_set(rig, layout, &train, &validation, &bake)?));
                 }
@@ -342,19 +332,19 @@ pub fn sweep(
     })
 }
 
-impl Reference {
-    /// The training and validation clips at the reference's stride.
-    fn strided_clips(&self, clips: &SceneClips<'_>) -> (Vec<Clip>, Vec<Clip>) {
-        let strided = |c: &Clip| Clip {
-            name: c.name.clone(),
-            fps: c.fps / self.stride as f64,
-            frames: c.frames.iter().step_by(self.stride).cloned().collect(),
-        };
-        (
-            clips.train.iter().map(strided).collect(),
-            clips.validation.iter().map(strided).collect(),
-        )
+/// Every `stride`-th frame of `clip`.
+fn strided(clip: &Clip, stride: usize) -> Clip {
+    Clip {
+        name: clip.name.clone(),
+        fps: clip.fps / stride as f64,
+        frames: clip.frames.iter().step_by(stride).cloned().collect(),
     }
+}
+
+/// The training and validation clips, every `stride`-th frame.
+fn strided_clips(clips: &SceneClips<'_>, stride: usize) -> (Vec<Clip>, Vec<Clip>) {
+    let each = |list: &[Clip]| list.iter().map(|c| strided(c, stride)).collect();
+    (each(clips.train), each(clips.validation))
 }
 
 /// Which knobs a sweep turns.
