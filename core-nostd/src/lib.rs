@@ -52,6 +52,7 @@ mod light;
 mod lightmap;
 mod math;
 mod model;
+mod proxies;
 mod rotation;
 mod sh;
 
@@ -76,6 +77,7 @@ pub use light::{
 };
 pub use lightmap::LightMap;
 pub use model::{Model, StreamedModel};
+pub use proxies::{MAX_PROXIES, ProxyFrame, ProxySet, Skinning};
 pub use rotation::{Rotation, ShRotation};
 pub use sh::{
     CLAMPED_COSINE_BANDS, MAX_COEFFS, MAX_ORDER, ShError, band_of, clamped_cosine, coeff_count,
@@ -92,6 +94,9 @@ pub mod format {
         align_up, crc32, padded_vertices,
     };
     pub use crate::blob::read_header;
+    pub use crate::proxies::{
+        BONE_RECORD as PROXY_BONE_RECORD, PRELUDE as PROXY_PRELUDE, PROXY_RECORD, proxies_len,
+    };
 }
 
 #[cfg(doctest)]

@@ -598,7 +598,7 @@ fn tangent_derivative(
 }
 
 /// Irradiance of a sphere of unit radiance, `sin α = r/d` (d ≥ r), at `cos θ` from its centre.
-fn sphere_irradiance(radius: f32, distance: f32, cos_theta: f32) -> f32 {
+pub(crate) fn sphere_irradiance(radius: f32, distance: f32, cos_theta: f32) -> f32 {
     let s = radius / distance;
     let s2 = s * s;
     if cos_theta * cos_theta > s2 {

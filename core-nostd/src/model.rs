@@ -9,6 +9,7 @@ use crate::blob::{
 use crate::eval::{LitWeights, PoseWeights};
 use crate::irradiance_rig::{IrradianceRig, Placement, RigLitWeights};
 use crate::light::Light;
+use crate::proxies::{ProxyFrame, Skinning};
 use crate::rotation::Rotation;
 
 /// A model whose blob is in memory: every call reads it in place, with no buffer.
@@ -309,6 +310,87 @@ impl<'a> Model<'a> {
         )
     }
 
+    /// Poses the model's occluder proxies for this frame: each sphere moved by its bone's
+    /// skinning matrix (`skinning`, one per bone, bind pose to posed, the matrices an engine
+    /// computes for linear blend skinning), and per bone the proxies that can reach its
+    /// vertices. [`Error::NoProxies`] when the model has none ([`ModelInfo::has_proxies`]).
+    ///
+    /// A model with proxies learnt its transfer plus the proxies' occlusion: call this, then
+    /// [`Model::occlude`] after [`Model::shade`] (or [`Model::occlude_transfer`] after
+    /// [`Model::transfer`]), every frame. Without them such a model is too bright wherever
+    /// a part of the character shades another.
+    pub fn pose_proxies(&self, skinning: &[Skinning], frame: &mut ProxyFrame) -> Result<(), Error> {
+        self.info
+            .pose_proxies(&mut Resident(self.blob), skinning, frame)
+    }
+
+    /// Subtracts from `out` (the [`Model::shade`] output of vertices `first .. first +
+    /// out.len()`) what the posed proxies block under the world SH `lighting` (n², as given
+    /// to [`Model::light`]): `out_j −= Σ_c L_c D_jc`. `positions` and `normals` are the
+    /// vertices' posed world positions and normals (the caller's skinned mesh); a zero normal
+    /// sees no proxy. Its cost is a few dozen operations per vertex and proxy within reach.
+    ///
+    /// ```
+    /// use aprt_core::{LitWeights, Model, PoseWeights, ProxyFrame};
+    ///
+    /// let model = Model::parse(include_bytes!("../../fixtures/golden/v1-proxies.aprt"))?;
+    /// let info = *model.info();
+    /// let (mut pose, mut lit, mut proxies) = (PoseWeights::new(), LitWeights::new(), ProxyFrame::new());
+    /// let identity = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    /// let still = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+    /// let sky = [1.0, 0.0, 0.8, 0.0];
+    /// model.set_pose(&vec![0.0; info.pose_len()], &mut pose)?;
+    /// model.light(&pose, &sky, &vec![identity; info.bones()], &mut lit)?;
+    /// model.pose_proxies(&vec![still; info.bones()], &mut proxies)?;
+    /// let (positions, normals) = (vec![[0.0, 0.0, 0.0]; 4], vec![[0.0, 0.0, 1.0]; 4]);
+    /// let mut shading = vec![0.0; 4];
+    /// model.shade(&lit, 0, &mut shading)?;
+    /// model.occlude(&proxies, &sky, &positions, &normals, 0, &mut shading)?;
+    /// # Ok::<(), aprt_core::Error>(())
+    /// ```
+    pub fn occlude(
+        &self,
+        frame: &ProxyFrame,
+        lighting: &[f32],
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        first: usize,
+        out: &mut [f32],
+    ) -> Result<(), Error> {
+        self.info.occlude(
+            &mut Resident(self.blob),
+            frame,
+            lighting,
+            positions,
+            normals,
+            first,
+            out,
+        )
+    }
+
+    /// Subtracts the proxies' occlusion `D_j` from [`Model::transfer`] output (`out`, n² per
+    /// vertex of `first ..`), in each vertex's bone frame (`bones` as in [`Model::light`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn occlude_transfer(
+        &self,
+        frame: &ProxyFrame,
+        bones: &[Rotation],
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        first: usize,
+        out: &mut [f32],
+    ) -> Result<(), Error> {
+        self.info.occlude_transfer(
+            &mut Resident(self.blob),
+            frame,
+            bones,
+            positions,
+            normals,
+            first,
+            out,
+        )
+    }
+
     /// Adds (`+=`) to `out` the RGB shading of vertices `first .. first + out.len()` under
     /// `lights`, each evaluated at the vertex's own world position (`positions`, one per
     /// vertex, skinned by the caller) and scaled by `weights[i]`, its per-vertex share
@@ -579,6 +661,61 @@ impl<'s, S: BlobSource> StreamedModel<'s, S> {
             rig,
             placement,
             positions,
+            first,
+            out,
+        )
+    }
+
+    /// As [`Model::pose_proxies`], reading the proxies through the buffer.
+    pub fn pose_proxies(
+        &mut self,
+        skinning: &[Skinning],
+        frame: &mut ProxyFrame,
+    ) -> Result<(), Error> {
+        let info = self.info;
+        info.pose_proxies(&mut self.reader(), skinning, frame)
+    }
+
+    /// As [`Model::occlude`], streaming the bone rows of the range.
+    pub fn occlude(
+        &mut self,
+        frame: &ProxyFrame,
+        lighting: &[f32],
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        first: usize,
+        out: &mut [f32],
+    ) -> Result<(), Error> {
+        let info = self.info;
+        info.occlude(
+            &mut self.reader(),
+            frame,
+            lighting,
+            positions,
+            normals,
+            first,
+            out,
+        )
+    }
+
+    /// As [`Model::occlude_transfer`], streaming the bone rows of the range.
+    #[allow(clippy::too_many_arguments)]
+    pub fn occlude_transfer(
+        &mut self,
+        frame: &ProxyFrame,
+        bones: &[Rotation],
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        first: usize,
+        out: &mut [f32],
+    ) -> Result<(), Error> {
+        let info = self.info;
+        info.occlude_transfer(
+            &mut self.reader(),
+            frame,
+            bones,
+            positions,
+            normals,
             first,
             out,
         )

@@ -10,7 +10,7 @@
 
 use aprt_core::{
     Error, Frame, Input, IrradianceRig, Light, LitWeights, Model, ModelInfo, Placement, PointLight,
-    PoseWeights, RigLitWeights, Rotation, SphereLight, StreamedModel,
+    PoseWeights, ProxyFrame, RigLitWeights, Rotation, Skinning, SphereLight, StreamedModel,
 };
 
 use crate::decode::decode;
@@ -186,7 +186,90 @@ pub fn exercise(blob: &[u8], probe: &Probe) -> Result<Evaluation, Error> {
         exercise_rig(&model, &rig, probe, &eval);
     }
     exercise_atlas(&model, blob, probe, &eval);
+    exercise_proxies(&model, blob, probe, &eval);
     Ok(eval)
+}
+
+/// A model's occluder proxies posed by skinning matrices from the probe's rotations (moved by
+/// its angles) and subtracted from its shading and transfer at positions and normals from the
+/// probe: non-finite skinning, positions or normals are refused with their errors; finite
+/// inputs give no NaN, and the streamed model the same bits; a model without proxies refuses
+/// with [`Error::NoProxies`].
+fn exercise_proxies(model: &Model, blob: &[u8], probe: &Probe, eval: &Evaluation) {
+    let info = model.info();
+    let a = probe.angles;
+    let skinning: Vec<Skinning> = (0..info.bones())
+        .map(|b| {
+            let r = probe.rotation(b);
+            let t = [a[b % 4], a[(b + 1) % 4], a[(b + 2) % 4]];
+            [0, 1, 2]
+                .map(|i| [r[i][0], r[i][1], r[i][2], t[i]])
+                .concat()
+                .try_into()
+                .expect("twelve values")
+        })
+        .collect();
+    let mut frame = Box::new(ProxyFrame::new());
+    let posed = model.pose_proxies(&skinning, &mut frame);
+    if !info.has_proxies() {
+        assert_eq!(posed, Err(Error::NoProxies));
+        return;
+    }
+    let finite_skinning = skinning.iter().flatten().all(|x| x.is_finite());
+    if !finite_skinning {
+        assert!(matches!(posed, Err(Error::BadSkinning { .. })));
+        return;
+    }
+    posed.expect("finite skinning poses the proxies");
+    let v = info.vertices();
+    let positions: Vec<[f32; 3]> = (0..v)
+        .map(|j| [a[j % 4], a[(j + 1) % 4], 0.1 * j as f32])
+        .collect();
+    let normals: Vec<[f32; 3]> = (0..v)
+        .map(|j| [a[(j + 2) % 4], 1.0, a[(j + 3) % 4]])
+        .collect();
+    let lighting = &eval.lighting;
+    let mut shading = eval.shading.clone();
+    let result = model.occlude(&frame, lighting, &positions, &normals, 0, &mut shading);
+    let finite = positions
+        .iter()
+        .chain(&normals)
+        .flatten()
+        .all(|x| x.is_finite());
+    if !finite {
+        assert!(matches!(
+            result,
+            Err(Error::NonFinitePosition { .. } | Error::NonFiniteNormal { .. })
+        ));
+        return;
+    }
+    result.expect("finite inputs occlude");
+    assert!(shading.iter().all(|x| !x.is_nan()), "NaN occluded shading");
+    let mut transfer = eval.transfer.clone();
+    model
+        .occlude_transfer(
+            &frame,
+            &eval.rotations,
+            &positions,
+            &normals,
+            0,
+            &mut transfer,
+        )
+        .expect("finite inputs occlude the transfer");
+    assert!(
+        transfer.iter().all(|x| !x.is_nan()),
+        "NaN occluded transfer"
+    );
+    let mut scratch = vec![0u8; info.scratch_bytes()];
+    let mut streamed = StreamedModel::open(Streamed::new(blob), &mut scratch).unwrap();
+    let mut sframe = Box::new(ProxyFrame::new());
+    streamed.pose_proxies(&skinning, &mut sframe).unwrap();
+    let mut again = eval.shading.clone();
+    streamed
+        .occlude(&sframe, lighting, &positions, &normals, 0, &mut again)
+        .unwrap();
+    let bits = |xs: &[f32]| xs.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&again), bits(&shading), "streamed occlusion differs");
 }
 
 /// A model's texel atlas: the streamed reader reads the same atlas, through a buffer of

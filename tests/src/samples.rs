@@ -3,6 +3,7 @@
 //! (`cargo test -p aprt-tests --test corpus -- --ignored` writes `fuzz/corpus/`).
 
 use aprt_core::{AxisKind, RigLayout, RigShape};
+use aprt_trainer::model::occluders::{BoneBound, ProxySection, Sphere};
 use aprt_trainer::{
     BoneFrames, Extras, LinearModel, Precision, encode_model, encode_model_with,
     encode_model_with_rig,
@@ -98,18 +99,55 @@ pub fn sample_atlas_model() -> LinearModel {
     random_model(2, SAMPLE_ATLAS.1.len(), 2, 1, None)
 }
 
-/// `(name, blob)` of each sample, a bone-frame model carrying an irradiance rig, and a
-/// light-map model carrying its texel atlas.
+/// A proxies section for a model of `bones` bones: a sphere on bone 0 and one on the last
+/// bone, each ignored by its own bone, culled below a cap of `sin²α = 0.01`.
+pub fn sample_proxies(bones: usize) -> Vec<u8> {
+    let last = (bones - 1) as u16;
+    let sphere = |bone, centre| Sphere {
+        bone,
+        centre,
+        radius: 0.25,
+    };
+    let mut bounds = vec![
+        BoneBound {
+            centre: [0.0, 0.0, 0.0],
+            radius: 1.0,
+            ignored: 0,
+        };
+        bones
+    ];
+    bounds[0].ignored |= 1;
+    bounds[bones - 1].ignored |= 2;
+    ProxySection {
+        spheres: vec![sphere(0, [0.0, 0.0, 0.5]), sphere(last, [0.3, -0.2, 0.4])],
+        bones: bounds,
+        cull: 0.01,
+    }
+    .to_bytes()
+    .expect("the sample proxies are valid")
+}
+
+/// `(name, blob)` of each sample, a bone-frame model carrying an irradiance rig, one carrying
+/// occluder proxies, and a light-map model carrying its texel atlas (last).
 pub fn sample_blobs() -> Vec<(&'static str, Vec<u8>)> {
     let rigged = with_bones(random_model(2, 10, 3, 1, Some(2)), 2);
     let atlas = Extras {
         texel_atlas: Some((SAMPLE_ATLAS.0, &SAMPLE_ATLAS.1)),
         ..Extras::default()
     };
+    let proxies = sample_proxies(2);
+    let occluded = Extras {
+        proxies: Some(&proxies),
+        ..Extras::default()
+    };
     sample_models()
         .into_iter()
         .map(|(name, m, p)| (name, encode_model(&m, p).expect("samples are valid")))
         .chain([
+            (
+                "proxies-bones-f32",
+                encode_model_with(&rigged, Precision::F32, &occluded).expect("samples are valid"),
+            ),
             (
                 "rig-bones-f32",
                 encode_model_with_rig(&rigged, Precision::F32, Some(&sample_rig()))

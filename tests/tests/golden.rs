@@ -9,31 +9,36 @@ use aprt_core::{Frame, Model};
 use aprt_tests::decode::decode;
 use aprt_tests::harness::{Probe, exercise};
 use aprt_tests::random_model;
+use aprt_trainer::model::occluders::{BoneBound, ProxySection, Sphere};
 use aprt_trainer::{BoneFrames, Extras, LinearModel, Precision, encode_model_with};
 
 fn golden_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../fixtures/golden")
 }
 
-/// A golden blob: its file name, model, precision and texel atlas (resolution, texels).
+/// A golden blob: its file name, model, precision, texel atlas (resolution, texels) and
+/// occluder proxies' section.
 type Golden = (
     &'static str,
     LinearModel,
     Precision,
     Option<(u32, Vec<u32>)>,
+    Option<Vec<u8>>,
 );
 
 /// The blob's bytes as the writer writes them today.
-fn encode((_, model, precision, atlas): &Golden) -> Vec<u8> {
+fn encode((_, model, precision, atlas, proxies): &Golden) -> Vec<u8> {
     let extras = Extras {
         texel_atlas: atlas.as_ref().map(|(r, texels)| (*r, &texels[..])),
+        proxies: proxies.as_deref(),
         ..Extras::default()
     };
     encode_model_with(model, *precision, &extras).unwrap()
 }
 
-/// Each golden blob: a world-frame and a bone-frame model, and a light-map model (its rows
-/// are texels of an 8 × 8 map) with its texel atlas.
+/// Each golden blob: a world-frame and a bone-frame model, a light-map model (its rows are
+/// texels of an 8 × 8 map) with its texel atlas, and a bone-frame model with occluder
+/// proxies (two spheres on bone 0, which bone 0 ignores).
 fn golden_models() -> Vec<Golden> {
     let names = |names: &[&str]| names.iter().map(|n| n.to_string()).collect();
     let mut world = random_model(3, 20, 4, 2, Some(3));
@@ -47,10 +52,52 @@ fn golden_models() -> Vec<Golden> {
     let mut lightmap = random_model(2, 12, 3, 1, None);
     lightmap.angle_names = names(&["jaw", "brow.l", "brow.r"]);
     let texels = (0..12).map(|j| 9 + 4 * j).collect();
+    let mut occluded = random_model(2, 16, 3, 3, Some(5));
+    occluded.angle_names = names(&["shoulder.x", "shoulder.y", "elbow"]);
+    occluded.bones = Some(BoneFrames {
+        count: 2,
+        vertex_bone: (0..16).map(|j| (j / 8) as u16).collect(),
+    });
+    let sphere = |centre, radius| Sphere {
+        bone: 0,
+        centre,
+        radius,
+    };
+    let proxies = ProxySection {
+        spheres: vec![sphere([0.0, 0.0, 1.0], 0.3), sphere([0.0, 0.4, 1.0], 0.2)],
+        bones: vec![
+            BoneBound {
+                centre: [0.0, 0.2, 1.0],
+                radius: 0.5,
+                ignored: 0b11,
+            },
+            BoneBound {
+                centre: [0.0, 0.0, 0.0],
+                radius: 0.3,
+                ignored: 0,
+            },
+        ],
+        cull: 0.01,
+    }
+    .to_bytes()
+    .unwrap();
     vec![
-        ("v1-world.aprt", world, Precision::F32, None),
-        ("v1-bones.aprt", bones, Precision::F16, None),
-        ("v1-atlas.aprt", lightmap, Precision::F32, Some((8, texels))),
+        ("v1-world.aprt", world, Precision::F32, None, None),
+        ("v1-bones.aprt", bones, Precision::F16, None, None),
+        (
+            "v1-atlas.aprt",
+            lightmap,
+            Precision::F32,
+            Some((8, texels)),
+            None,
+        ),
+        (
+            "v1-proxies.aprt",
+            occluded,
+            Precision::F32,
+            None,
+            Some(proxies),
+        ),
     ]
 }
 
@@ -68,7 +115,7 @@ fn write_golden_blobs() {
 #[test]
 fn golden_blobs_read_as_written() {
     for golden in golden_models() {
-        let (name, model, _, atlas) = &golden;
+        let (name, model, _, atlas, proxies) = &golden;
         let path = golden_dir().join(name);
         let blob = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         let core = Model::parse(&blob).unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -104,6 +151,7 @@ fn golden_blobs_read_as_written() {
             (a.resolution(), texels)
         });
         assert_eq!(read, *atlas, "{name}: texel atlas");
+        assert_eq!(info.has_proxies(), proxies.is_some(), "{name}: proxies");
         exercise(&blob, &Probe::GENTLE).unwrap();
         assert!(
             encode(&golden) == blob,

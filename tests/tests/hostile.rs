@@ -574,6 +574,7 @@ fn moved_or_resized_sections_are_refused() {
             let is_names = SectionKind::from_tag(before.kind) == SectionKind::AngleNames;
             let is_rig = SectionKind::from_tag(before.kind) == SectionKind::IrradianceRig;
             let is_atlas = SectionKind::from_tag(before.kind) == SectionKind::TexelAtlas;
+            let is_proxies = SectionKind::from_tag(before.kind) == SectionKind::Proxies;
             for (offset_delta, len_delta) in
                 (-64i64..64).flat_map(|o| (-64i64..64).map(move |l| (o, l)))
             {
@@ -600,6 +601,7 @@ fn moved_or_resized_sections_are_refused() {
                     ) || (is_names && result == Err(Error::BadAngleNames))
                         || (is_rig && result == Err(Error::BadIrradianceRig))
                         || (is_atlas && result == Err(Error::BadTexelAtlas))
+                        || (is_proxies && result == Err(Error::BadProxies))
                         || (empty_moved && result.is_ok()),
                     "{name}, section {section} moved to {offset}, resized to {len}: {result:?}"
                 );
@@ -689,4 +691,78 @@ fn a_source_changed_after_open_never_panics() {
         }
     }
     assert!(shaded > 0, "no changed source reached the shading loop");
+}
+
+/// Occluder proxies' damage, checksums matching, is refused with `BadProxies`: counts out of
+/// range or not the model's bones, a cull outside [0, 1), a reserved word, a bone past the
+/// count, non-finite or non-positive radii, a NaN centre, a mask bit past the proxies, a
+/// length the counts do not imply; and so is a proxies section in a world-frame model.
+#[test]
+fn damaged_occluder_proxies_are_refused() {
+    let (_, blob) = sample_blobs()
+        .into_iter()
+        .find(|(name, _)| *name == "proxies-bones-f32")
+        .expect("the proxies sample");
+    assert!(parse(&blob).unwrap().has_proxies());
+    let header = read_header(&blob).unwrap();
+    let at = header
+        .sections
+        .iter()
+        .find(|s| s.kind == SectionKind::Proxies.tag())
+        .expect("the proxies section")
+        .offset as usize;
+    let word = |offset: usize, value: [u8; 4]| {
+        let mut edited = blob.clone();
+        edited[at + offset..at + offset + 4].copy_from_slice(&value);
+        parse(&reseal(&edited))
+    };
+    let u = |x: u32| x.to_le_bytes();
+    let f = |x: f32| x.to_le_bytes();
+    // Prelude 16 bytes, then 20 per proxy (bone, centre, radius), then 24 per bone.
+    let bad = [
+        ("no proxies", 0, u(0)),
+        ("65 proxies", 0, u(65)),
+        ("other bone count", 4, u(3)),
+        ("cull 1", 8, f(1.0)),
+        ("cull NaN", 8, f(f32::NAN)),
+        ("negative cull", 8, f(-0.1)),
+        ("reserved word", 12, u(1)),
+        ("bone past the count", 16, u(2)),
+        ("NaN centre", 20, f(f32::NAN)),
+        ("zero radius", 32, f(0.0)),
+        ("negative radius", 32, f(-1.0)),
+        ("infinite radius", 32, f(f32::INFINITY)),
+        ("negative bound", 56 + 12, f(-1.0)),
+        ("mask past the proxies", 56 + 16, u(4)),
+        ("high mask word", 56 + 20, u(1)),
+    ];
+    for (what, offset, value) in bad {
+        assert_eq!(word(offset, value), Err(Error::BadProxies), "{what}");
+    }
+    // One proxy fewer announced, or a section cut short: the length no longer matches.
+    let length = |found| {
+        Err(Error::SectionLength {
+            section: SectionKind::Proxies,
+            expected: 16 + 40 + 48,
+            found,
+        })
+    };
+    assert_eq!(
+        word(0, u(1)),
+        Err(Error::SectionLength {
+            section: SectionKind::Proxies,
+            expected: 16 + 20 + 48,
+            found: 104
+        }),
+        "a count short"
+    );
+    let index = header
+        .sections
+        .iter()
+        .position(|s| s.kind == SectionKind::Proxies.tag())
+        .unwrap();
+    let short = with_header(&blob, |h| h.sections[index].len -= 24);
+    assert_eq!(parse(&reseal(&short)), length(80));
+    let world = with_header(&blob, |h| h.frame = aprt_core::Frame::World);
+    assert!(parse(&world).is_err());
 }

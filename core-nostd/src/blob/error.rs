@@ -45,6 +45,10 @@ pub enum Input {
     LightMap,
     /// The R × R map [`TexelAtlas::scatter`](crate::TexelAtlas::scatter) writes into.
     AtlasMap,
+    /// The bones' skinning matrices of `pose_proxies` (one per bone).
+    Skinning,
+    /// The vertex normals of `occlude` and `occlude_transfer` (one per vertex).
+    Normals,
 }
 
 /// Everything that can go wrong reading a blob or evaluating a model.
@@ -156,6 +160,21 @@ pub enum Error {
     BadTexelAtlas,
     /// A call needs the model's irradiance rig and the model has none.
     NoIrradianceRig,
+    /// The proxies section has a bad count, cull threshold, bone, centre, radius, mask or
+    /// length, or a world-frame model has one.
+    BadProxies,
+    /// A call needs the model's occluder proxies and the model has none.
+    NoProxies,
+    /// A bone's skinning matrix holds NaN or infinity.
+    BadSkinning {
+        /// Index of the bone.
+        bone: usize,
+    },
+    /// A vertex normal is NaN or infinite.
+    NonFiniteNormal {
+        /// Index of the vertex in the call's range.
+        index: usize,
+    },
     /// Rig lighting weights were computed for a rig of another size.
     WeightsForOtherRig,
     /// The caller's buffer is too small; `needed` bytes would do.
@@ -299,6 +318,17 @@ impl core::fmt::Display for Error {
                 "texel atlas needs a resolution in 1..=8192 and increasing texels below its square"
             ),
             Error::NoIrradianceRig => write!(f, "the model has no irradiance rig"),
+            Error::BadProxies => write!(
+                f,
+                "occluder proxies have a bad count, cull, bone, centre, radius, mask or length"
+            ),
+            Error::NoProxies => write!(f, "the model has no occluder proxies"),
+            Error::BadSkinning { bone } => {
+                write!(f, "skinning matrix of bone {bone} is NaN or infinite")
+            }
+            Error::NonFiniteNormal { index } => {
+                write!(f, "vertex normal {index} is NaN or infinite")
+            }
             Error::WeightsForOtherRig => {
                 write!(f, "rig lighting weights were computed for another rig")
             }

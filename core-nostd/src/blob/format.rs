@@ -165,13 +165,19 @@ pub enum SectionKind {
     /// `max_j |v_jr| / 127`, 0 for a zero vector), so the row `r` of vertex `j` is
     /// `scale_r · q_jr`.
     RowScales,
+    /// Tag 12, optional for the writer, required once written: occluder proxies, spheres that
+    /// move with the bones and occlude the vertices of other parts (bone-frame models only);
+    /// the model's transfer is then `model(pose) − occlusion(pose)`, so a reader that does
+    /// not subtract the occlusion must refuse the model. Its own little layout, described and
+    /// validated in `proxies/section.rs` (FORMAT.md).
+    Proxies,
     /// A tag this version does not know.
     Unknown(u16),
 }
 
 impl SectionKind {
     /// The kinds this version knows, in tag order.
-    const KNOWN: [SectionKind; 11] = [
+    const KNOWN: [SectionKind; 12] = [
         SectionKind::PoseMean,
         SectionKind::PoseProjection,
         SectionKind::Weights,
@@ -183,12 +189,13 @@ impl SectionKind {
         SectionKind::IrradianceRig,
         SectionKind::TexelAtlas,
         SectionKind::RowScales,
+        SectionKind::Proxies,
     ];
 
     /// The kind of a section-table tag.
     pub const fn from_tag(tag: u16) -> SectionKind {
         match tag {
-            1..=11 => Self::KNOWN[tag as usize - 1],
+            1..=12 => Self::KNOWN[tag as usize - 1],
             other => SectionKind::Unknown(other),
         }
     }
@@ -207,6 +214,7 @@ impl SectionKind {
             SectionKind::IrradianceRig => 9,
             SectionKind::TexelAtlas => 10,
             SectionKind::RowScales => 11,
+            SectionKind::Proxies => 12,
             SectionKind::Unknown(tag) => tag,
         }
     }

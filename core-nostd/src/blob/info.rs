@@ -48,6 +48,8 @@ pub struct ModelInfo {
     /// The texel of every row of a light-map model, when the model has one (validated at
     /// open).
     pub(crate) texel_atlas: Option<Span>,
+    /// The occluder proxies, when the model has them (validated at open).
+    pub(crate) proxies: Option<Span>,
 }
 
 impl ModelInfo {

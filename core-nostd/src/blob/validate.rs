@@ -12,6 +12,7 @@ use super::info::{ModelInfo, Span};
 use super::names::NamesCheck;
 use super::{Dim, Error, Reader};
 use crate::irradiance_rig::{RigCheck, RigFailure};
+use crate::proxies::ProxyCheck;
 use crate::sh::{MAX_ORDER, coeff_count};
 
 fn dim(what: Dim, value: u64, min: u64, max: u64) -> Result<usize, Error> {
@@ -78,6 +79,10 @@ impl ModelInfo {
             })
         };
 
+        let bones = match h.frame {
+            Frame::World => 0,
+            Frame::Bones { count } => usize::from(count),
+        };
         let mut found: [Option<Span>; SectionKind::KNOWN_COUNT] = [None; SectionKind::KNOWN_COUNT];
         let mut end_of_data = decoded.end;
         for e in &h.sections {
@@ -97,7 +102,13 @@ impl ModelInfo {
             if found[slot].is_some() {
                 return Err(Error::DuplicateSection { section: kind });
             }
-            let Some(span) = check_section(r, e, kind, expected_elems(kind), (vertices, pose_len))?
+            let Some(span) = check_section(
+                r,
+                e,
+                kind,
+                expected_elems(kind),
+                (vertices, pose_len, bones),
+            )?
             else {
                 continue;
             };
@@ -143,6 +154,7 @@ impl ModelInfo {
             pose_features,
             irradiance_rig: get(SectionKind::IrradianceRig),
             texel_atlas: get(SectionKind::TexelAtlas),
+            proxies: get(SectionKind::Proxies),
         };
         info.verify_bones(r)?;
         info.verify_bounds(r)?;
@@ -338,6 +350,23 @@ fn check_texel_atlas<R: Reader>(
     })
 }
 
+/// The occluder proxies: checksummed and validated as they stream past ([`ProxyCheck`]), for
+/// a bone-frame model only (`bones` is 0 for a world-frame one, which no proxy fits). Their
+/// encoding byte carries no meaning.
+fn check_proxies<R: Reader>(r: &mut R, e: &SectionEntry, bones: usize) -> Result<Span, Error> {
+    if bones == 0 {
+        return Err(Error::BadProxies);
+    }
+    let mut proxies = ProxyCheck::new(bones);
+    check_crc(r, e, |bytes| proxies.feed(bytes))?;
+    proxies.finish()?;
+    Ok(Span {
+        offset: e.offset,
+        len: e.len,
+        encoding: Encoding::F32,
+    })
+}
+
 /// The angle names: checksummed, then one UTF-8 line per pose entry. Their encoding byte
 /// carries no meaning and is not checked.
 fn check_angle_names<R: Reader>(
@@ -416,17 +445,18 @@ fn verify_array<R: Reader>(r: &mut R, e: &SectionEntry, span: Span) -> Result<()
 /// Validates one known section other than the pose features (read first by
 /// `pose_features`): its span, or `None` for a section this basis does not use (its CRC is
 /// still checked). `elems` is the element count an array section of this basis must hold;
-/// `(vertices, pose_len)` size the atlas and the angle names.
+/// `(vertices, pose_len, bones)` size the atlas, the angle names and the proxies.
 fn check_section<R: Reader>(
     r: &mut R,
     e: &SectionEntry,
     kind: SectionKind,
     elems: Option<Result<u64, Error>>,
-    (vertices, pose_len): (usize, usize),
+    (vertices, pose_len, bones): (usize, usize, usize),
 ) -> Result<Option<Span>, Error> {
     Ok(Some(match kind {
         SectionKind::IrradianceRig => check_irradiance_rig(r, e)?,
         SectionKind::TexelAtlas => check_texel_atlas(r, e, vertices)?,
+        SectionKind::Proxies => check_proxies(r, e, bones)?,
         SectionKind::AngleNames => check_angle_names(r, e, pose_len)?,
         _ => match elems {
             Some(elems) => {

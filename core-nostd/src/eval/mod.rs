@@ -21,6 +21,7 @@ mod analytic;
 mod bounds;
 mod features;
 mod kernels;
+mod occlude;
 mod rig;
 mod weights;
 
@@ -29,8 +30,9 @@ use kernels::{
     transfer_stored,
 };
 pub(crate) use rig::check_positions;
+use weights::check_capacity;
 pub use weights::{LitWeights, MAX_POSE_WEIGHTS, PoseWeights};
-use weights::{check_capacity, check_stamp};
+pub(crate) use weights::{Stamp, check_stamp};
 
 use crate::blob::format::{Basis, Encoding, Frame, MAX_POSE_LEN, VERTEX_BLOCK};
 use crate::blob::{Error, Input, ModelInfo, Reader, Span};
@@ -38,7 +40,7 @@ use crate::rotation::{Rotation, ShRotation, is_rotation};
 use crate::sh::MAX_COEFFS;
 
 /// The index of the first NaN or infinite value, if any.
-fn first_non_finite(xs: &[f32]) -> Option<usize> {
+pub(crate) fn first_non_finite(xs: &[f32]) -> Option<usize> {
     xs.iter().position(|x| !x.is_finite())
 }
 

@@ -106,6 +106,7 @@ pub fn train_light_maps(
         &Extras {
             irradiance_rig: None,
             texel_atlas: Some((training.resolution as u32, &rows)),
+            proxies: None,
         },
     )?;
     Ok(TrainedLightMaps {

@@ -73,6 +73,10 @@ impl Precision {
 /// Why a model cannot be written.
 #[derive(Clone, Debug, thiserror::Error, PartialEq)]
 pub enum ExportError {
+    /// The occluder proxies do not fit the model (a world-frame model, another bone count) or
+    /// are malformed.
+    #[error("occluder proxies: {0} (they need a bone-frame model of the same bones)")]
+    Proxies(aprt_core::Error),
     /// A dimension exceeds what `aprt-core` accepts.
     #[error("{what} = {value} exceeds the runtime limit {max}")]
     TooLarge {
@@ -303,6 +307,10 @@ pub struct Extras<'a> {
     /// A light-map model's atlas: the resolution R and each row's texel index `y · R + x`
     /// (strictly increasing, below R², one per row), written as the `TexelAtlas` section.
     pub texel_atlas: Option<(u32, &'a [u32])>,
+    /// Occluder proxies' bytes (`aprt_core::ProxySet`'s layout, from
+    /// [`crate::model::occluders`]), written as the required `Proxies` section: the model's
+    /// transfer is then its output minus their occlusion.
+    pub proxies: Option<&'a [u8]>,
 }
 
 /// Serialises `model` into a complete blob.
@@ -451,6 +459,16 @@ fn optional_sections(
     }
     if let Some((resolution, texels)) = extras.texel_atlas {
         table.push(texel_atlas_section(resolution, texels, v)?);
+    }
+    if let Some(proxies) = extras.proxies {
+        let bones = model.bones.as_ref().map_or(0, |b| b.count);
+        aprt_core::ProxySet::parse(proxies, bones).map_err(ExportError::Proxies)?;
+        table.push(SectionBytes {
+            tag: SectionKind::Proxies.tag(),
+            required: true,
+            encoding: Encoding::F32,
+            bytes: proxies.to_vec(),
+        });
     }
     Ok(table)
 }

@@ -12,6 +12,7 @@
 pub mod export;
 pub mod features;
 pub mod fit;
+pub mod occluders;
 pub mod precision;
 pub mod predict;
 pub mod runtime;

@@ -1,0 +1,187 @@
+//! One vertex's occlusion by the proxies that may touch it (see the module above).
+
+use core::f32::consts::PI;
+
+use super::frame::ProxyFrame;
+use crate::light::{sphere_irradiance, sphere_light_bands};
+use crate::math;
+use crate::rotation::Rotation;
+use crate::sh::{MAX_COEFFS, MAX_ORDER, band_of, clamped_cosine, eval_basis};
+
+/// The zonal bands of the cosine-weighted cap, `2π ∫_{cos α}^1 t P_l(t) dt`, relative to band
+/// 0 (`π sin²α`): with `c = cos α` they are `sin²α · q_l(c)`, `q = [1/2, (1 + c + c²)/(3(1 + c)),
+/// (3c² + 1)/8, c³/2, (35c⁴ − 10c² − 1)/48, c³(9c² − 5)/8]`, factored so that no band cancels
+/// for small caps (all tend to `sin²α / 2`). For a cap about the normal they are its exact
+/// projection; tilted, the cosine is taken as its value along the axis (module doc).
+fn cosine_cap_bands(d: f32, r: f32) -> ([f32; MAX_ORDER], f32) {
+    // `cos α = √((d − r)/d · (1 + r/d))`, exact as `d → r` (as `sphere_light_bands`).
+    let c = math::sqrt(((d - r) / d * (1.0 + r / d)).max(0.0));
+    let (c2, c3) = (c * c, c * c * c);
+    let bands = [
+        1.0,
+        2.0 * (1.0 + c + c2) / (3.0 * (1.0 + c)),
+        (3.0 * c2 + 1.0) / 4.0,
+        c3,
+        (35.0 * c2 * c2 - 10.0 * c2 - 1.0) / 24.0,
+        c3 * (9.0 * c2 - 5.0) / 4.0,
+    ];
+    (bands, c)
+}
+
+/// `Rᵀ v`: a world direction in a bone's frame.
+fn to_bone(r: &Rotation, v: [f32; 3]) -> [f32; 3] {
+    [0, 1, 2].map(|k| r[0][k] * v[0] + r[1][k] * v[1] + r[2][k] * v[2])
+}
+
+/// The fade of a cap of `sin²α = s2` kept from `cull`: 0 below it, 1 from twice it, a
+/// smoothstep between, so that a sphere entering a vertex's reach never pops.
+fn fade(s2: f32, cull: f32) -> f32 {
+    if cull <= 0.0 {
+        return 1.0;
+    }
+    let t = ((s2 - cull) / cull).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// Adds one sphere's occlusion seen from `position` (normal `normal`, unit) to `sum`
+/// (`order²` values, in the frame of `rotation` when given, world otherwise) and returns its
+/// form factor `F` (0 when it does not reach the vertex).
+fn add_cap(
+    order: usize,
+    (centre, radius): ([f32; 3], f32),
+    (position, normal): ([f32; 3], [f32; 3]),
+    rotation: Option<&Rotation>,
+    cull: f32,
+    sum: &mut [f32; MAX_COEFFS],
+) -> f32 {
+    let n2 = order * order;
+    let v = [0, 1, 2].map(|k| centre[k] - position[k]);
+    let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    let frame = |w: [f32; 3]| rotation.map_or(w, |r| to_bone(r, w));
+    let mut y = [0.0f32; MAX_COEFFS];
+    if d2 <= radius * radius {
+        // Inside: every direction is blocked, the whole lobe goes.
+        if clamped_cosine(order, frame(normal), &mut y[..n2]).is_err() {
+            return 0.0;
+        }
+        for (s, y) in sum[..n2].iter_mut().zip(&y) {
+            *s += y;
+        }
+        return PI;
+    }
+    let s2 = radius * radius / d2;
+    let weight = fade(s2, cull);
+    if weight == 0.0 {
+        return 0.0;
+    }
+    let d = math::sqrt(d2);
+    let axis = v.map(|x| x / d);
+    let cos_beta = dot(axis, normal);
+    let f = weight * sphere_irradiance(radius, d, cos_beta);
+    if f <= 0.0 || eval_basis(order, frame(axis), &mut y[..n2]).is_err() {
+        return 0.0;
+    }
+    let (ratio, cos_alpha) = cosine_cap_bands(d, radius);
+    for c in 0..n2 {
+        sum[c] += f * ratio[band_of(c)] * y[c];
+    }
+    // The cosine's tilt across the cap: `(n⊥·ω) 1_cap` is the derivative, as the axis turns
+    // towards n⊥, of the zonal `max(a·ω − cos α, 0)`, whose bands are `Z_l − cos α · b_l`
+    // (`b_l` the cap's own). Exact for a cap above the horizon; faded out by the share of the
+    // cap the horizon keeps, so that it vanishes with the cap.
+    let unclipped = PI * s2 * cos_beta * weight;
+    let kept = (unclipped / f).clamp(0.0, 1.0);
+    let tangent = [0, 1, 2].map(|k| normal[k] - cos_beta * axis[k]);
+    let Ok(cap) = sphere_light_bands(radius, d) else {
+        return f;
+    };
+    let mut slope = [0.0f32; MAX_COEFFS];
+    if kept > 0.0 && directional_derivative(order, axis, tangent, &frame, &mut slope[..n2]) {
+        for c in 0..n2 {
+            let l = band_of(c);
+            let g = PI * s2 * ratio[l] - cos_alpha * cap[l];
+            sum[c] += weight * kept * g * slope[c];
+        }
+    }
+    f
+}
+
+fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// Step of the central difference in [`directional_derivative`], in radians: the error is
+/// `h²/6` of the third derivative, below 1e-4 of an order-6 basis function.
+const SLOPE_STEP: f32 = 1.0 / 128.0;
+
+/// `∂_t y(a)`: the basis's derivative at `a` as it moves along the tangent `t` (⟂ `a`, any
+/// length, the derivative scales with it), by a central difference, each direction mapped by
+/// `frame`; `false` when a direction cannot be evaluated.
+fn directional_derivative(
+    order: usize,
+    a: [f32; 3],
+    t: [f32; 3],
+    frame: &impl Fn([f32; 3]) -> [f32; 3],
+    out: &mut [f32],
+) -> bool {
+    let h = SLOPE_STEP;
+    let (mut plus, mut minus) = ([0.0f32; MAX_COEFFS], [0.0f32; MAX_COEFFS]);
+    let step = |sign: f32| [0, 1, 2].map(|k| a[k] + sign * h * t[k]);
+    let n2 = out.len();
+    if eval_basis(order, frame(step(1.0)), &mut plus[..n2]).is_err()
+        || eval_basis(order, frame(step(-1.0)), &mut minus[..n2]).is_err()
+    {
+        return false;
+    }
+    // `a ± h t` has length `√(1 + h²|t|²)`; the basis is homogeneous of degree 0 only
+    // after normalising, which eval_basis does, and the second-order stretch cancels.
+    for ((o, p), m) in out.iter_mut().zip(&plus).zip(&minus) {
+        *o = (p - m) / (2.0 * h);
+    }
+    true
+}
+
+/// The occlusion `D` of one vertex of bone `bone` at `position` with unit `normal` by the
+/// proxies `frame` lets touch that bone, into `out` (`order²` values, in the frame of
+/// `rotation` when given: the vertex's bone frame; world otherwise). Returns whether any
+/// proxy reached it (`out` is zero otherwise). The bone must be below the frame's bone count
+/// and the normal unit; a zero normal sees nothing.
+pub(crate) fn vertex_occlusion(
+    frame: &ProxyFrame,
+    order: usize,
+    bone: usize,
+    (position, normal): ([f32; 3], [f32; 3]),
+    rotation: Option<&Rotation>,
+    out: &mut [f32],
+) -> bool {
+    let n2 = order * order;
+    let mut sum = [0.0f32; MAX_COEFFS];
+    let (mut total, mut visible) = (0.0f32, 1.0f32);
+    let mut mask = frame.candidates.get(bone).copied().unwrap_or(0);
+    while mask != 0 {
+        let i = mask.trailing_zeros() as usize;
+        mask &= mask - 1;
+        let sphere = (frame.centres[i], frame.radii[i]);
+        let f = add_cap(
+            order,
+            sphere,
+            (position, normal),
+            rotation,
+            frame.cull,
+            &mut sum,
+        );
+        total += f;
+        visible *= (1.0 - f / PI).max(0.0);
+    }
+    let out = &mut out[..n2];
+    if total.is_nan() || total <= 0.0 {
+        out.fill(0.0);
+        return false;
+    }
+    // The caps overlap: their union blocks `π (1 − Π (1 − F_i/π))` of the lobe, not `Σ F_i`.
+    let scale = PI * (1.0 - visible) / total;
+    for (o, s) in out.iter_mut().zip(&sum) {
+        *o = s * scale;
+    }
+    true
+}
