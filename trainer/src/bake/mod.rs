@@ -44,7 +44,7 @@ mod directions;
 pub mod shard;
 #[cfg(test)]
 mod tests;
-mod tracer;
+pub(crate) mod tracer;
 mod wide;
 
 pub use tracer::Accel;

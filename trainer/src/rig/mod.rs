@@ -12,7 +12,9 @@
 //!   (BVH motion-capture files) and [`mannequin`] (the rig a motion-capture skeleton drives);
 //! - what a model needs of a rig: [`pose_layout`] (which pose entries it takes),
 //!   [`bone_frames`] (transfer in each vertex's bone frame) and [`transfer_rotation`]
-//!   (rotating each vertex's SH transfer).
+//!   (rotating each vertex's SH transfer);
+//! - [`proxies`]: occluder spheres per bone, fitted to the parts of the bind mesh, for the
+//!   runtime's shadows between parts.
 
 pub mod bone_frames;
 pub mod character;
@@ -25,6 +27,7 @@ pub mod mesh;
 pub mod mocap;
 pub mod pose_layout;
 pub(crate) mod procedural;
+pub mod proxies;
 pub mod rotation_vector;
 pub mod skin;
 pub mod transfer_rotation;
