@@ -52,6 +52,24 @@
 //! not quite closed (the glTF characters) or grazes an edge. Zero-area triangles are left out
 //! of the tracer, so they change nothing.
 //!
+//! # Measured (default options, this module's tests)
+//!
+//! | character | bones | with proxies | spheres | volume error | fit |
+//! | --- | --- | --- | --- | --- | --- |
+//! | built-in human | 17 | 16 | 55 | 42.1 % | 0.6 s |
+//! | CesiumMan | 19 | 19 | 60 | 31.8 % | |
+//! | Fox | 24 | 19 | 54 | 38.0 % | |
+//! | a ball (test mesh) | 1 | 1 | 1 | 1.8 % | |
+//! | a capsule 5 × as long as thick | 1 | 1 | 4 | 32.1 % | |
+//!
+//! Limbs end at 18–45 % with four spheres: a union of spheres is a string of beads, short of
+//! a cylinder between them and past it at their middles, which is what capsules would fix.
+//! The built-in head's part (head, nose and hat) keeps one sphere (radius 0.135 m over the
+//! head and the hat's crown) at 62 %: the brim is a disc about 3 cm thick and 0.33 m
+//! in radius, and spheres as thin as it cover too little of it to pass [`MIN_GAIN`]. The
+//! brim, the occluder issue 29 is about, needs a flat proxy (a disc or an oblate ellipsoid)
+//! if it is to cast its shadow through proxies.
+//!
 //! # Determinism
 //! Every step is a fixed sequence (Halton points, farthest-point starts with ties to the lowest
 //! index, fixed iteration counts, sorted sweeps); the only parallel loop labels each sample on

@@ -435,6 +435,12 @@ fn the_builtin_character_gets_proxies_on_head_arms_and_torso() {
     println!("{}", table("built-in character", &fit, bones.count));
     let has = |bone: u16| fit.proxies.iter().any(|p| p.bone == bone);
     const HEAD: u16 = 4;
+    for p in fit.proxies.iter().filter(|p| p.bone == HEAD) {
+        println!(
+            "  head and hat: centre {:.3?}, radius {:.3}",
+            p.centre, p.radius
+        );
+    }
     const ARMS: [u16; 4] = [5, 6, 8, 9];
     const TORSO: [u16; 3] = [0, 1, 2];
     assert!(has(HEAD), "no proxy on the head and hat");
@@ -476,6 +482,8 @@ fn gltf_characters_get_proxies() {
         let bones = dominant_bones(&rig);
         let fit = fit_proxies(rig.bind_mesh(), &bones, &ProxyOptions::default()).unwrap();
         println!("{}", table(file, &fit, bones.count));
+        let pairs: usize = fit.neighbours.iter().map(Vec::len).sum::<usize>() / 2;
+        println!("  {pairs} neighbouring pairs of bones");
         assert!(!fit.proxies.is_empty() && fit.proxies.len() <= 64, "{file}");
         assert_eq!(fit.neighbours.len(), bones.count);
         assert!(fit.volume_error.is_finite());
