@@ -102,6 +102,12 @@ pub fn decode(blob: &[u8]) -> Option<LinearModel> {
         },
         cosines: section(SectionKind::PoseFeatures)
             .map_or_else(Vec::new, |flags| flags.iter().map(|&f| f == 1.0).collect()),
+        // Its own layout, kept as bytes: FORMAT.md's `Proxies`.
+        proxies: entry(SectionKind::Proxies).and_then(|e| {
+            let start = usize::try_from(e.offset).ok()?;
+            let end = start.checked_add(usize::try_from(e.len).ok()?)?;
+            Some(blob.get(start..end)?.to_vec())
+        }),
         bones: match h.frame {
             Frame::World => None,
             Frame::Bones { count } => Some(BoneFrames {

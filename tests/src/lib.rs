@@ -124,6 +124,7 @@ pub fn random_model(
         angle_names: (0..pose_len).map(|i| format!("joint{i}")).collect(),
         bounds: None,
         cosines: Vec::new(),
+        proxies: None,
     }
 }
 

@@ -39,6 +39,7 @@ pub fn magnitude(model: &LinearModel, angles: &[f64], big: impl Fn(f64) -> f64) 
         // The magnitudes of the bounded pose: the bound itself is not a sum of products.
         bounds: None,
         cosines: Vec::new(),
+        proxies: None,
         angle_names: Vec::new(),
         ..model.clone()
     };

@@ -135,10 +135,9 @@ pub fn sample_blobs() -> Vec<(&'static str, Vec<u8>)> {
         texel_atlas: Some((SAMPLE_ATLAS.0, &SAMPLE_ATLAS.1)),
         ..Extras::default()
     };
-    let proxies = sample_proxies(2);
-    let occluded = Extras {
-        proxies: Some(&proxies),
-        ..Extras::default()
+    let occluded = LinearModel {
+        proxies: Some(sample_proxies(2)),
+        ..rigged.clone()
     };
     sample_models()
         .into_iter()
@@ -146,7 +145,7 @@ pub fn sample_blobs() -> Vec<(&'static str, Vec<u8>)> {
         .chain([
             (
                 "proxies-bones-f32",
-                encode_model_with(&rigged, Precision::F32, &occluded).expect("samples are valid"),
+                encode_model(&occluded, Precision::F32).expect("samples are valid"),
             ),
             (
                 "rig-bones-f32",

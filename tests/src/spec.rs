@@ -148,6 +148,7 @@ impl<'a> Arbitrary<'a> for ModelSpec {
                 bones,
                 bounds,
                 cosines,
+                proxies: None,
                 angle_names: if u.arbitrary()? {
                     (0..pose_len).map(|i| format!("joint{i}.x")).collect()
                 } else {

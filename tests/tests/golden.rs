@@ -16,21 +16,18 @@ fn golden_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../fixtures/golden")
 }
 
-/// A golden blob: its file name, model, precision, texel atlas (resolution, texels) and
-/// occluder proxies' section.
+/// A golden blob: its file name, model, precision and texel atlas (resolution, texels).
 type Golden = (
     &'static str,
     LinearModel,
     Precision,
     Option<(u32, Vec<u32>)>,
-    Option<Vec<u8>>,
 );
 
 /// The blob's bytes as the writer writes them today.
-fn encode((_, model, precision, atlas, proxies): &Golden) -> Vec<u8> {
+fn encode((_, model, precision, atlas): &Golden) -> Vec<u8> {
     let extras = Extras {
         texel_atlas: atlas.as_ref().map(|(r, texels)| (*r, &texels[..])),
-        proxies: proxies.as_deref(),
         ..Extras::default()
     };
     encode_model_with(model, *precision, &extras).unwrap()
@@ -63,41 +60,31 @@ fn golden_models() -> Vec<Golden> {
         centre,
         radius,
     };
-    let proxies = ProxySection {
-        spheres: vec![sphere([0.0, 0.0, 1.0], 0.3), sphere([0.0, 0.4, 1.0], 0.2)],
-        bones: vec![
-            BoneBound {
-                centre: [0.0, 0.2, 1.0],
-                radius: 0.5,
-                ignored: 0b11,
-            },
-            BoneBound {
-                centre: [0.0, 0.0, 0.0],
-                radius: 0.3,
-                ignored: 0,
-            },
-        ],
-        cull: 0.01,
-    }
-    .to_bytes()
-    .unwrap();
+    occluded.proxies = Some(
+        ProxySection {
+            spheres: vec![sphere([0.0, 0.0, 1.0], 0.3), sphere([0.0, 0.4, 1.0], 0.2)],
+            bones: vec![
+                BoneBound {
+                    centre: [0.0, 0.2, 1.0],
+                    radius: 0.5,
+                    ignored: 0b11,
+                },
+                BoneBound {
+                    centre: [0.0, 0.0, 0.0],
+                    radius: 0.3,
+                    ignored: 0,
+                },
+            ],
+            cull: 0.01,
+        }
+        .to_bytes()
+        .unwrap(),
+    );
     vec![
-        ("v1-world.aprt", world, Precision::F32, None, None),
-        ("v1-bones.aprt", bones, Precision::F16, None, None),
-        (
-            "v1-atlas.aprt",
-            lightmap,
-            Precision::F32,
-            Some((8, texels)),
-            None,
-        ),
-        (
-            "v1-proxies.aprt",
-            occluded,
-            Precision::F32,
-            None,
-            Some(proxies),
-        ),
+        ("v1-world.aprt", world, Precision::F32, None),
+        ("v1-bones.aprt", bones, Precision::F16, None),
+        ("v1-atlas.aprt", lightmap, Precision::F32, Some((8, texels))),
+        ("v1-proxies.aprt", occluded, Precision::F32, None),
     ]
 }
 
@@ -115,7 +102,7 @@ fn write_golden_blobs() {
 #[test]
 fn golden_blobs_read_as_written() {
     for golden in golden_models() {
-        let (name, model, _, atlas, proxies) = &golden;
+        let (name, model, _, atlas) = &golden;
         let path = golden_dir().join(name);
         let blob = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         let core = Model::parse(&blob).unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -151,7 +138,12 @@ fn golden_blobs_read_as_written() {
             (a.resolution(), texels)
         });
         assert_eq!(read, *atlas, "{name}: texel atlas");
-        assert_eq!(info.has_proxies(), proxies.is_some(), "{name}: proxies");
+        assert_eq!(
+            info.has_proxies(),
+            model.proxies.is_some(),
+            "{name}: proxies"
+        );
+        assert_eq!(stored.proxies, model.proxies, "{name}: proxies");
         exercise(&blob, &Probe::GENTLE).unwrap();
         assert!(
             encode(&golden) == blob,

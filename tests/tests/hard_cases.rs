@@ -19,6 +19,7 @@ fn constant_model(values: &[f64]) -> LinearModel {
         angle_names: Vec::new(),
         bounds: None,
         cosines: Vec::new(),
+        proxies: None,
     }
 }
 
@@ -96,6 +97,7 @@ fn a_joint_the_projection_ignores_cannot_overflow_the_pose() {
         angle_names: Vec::new(),
         bounds: None,
         cosines: Vec::new(),
+        proxies: None,
     };
     let blob = encode_model(&model, Precision::F32).unwrap();
     let core = Model::parse(&blob).unwrap();

@@ -11,7 +11,7 @@ use aprt_core::{
 use aprt_tests::quadrature::gauss_legendre;
 use aprt_tests::{Streamed, random_model};
 use aprt_trainer::model::occluders::{BoneBound, ProxySection, Sphere};
-use aprt_trainer::{BoneFrames, Extras, Precision, encode_model_with};
+use aprt_trainer::{BoneFrames, Precision, encode_model};
 
 const Y00: f64 = 0.282_094_791_773_878_14;
 const IDENTITY: Skinning = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0];
@@ -134,8 +134,9 @@ fn a_sphere_over_a_plane_occludes_its_closed_form_cap() {
                     Y00 * closed
                 );
             }
-            // Band 0 is exact in every case, and every band is for a cap above the horizon;
-            // one the horizon cuts keeps its shape within a few percent.
+            // Band 0 is exact in every case, and every band for a cap about the normal; a
+            // tilted cap's higher bands are off by the second order of its tilt's shift (6 %
+            // of the vector for a cap of 42° tilted 40°, 0.2 % at 17°).
             assert!(
                 (d[0] - quad[0]).abs() < 2e-4 * quad[0],
                 "h {height} tilt {tilt_deg}: D00 {} against quadrature {}",
@@ -143,7 +144,8 @@ fn a_sphere_over_a_plane_occludes_its_closed_form_cap() {
                 quad[0]
             );
             let err = relative(&d, &quad);
-            let bound = if above { 1e-3 } else { 0.03 };
+            // The tilt's shift of the bands is first-order: the rest grows with the cap.
+            let bound = if above { 0.15 * sin2 } else { 0.35 * sin2 };
             assert!(
                 err < bound,
                 "h {height} tilt {tilt_deg}: relative error {err}"
@@ -264,33 +266,31 @@ fn model_with_proxies() -> Vec<u8> {
         count: 3,
         vertex_bone: (0..24).map(|j| (j / 8) as u16).collect(),
     });
-    let proxies = ProxySection {
-        spheres: vec![Sphere {
-            bone: 0,
-            centre: [0.0, 0.0, 1.0],
-            radius: 0.5,
-        }],
-        bones: vec![
-            BoneBound {
-                ignored: 1,
-                ..BoneBound::default()
-            },
-            BoneBound::default(),
-            BoneBound {
-                centre: [0.0, 0.0, 0.0],
+    model.proxies = Some(
+        ProxySection {
+            spheres: vec![Sphere {
+                bone: 0,
+                centre: [0.0, 0.0, 1.0],
                 radius: 0.5,
-                ignored: 0,
-            },
-        ],
-        cull: 0.02,
-    }
-    .to_bytes()
-    .unwrap();
-    let extras = Extras {
-        proxies: Some(&proxies),
-        ..Extras::default()
-    };
-    encode_model_with(&model, Precision::F32, &extras).unwrap()
+            }],
+            bones: vec![
+                BoneBound {
+                    ignored: 1,
+                    ..BoneBound::default()
+                },
+                BoneBound::default(),
+                BoneBound {
+                    centre: [0.0, 0.0, 0.0],
+                    radius: 0.5,
+                    ignored: 0,
+                },
+            ],
+            cull: 0.02,
+        }
+        .to_bytes()
+        .unwrap(),
+    );
+    encode_model(&model, Precision::F32).unwrap()
 }
 
 #[test]

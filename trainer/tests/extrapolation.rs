@@ -59,9 +59,16 @@ fn check(rig: &dyn Rig, what: &str, frames: Vec<Vec<f64>>) {
             .collect();
         let name = format!("{scale}x");
         let (clip, _) = bake_clip(rig, &layout, &name, poses, &SETTINGS, &Silent).unwrap();
-        let model = predict_world(&blob, &clip.angles, &clip.rotations).unwrap();
+        let model =
+            predict_world(&blob, &clip.angles, &clip.rotations, Some(clip.geometry())).unwrap();
         let fallback_angles = vec![prior.clone(); clip.angles.len()];
-        let fallback = predict_world(&blob, &fallback_angles, &clip.rotations).unwrap();
+        let fallback = predict_world(
+            &blob,
+            &fallback_angles,
+            &clip.rotations,
+            Some(clip.geometry()),
+        )
+        .unwrap();
         let mut worst = 0.0f64;
         for f in 0..clip.angles.len() {
             assert!(

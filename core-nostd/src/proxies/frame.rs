@@ -28,6 +28,8 @@ pub struct ProxyFrame {
     pub(crate) cull: f32,
     pub(crate) centres: [[f32; 3]; MAX_PROXIES],
     pub(crate) radii: [f32; MAX_PROXIES],
+    /// `(r / √cull)²`: beyond it a proxy's cap is culled (infinite when nothing is).
+    pub(crate) reach2: [f32; MAX_PROXIES],
     /// Per bone, the proxies that may occlude its vertices this frame.
     pub(crate) candidates: [u64; MAX_BONES],
 }
@@ -40,6 +42,7 @@ impl ProxyFrame {
             cull: 0.0,
             centres: [[0.0; 3]; MAX_PROXIES],
             radii: [0.0; MAX_PROXIES],
+            reach2: [0.0; MAX_PROXIES],
             candidates: [0; MAX_BONES],
         }
     }
@@ -218,6 +221,9 @@ fn pose_section<R: Reader>(
         true => radius / math::sqrt(cull),
         false => f32::INFINITY,
     };
+    for p in 0..count {
+        frame.reach2[p] = reach(frame.radii[p]) * reach(frame.radii[p]);
+    }
     frame.candidates = [0; MAX_BONES];
     let bone_records = records + (count * PROXY_RECORD) as u64;
     r.chunks(bone_records, BONE_RECORD, bones, |first, bytes| {

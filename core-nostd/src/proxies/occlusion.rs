@@ -3,7 +3,7 @@
 use core::f32::consts::PI;
 
 use super::frame::ProxyFrame;
-use crate::light::{sphere_irradiance, sphere_light_bands};
+use crate::light::sphere_irradiance;
 use crate::math;
 use crate::rotation::Rotation;
 use crate::sh::{MAX_COEFFS, MAX_ORDER, band_of, clamped_cosine, eval_basis};
@@ -48,15 +48,18 @@ fn fade(s2: f32, cull: f32) -> f32 {
 /// form factor `F` (0 when it does not reach the vertex).
 fn add_cap(
     order: usize,
-    (centre, radius): ([f32; 3], f32),
+    (centre, radius, reach2): ([f32; 3], f32, f32),
     (position, normal): ([f32; 3], [f32; 3]),
     rotation: Option<&Rotation>,
     cull: f32,
     sum: &mut [f32; MAX_COEFFS],
 ) -> f32 {
-    let n2 = order * order;
     let v = [0, 1, 2].map(|k| centre[k] - position[k]);
     let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    if d2 >= reach2 {
+        return 0.0;
+    }
+    let n2 = order * order;
     let frame = |w: [f32; 3]| rotation.map_or(w, |r| to_bone(r, w));
     let mut y = [0.0f32; MAX_COEFFS];
     if d2 <= radius * radius {
@@ -78,67 +81,31 @@ fn add_cap(
     let axis = v.map(|x| x / d);
     let cos_beta = dot(axis, normal);
     let f = weight * sphere_irradiance(radius, d, cos_beta);
-    if f <= 0.0 || eval_basis(order, frame(axis), &mut y[..n2]).is_err() {
+    if f <= 0.0 {
         return 0.0;
     }
     let (ratio, cos_alpha) = cosine_cap_bands(d, radius);
-    for c in 0..n2 {
-        sum[c] += f * ratio[band_of(c)] * y[c];
-    }
-    // The cosine's tilt across the cap: `(n⊥·ω) 1_cap` is the derivative, as the axis turns
-    // towards n⊥, of the zonal `max(a·ω − cos α, 0)`, whose bands are `Z_l − cos α · b_l`
-    // (`b_l` the cap's own). Exact for a cap above the horizon; faded out by the share of the
-    // cap the horizon keeps, so that it vanishes with the cap.
+    // The cosine's tilt across the cap, `(n⊥·ω) 1_cap`, is the derivative as the axis turns
+    // towards n⊥ of the zonal `max(a·ω − cos α, 0)`, whose band 0 is `π (1 − cos α)²`. To
+    // first order it moves the cap's centre of weight towards the normal: the bands are taken
+    // about `a + π (1 − cos α)² n⊥ k / F` instead of `a` (`k` the share of the cap the horizon
+    // keeps, so the shift vanishes with the cap). Exact in band 0; the other bands are off by
+    // the second order of the shift, a few percent for a cap of 40° tilted 40°.
     let unclipped = PI * s2 * cos_beta * weight;
     let kept = (unclipped / f).clamp(0.0, 1.0);
-    let tangent = [0, 1, 2].map(|k| normal[k] - cos_beta * axis[k]);
-    let Ok(cap) = sphere_light_bands(radius, d) else {
-        return f;
-    };
-    let mut slope = [0.0f32; MAX_COEFFS];
-    if kept > 0.0 && directional_derivative(order, axis, tangent, &frame, &mut slope[..n2]) {
-        for c in 0..n2 {
-            let l = band_of(c);
-            let g = PI * s2 * ratio[l] - cos_alpha * cap[l];
-            sum[c] += weight * kept * g * slope[c];
-        }
+    let shift = kept * weight * PI * (1.0 - cos_alpha) * (1.0 - cos_alpha) / f;
+    let centre_of_weight = [0, 1, 2].map(|k| axis[k] + shift * (normal[k] - cos_beta * axis[k]));
+    if eval_basis(order, frame(centre_of_weight), &mut y[..n2]).is_err() {
+        return 0.0;
+    }
+    for c in 0..n2 {
+        sum[c] += f * ratio[band_of(c)] * y[c];
     }
     f
 }
 
 fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-/// Step of the central difference in [`directional_derivative`], in radians: the error is
-/// `h²/6` of the third derivative, below 1e-4 of an order-6 basis function.
-const SLOPE_STEP: f32 = 1.0 / 128.0;
-
-/// `∂_t y(a)`: the basis's derivative at `a` as it moves along the tangent `t` (⟂ `a`, any
-/// length, the derivative scales with it), by a central difference, each direction mapped by
-/// `frame`; `false` when a direction cannot be evaluated.
-fn directional_derivative(
-    order: usize,
-    a: [f32; 3],
-    t: [f32; 3],
-    frame: &impl Fn([f32; 3]) -> [f32; 3],
-    out: &mut [f32],
-) -> bool {
-    let h = SLOPE_STEP;
-    let (mut plus, mut minus) = ([0.0f32; MAX_COEFFS], [0.0f32; MAX_COEFFS]);
-    let step = |sign: f32| [0, 1, 2].map(|k| a[k] + sign * h * t[k]);
-    let n2 = out.len();
-    if eval_basis(order, frame(step(1.0)), &mut plus[..n2]).is_err()
-        || eval_basis(order, frame(step(-1.0)), &mut minus[..n2]).is_err()
-    {
-        return false;
-    }
-    // `a ± h t` has length `√(1 + h²|t|²)`; the basis is homogeneous of degree 0 only
-    // after normalising, which eval_basis does, and the second-order stretch cancels.
-    for ((o, p), m) in out.iter_mut().zip(&plus).zip(&minus) {
-        *o = (p - m) / (2.0 * h);
-    }
-    true
 }
 
 /// The occlusion `D` of one vertex of bone `bone` at `position` with unit `normal` by the
@@ -161,7 +128,7 @@ pub(crate) fn vertex_occlusion(
     while mask != 0 {
         let i = mask.trailing_zeros() as usize;
         mask &= mask - 1;
-        let sphere = (frame.centres[i], frame.radii[i]);
+        let sphere = (frame.centres[i], frame.radii[i], frame.reach2[i]);
         let f = add_cap(
             order,
             sphere,

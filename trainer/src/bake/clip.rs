@@ -5,7 +5,7 @@
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use glam::DMat3;
+use glam::{DMat3, Mat4};
 
 use crate::bake::{BakeSettings, bake_poses};
 use crate::progress::Reporter;
@@ -29,9 +29,22 @@ pub struct BakedClip {
     pub transfer: Vec<Vec<f32>>,
     /// Per frame, every bone's world rotation.
     pub rotations: Vec<Vec<DMat3>>,
+    /// Per frame, every joint's skinning matrix (bind pose to posed): what moves a model's
+    /// occluder proxies.
+    pub joints: Vec<Vec<Mat4>>,
     /// The clips the frames come from, in order, with their frame counts (one for a single
     /// clip): held-out segments of the fit never straddle two of them.
     pub parts: Vec<(String, usize)>,
+}
+
+/// Each frame's joint matrices and posed mesh: what a model's occluder proxies need besides
+/// its pose vector (see [`crate::model::occluders`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Geometry<'a> {
+    /// Per frame, every joint's skinning matrix.
+    pub joints: &'a [Vec<Mat4>],
+    /// Per frame, the posed mesh.
+    pub meshes: &'a [Mesh],
 }
 
 /// Poses and bakes `poses` of `rig`; returns the clip and the bake's seconds per frame. The
@@ -98,6 +111,10 @@ impl BakedClip {
         transfer: Vec<Vec<f32>>,
     ) -> Result<BakedClip> {
         let rotations = all_rotations(rig, &poses)?;
+        let joints = poses
+            .iter()
+            .map(|p| rig.joint_matrices(p))
+            .collect::<Result<_, _>>()?;
         Ok(BakedClip {
             name: name.to_owned(),
             parts: vec![(name.to_owned(), poses.len())],
@@ -106,6 +123,7 @@ impl BakedClip {
             meshes,
             transfer,
             rotations,
+            joints,
         })
     }
 
@@ -131,6 +149,7 @@ impl BakedClip {
                 })
                 .collect(),
             rotations: self.rotations.clone(),
+            joints: self.joints.clone(),
             parts: self.parts.clone(),
         }
     }
@@ -150,6 +169,7 @@ impl BakedClip {
             meshes: Vec::new(),
             transfer: Vec::new(),
             rotations: Vec::new(),
+            joints: Vec::new(),
             parts: Vec::new(),
         };
         for c in clips {
@@ -158,9 +178,18 @@ impl BakedClip {
             all.meshes.extend(c.meshes);
             all.transfer.extend(c.transfer);
             all.rotations.extend(c.rotations);
+            all.joints.extend(c.joints);
             all.parts.extend(c.parts);
         }
         all
+    }
+
+    /// The posed geometry of every frame, for models with occluder proxies.
+    pub fn geometry(&self) -> Geometry<'_> {
+        Geometry {
+            joints: &self.joints,
+            meshes: &self.meshes,
+        }
     }
 
     /// Frame `f`'s bone rotations as aprt-core takes them (row-major f32).

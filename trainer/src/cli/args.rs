@@ -11,6 +11,7 @@ use crate::cli::source::SourceArgs;
 use crate::model::export::ExportError;
 use crate::model::export::Precision;
 use crate::model::fit::{Alpha, CoefDims, Dims, Features, FitOptions, Local, Prior};
+use crate::model::occluders::Occluders;
 use crate::model::train::{OptionError, check_options};
 use crate::report::demo::DemoSettings;
 
@@ -154,9 +155,15 @@ pub struct FitArgs {
     /// (the one of the two with the lower held-out error).
     #[arg(long, value_enum)]
     pub features: Option<FeaturesArg>,
+    /// Occluder proxies for bone-frame models of characters (spheres fitted per bone that
+    /// shadow other parts in poses the training never showed; the model learns the rest):
+    /// `auto` (fitted with and without, the lower held-out error wins; the default), `on`, or
+    /// `none` (the model alone; the default with `--paper`).
+    #[arg(long, value_enum)]
+    pub proxies: Option<ProxiesArg>,
     /// The paper's model: every pose dimension, the mean as prior, no bound, no local model,
-    /// the angles as features (other flags may still change its shape).
-    #[arg(long, conflicts_with_all = ["prior", "local", "features"])]
+    /// no proxies, the angles as features (other flags may still change its shape).
+    #[arg(long, conflicts_with_all = ["prior", "local", "features", "proxies"])]
     pub paper: bool,
     /// Precision of the large sections.
     #[arg(long, value_enum, default_value_t = PrecisionArg::F32)]
@@ -182,6 +189,17 @@ pub enum LocalArg {
     /// The only candidate.
     Only,
     /// Not tried.
+    None,
+}
+
+/// `--proxies`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ProxiesArg {
+    /// Fitted with and without, kept when the held-out error is lower.
+    Auto,
+    /// Always.
+    On,
+    /// Never.
     None,
 }
 
@@ -488,6 +506,12 @@ impl FitArgs {
             Some(LocalArg::Auto) => Local::Auto,
             Some(LocalArg::Only) => Local::Only,
             Some(LocalArg::None) => Local::Off,
+        };
+        options.proxies = match self.proxies {
+            None => options.proxies,
+            Some(ProxiesArg::Auto) => Occluders::Auto,
+            Some(ProxiesArg::On) => Occluders::On,
+            Some(ProxiesArg::None) => Occluders::None,
         };
         options.features = match self.features {
             None => options.features,

@@ -244,7 +244,7 @@ fn eval(args: &EvalArgs) -> Result<()> {
         }
         Workload::evaluation(poses.len(), info.vertices, n2, copies)
             .check(&csv.display().to_string())?;
-        predict_world(&blob, &poses, &[])
+        predict_world(&blob, &poses, &[], None)
     }
     .with_context(|| format!("evaluating {model_name}"))?;
     let flat: Vec<f32> = transfer.concat();

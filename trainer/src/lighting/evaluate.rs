@@ -306,6 +306,7 @@ pub fn static_model(normals: &[[f32; 3]], order: usize) -> LinearModel {
         angle_names: vec!["static".into()],
         bounds: None,
         cosines: Vec::new(),
+        proxies: None,
     }
 }
 

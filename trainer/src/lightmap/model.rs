@@ -106,7 +106,6 @@ pub fn train_light_maps(
         &Extras {
             irradiance_rig: None,
             texel_atlas: Some((training.resolution as u32, &rows)),
-            proxies: None,
         },
     )?;
     Ok(TrainedLightMaps {
@@ -135,7 +134,7 @@ pub fn predict_maps(
     let layout = PoseLayout::from_names(&rig.angle_names(), &info.angle_names)
         .with_context(|| format!("{model_name} does not fit this character"))?;
     let angles: Vec<Vec<f64>> = clip.frames.iter().map(|p| layout.reduce(p)).collect();
-    let rows = crate::model::predict::predict_world(blob, &angles, &[])?;
+    let rows = crate::model::predict::predict_world(blob, &angles, &[], None)?;
     let texels = (0..atlas.rows())
         .map(|row| atlas.texel(row))
         .collect::<Result<Vec<u32>, _>>()?;

@@ -307,10 +307,6 @@ pub struct Extras<'a> {
     /// A light-map model's atlas: the resolution R and each row's texel index `y · R + x`
     /// (strictly increasing, below R², one per row), written as the `TexelAtlas` section.
     pub texel_atlas: Option<(u32, &'a [u32])>,
-    /// Occluder proxies' bytes (`aprt_core::ProxySet`'s layout, from
-    /// [`crate::model::occluders`]), written as the required `Proxies` section: the model's
-    /// transfer is then its output minus their occlusion.
-    pub proxies: Option<&'a [u8]>,
 }
 
 /// Serialises `model` into a complete blob.
@@ -460,7 +456,7 @@ fn optional_sections(
     if let Some((resolution, texels)) = extras.texel_atlas {
         table.push(texel_atlas_section(resolution, texels, v)?);
     }
-    if let Some(proxies) = extras.proxies {
+    if let Some(proxies) = &model.proxies {
         let bones = model.bones.as_ref().map_or(0, |b| b.count);
         aprt_core::ProxySet::parse(proxies, bones).map_err(ExportError::Proxies)?;
         table.push(SectionBytes {
@@ -659,6 +655,7 @@ mod tests {
             angle_names: Vec::new(),
             bounds: None,
             cosines: Vec::new(),
+            proxies: None,
         }
     }
 

@@ -177,6 +177,10 @@ pub struct LinearModel {
     /// Per pose entry, whether `1 − cos a` is a pose feature besides `a` (see
     /// [`PoseFeatures`]); empty or all false: the features are the angles, as in the paper.
     pub cosines: Vec<bool>,
+    /// Occluder proxies (the `Proxies` section's bytes, [`occluders`]): the model was fitted
+    /// to its transfer plus their occlusion, which the runtime subtracts. Bone-frame models
+    /// only; `None`: none.
+    pub proxies: Option<Vec<u8>>,
 }
 
 impl LinearModel {

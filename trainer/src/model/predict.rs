@@ -4,23 +4,59 @@
 use anyhow::{Context, Result, bail};
 use glam::DMat3;
 
-use crate::model::runtime::BlobInfo;
+use crate::bake::clip::Geometry;
+use crate::model::occluders::occlusion;
+use crate::model::runtime::{self, BlobInfo};
 use crate::rig::bone_frames::{FrameChange, all_rotations, change_frames};
 use crate::rig::pose_layout::PoseLayout;
 use crate::rig::{Clip, Rig};
 
 /// World-frame transfer a blob predicts through aprt-core for model pose vectors `angles`;
-/// `rotations` (each frame's bone rotations) are used when the model is in bone frames.
+/// `rotations` (each frame's bone rotations) are used when the model is in bone frames, and
+/// `geometry` (each frame's joint matrices and posed mesh) when it has occluder proxies, whose
+/// occlusion is subtracted as the runtime does.
 pub fn predict_world(
     blob: &[u8],
     angles: &[Vec<f64>],
     rotations: &[Vec<DMat3>],
+    geometry: Option<Geometry<'_>>,
 ) -> Result<Vec<Vec<f32>>> {
-    let raw = crate::model::runtime::predict_transfer(blob, angles)?;
-    match crate::model::runtime::bone_frames(blob)? {
-        Some(b) => change_frames(&raw, rotations, &b, FrameChange::BoneToWorld),
-        None => Ok(raw),
+    let raw = runtime::predict_transfer(blob, angles)?;
+    let frames = runtime::bone_frames(blob)?;
+    let mut world = match &frames {
+        Some(b) => change_frames(&raw, rotations, b, FrameChange::BoneToWorld)?,
+        None => raw,
+    };
+    let (Some(section), Some(bones)) = (runtime::proxies_section(blob)?, &frames) else {
+        return Ok(world);
+    };
+    let geometry = geometry.context(
+        "this model has occluder proxies: evaluating it needs each frame's posed mesh and \
+         joint matrices (a clip of its character), not pose vectors alone",
+    )?;
+    if geometry.meshes.len() != world.len() || geometry.joints.len() != world.len() {
+        bail!(
+            "{} frames of pose vectors but {} posed meshes and {} frames of joints",
+            world.len(),
+            geometry.meshes.len(),
+            geometry.joints.len()
+        );
     }
+    let order = aprt_core::Model::parse(blob)?.info().order();
+    for (f, t) in world.iter_mut().enumerate() {
+        let d = occlusion(
+            section,
+            bones,
+            &geometry.joints[f],
+            &geometry.meshes[f],
+            order,
+        )
+        .with_context(|| format!("frame {f}"))?;
+        for (t, d) in t.iter_mut().zip(d) {
+            *t -= d;
+        }
+    }
+    Ok(world)
 }
 
 /// World-frame transfer of every frame of `clip` of `rig` as the model `blob` (described by
@@ -45,5 +81,25 @@ pub fn predict_clip(
     }
     let angles: Vec<Vec<f64>> = clip.frames.iter().map(|p| layout.reduce(p)).collect();
     let rotations = all_rotations(rig, &clip.frames)?;
-    predict_world(blob, &angles, &rotations)
+    let (joints, meshes) = match runtime::proxies_section(blob)? {
+        Some(_) => {
+            let joints = clip
+                .frames
+                .iter()
+                .map(|p| rig.joint_matrices(p))
+                .collect::<Result<Vec<_>, _>>()?;
+            let meshes = clip
+                .frames
+                .iter()
+                .map(|p| rig.pose(p))
+                .collect::<Result<Vec<_>, _>>()?;
+            (joints, meshes)
+        }
+        None => (Vec::new(), Vec::new()),
+    };
+    let geometry = Geometry {
+        joints: &joints,
+        meshes: &meshes,
+    };
+    predict_world(blob, &angles, &rotations, Some(geometry))
 }

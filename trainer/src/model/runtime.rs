@@ -27,6 +27,23 @@ pub fn predict_transfer(
         .collect()
 }
 
+/// The bytes of the model's occluder proxies (its `Proxies` section), when it has them.
+pub fn proxies_section(blob: &[u8]) -> Result<Option<&[u8]>, aprt_core::Error> {
+    let model = Model::parse(blob)?;
+    if !model.info().has_proxies() {
+        return Ok(None);
+    }
+    let header = read_header(blob)?;
+    Ok(header
+        .sections
+        .iter()
+        .find(|e| e.kind == SectionKind::Proxies.tag())
+        .and_then(|e| {
+            let start = usize::try_from(e.offset).ok()?;
+            blob.get(start..start.checked_add(usize::try_from(e.len).ok()?)?)
+        }))
+}
+
 /// The bone of each vertex, for bone-frame models; `None` for world-frame models.
 pub fn bone_frames(blob: &[u8]) -> Result<Option<BoneFrames>, aprt_core::Error> {
     let model = Model::parse(blob)?;

@@ -22,14 +22,17 @@ use crate::io::atomic::write_atomic;
 use crate::io::source::{Poses, clip_names, joined};
 use crate::lighting::rig_fit::{FIT_POSES, fitting_meshes};
 use crate::lighting::{RigKind, fit_rig};
-use crate::model::ModelFrame;
 use crate::model::export::{ExportError, Precision, check_alpha};
 use crate::model::fit::{
     Alpha, Anchor, Choice, CoefDims, Dims, Fit, FitInput, FitOptions, FitReport, HeldOutKind,
     LOCALITY_RADIUS, Local, PriorKind, REST_DISTANCE_LIMIT, Validation, fit, fit_input,
 };
+use crate::model::occluders::{
+    DEFAULT_CULL, OccluderChoice, Occluders, rig_section, with_occlusion,
+};
 use crate::model::precision::{PrecisionChoice, encode_chosen};
 use crate::model::runtime::{BlobInfo, describe};
+use crate::model::{BoneFrames, LinearModel, ModelFrame};
 use crate::progress::Reporter;
 use crate::rig::bone_frames::{FrameChange, change_frames, dominant_bones};
 use crate::rig::locality::locality;
@@ -56,7 +59,9 @@ pub struct ClipSet<'a> {
 /// Fits a model to `clips` in `frame` (each vertex's dominant-bone frame, or world space). The
 /// model records the layout's entry names. Bone-frame models are anchored at the rest pose
 /// (their prior, when it wins on held-out error, is the rest transfer carried by the skin);
-/// world-frame models keep the mean as their prior.
+/// world-frame models keep the mean as their prior. Bone-frame models are fitted with and
+/// without occluder proxies fitted to the bind mesh (`options.proxies`), each with its own
+/// model selection, and keep the one of lower held-out error; the report says what both gave.
 pub fn fit_clip(
     rig: &dyn Rig,
     layout: &PoseLayout,
@@ -66,10 +71,65 @@ pub fn fit_clip(
     frame: ModelFrame,
 ) -> Result<Fit> {
     let bones = (frame == ModelFrame::Bone).then(|| dominant_bones(rig));
+    let proxies = match (options.proxies, &bones) {
+        (Occluders::None, _) | (_, None) => None,
+        (_, Some(b)) => rig_section(rig, b, DEFAULT_CULL)?,
+    };
+    let fit_with = |section: Option<&[u8]>| {
+        let bones = bones.as_ref();
+        fit_targets(rig, layout, clips, order, options, bones, section)
+    };
+    let plain = match (&proxies, options.proxies) {
+        (Some(_), Occluders::On) => None,
+        _ => Some(fit_with(None)?),
+    };
+    let Some((section, proxy_fit)) = proxies else {
+        return plain.context("a fit without proxies");
+    };
+    let occluded = fit_with(Some(&section))?;
+    let held_out = |f: &Fit| f.report.chosen.held_out_error;
+    let without = plain.as_ref().map(held_out);
+    let used = without.is_none_or(|w| held_out(&occluded) < w);
+    let choice = OccluderChoice {
+        spheres: proxy_fit.proxies.len(),
+        volume_error: proxy_fit.volume_error,
+        held_out_with: held_out(&occluded),
+        held_out_without: without,
+        used,
+    };
+    let mut fitted = match (used, plain) {
+        (false, Some(plain)) => plain,
+        _ => Fit {
+            model: LinearModel {
+                proxies: Some(section),
+                ..occluded.model
+            },
+            report: occluded.report,
+        },
+    };
+    fitted.report.occluders = Some(choice);
+    Ok(fitted)
+}
+
+/// [`fit_clip`]'s fit of one set of targets: the transfer in the model's frame, plus the
+/// occlusion of the proxies of `section` when given.
+fn fit_targets(
+    rig: &dyn Rig,
+    layout: &PoseLayout,
+    clips: ClipSet<'_>,
+    order: usize,
+    options: &FitOptions,
+    bones: Option<&BoneFrames>,
+    section: Option<&[u8]>,
+) -> Result<Fit> {
     let in_frame = |clip: &'_ BakedClip| -> Result<Vec<Vec<f32>>> {
-        Ok(match &bones {
-            Some(b) => change_frames(&clip.transfer, &clip.rotations, b, FrameChange::WorldToBone)?,
-            None => clip.transfer.clone(),
+        let targets = match (section, bones) {
+            (Some(s), Some(b)) => &with_occlusion(s, b, clip, order)?,
+            _ => &clip.transfer,
+        };
+        Ok(match bones {
+            Some(b) => change_frames(targets, &clip.rotations, b, FrameChange::WorldToBone)?,
+            None => targets.clone(),
         })
     };
     let matrix = |clip: &BakedClip| {
@@ -80,7 +140,7 @@ pub fn fit_clip(
     let train = clips.train;
     let targets = in_frame(train)?;
     let angles = matrix(train);
-    let rest = match (clips.rest, &bones) {
+    let rest = match (clips.rest, bones) {
         (Some(rest), Some(_)) => Some((in_frame(rest)?.remove(0), rest.angles[0].clone())),
         _ => None,
     };
@@ -90,7 +150,7 @@ pub fn fit_clip(
         .map(|v| Ok((matrix(v), in_frame(v)?)))
         .collect::<Result<_>>()?;
     // The local model's groups, from the rig's geometry over a sample of the training poses.
-    let locality = match (options.local, &bones, &rest) {
+    let locality = match (options.local, bones, &rest) {
         (Local::Auto | Local::Only, Some(_), Some(_)) => {
             let stride = train.meshes.len().div_ceil(LOCALITY_POSES).max(1);
             let sample: Vec<&Mesh> = train.meshes.iter().step_by(stride).collect();
@@ -113,7 +173,7 @@ pub fn fit_clip(
         locality: locality.as_ref(),
     };
     let mut fitted = fit_input(&input, options)?;
-    fitted.model.bones = bones;
+    fitted.model.bones = bones.cloned();
     fitted.model.angle_names = layout.names().to_vec();
     Ok(fitted)
 }
@@ -359,6 +419,8 @@ pub struct Selection {
     pub rest_distance: Option<f64>,
     /// Every (features, prior, k_a or local) candidate with its best α, in the order tried.
     pub choices: Vec<Choice>,
+    /// What the occluder proxies did, when they were tried.
+    pub occluders: Option<OccluderChoice>,
 }
 
 impl Selection {
@@ -370,6 +432,7 @@ impl Selection {
             chosen: report.chosen,
             rest_distance: report.rest_distance,
             choices: report.choices.clone(),
+            occluders: report.occluders,
         }
     }
 
@@ -397,6 +460,19 @@ impl Selection {
             };
             lines.push(format!(
                 "  the rest pose is {d:.2} standard deviations from the training poses, {tried} the {REST_DISTANCE_LIMIT} up to which --prior auto tries it"
+            ));
+        }
+        if let Some(o) = &self.occluders {
+            let without = o
+                .held_out_without
+                .map_or(String::new(), |w| format!(", without them {w:.4e}"));
+            let verdict = if o.used { "kept" } else { "left out" };
+            lines.push(format!(
+                "  occluder proxies: {} spheres, volume error {:.0} %; held-out {:.4e} with them{without}: {verdict} (the candidates below are the {} model's)",
+                o.spheres,
+                100.0 * o.volume_error,
+                o.held_out_with,
+                if o.used { "proxies'" } else { "plain" },
             ));
         }
         lines.extend(self.choices.iter().map(|c| {

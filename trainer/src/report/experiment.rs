@@ -6,18 +6,22 @@ use std::fmt::Write as _;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use aprt_core::{LitWeights, Model, ModelInfo, PoseWeights, Rotation, ShRotation};
+use aprt_core::{LitWeights, Model, ModelInfo, PoseWeights, ProxyFrame, Rotation, ShRotation};
+use glam::Mat4;
 
 use crate::bake::clip::{BakedClip, bake_rest};
 use crate::bake::{BakeSettings, bake_poses};
 use crate::model::ModelFrame;
 use crate::model::export::{ExportError, Precision, encode_model};
 use crate::model::fit::{Alpha, CoefDims, Dims, Features, Fit, FitError, FitOptions, Local, Prior};
+use crate::model::occluders::{DEFAULT_CULL, Occluders, occlusion, rig_section, skinning_of};
 use crate::model::predict::predict_world;
 use crate::model::train::{ClipSet, Selection, fit_clip};
 use crate::progress::{Reporter, Silent};
 use crate::report::evaluate::{mean_transfer, nearest_pose, relative_error, skinned_transfer};
 use crate::rig::Rig;
+use crate::rig::bone_frames::dominant_bones;
+use crate::rig::mesh::Mesh;
 use crate::rig::pose_layout::PoseLayout;
 
 /// One model shape the experiment fits.
@@ -35,6 +39,8 @@ pub struct ModelConfig {
 pub const DEFAULT_CONFIG: &str = "default: bone frame, bounded, LOSO α, k_a and prior";
 /// The default with the rest prior forced.
 pub const REST_CONFIG: &str = "default, rest prior";
+/// The default without occluder proxies: what the model learns alone.
+pub const NO_PROXIES_CONFIG: &str = "default, no occluder proxies";
 /// The default with the local model forced (`--local only`).
 pub const LOCAL_CONFIG: &str = "default, local model (every entry near each vertex)";
 /// The default with the cosine features forced (`--features cosines`).
@@ -62,6 +68,14 @@ pub fn standard_configs() -> Vec<ModelConfig> {
     vec![
         config(DEFAULT_CONFIG, default, ModelFrame::Bone),
         config(PAPER_CONFIG, FitOptions::paper(), ModelFrame::Bone),
+        config(
+            NO_PROXIES_CONFIG,
+            FitOptions {
+                proxies: Occluders::None,
+                ..default
+            },
+            ModelFrame::Bone,
+        ),
         config(
             REST_CONFIG,
             FitOptions {
@@ -172,6 +186,9 @@ pub struct Row {
     pub test_errors: Vec<f64>,
     /// Microseconds per frame through aprt-core: pose step, lighting, shading of every vertex.
     pub shade_us: Option<f64>,
+    /// Microseconds per frame of the occluder proxies on top (posing them, subtracting their
+    /// occlusion from every vertex's shading), for models that have them.
+    pub proxies_us: Option<f64>,
     /// Microseconds per frame through aprt-core for the full per-vertex transfer.
     pub transfer_us: Option<f64>,
     /// Multiply-adds per frame to shade every vertex in RGB, in millions.
@@ -277,7 +294,8 @@ pub fn run(
         };
         let model = *Model::parse(&blob)?.info();
         let error = |clip: &BakedClip| -> Result<f64> {
-            let predicted = predict_world(&blob, &clip.angles, &clip.rotations)?;
+            let predicted =
+                predict_world(&blob, &clip.angles, &clip.rotations, Some(clip.geometry()))?;
             Ok(relative_error(&predicted, &clip.transfer))
         };
         let train_error = error(train)?;
@@ -287,8 +305,14 @@ pub fn run(
         } else {
             Vec::new()
         };
-        let (shade_us, transfer_us) =
-            time_core(&blob, &timing_clip.angles[0], &rotations, lighting)?;
+        let geometry = (&timing_clip.joints[0][..], &timing_clip.meshes[0]);
+        let (shade_us, transfer_us, proxies_us) = time_core(
+            &blob,
+            &timing_clip.angles[0],
+            &rotations,
+            lighting,
+            Some(geometry),
+        )?;
         rows.push(Row {
             name: config.name.clone(),
             bytes: blob.len(),
@@ -296,6 +320,7 @@ pub fn run(
             train_error,
             test_errors,
             shade_us: Some(shade_us),
+            proxies_us,
             transfer_us: Some(transfer_us),
             megaops: Some(megaops(&model)),
             fit_s: Some(fit_s),
@@ -368,6 +393,7 @@ fn baselines(
                 .map(|t| Ok(relative_error(&predict(t)?, &t.transfer)))
                 .collect::<Result<Vec<_>>>()?,
             shade_us: None,
+            proxies_us: None,
             transfer_us: None,
             megaops: None,
             fit_s: None,
@@ -375,7 +401,7 @@ fn baselines(
             selection: None,
         })
     };
-    Ok(vec![
+    let mut rows = vec![
         row("baseline: mean training transfer", frame_bytes, &mean_of)?,
         row(
             "baseline: nearest training pose",
@@ -383,7 +409,59 @@ fn baselines(
             &nearest_of,
         )?,
         row("baseline: bind transfer, skinned", frame_bytes, &skinned_of)?,
-    ])
+    ];
+    if let Some((bytes, corrected_of)) = corrected_bind(rig, &bind_transfer, settings.order)? {
+        rows.push(row(
+            "baseline: bind transfer, skinned, with occluder proxies",
+            frame_bytes + bytes,
+            &*corrected_of,
+        )?);
+    }
+    Ok(rows)
+}
+
+/// The skinned bind transfer with the occluder proxies' correction: what they block in the
+/// pose, less what they blocked in the bind pose (whose transfer already holds it). Returns
+/// the section's bytes and the prediction of a clip; `None` when no part of the character is
+/// large enough for a proxy.
+#[allow(clippy::type_complexity)]
+fn corrected_bind<'a>(
+    rig: &'a dyn Rig,
+    bind_transfer: &[f32],
+    order: usize,
+) -> Result<Option<(usize, Box<dyn Fn(&BakedClip) -> Result<Vec<Vec<f32>>> + 'a>)>> {
+    let bones = dominant_bones(rig);
+    let Some((section, _)) = rig_section(rig, &bones, DEFAULT_CULL)? else {
+        return Ok(None);
+    };
+    let skin = rig.skin();
+    let rotation = ShRotation::new(order)?;
+    let identity = vec![Mat4::IDENTITY; skin.joint_count()];
+    let bind_occlusion = occlusion(&section, &bones, &identity, rig.bind_mesh(), order)?;
+    let corrected: Vec<f32> = bind_transfer
+        .iter()
+        .zip(&bind_occlusion)
+        .map(|(t, d)| t + d)
+        .collect();
+    let bytes = section.len();
+    let predict = move |set: &BakedClip| -> Result<Vec<Vec<f32>>> {
+        set.poses
+            .iter()
+            .zip(set.joints.iter().zip(&set.meshes))
+            .map(|(p, (joints, mesh))| {
+                let mut t = skinned_transfer(
+                    &rotation,
+                    &corrected,
+                    |j| skin.influences(j).collect(),
+                    &rig.joint_matrices(p)?,
+                );
+                let d = occlusion(&section, &bones, joints, mesh, order)?;
+                t.iter_mut().zip(d).for_each(|(t, d)| *t -= d);
+                Ok(t)
+            })
+            .collect()
+    };
+    Ok(Some((bytes, Box::new(predict))))
 }
 
 /// Median seconds of `f` over 31 calls (robust to a busy machine).
@@ -399,13 +477,16 @@ fn median_seconds(mut f: impl FnMut()) -> f64 {
     samples[15]
 }
 
-/// Per-frame cost through aprt-core on one pose: (shade µs, transfer µs).
+/// Per-frame cost through aprt-core on one pose: (shade µs, transfer µs, and for a model
+/// with occluder proxies the µs of posing them and subtracting their occlusion from the
+/// shading of every vertex, on `geometry`: the pose's joint matrices and posed mesh).
 pub(crate) fn time_core(
     blob: &[u8],
     angles: &[f64],
     rotations: &[Rotation],
     lighting: &[f32],
-) -> Result<(f64, f64)> {
+    geometry: Option<(&[Mat4], &Mesh)>,
+) -> Result<(f64, f64, Option<f64>)> {
     let model = Model::parse(blob)?;
     let info = model.info();
     let a: Vec<f32> = angles.iter().map(|&x| x as f32).collect();
@@ -425,8 +506,28 @@ pub(crate) fn time_core(
             .and(model.set_pose(&a, &mut pose))
             .and(model.transfer(&pose, 0, &mut transfer));
     });
+    let proxies = match geometry.filter(|_| info.has_proxies()) {
+        Some((joints, mesh)) => {
+            let skinning: Vec<_> = joints.iter().map(skinning_of).collect();
+            let mut frame = Box::new(ProxyFrame::new());
+            let seconds = median_seconds(|| {
+                result = result
+                    .and(model.pose_proxies(&skinning, &mut frame))
+                    .and(model.occlude(
+                        &frame,
+                        lighting,
+                        &mesh.positions,
+                        &mesh.normals,
+                        0,
+                        &mut shading,
+                    ));
+            });
+            Some(seconds * 1e6)
+        }
+        None => None,
+    };
     result?;
-    Ok((shade * 1e6, full * 1e6))
+    Ok((shade * 1e6, full * 1e6, proxies))
 }
 
 /// Multiply-adds per frame for RGB shading of every vertex.
@@ -464,10 +565,10 @@ pub fn table_markdown(rows: &[Row], test_clips: &[String]) -> String {
     let tests: Vec<String> = test_clips.iter().map(|n| format!("test `{n}`")).collect();
     let _ = writeln!(
         s,
-        "| method | k_a | k_v | α | bytes | % of frame | train err | {} | shade µs/frame | transfer µs/frame | megaops/frame | fit s |",
+        "| method | k_a | k_v | α | bytes | % of frame | train err | {} | shade µs/frame | proxies µs/frame | transfer µs/frame | megaops/frame | fit s |",
         tests.join(" | ")
     );
-    let _ = writeln!(s, "|{}", "---|".repeat(11 + tests.len()));
+    let _ = writeln!(s, "|{}", "---|".repeat(12 + tests.len()));
     for r in rows {
         let opt =
             |x: Option<f64>, digits: usize| x.map_or("–".into(), |x| format!("{x:.digits$}"));
@@ -478,7 +579,7 @@ pub fn table_markdown(rows: &[Row], test_clips: &[String]) -> String {
             });
         let _ = writeln!(
             s,
-            "| {} | {ka} | {kv} | {alpha} | {} | {:.1} | {:.2}% | {} | {} | {} | {} | {} |",
+            "| {} | {ka} | {kv} | {alpha} | {} | {:.1} | {:.2}% | {} | {} | {} | {} | {} | {} |",
             r.name,
             r.bytes,
             r.percent_of_frame,
@@ -489,6 +590,7 @@ pub fn table_markdown(rows: &[Row], test_clips: &[String]) -> String {
                 .collect::<Vec<_>>()
                 .join(" | "),
             opt(r.shade_us, 0),
+            opt(r.proxies_us, 0),
             opt(r.transfer_us, 0),
             opt(r.megaops, 2),
             opt(r.fit_s, 2),

@@ -147,7 +147,6 @@ fn light_map_model_row(
         &Extras {
             irradiance_rig: None,
             texel_atlas: Some((seq.resolution as u32, &rows)),
-            proxies: None,
         },
     )?;
     let maps = |angles: &[Vec<f64>]| -> Result<(Vec<Vec<f32>>, f64)> {

@@ -344,7 +344,8 @@ fn alpha_sweep(
             let fitted = fit_clip(rig, layout, clips, order, &options, ModelFrame::Bone)?;
             let blob = encode_model(&fitted.model, Precision::F32)?;
             let error = |clip: &BakedClip| -> Result<f64> {
-                let predicted = predict_world(&blob, &clip.angles, &clip.rotations)?;
+                let predicted =
+                    predict_world(&blob, &clip.angles, &clip.rotations, Some(clip.geometry()))?;
                 Ok(relative_error(&predicted, &clip.transfer))
             };
             let tests = tests.iter().map(error).collect::<Result<Vec<_>>>()?;
@@ -358,7 +359,7 @@ fn vertex_residuals(blob: &[u8], tests: &[BakedClip]) -> Result<Vec<f64>> {
     let mut residuals = Vec::new();
     let mut norms = Vec::new();
     for clip in tests {
-        let predicted = predict_world(blob, &clip.angles, &clip.rotations)?;
+        let predicted = predict_world(blob, &clip.angles, &clip.rotations, Some(clip.geometry()))?;
         let n2 = clip.transfer[0].len() / clip.meshes[0].vertex_count();
         for (p, t) in predicted.iter().zip(&clip.transfer) {
             for (pv, tv) in p.chunks_exact(n2).zip(t.chunks_exact(n2)) {

@@ -34,6 +34,7 @@ use aprt_core::{MAX_POSE_DIMS, MAX_POSE_LEN};
 use nalgebra::{DMatrix, DVector};
 
 use crate::model::features::PoseFeatures;
+use crate::model::occluders::{OccluderChoice, Occluders};
 use crate::model::{LinearModel, PoseBounds, VertexBasis};
 use local::{LocalFit, LocalScoring, fit_local};
 
@@ -119,6 +120,9 @@ pub struct FitOptions {
     pub local: Local,
     /// The pose features the model is linear in.
     pub features: Features,
+    /// Whether occluder proxies shadow what the poses do not show (bone-frame models of
+    /// characters; `model::train::fit_clip` fits with and without them).
+    pub proxies: Occluders,
 }
 
 /// The pose features a fit may use (see [`PoseFeatures`]).
@@ -165,18 +169,21 @@ impl Default for FitOptions {
             bound: Some(DEFAULT_FALLOFF),
             local: Local::Auto,
             features: Features::Angles,
+            proxies: Occluders::Auto,
         }
     }
 }
 
 impl FitOptions {
-    /// The paper's model: every pose dimension, the mean as prior, no bound, no local model.
+    /// The paper's model: every pose dimension, the mean as prior, no bound, no local model,
+    /// no proxies.
     pub fn paper() -> Self {
         Self {
             pose_dims: Dims::All,
             prior: Prior::Mean,
             bound: None,
             local: Local::Off,
+            proxies: Occluders::None,
             ..Self::default()
         }
     }
@@ -374,6 +381,8 @@ pub struct FitReport {
     pub rest_distance: Option<f64>,
     /// Time per stage.
     pub seconds: StageSeconds,
+    /// What the occluder proxies did, when they were tried.
+    pub occluders: Option<OccluderChoice>,
 }
 
 /// A fitted model and its report.
@@ -917,6 +926,7 @@ fn fit_features(
                 angle_names: Vec::new(),
                 bounds,
                 cosines: flags,
+                proxies: None,
             };
             (model, 1, local.energies.clone())
         }
@@ -960,6 +970,7 @@ fn fit_features(
                 angle_names: Vec::new(),
                 bounds: bound_of(&prior_angles),
                 cosines: flags,
+                proxies: None,
             };
             (model, problem.rank(), coef_energy)
         }
@@ -983,6 +994,7 @@ fn fit_features(
         chosen,
         rest_distance: None,
         seconds,
+        occluders: None,
     };
     Ok(Fit { model, report })
 }

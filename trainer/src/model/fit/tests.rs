@@ -576,6 +576,7 @@ fn a_rest_anchored_model_at_huge_alpha_is_its_prior_exactly() {
             bound: None,
             local: Local::Off,
             features,
+            proxies: Occluders::None,
         };
         let (fit, _, rest_transfer, angles) = anchored_fit(&options);
         assert_eq!(fit.report.prior, PriorKind::Rest);

@@ -45,7 +45,7 @@ pub fn measure(blob: &[u8], frame: ModelFrame, truth: &Truth<'_>) -> Result<Meas
     let lighting = &truth.lighting[..m2];
     let (mut diff, mut norm, mut grey2, mut grey_max, mut count) = (0.0, 0.0, 0.0, 0.0f64, 0usize);
     for clip in truth.tests {
-        let predicted = predict_world(blob, &clip.angles, &clip.rotations)?;
+        let predicted = predict_world(blob, &clip.angles, &clip.rotations, Some(clip.geometry()))?;
         for (p, t) in predicted.iter().zip(&clip.transfer) {
             for (pv, tv) in p.chunks_exact(m2).zip(t.chunks_exact(truth.n2)) {
                 let mut shade = 0.0f64;
@@ -73,7 +73,16 @@ pub fn measure(blob: &[u8], frame: ModelFrame, truth: &Truth<'_>) -> Result<Meas
     } else {
         Vec::new()
     };
-    let (us_per_frame, transfer_us) = time_core(blob, &timing.angles[0], &rotations, lighting)?;
+    // A model with occluder proxies pays for them every frame: they count in its time.
+    let geometry = (&timing.joints[0][..], &timing.meshes[0]);
+    let (shade_us, transfer_us, proxies_us) = time_core(
+        blob,
+        &timing.angles[0],
+        &rotations,
+        lighting,
+        Some(geometry),
+    )?;
+    let us_per_frame = shade_us + proxies_us.unwrap_or(0.0);
     Ok(Measured {
         grey_rms: (grey2 / count.max(1) as f64).sqrt(),
         grey_max,
