@@ -17,6 +17,8 @@ use aprt_core::MAX_POSE_DIMS;
 pub(super) struct Tried<'a> {
     /// The pose PCA's rank (the longest k_a).
     pub pose_rank: usize,
+    /// The training poses.
+    pub poses: usize,
     /// Whether the priors alone are scored with this feature set.
     pub priors_alone: bool,
     /// The held-out runs, when no validation clip is given.
@@ -41,7 +43,7 @@ pub(super) fn score_candidates(
     if options.local != Local::Only {
         let ladder = pose_dim_candidates(options.pose_dims, tried.pose_rank);
         for prior in priors_tried(options.prior, shared.projected.anchor.is_some()) {
-            if tried.priors_alone && priors_alone_tried(options, tried.pose_rank) {
+            if tried.priors_alone && priors_alone_tried(options, tried.poses) {
                 shared.prior_alone(prior, &mut tally);
             }
             shared.ladder(prior, &ladder, &mut tally)?;
@@ -82,9 +84,11 @@ pub(super) fn priors_tried(prior: Prior, anchored: bool) -> Vec<PriorKind> {
 
 /// Whether the priors alone (α = ∞) are candidates: whenever α is chosen by held-out error
 /// and the shared candidates are tried (a fixed α is the caller's; the local model alone is
-/// what was asked for), and the pose moves at all (otherwise every candidate is its prior).
-pub(super) fn priors_alone_tried(options: &FitOptions, pose_rank: usize) -> bool {
-    !matches!(options.alpha, Alpha::Fixed(_)) && options.local != Local::Only && pose_rank > 0
+/// what was asked for), and some pose can be held out of the others. Even when the pose
+/// coordinates do not move (the shared maps are then their priors, unscored), the priors
+/// alone are scored, so that the local model competes with the bind transfer.
+pub(super) fn priors_alone_tried(options: &FitOptions, poses: usize) -> bool {
+    !matches!(options.alpha, Alpha::Fixed(_)) && options.local != Local::Only && poses >= 2
 }
 
 /// k_v of the local model, or why it cannot be fitted.

@@ -418,6 +418,7 @@ fn fit_features(
     };
     let tried = Tried {
         pose_rank: pca.dims(),
+        poses: p,
         priors_alone,
         runs: &runs,
     };
