@@ -25,7 +25,7 @@ use crate::lighting::{RigKind, fit_rig};
 use crate::model::export::{ExportError, Precision, check_alpha};
 use crate::model::fit::{
     Alpha, Anchor, Choice, CoefDims, Dims, Fit, FitInput, FitOptions, FitReport, HeldOutKind,
-    LOCALITY_RADIUS, Local, PriorKind, REST_DISTANCE_LIMIT, Validation, fit, fit_input,
+    LOCALITY_RADIUS, Local, PriorKind, Validation, fit, fit_input, rest_distance_sentence,
 };
 use crate::model::occluders::{
     DEFAULT_CULL, OccluderChoice, Occluders, rig_section, with_occlusion,
@@ -374,7 +374,7 @@ pub fn check(poses: &Poses, settings: &TrainSettings) -> Result<(), RequestError
             return Err(RequestError::Bones { what, bones });
         }
         let n2 = settings.bake.order * settings.bake.order;
-        let (width, hint) = match settings.fit.coef_dims {
+        let (width, hint) = match settings.fit.coef_dims.at_order(settings.bake.order) {
             CoefDims::Count(k) => (
                 k,
                 format!("at most {} vertex-basis vectors fit", MAX_LIT / bones),
@@ -383,7 +383,7 @@ pub fn check(poses: &Poses, settings: &TrainSettings) -> Result<(), RequestError
                 n2,
                 "the full linear model does not fit; keep a vertex basis".to_owned(),
             ),
-            CoefDims::Variance(_) => (0, String::new()),
+            CoefDims::Variance(_) | CoefDims::FieldsPlus(_) => (0, String::new()),
         };
         if bones * width > MAX_LIT {
             return Err(RequestError::Lighting {
@@ -444,23 +444,19 @@ impl Selection {
             HeldOutKind::Clips(n) => format!("{n} validation clips"),
         };
         let c = &self.chosen;
-        let shape = if c.local { "local model" } else { "k_a" };
+        let shape = if c.is_prior() {
+            c.shape()
+        } else {
+            let shape = if c.local { "local model" } else { "k_a" };
+            format!("{shape} {}, alpha {:.3e}", c.pose_dims, c.alpha)
+        };
         let mut lines = vec![format!(
-            "model selection ({held}): {}, prior {}, {shape} {}, alpha {:.3e}",
+            "model selection ({held}): {}, prior {}, {shape}",
             features_name(c.cosines),
             c.prior.name(),
-            c.pose_dims,
-            c.alpha
         )];
         if let Some(d) = self.rest_distance {
-            let tried = if d > REST_DISTANCE_LIMIT {
-                "beyond"
-            } else {
-                "within"
-            };
-            lines.push(format!(
-                "  the rest pose is {d:.2} standard deviations from the training poses, {tried} the {REST_DISTANCE_LIMIT} up to which --prior auto tries it"
-            ));
+            lines.push(format!("  {}", rest_distance_sentence(d)));
         }
         if let Some(o) = &self.occluders {
             let without = o
@@ -477,13 +473,16 @@ impl Selection {
         }
         lines.extend(self.choices.iter().map(|c| {
             let mark = if *c == self.chosen { " <- chosen" } else { "" };
-            let shape = if c.local { "local" } else { "k_a" };
+            let alpha = if c.is_prior() {
+                String::new()
+            } else {
+                format!("alpha {:.3e}, ", c.alpha)
+            };
             format!(
-                "  {:<7} prior {:<4} {shape:<5} {:>2}: alpha {:.3e}, held-out {:.4e}, train {:.4e}{mark}",
+                "  {:<7} prior {:<4} {}: {alpha}held-out {:.4e}, train {:.4e}{mark}",
                 features_name(c.cosines),
                 c.prior.name(),
-                c.pose_dims,
-                c.alpha,
+                c.shape(),
                 c.held_out_error,
                 c.train_error
             )

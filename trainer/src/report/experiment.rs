@@ -324,7 +324,8 @@ pub fn run(
             transfer_us: Some(transfer_us),
             megaops: Some(megaops(&model)),
             fit_s: Some(fit_s),
-            shape: Some((model.pose_dims(), model.coef_dims(), fitted.model.alpha)),
+            // The fit's α: infinite when the model is its prior alone (its blob holds f32::MAX).
+            shape: Some((model.pose_dims(), model.coef_dims(), fitted.report.alpha)),
             selection: Some(Selection::of(&fitted.report)),
         });
         models.push(Fitted {

@@ -429,7 +429,13 @@ fn alpha_plot(
         .map(|s| s.0)
         .filter(|a| *a > 0.0)
         .fold(f64::INFINITY, f64::min);
-    let x = |a: f64| if a > 0.0 { a } else { smallest / 10.0 };
+    // The prior alone (α = ∞) is drawn a decade right of the largest α swept.
+    let largest = sweep.iter().map(|s| s.0).fold(0.0f64, f64::max);
+    let x = |a: f64| match a {
+        f64::INFINITY => largest * 10.0,
+        a if a > 0.0 => a,
+        _ => smallest / 10.0,
+    };
     let mut series = vec![Series {
         name: "train".into(),
         points: sweep.iter().map(|s| (x(s.0), 100.0 * s.1)).collect(),
@@ -461,7 +467,11 @@ fn alpha_plot(
         path,
         &Axes {
             title: &format!("{title}: error against α"),
-            x: "α (leftmost point: α = 0)",
+            x: if chosen == f64::INFINITY {
+                "α (leftmost point: α = 0; the choice at the right: α = ∞)"
+            } else {
+                "α (leftmost point: α = 0)"
+            },
             y: "relative transfer error, %",
             log_x: true,
             log_y,

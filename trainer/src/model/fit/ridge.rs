@@ -139,6 +139,70 @@ impl RidgeTarget<'_> {
     fn shape(&self) -> (usize, usize) {
         self.outputs.y_centred.shape()
     }
+
+    /// The prior's prediction: the anchor's output, or the mean output (the limit α → ∞).
+    pub fn centre(&self) -> &DVector<f64> {
+        &self.centre
+    }
+
+    /// The limit α → ∞ scored over the held-out `runs`, in closed form: anchored, every pose
+    /// is predicted by the anchor's output whatever is held out; around the mean, a held-out
+    /// run S of L poses by the mean of the other `p − L` (infinite when there are none).
+    /// Errors per output entry, as [`CvPoint`]'s, at α = ∞.
+    pub fn prior_point(&self, runs: &[Range<usize>]) -> CvPoint {
+        let (p, q) = self.shape();
+        let y = &self.outputs.y_centred;
+        // Outputs relative to the centre: `Y_c + 1 shiftᵀ`.
+        let relative = |i: usize| y.row(i).transpose() + &self.shift;
+        let train: f64 = (0..p).map(|i| relative(i).norm_squared()).sum();
+        let cv = if self.anchored {
+            train
+        } else {
+            runs.iter()
+                .map(|run| {
+                    let rest = p - run.len();
+                    if rest == 0 {
+                        return f64::INFINITY;
+                    }
+                    // The other poses' mean, relative to the mean of all: −Σ_S c_i / (p − L).
+                    let sum = run
+                        .clone()
+                        .fold(DVector::zeros(q), |acc, i| acc + relative(i));
+                    let others = sum / -(rest as f64);
+                    run.clone()
+                        .map(|i| (relative(i) - &others).norm_squared())
+                        .sum::<f64>()
+                })
+                .sum()
+        };
+        let entries = (p * q.max(1)).max(1) as f64;
+        CvPoint {
+            alpha: f64::INFINITY,
+            cv_error: cv / entries,
+            train_error: train / entries,
+        }
+    }
+
+    /// The limit α → ∞ scored on poses held out whole: each predicted by the centre.
+    pub fn prior_held_out(&self, held: &[HeldOut]) -> CvPoint {
+        let (p, q) = self.shape();
+        let (mut err, mut rows) = (0.0, 0);
+        for h in held {
+            for row in h.y.row_iter() {
+                err += (row.transpose() - &self.centre).norm_squared();
+            }
+            rows += h.y.nrows();
+        }
+        let y = &self.outputs.y_centred;
+        let train: f64 = (0..p)
+            .map(|i| (y.row(i).transpose() + &self.shift).norm_squared())
+            .sum();
+        CvPoint {
+            alpha: f64::INFINITY,
+            cv_error: err / (rows * q.max(1)).max(1) as f64,
+            train_error: train / (p * q.max(1)).max(1) as f64,
+        }
+    }
 }
 
 /// A ridge problem: the factored inputs and the outputs they predict.

@@ -669,9 +669,18 @@ fn the_selection_keeps_the_candidate_with_the_lowest_held_out_error() {
     // (k_a 1, 2, 3, 4), or the angles and their cosines (8: k_a 1, 2, 3, 4, 6, 8).
     let count = |cosines: bool| {
         let of = fit.report.choices.iter().filter(|c| c.cosines == cosines);
-        of.count()
+        of.filter(|c| !c.is_prior()).count()
     };
     assert_eq!((count(false), count(true)), (2 * 4, 2 * 6));
+    // And each prior alone (α = ∞), once: they do not depend on the features.
+    let alone: Vec<PriorKind> = fit
+        .report
+        .choices
+        .iter()
+        .filter(|c| c.is_prior())
+        .map(|c| c.prior)
+        .collect();
+    assert_eq!(alone, [PriorKind::Rest, PriorKind::Mean]);
 }
 
 /// Four vertices (order 1) in two groups: vertices 0, 1 depend on entry 0 only, 2, 3 on
@@ -897,10 +906,10 @@ fn the_rest_distance_is_the_rms_of_standard_scores_over_moving_entries() {
     );
 }
 
-/// `--prior auto` tries the rest prior only when the rest pose lies among the training poses;
-/// asked for, it is still fitted.
+/// `--prior auto` scores the rest prior however far the rest pose lies from the training
+/// poses, and the report says when it is far; asked for, it is the only prior.
 #[test]
-fn a_rest_pose_far_from_the_training_poses_is_not_an_automatic_prior() {
+fn a_rest_pose_far_from_the_training_poses_is_still_scored_and_said_to_be_far() {
     let (angles, transfers, _, rest_transfer) = anchored_problem();
     let far = vec![-3.0; 4];
     let mut input = FitInput::new(&angles, &transfers, 2);
@@ -913,25 +922,206 @@ fn a_rest_pose_far_from_the_training_poses_is_not_an_automatic_prior() {
         ..FitOptions::default()
     };
     let fit = fit_input(&input, &options).unwrap();
-    assert!(fit.report.rest_distance.unwrap() > REST_DISTANCE_LIMIT);
-    assert!(
+    let distance = fit.report.rest_distance.unwrap();
+    assert!(distance > FAR_REST_DISTANCE);
+    let priors = |fit: &Fit, prior| {
         fit.report
             .choices
             .iter()
-            .all(|c| c.prior == PriorKind::Mean)
-    );
+            .filter(|c| c.prior == prior)
+            .count()
+    };
+    assert_eq!(priors(&fit, PriorKind::Rest), priors(&fit, PriorKind::Mean));
+    assert!(rest_distance_sentence(distance).contains("far from every one of them"));
     let (near, ..) = anchored_fit(&options);
-    assert!(near.report.rest_distance.unwrap() < REST_DISTANCE_LIMIT);
-    assert!(
-        near.report
-            .choices
-            .iter()
-            .any(|c| c.prior == PriorKind::Rest)
-    );
+    let distance = near.report.rest_distance.unwrap();
+    assert!(distance < FAR_REST_DISTANCE);
+    assert!(!rest_distance_sentence(distance).contains("far"));
     let forced = FitOptions {
         prior: Prior::Rest,
         ..options
     };
     let fit = fit_input(&input, &forced).unwrap();
     assert_eq!(fit.report.prior, PriorKind::Rest);
+    assert!(
+        fit.report
+            .choices
+            .iter()
+            .all(|c| c.prior == PriorKind::Rest)
+    );
+}
+
+/// 40 poses of 3 entries, order 2, 10 vertices: the rest transfer plus noise of 0.02, plus
+/// `slope` times a linear function of the pose.
+fn prior_problem(slope: f64) -> (DMatrix<f64>, Vec<Vec<f32>>, Vec<f64>, Vec<f32>) {
+    let angles = uniform(40, 3, 101);
+    let rest = vec![0.0; 3];
+    let rest_transfer: Vec<f32> = uniform(1, 40, 102)
+        .iter()
+        .map(|x| (1.0 + x) as f32)
+        .collect();
+    let noise = uniform(40, 40, 103);
+    let g = uniform(3, 40, 104);
+    let linear = &angles * g;
+    let transfers = (0..40)
+        .map(|i| {
+            (0..40)
+                .map(|j| {
+                    let t = f64::from(rest_transfer[j]) + 0.02 * noise[(i, j)];
+                    (t + slope * linear[(i, j)]) as f32
+                })
+                .collect()
+        })
+        .collect();
+    (angles, transfers, rest, rest_transfer)
+}
+
+fn prior_options() -> FitOptions {
+    FitOptions {
+        coef_dims: CoefDims::Count(8),
+        ..FitOptions::default()
+    }
+}
+
+#[test]
+fn a_transfer_the_pose_does_not_change_is_the_bind_transfer_alone() {
+    let (angles, transfers, rest, rest_transfer) = prior_problem(0.0);
+    let mut input = FitInput::new(&angles, &transfers, 2);
+    input.anchor = Some(Anchor {
+        angles: &rest,
+        transfer: &rest_transfer,
+    });
+    let fit = fit_input(&input, &prior_options()).unwrap();
+    let chosen = fit.report.chosen;
+    assert!(chosen.is_prior(), "{:?}", fit.report.choices);
+    assert_eq!(
+        (chosen.prior, fit.report.prior),
+        (PriorKind::Rest, PriorKind::Rest)
+    );
+    assert_eq!(fit.model.pose_dims(), 0);
+    assert!(fit.report.alpha.is_infinite() && fit.report.cv_curve.is_empty());
+    // The skinned bind transfer at every pose, in f64 and through a blob read by aprt-core.
+    let blob = crate::model::export::encode_model(&fit.model, Default::default()).unwrap();
+    let poses: Vec<Vec<f64>> = [angles.row(4).transpose(), angles.row(9).transpose() * 20.0]
+        .iter()
+        .map(|p| p.as_slice().to_vec())
+        .collect();
+    let core = crate::model::runtime::predict_transfer(&blob, &poses).unwrap();
+    for (pose, through_core) in poses.iter().zip(&core) {
+        let t = fit.model.predict(pose);
+        for ((a, c), b) in t.iter().zip(through_core).zip(&rest_transfer) {
+            assert!((a - f64::from(*b)).abs() < 1e-9, "{a} vs {b}");
+            assert!((c - b).abs() < 1e-5, "{c} vs {b}");
+        }
+    }
+    let info = crate::model::runtime::describe(&blob).unwrap();
+    assert_eq!(info.pose_dims, 0);
+}
+
+#[test]
+fn a_transfer_linear_in_the_pose_is_not_its_prior_alone() {
+    let (angles, transfers, rest, rest_transfer) = prior_problem(0.5);
+    let mut input = FitInput::new(&angles, &transfers, 2);
+    input.anchor = Some(Anchor {
+        angles: &rest,
+        transfer: &rest_transfer,
+    });
+    let fit = fit_input(&input, &prior_options()).unwrap();
+    assert!(!fit.report.chosen.is_prior(), "{:?}", fit.report.choices);
+    assert!(fit.model.pose_dims() > 0);
+    // Both baselines were scored, and both lost by far.
+    let alone: Vec<&Choice> = fit.report.choices.iter().filter(|c| c.is_prior()).collect();
+    assert_eq!(alone.len(), 2);
+    for c in alone {
+        assert!(
+            c.held_out_error > 10.0 * fit.report.chosen.held_out_error,
+            "{c:?}"
+        );
+    }
+}
+
+/// The bind candidate's held-out error is the plain mean squared error of the rest transfer
+/// against every scored pose: on held-out runs (which it does not learn from) and on a
+/// validation clip; the mean candidate's on the clip is that of the training poses' mean.
+#[test]
+fn the_priors_alone_are_scored_by_their_plain_mean_squared_errors() {
+    let (angles, transfers, rest, rest_transfer) = prior_problem(0.3);
+    let mse = |poses: &[Vec<f32>], prediction: &[f64]| {
+        let sum: f64 = poses
+            .iter()
+            .flat_map(|t| {
+                t.iter()
+                    .zip(prediction)
+                    .map(|(a, b)| (f64::from(*a) - b).powi(2))
+            })
+            .sum();
+        sum / (poses.len() * prediction.len()) as f64
+    };
+    let bind: Vec<f64> = rest_transfer.iter().map(|&x| f64::from(x)).collect();
+    let alone = |fit: &Fit, prior| {
+        *fit.report
+            .choices
+            .iter()
+            .find(|c| c.is_prior() && c.prior == prior)
+            .unwrap()
+    };
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs();
+
+    // k_v 8 of 40 values: the basis spans the rest transfer's fields, so the bind candidate
+    // is exact and its error counts what lies outside the basis; the identity basis for the
+    // mean, which an anchored basis does not span.
+    let full = FitOptions {
+        coef_dims: CoefDims::Full,
+        ..prior_options()
+    };
+    let mut input = FitInput::new(&angles, &transfers, 2);
+    input.anchor = Some(Anchor {
+        angles: &rest,
+        transfer: &rest_transfer,
+    });
+    let fit = fit_input(&input, &prior_options()).unwrap();
+    let c = alone(&fit, PriorKind::Rest);
+    assert!(close(c.held_out_error, mse(&transfers, &bind)), "{c:?}");
+    assert!(close(c.train_error, mse(&transfers, &bind)), "{c:?}");
+    // The mean alone on held-out runs of 4 poses: each run predicted by the others' mean.
+    let mut sum = 0.0;
+    for run in segments(&[40], 4) {
+        let others: Vec<&Vec<f32>> = (0..40)
+            .filter(|i| !run.contains(i))
+            .map(|i| &transfers[i])
+            .collect();
+        let mean: Vec<f64> = (0..40)
+            .map(|j| others.iter().map(|t| f64::from(t[j])).sum::<f64>() / others.len() as f64)
+            .collect();
+        sum += mse(&transfers[run.clone()], &mean) * run.len() as f64;
+    }
+    let fit = fit_input(&input, &full).unwrap();
+    let c = alone(&fit, PriorKind::Mean);
+    assert!(
+        close(c.held_out_error, sum / 40.0),
+        "{c:?} vs {}",
+        sum / 40.0
+    );
+
+    // On a validation clip: the first 10 poses held out whole, trained on the other 30.
+    let (train_angles, train) = (angles.rows(10, 30).into_owned(), transfers[10..].to_vec());
+    let (held_angles, held) = (angles.rows(0, 10).into_owned(), transfers[..10].to_vec());
+    let mut input = FitInput::new(&train_angles, &train, 2);
+    input.anchor = Some(Anchor {
+        angles: &rest,
+        transfer: &rest_transfer,
+    });
+    input.validation = vec![Validation {
+        angles: &held_angles,
+        transfers: &held,
+    }];
+    let fit = fit_input(&input, &full).unwrap();
+    assert_eq!(fit.report.held_out, HeldOutKind::Clips(1));
+    let c = alone(&fit, PriorKind::Rest);
+    assert!(close(c.held_out_error, mse(&held, &bind)), "{c:?}");
+    let t = as_matrix(&train);
+    let mean: Vec<f64> = (0..40).map(|j| t.column(j).mean()).collect();
+    let c = alone(&fit, PriorKind::Mean);
+    assert!(close(c.held_out_error, mse(&held, &mean)), "{c:?}");
+    assert!(close(c.train_error, mse(&train, &mean)), "{c:?}");
 }

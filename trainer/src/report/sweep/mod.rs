@@ -528,10 +528,11 @@ fn fit_and_measure(
                     Dims::All => "all".into(),
                     Dims::Auto => "auto".into(),
                 },
-                coef_dims: match candidate.coef_dims {
+                coef_dims: match candidate.coef_dims.at_order(candidate.order) {
                     CoefDims::Count(k) => k.to_string(),
                     CoefDims::Variance(f) => format!("{f} of the energy"),
                     CoefDims::Full => "full".into(),
+                    CoefDims::FieldsPlus(extra) => format!("n² + {extra}"),
                 },
                 fitted: (info.pose_dims(), info.coef_dims()),
                 precision: precision.name(),

@@ -1,0 +1,187 @@
+//! How the candidates are scored: what is held out (runs of the training clips, or whole
+//! validation clips), the transfer as the candidates see it (coordinates in the vertex basis
+//! and what lies outside it), and errors per transfer value, comparable across candidates.
+
+use std::ops::Range;
+
+use nalgebra::{DMatrix, DVector};
+
+use super::ridge::{
+    AlphaSelection, CvPoint, HeldOut, RidgeOutputs, RidgeProblem, RidgeTarget, segments,
+};
+use super::rsvd::RowOperator;
+use super::vertex_basis::{PoseRows, project_rows, raw_rows};
+use super::{Alpha, FitError, FitInput, PosePca};
+
+/// How a candidate is scored: held-out runs of the training clips, or whole held-out clips.
+#[derive(Clone, Copy)]
+pub(super) enum Scoring<'a> {
+    Segments(&'a [Range<usize>]),
+    Clips(&'a [HeldOut]),
+}
+
+impl Scoring<'_> {
+    /// α by held-out error, and the curve it was chosen on.
+    pub fn select(&self, problem: &RidgeProblem<'_>) -> Result<AlphaSelection, FitError> {
+        match self {
+            Scoring::Segments(runs) => problem.select_alpha(runs),
+            Scoring::Clips(held) => problem.select_on(held),
+        }
+    }
+
+    /// The errors at one α.
+    pub fn point(&self, problem: &RidgeProblem<'_>, alpha: f64) -> CvPoint {
+        match self {
+            Scoring::Segments(runs) => problem.cv_point(alpha, runs),
+            Scoring::Clips(held) => problem.held_out_point(alpha, held),
+        }
+    }
+
+    /// The errors of the target's prior alone (α = ∞), in closed form.
+    pub fn prior(&self, target: &RidgeTarget<'_>) -> CvPoint {
+        match self {
+            Scoring::Segments(runs) => target.prior_point(runs),
+            Scoring::Clips(held) => target.prior_held_out(held),
+        }
+    }
+}
+
+/// Poses per held-out run: 1 for leave-one-out, the asked length or `⌈p / 10⌉` otherwise.
+pub(super) fn segment_length(alpha: Alpha, poses: usize) -> usize {
+    match alpha {
+        Alpha::Loo => 1,
+        Alpha::Loso { segment } => segment.unwrap_or(poses.div_ceil(10)).max(1),
+        Alpha::Fixed(_) => poses.div_ceil(10).max(1),
+    }
+}
+
+/// The held-out runs of `segment` poses inside each training clip.
+pub(super) fn held_out_runs(input: &FitInput<'_>, segment: usize) -> Vec<Range<usize>> {
+    let clips = if input.clips.is_empty() {
+        vec![input.transfers.len()]
+    } else {
+        input.clips.clone()
+    };
+    segments(&clips, segment)
+}
+
+/// The transfer as the candidates see it: each pose's coordinates in the vertex basis (its
+/// raw values for the identity basis), the anchor's, the validation clips', and the part of
+/// each pose's transfer outside the basis, which is the same for every candidate that
+/// predicts in the basis and part of its error.
+pub(super) struct Projected {
+    /// The training poses' outputs.
+    pub outputs: RidgeOutputs,
+    /// `‖t‖² − ‖coordinates‖²` summed over the training poses.
+    pub outside_train: f64,
+    /// The anchor's pose coordinates and outputs.
+    pub anchor: Option<(DVector<f64>, DVector<f64>)>,
+    /// The validation clips' pose coordinates and outputs.
+    pub held: Vec<HeldOut>,
+    /// What lies outside the basis, summed over the validation poses.
+    pub outside_held: f64,
+}
+
+impl Projected {
+    /// Projects `input`'s transfer on `basis` (`None`: the identity) and its poses with `pca`.
+    pub fn new(
+        input: &FitInput<'_>,
+        basis: Option<&DMatrix<f64>>,
+        pca: &PosePca,
+        vertices: usize,
+    ) -> Self {
+        let n2 = input.order * input.order;
+        let outputs_of = |transfers: &[&[f32]]| {
+            let rows = PoseRows::from_slices(transfers.to_vec(), n2, vertices);
+            match basis {
+                Some(b) => project_rows(&rows, b),
+                None => raw_rows(&rows),
+            }
+        };
+        let outside = |transfers: &[&[f32]], outputs: &DMatrix<f64>| {
+            let rows = PoseRows::from_slices(transfers.to_vec(), n2, vertices);
+            (rows.frobenius_sq() - outputs.norm_squared()).max(0.0)
+        };
+        let train_slices: Vec<&[f32]> = input.transfers.iter().map(Vec::as_slice).collect();
+        let train_outputs = outputs_of(&train_slices);
+        let outside_train = outside(&train_slices, &train_outputs);
+        let anchor = input.anchor.map(|a| {
+            let z0 = pca.project(&DMatrix::from_row_slice(1, a.angles.len(), a.angles));
+            let y0 = outputs_of(&[a.transfer]);
+            (z0.row(0).transpose(), y0.row(0).transpose())
+        });
+        let mut held = Vec::new();
+        let mut outside_held = 0.0;
+        for v in &input.validation {
+            let slices: Vec<&[f32]> = v.transfers.iter().map(Vec::as_slice).collect();
+            let y = outputs_of(&slices);
+            outside_held += outside(&slices, &y);
+            held.push(HeldOut {
+                z: pca.project(v.angles),
+                y,
+            });
+        }
+        Self {
+            outputs: RidgeOutputs::new(train_outputs),
+            outside_train,
+            anchor,
+            held,
+            outside_held,
+        }
+    }
+
+    /// Poses in the validation clips.
+    pub fn held_poses(&self) -> usize {
+        self.held.iter().map(|h| h.y.nrows()).sum()
+    }
+}
+
+/// Errors per transfer value from errors per output (basis coordinates), with what lies
+/// outside the basis added: comparable across every candidate.
+pub(super) struct PerValue {
+    /// Outputs per pose (`n²·k_v`) and transfer values per pose (`v·n²`).
+    outputs: usize,
+    values: usize,
+    train_poses: usize,
+    outside_train: f64,
+    scored_poses: usize,
+    outside_scored: f64,
+}
+
+impl PerValue {
+    /// For `n2` coefficients of `vertices` vertices through `kv` basis vectors, scored on the
+    /// training poses (held-out runs) or on the validation clips.
+    pub fn new(projected: &Projected, poses: usize, n2: usize, kv: usize, vertices: usize) -> Self {
+        let (scored_poses, outside_scored) = if projected.held.is_empty() {
+            (poses, projected.outside_train)
+        } else {
+            (projected.held_poses(), projected.outside_held)
+        };
+        Self {
+            outputs: n2 * kv,
+            values: vertices * n2,
+            train_poses: poses,
+            outside_train: projected.outside_train,
+            scored_poses,
+            outside_scored,
+        }
+    }
+
+    fn convert(&self, mse: f64, poses: usize, outside: f64) -> f64 {
+        if mse == f64::MAX {
+            return mse;
+        }
+        let poses = poses.max(1) as f64;
+        (mse * poses * self.outputs as f64 + outside) / (poses * self.values as f64)
+    }
+
+    /// The held-out error per transfer value of a point's held-out error per output.
+    pub fn held_out(&self, point: &CvPoint) -> f64 {
+        self.convert(point.cv_error, self.scored_poses, self.outside_scored)
+    }
+
+    /// The same for the in-sample error.
+    pub fn train(&self, point: &CvPoint) -> f64 {
+        self.convert(point.train_error, self.train_poses, self.outside_train)
+    }
+}
