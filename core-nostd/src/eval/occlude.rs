@@ -34,19 +34,30 @@ impl ModelInfo {
         self.check_range(first, count)
     }
 
-    /// Visits every vertex of `first .. first + count` with its bone and its index in the
-    /// range.
-    fn each_vertex_bone<R: Reader>(
+    /// Visits every vertex of `first .. first + count` that some proxy may reach, with its
+    /// index in the range and the mask of those proxies (its bone's, cut to its block's).
+    fn each_reached_vertex<R: Reader>(
         &self,
         r: &mut R,
-        first: usize,
-        count: usize,
-        mut visit: impl FnMut(usize, usize),
+        frame: &ProxyFrame,
+        (first, count): (usize, usize),
+        positions: &[[f32; 3]],
+        mut visit: impl FnMut(usize, usize, u64),
     ) -> Result<(), Error> {
         let end = first + count;
         self.each_block(r, first, count, |v0, bones, _| {
-            for j in v0.max(first)..(v0 + bones.len()).min(end) {
-                visit(j - first, bones[j - v0]);
+            let (lo, hi) = (v0.max(first), (v0 + bones.len()).min(end));
+            let lanes = &bones[lo - v0..hi - v0];
+            let block = frame.block_mask(lanes, &positions[lo - first..hi - first]);
+            if block == 0 {
+                return;
+            }
+            for j in lo..hi {
+                let bone = bones[j - v0];
+                let mask = frame.candidates.get(bone).copied().unwrap_or(0) & block;
+                if mask != 0 {
+                    visit(j - first, bone, mask);
+                }
             }
         })
     }
@@ -75,12 +86,13 @@ impl ModelInfo {
         }
         self.check_occlusion_inputs(frame, positions, normals, first, out.len())?;
         let mut d = [0.0f32; MAX_COEFFS];
-        self.each_vertex_bone(r, first, out.len(), |i, bone| {
+        let range = (first, out.len());
+        self.each_reached_vertex(r, frame, range, positions, |i, _, mask| {
             let Some(normal) = unit(normals[i]) else {
                 return;
             };
             let vertex = (positions[i], normal);
-            if vertex_occlusion(frame, self.order, bone, vertex, None, &mut d) {
+            if vertex_occlusion(frame, self.order, mask, vertex, None, &mut d) {
                 out[i] -= d[..n2]
                     .iter()
                     .zip(lighting)
@@ -120,12 +132,12 @@ impl ModelInfo {
         let count = out.len() / n2;
         self.check_occlusion_inputs(frame, positions, normals, first, count)?;
         let mut d = [0.0f32; MAX_COEFFS];
-        self.each_vertex_bone(r, first, count, |i, bone| {
+        self.each_reached_vertex(r, frame, (first, count), positions, |i, bone, mask| {
             let Some(normal) = unit(normals[i]) else {
                 return;
             };
             let vertex = (positions[i], normal);
-            if vertex_occlusion(frame, self.order, bone, vertex, bones.get(bone), &mut d) {
+            if vertex_occlusion(frame, self.order, mask, vertex, bones.get(bone), &mut d) {
                 for (t, d) in out[i * n2..(i + 1) * n2].iter_mut().zip(&d) {
                     *t -= d;
                 }

@@ -52,6 +52,42 @@ impl ProxyFrame {
     pub fn candidates(&self, bone: usize) -> u32 {
         self.candidates.get(bone).map_or(0, |m| m.count_ones())
     }
+
+    /// The proxies that may reach a block of vertices of bones `bones` at `positions`: those
+    /// of the bones' masks whose reach meets the block's box. One test per proxy and block
+    /// spares the vertices of a block every proxy that cannot touch any of them.
+    pub(crate) fn block_mask(&self, bones: &[usize], positions: &[[f32; 3]]) -> u64 {
+        let mut mask = bones
+            .iter()
+            .map(|&b| self.candidates.get(b).copied().unwrap_or(0))
+            .fold(0, |m, c| m | c);
+        if mask == 0 {
+            return 0;
+        }
+        let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+        for p in positions {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        let mut left = mask;
+        while left != 0 {
+            let i = left.trailing_zeros() as usize;
+            left &= left - 1;
+            let c = self.centres[i];
+            let gap2: f32 = (0..3)
+                .map(|k| {
+                    let g = (lo[k] - c[k]).max(c[k] - hi[k]).max(0.0);
+                    g * g
+                })
+                .sum();
+            if gap2 >= self.reach2[i] {
+                mask &= !(1 << i);
+            }
+        }
+        mask
+    }
 }
 
 impl Default for ProxyFrame {
@@ -136,10 +172,11 @@ impl ProxyFrame {
             out[..n2].fill(0.0);
             return Ok(false);
         };
+        let mask = self.candidates[bone];
         Ok(vertex_occlusion(
             self,
             order,
-            bone,
+            mask,
             (position, normal),
             rotation,
             out,

@@ -108,15 +108,15 @@ fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-/// The occlusion `D` of one vertex of bone `bone` at `position` with unit `normal` by the
-/// proxies `frame` lets touch that bone, into `out` (`order²` values, in the frame of
+/// The occlusion `D` of one vertex at `position` with unit `normal` by the proxies of `mask`
+/// (those `frame` lets touch the vertex's bone, and its block), into `out` (`order²` values, in the frame of
 /// `rotation` when given: the vertex's bone frame; world otherwise). Returns whether any
 /// proxy reached it (`out` is zero otherwise). The bone must be below the frame's bone count
 /// and the normal unit; a zero normal sees nothing.
 pub(crate) fn vertex_occlusion(
     frame: &ProxyFrame,
     order: usize,
-    bone: usize,
+    mut mask: u64,
     (position, normal): ([f32; 3], [f32; 3]),
     rotation: Option<&Rotation>,
     out: &mut [f32],
@@ -124,7 +124,6 @@ pub(crate) fn vertex_occlusion(
     let n2 = order * order;
     let mut sum = [0.0f32; MAX_COEFFS];
     let (mut total, mut visible) = (0.0f32, 1.0f32);
-    let mut mask = frame.candidates.get(bone).copied().unwrap_or(0);
     while mask != 0 {
         let i = mask.trailing_zeros() as usize;
         mask &= mask - 1;
