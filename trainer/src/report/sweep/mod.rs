@@ -20,6 +20,7 @@ use crate::io::scene::Scene;
 use crate::model::ModelFrame;
 use crate::model::export::{Precision, encode_model};
 use crate::model::fit::{CoefDims, Dims, FitOptions};
+use crate::model::occluders::Occluders;
 use crate::model::train::{ClipSet, fit_clip};
 use crate::progress::{Reporter, Silent};
 use crate::rig::pose_layout::PoseLayout;
@@ -71,6 +72,9 @@ pub struct Setting {
     pub rays: usize,
     /// Bounces of the training bake.
     pub bounces: usize,
+    /// Occluder proxies asked for (`auto`: kept where they lower the held-out error), and
+    /// whether the model has them.
+    pub proxies: (&'static str, bool),
 }
 
 /// One measured setting.
@@ -133,6 +137,7 @@ pub struct Candidate {
     pose_dims: Dims,
     coef_dims: CoefDims,
     data: Data,
+    proxies: Occluders,
 }
 
 /// Which bake a candidate learns from.
@@ -365,6 +370,7 @@ pub fn candidates(scene: &Scene, order: usize, knobs: Knobs) -> Vec<Candidate> {
         pose_dims,
         coef_dims,
         data,
+        proxies: Occluders::Auto,
     };
     let defaults = FitOptions::default();
     let mut list: Vec<Candidate> = (1..=MAX_ORDER)
@@ -374,8 +380,21 @@ pub fn candidates(scene: &Scene, order: usize, knobs: Knobs) -> Vec<Candidate> {
             pose_dims: defaults.pose_dims,
             coef_dims: defaults.coef_dims,
             data: Data::Reference,
+            proxies: Occluders::Auto,
         })
         .collect();
+    // What the occluder proxies cost and buy: the model without them and with them always.
+    for (proxies, name) in [(Occluders::None, "no proxies"), (Occluders::On, "proxies")] {
+        list.push(Candidate {
+            proxies,
+            ..at(
+                format!("order {order}, {name}"),
+                defaults.pose_dims,
+                defaults.coef_dims,
+                Data::Reference,
+            )
+        });
+    }
     for k in [4, 8, 16, 32] {
         list.push(at(
             format!("order {order}, k_v {k}"),
@@ -500,6 +519,7 @@ fn fit_and_measure(
     let options = FitOptions {
         pose_dims: candidate.pose_dims,
         coef_dims: candidate.coef_dims,
+        proxies: candidate.proxies,
         ..FitOptions::default()
     };
     let set = ClipSet {
@@ -544,6 +564,7 @@ fn fit_and_measure(
                     Data::Bounces(b) => b,
                     _ => scene.effects.bounces,
                 },
+                proxies: (candidate.proxies.name(), info.has_proxies()),
             },
             error: measured.grey_rms,
             us_per_frame: measured.us_per_frame,
