@@ -21,6 +21,18 @@ pub(super) struct Spheres {
     pub misfit: usize,
 }
 
+impl Spheres {
+    /// The spheres of positive radius, as `(centre, radius)`.
+    pub fn nonzero(&self) -> Vec<(DVec3, f64)> {
+        self.centres
+            .iter()
+            .zip(&self.radii)
+            .filter(|&(_, &r)| r > 0.0)
+            .map(|(&c, &r)| (c, r))
+            .collect()
+    }
+}
+
 /// `k` (≥ 1, at most `points.len()`) centres by k-means over `points`: farthest-point
 /// initialisation (the point farthest from the mean, then repeatedly the point farthest from
 /// every chosen centre; the lowest index on ties), then [`ITERATIONS`] Lloyd steps (each point

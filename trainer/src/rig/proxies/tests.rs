@@ -86,6 +86,16 @@ fn capsule(radius: f64, length: f64, centre: DVec3) -> Mesh {
     revolve(&profile, 32, centre)
 }
 
+/// A flat cylinder across the x axis (a disc in the plane `x = centre.x`): `radius`, `thickness`,
+/// its faces in rings a tenth of the radius apart and its rim in four.
+fn disc(radius: f64, thickness: f64, centre: DVec3) -> Mesh {
+    let h = 0.5 * thickness;
+    let mut profile: Vec<(f64, f64)> = (0..10).map(|i| (-h, radius * i as f64 / 10.0)).collect();
+    profile.extend((0..=4).map(|i| (-h + thickness * i as f64 / 4.0, radius)));
+    profile.extend((0..10).rev().map(|i| (h, radius * i as f64 / 10.0)));
+    revolve(&profile, 48, centre)
+}
+
 /// Several meshes as one, each driven by its own bone (`bone i` for mesh `i`).
 fn join(meshes: &[Mesh]) -> (Mesh, BoneFrames) {
     let (mut positions, mut triangles, mut vertex_bone) = (Vec::new(), Vec::new(), Vec::new());
@@ -115,20 +125,22 @@ fn one_bone(mesh: &Mesh) -> BoneFrames {
 /// The fit's table: one row per bone with proxies, then the totals.
 fn table(name: &str, fit: &ProxyFit, bone_count: usize) -> String {
     let mut s = format!(
-        "{name}: {bone_count} bones, {} with proxies, {} spheres, volume error {:.1} % ({:.1} % of the volume on bones without proxies)\n",
+        "{name}: {bone_count} bones, {} with proxies, {} spheres, volume error {:.1} % ({:.1} % of the volume on bones without proxies), surface covered {:.1} %\n",
         fit.bones.len(),
         fit.proxies.len(),
         100.0 * fit.volume_error,
-        100.0 * fit.uncovered
+        100.0 * fit.uncovered,
+        100.0 * fit.covered
     );
-    s += "  bone  vertices  spheres  volume error\n";
+    s += "  bone  vertices  spheres  volume error  covered\n";
     for b in &fit.bones {
         s += &format!(
-            "  {:>4}  {:>8}  {:>7}  {:>10.1} %\n",
+            "  {:>4}  {:>8}  {:>7}  {:>10.1} %  {:>5.1} %\n",
             b.bone,
             b.vertices,
             b.spheres,
-            100.0 * b.volume_error
+            100.0 * b.volume_error,
+            100.0 * b.covered
         );
     }
     s
@@ -291,6 +303,37 @@ fn the_budgets_hold_and_small_parts_give_way() {
     assert_eq!(none.volume_error, 1.0);
 }
 
+/// A disc ten times as wide (in radius) as it is thick, the shape of a hat's brim: it holds
+/// too little volume for spheres to earn their place by volume, so coverage puts a set of
+/// spheres over it, all centred in its plane, within the tolerance of nine tenths of its
+/// vertices.
+#[test]
+fn a_thin_disc_gets_spheres_in_its_plane_that_cover_it() {
+    let (radius, thickness, centre) = (0.3, 0.03, DVec3::new(0.2, -0.1, 1.0));
+    let mesh = disc(radius, thickness, centre);
+    let fit = fit_proxies(&mesh, &one_bone(&mesh), &ProxyOptions::default()).unwrap();
+    println!("{}", table("disc", &fit, 1));
+    for p in &fit.proxies {
+        println!("  {:.4?} r {:.4}", p.centre, p.radius);
+    }
+    assert!(fit.proxies.len() >= 3, "{fit:?}");
+    assert!(fit.bones[0].covered >= 0.9, "{:?}", fit.bones);
+    assert_eq!(fit.covered, fit.bones[0].covered);
+    for p in &fit.proxies {
+        let off = DVec3::from(p.centre) - centre;
+        assert!(off.x.abs() <= 0.5 * thickness, "out of the plane: {off}");
+        assert!(off.y.hypot(off.z) < radius, "off the disc: {off}");
+    }
+    // Spread over the disc, not heaped at its middle.
+    assert!(
+        fit.proxies
+            .iter()
+            .any(|p| (DVec3::from(p.centre) - centre).length() > 0.5 * radius),
+        "{:?}",
+        fit.proxies
+    );
+}
+
 /// Bones with fewer than [`MIN_VERTICES`] vertices get no sphere.
 #[test]
 fn a_bone_with_few_vertices_gets_none() {
@@ -337,6 +380,7 @@ fn the_same_input_gives_the_same_bytes() {
         for b in &fit.bones {
             out.extend(b.volume_error.to_bits().to_le_bytes());
             out.extend(b.volume.to_bits().to_le_bytes());
+            out.extend(b.covered.to_bits().to_le_bytes());
         }
         out.extend(fit.volume_error.to_bits().to_le_bytes());
         out
@@ -435,12 +479,23 @@ fn the_builtin_character_gets_proxies_on_head_arms_and_torso() {
     println!("{}", table("built-in character", &fit, bones.count));
     let has = |bone: u16| fit.proxies.iter().any(|p| p.bone == bone);
     const HEAD: u16 = 4;
+    // The head's axis is vertical through its centre; the brim is 3 cm thick from z = 1.755.
+    let from_axis = |p: &Proxy| (p.centre[0] - 0.0).hypot(p.centre[1] + 0.01);
     for p in fit.proxies.iter().filter(|p| p.bone == HEAD) {
         println!(
-            "  head and hat: centre {:.3?}, radius {:.3}",
-            p.centre, p.radius
+            "  head and hat: centre {:.3?}, radius {:.3}, {:.3} m from the head's axis",
+            p.centre,
+            p.radius,
+            from_axis(p)
         );
     }
+    assert!(
+        fit.proxies
+            .iter()
+            .any(|p| p.bone == HEAD && from_axis(p) >= 0.2 && (p.centre[2] - 1.77).abs() < 0.05),
+        "no sphere out on the brim"
+    );
+    assert!(fit.covered >= 0.9, "{}", fit.covered);
     const ARMS: [u16; 4] = [5, 6, 8, 9];
     const TORSO: [u16; 3] = [0, 1, 2];
     assert!(has(HEAD), "no proxy on the head and hat");
@@ -454,7 +509,20 @@ fn the_builtin_character_gets_proxies_on_head_arms_and_torso() {
         !fit.neighbours[HEAD as usize].contains(&6),
         "head beside the elbow"
     );
-    assert!(fit.volume_error < 0.5, "{}", fit.volume_error);
+    // Was `< 0.5` (42 %) before the surface coverage: the brim's five coverage spheres are
+    // about 0.1 m in radius (the tolerance, their floor) on a brim 3 cm thick, so they add
+    // about 0.02 m³ of sphere outside the part, near a third of the body's volume (69 % in
+    // all). That overshoot is the price of the brim's shadow; the rest of the body is held to
+    // the old bound.
+    assert!(fit.volume_error < 0.75, "{}", fit.volume_error);
+    let (missed, volume) = fit
+        .bones
+        .iter()
+        .filter(|b| b.bone != HEAD)
+        .fold((0.0, 0.0), |(m, v), b| {
+            (m + b.volume_error * b.volume, v + b.volume)
+        });
+    assert!(missed / volume < 0.5, "{}", missed / volume);
 }
 
 /// The real assets, from `$APRT_ASSETS` or the repository's neighbour `shared/assets`.
