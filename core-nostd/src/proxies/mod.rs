@@ -8,9 +8,10 @@
 //! Each sphere seen from a vertex is a cap of half-angle `α`, `sin α = r/d`. Its occlusion of
 //! the vertex's transfer is the cap's clamped-cosine integral `F` (the exact, horizon-clipped
 //! form factor of a sphere; `π sin²α cos β` when the cap is above the horizon) spread over the
-//! bands as the cap's zonal harmonic `2π ∫ P_l` about the direction towards it (the shape of
-//! a sphere light, *Irradiance Rigs* eq. 2): `D_lm = F · (b_l / b_0) · y_lm(ω)`, exact in band
-//! 0 and exact in every band for a cap above the horizon in the limit of small caps. Caps of
+//! bands as the cosine-weighted cap's zonal harmonic `2π ∫ t P_l(t)` about the cap's centre of
+//! weight (its axis moved towards the normal by the cosine's tilt, to first order):
+//! `D_lm = F · ζ_l · y_lm(a')`. Band 0 is exact, and every band for a cap about the normal;
+//! a tilted cap's higher bands are off by the second order of the shift (FORMAT.md). Caps of
 //! one vertex overlap (neighbouring spheres of one bone do by construction), so they combine
 //! by the product of their visible fractions in band 0, `1 − Π (1 − F_i / π)`, the sum of
 //! their vectors scaled to it. A vertex inside a sphere is fully occluded: its `D` is the

@@ -211,8 +211,9 @@ impl Occluders {
 /// vertex `√(1/0.1) ≈ 3.2` radii away, where it blocks 10 % of the cosine lobe's band 0,
 /// fading in over the next 10 %; what lies beyond is the learnt model's, which sees it in
 /// its targets. Measured on the demo's character in `wave` (`cargo bench -p aprt-tests
-/// --bench proxies`, `APRT_CULL` to try others): 0.02 costs 130× the shading, 0.1 16×, 0.2
-/// 6.8×.
+/// --bench proxies`, `APRT_CULL` to try others; 55 spheres before the brim had any): 0.02
+/// costs 130× the shading, 0.1 16×, 0.2 6.8×; with the 64 that cover the brim, 0.1 costs
+/// 18.6×.
 pub const DEFAULT_CULL: f32 = 0.1;
 
 /// What the proxies did in a fit's selection.
@@ -310,6 +311,7 @@ mod tests {
             bones: Vec::new(),
             volume_error: 0.0,
             uncovered: 0.0,
+            covered: 1.0,
         };
         let section = section_of(&mesh, &bones, &fit, DEFAULT_CULL);
         assert_eq!(section.bones[0].ignored, 0b101);
