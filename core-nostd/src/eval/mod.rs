@@ -190,6 +190,16 @@ impl ModelInfo {
     ) -> Result<(), Error> {
         lit.stamp = None;
         self.check_lighting_inputs(pose, bones)?;
+        self.check_sh_lighting(lighting)?;
+        check_capacity(self.lit_weights_len(), L)?;
+        self.check_rotations(bones)?;
+        self.light_checked(pose, lighting, bones, &mut lit.q[..self.lit_weights_len()]);
+        lit.stamp = Some(self.id);
+        Ok(())
+    }
+
+    /// SH lighting of this model: n² finite coefficients.
+    pub(crate) fn check_sh_lighting(&self, lighting: &[f32]) -> Result<(), Error> {
         let n2 = self.coeffs();
         if lighting.len() != n2 {
             return Err(Error::WrongLength {
@@ -198,14 +208,10 @@ impl ModelInfo {
                 found: lighting.len(),
             });
         }
-        if let Some(index) = first_non_finite(lighting) {
-            return Err(Error::NonFiniteLighting { index });
+        match first_non_finite(lighting) {
+            Some(index) => Err(Error::NonFiniteLighting { index }),
+            None => Ok(()),
         }
-        check_capacity(self.lit_weights_len(), L)?;
-        self.check_rotations(bones)?;
-        self.light_checked(pose, lighting, bones, &mut lit.q[..self.lit_weights_len()]);
-        lit.stamp = Some(self.id);
-        Ok(())
     }
 
     /// What every lighting call checks first: pose weights of this model, and one rotation

@@ -34,17 +34,21 @@ impl ModelInfo {
         self.check_range(first, count)
     }
 
-    /// Visits every vertex of `first .. first + count` that some proxy may reach, with its
-    /// index in the range and the mask of those proxies (its bone's, cut to its block's).
-    fn each_reached_vertex<R: Reader>(
+    /// Visits every vertex of `first .. first + count` that some proxy reaches with its
+    /// index in the range and its occlusion `D` (n² values; in its bone's frame when
+    /// `rotations` are given). Proxies are first cut to the vertex's bone's and to its
+    /// block's reach; a vertex of zero normal sees none.
+    fn each_occlusion<R: Reader>(
         &self,
         r: &mut R,
         frame: &ProxyFrame,
         (first, count): (usize, usize),
-        positions: &[[f32; 3]],
-        mut visit: impl FnMut(usize, usize, u64),
+        (positions, normals): (&[[f32; 3]], &[[f32; 3]]),
+        rotations: Option<&[Rotation]>,
+        mut visit: impl FnMut(usize, &[f32]),
     ) -> Result<(), Error> {
-        let end = first + count;
+        let (end, n2) = (first + count, self.coeffs());
+        let mut d = [0.0f32; MAX_COEFFS];
         self.each_block(r, first, count, |v0, bones, _| {
             let (lo, hi) = (v0.max(first), (v0 + bones.len()).min(end));
             let lanes = &bones[lo - v0..hi - v0];
@@ -53,10 +57,15 @@ impl ModelInfo {
                 return;
             }
             for j in lo..hi {
-                let bone = bones[j - v0];
+                let (i, bone) = (j - first, bones[j - v0]);
                 let mask = frame.candidates.get(bone).copied().unwrap_or(0) & block;
-                if mask != 0 {
-                    visit(j - first, bone, mask);
+                let Some(normal) = unit(normals[i]).filter(|_| mask != 0) else {
+                    continue;
+                };
+                let rotation = rotations.and_then(|r| r.get(bone));
+                let vertex = (positions[i], normal);
+                if vertex_occlusion(frame, self.order, mask, vertex, rotation, &mut d) {
+                    visit(i, &d[..n2]);
                 }
             }
         })
@@ -73,32 +82,11 @@ impl ModelInfo {
         first: usize,
         out: &mut [f32],
     ) -> Result<(), Error> {
-        let n2 = self.coeffs();
-        if lighting.len() != n2 {
-            return Err(Error::WrongLength {
-                what: Input::Lighting,
-                expected: n2,
-                found: lighting.len(),
-            });
-        }
-        if let Some(index) = first_non_finite(lighting) {
-            return Err(Error::NonFiniteLighting { index });
-        }
+        self.check_sh_lighting(lighting)?;
         self.check_occlusion_inputs(frame, positions, normals, first, out.len())?;
-        let mut d = [0.0f32; MAX_COEFFS];
         let range = (first, out.len());
-        self.each_reached_vertex(r, frame, range, positions, |i, _, mask| {
-            let Some(normal) = unit(normals[i]) else {
-                return;
-            };
-            let vertex = (positions[i], normal);
-            if vertex_occlusion(frame, self.order, mask, vertex, None, &mut d) {
-                out[i] -= d[..n2]
-                    .iter()
-                    .zip(lighting)
-                    .map(|(d, l)| d * l)
-                    .sum::<f32>();
-            }
+        self.each_occlusion(r, frame, range, (positions, normals), None, |i, d| {
+            out[i] -= d.iter().zip(lighting).map(|(d, l)| d * l).sum::<f32>();
         })
     }
 
@@ -131,17 +119,18 @@ impl ModelInfo {
         }
         let count = out.len() / n2;
         self.check_occlusion_inputs(frame, positions, normals, first, count)?;
-        let mut d = [0.0f32; MAX_COEFFS];
-        self.each_reached_vertex(r, frame, (first, count), positions, |i, bone, mask| {
-            let Some(normal) = unit(normals[i]) else {
-                return;
-            };
-            let vertex = (positions[i], normal);
-            if vertex_occlusion(frame, self.order, mask, vertex, bones.get(bone), &mut d) {
-                for (t, d) in out[i * n2..(i + 1) * n2].iter_mut().zip(&d) {
+        let range = (first, count);
+        self.each_occlusion(
+            r,
+            frame,
+            range,
+            (positions, normals),
+            Some(bones),
+            |i, d| {
+                for (t, d) in out[i * n2..(i + 1) * n2].iter_mut().zip(d) {
                     *t -= d;
                 }
-            }
-        })
+            },
+        )
     }
 }
