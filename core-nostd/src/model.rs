@@ -368,6 +368,29 @@ impl<'a> Model<'a> {
         )
     }
 
+    /// Calls `visit(i, D)` for each vertex `first + i` (of `positions` and `normals`, posed
+    /// world positions and normals) that the posed proxies reach, with its world-frame
+    /// occlusion `D` (n² values), for lighting that varies over the character: an irradiance
+    /// rig's ([`IrradianceRig::lighting_at`]) or per-vertex lights'. Subtract `Σ_c L_c D_c`
+    /// per colour channel from that vertex's [`Model::shade_rig`] or
+    /// [`Model::shade_lights`] output, with `L` its lighting there.
+    pub fn occlusions(
+        &self,
+        frame: &ProxyFrame,
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        first: usize,
+        visit: impl FnMut(usize, &[f32]),
+    ) -> Result<(), Error> {
+        self.info.occlusions(
+            &mut Resident(self.blob),
+            frame,
+            (positions, normals),
+            first,
+            visit,
+        )
+    }
+
     /// Subtracts the proxies' occlusion `D_j` from [`Model::transfer`] output (`out`, n² per
     /// vertex of `first ..`), in each vertex's bone frame (`bones` as in [`Model::light`]).
     #[allow(clippy::too_many_arguments)]
@@ -695,6 +718,25 @@ impl<'s, S: BlobSource> StreamedModel<'s, S> {
             normals,
             first,
             out,
+        )
+    }
+
+    /// As [`Model::occlusions`], streaming the bone rows of the range.
+    pub fn occlusions(
+        &mut self,
+        frame: &ProxyFrame,
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        first: usize,
+        visit: impl FnMut(usize, &[f32]),
+    ) -> Result<(), Error> {
+        let info = self.info;
+        info.occlusions(
+            &mut self.reader(),
+            frame,
+            (positions, normals),
+            first,
+            visit,
         )
     }
 

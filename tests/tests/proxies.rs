@@ -349,6 +349,16 @@ fn the_correction_is_linear_in_the_lighting_and_streams_like_it_reads() {
             sa[j]
         );
     }
+    // `occlusions` hands out the same vectors, for lighting that varies per vertex.
+    let mut seen = [0.0f32; 24];
+    model
+        .occlusions(&frame, &positions, &normals, 0, |i, d| {
+            seen[i] = -d.iter().zip(&a).map(|(d, l)| d * l).sum::<f32>();
+        })
+        .unwrap();
+    for j in 0..24 {
+        assert!((seen[j] - sa[j]).abs() < 1e-6, "vertex {j}");
+    }
     // The streamed model agrees to the bit.
     let mut scratch = vec![0u8; 256];
     let mut streamed = StreamedModel::open(Streamed::new(&blob), &mut scratch).unwrap();

@@ -71,6 +71,22 @@ impl ModelInfo {
         })
     }
 
+    /// Visits each vertex of `first .. first + positions.len()` some proxy reaches with its
+    /// index in the range and its world-frame occlusion `D` (n² values): for lighting that
+    /// varies per vertex (an irradiance rig, per-vertex lights), which the caller dots with `D`.
+    pub(crate) fn occlusions<R: Reader>(
+        &self,
+        r: &mut R,
+        frame: &ProxyFrame,
+        (positions, normals): (&[[f32; 3]], &[[f32; 3]]),
+        first: usize,
+        visit: impl FnMut(usize, &[f32]),
+    ) -> Result<(), Error> {
+        let count = positions.len();
+        self.check_occlusion_inputs(frame, positions, normals, first, count)?;
+        self.each_occlusion(r, frame, (first, count), (positions, normals), None, visit)
+    }
+
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn occlude<R: Reader>(
         &self,

@@ -2,7 +2,9 @@
 //! engine would run it, and a description of the blob for `aprt inspect`.
 
 use aprt_core::format::read_header;
-use aprt_core::{Basis, Encoding, Frame, LitWeights, Model, PoseWeights, Rotation, SectionKind};
+use aprt_core::{
+    Basis, Encoding, Frame, LitWeights, Model, PoseWeights, ProxyFrame, Rotation, SectionKind,
+};
 
 use crate::model::BoneFrames;
 
@@ -300,13 +302,17 @@ impl std::fmt::Display for BlobInfo {
 /// weights, each light's share from the rig's error table (`target` grey levels, `band`), the
 /// rig's SH vectors from the lights' rig shares, rig-lit shading of every vertex at its own
 /// position, and the rest of each light per vertex through the vertex's transfer. `positions`
-/// are the posed vertices in the world, which is the root frame here. Returns the RGB shading
-/// and each light's rig share.
+/// are the posed vertices in the world, which is the root frame here. A model with occluder
+/// proxies then loses what they block under each vertex's lighting (the rig's there plus
+/// the rest of each light), posed by `geometry`: each bone's skinning matrix and the posed
+/// normals. Returns the RGB shading and each light's rig share.
+#[allow(clippy::too_many_arguments)]
 pub fn predict_rig_shading(
     blob: &[u8],
     angles: &[f64],
     rotations: &[Rotation],
     positions: &[[f32; 3]],
+    geometry: (&[aprt_core::Skinning], &[[f32; 3]]),
     lights: &[aprt_core::Light],
     target: f32,
     band: f32,
@@ -338,5 +344,27 @@ pub fn predict_rig_shading(
     model.shade_rig(&lit, &rig, &place, positions, 0, &mut out)?;
     let rest: Vec<f32> = shares.iter().map(|s| 1.0 - s).collect();
     model.shade_lights(&pose, rotations, lights, &rest, positions, 0, &mut out)?;
+    if model.info().has_proxies() {
+        let (skinning, normals) = geometry;
+        let mut frame = Box::new(ProxyFrame::new());
+        model.pose_proxies(skinning, &mut frame)?;
+        let per_vertex: Vec<aprt_core::Light> = lights
+            .iter()
+            .zip(&rest)
+            .map(|(l, &r)| l.scaled(r))
+            .collect();
+        let mut lighting = [[0.0f32; 3]; aprt_core::MAX_COEFFS];
+        model.occlusions(&frame, positions, normals, 0, |i, d| {
+            let l = &mut lighting[..d.len()];
+            rig.lighting_at(&vectors, &place, positions[i], l);
+            // A vertex on a point light gets nothing from it, as in `shade_lights`.
+            for light in &per_vertex {
+                let _ = light.add_radiance_sh(order, positions[i], l);
+            }
+            for (o, k) in out[i].iter_mut().zip(0..3) {
+                *o -= d.iter().zip(l.iter()).map(|(d, c)| d * c[k]).sum::<f32>();
+            }
+        })?;
+    }
     Ok((out, shares))
 }

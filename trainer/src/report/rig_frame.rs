@@ -11,6 +11,7 @@ use glam::Vec3;
 use crate::bake::clip::BakedClip;
 use crate::lighting::rig_fit::GREY_PER_IRRADIANCE;
 use crate::lighting::{GreyError, kind_name};
+use crate::model::occluders::skinning_of;
 use crate::model::runtime::predict_rig_shading;
 use crate::report::figures::{ErrorPanel, save_panels, upright};
 
@@ -67,11 +68,13 @@ pub fn save_rig_frame(
     lights: &[Light],
 ) -> Result<RigFrame> {
     let mesh = &clip.meshes[frame];
+    let skinning: Vec<_> = clip.joints[frame].iter().map(skinning_of).collect();
     let (model, shares) = predict_rig_shading(
         blob,
         &clip.angles[frame],
         &clip.core_rotations(frame),
         &mesh.positions,
+        (&skinning, &mesh.normals),
         lights,
         TARGET,
         DEFAULT_BAND,
