@@ -257,3 +257,48 @@ fn builtin_creature_simulates_and_character_is_refused_without_builtin() {
     );
     assert!(!refused.exists());
 }
+
+#[test]
+fn sample_poses_adds_that_many_training_poses_and_a_bound_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let base = [
+        "train",
+        "--builtin",
+        "--character",
+        "creature",
+        "--clip",
+        "lash",
+        "--rays",
+        "16",
+        "--order",
+        "2",
+    ];
+    let poses = |extra: &[&str], out: &str| -> usize {
+        let o = model(out);
+        let out = aprt(&[&base[..], extra, &["-o", &o]].concat());
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(out.status.success(), "{stderr}");
+        let line = stderr
+            .lines()
+            .find(|l| l.starts_with("wrote "))
+            .unwrap_or_else(|| panic!("no `wrote` line in\n{stderr}"));
+        line.split(": ")
+            .nth(1)
+            .unwrap()
+            .split(' ')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap()
+    };
+    let without = poses(&[], "a.aprt");
+    let with = poses(&["--sample-poses", "8"], "b.aprt");
+    assert_eq!(with, without + 8);
+    let refused = model("c.aprt");
+    refuse(
+        &[&base[..], &["--sample-poses", "10001", "-o", &refused]].concat(),
+        &["--sample-poses 10001", "10000"],
+    );
+    assert!(!Path::new(&refused).exists());
+}

@@ -268,6 +268,12 @@ pub struct TrainArgs {
     /// (see docs/bake-farm.md).
     #[arg(long, value_name = "I/N")]
     pub shard: Option<crate::bake::shard::Shard>,
+    /// Add N training poses, each a random training frame with 1 to 3 random joints re-drawn
+    /// uniformly within the range each entry takes over the training clips (and, for the
+    /// built-in characters, their joint limits); fixed seed, baked as the training part
+    /// `sampled`. Characters only; 0 (the default) adds none.
+    #[arg(long, value_name = "N", default_value_t = 0, conflicts_with = "scene")]
+    pub sample_poses: usize,
 }
 
 /// `aprt simulate`.

@@ -407,6 +407,7 @@ fn train(args: &TrainArgs) -> Result<()> {
         existing,
         irradiance_rig: args.rig,
         shard: args.shard,
+        sample_poses: args.sample_poses,
     };
     settings.bake.validate()?;
     let poses = args.source.poses(&args.validate, &Terminal)?;

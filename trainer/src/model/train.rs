@@ -12,7 +12,7 @@ use aprt_core::{
 };
 use nalgebra::DMatrix;
 
-use crate::bake::budget::{BudgetError, Workload};
+use crate::bake::budget::{BudgetError, MAX_FRAMES, Workload};
 pub use crate::bake::checkpoint::ShardBaked;
 use crate::bake::checkpoint::{Checkpoint, OnExisting, Vertices};
 use crate::bake::clip::{BakedClip, pose_all};
@@ -38,6 +38,7 @@ use crate::rig::bone_frames::{FrameChange, change_frames, dominant_bones};
 use crate::rig::locality::locality;
 use crate::rig::mesh::Mesh;
 use crate::rig::pose_layout::PoseLayout;
+use crate::rig::pose_sampler::sampled_clip;
 use crate::rig::{Clip, Rig};
 
 /// Training poses sampled for the locality's distances (besides the bind pose).
@@ -202,6 +203,10 @@ pub struct TrainSettings {
     /// merged checkpoint (`docs/bake-farm.md`). A shard always joins a checkpoint of the same
     /// inputs and settings, whatever `existing` says, since its fellow shards share it.
     pub shard: Option<Shard>,
+    /// `--sample-poses`: training poses sampled within the range each pose entry takes over
+    /// the training clips ([`crate::rig::pose_sampler`]), baked and fitted as one more training
+    /// clip part, `sampled`. 0: none. Characters only.
+    pub sample_poses: usize,
 }
 
 /// A model option that no bake could make valid.
@@ -263,6 +268,16 @@ pub fn check_options(options: &FitOptions) -> Result<(), OptionError> {
 /// Why `aprt train` refused its request before baking anything.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum RequestError {
+    /// More sampled poses than one run bakes.
+    #[error(
+        "--sample-poses {0}: more than the {MAX_FRAMES} frames one run bakes or evaluates; sample fewer poses"
+    )]
+    SamplePoses(usize),
+    /// Sampled poses asked of meshes read from files, which have no joints to sample.
+    #[error(
+        "--sample-poses samples a character's joints: meshes read from files (--obj-seq) have none; use a character (--builtin, --gltf, --bvh) or leave it out"
+    )]
+    SamplePosesMeshes,
     /// A bake setting is out of range.
     #[error(transparent)]
     Bake(#[from] BakeError),
@@ -331,12 +346,18 @@ pub enum RequestError {
 pub fn check(poses: &Poses, settings: &TrainSettings) -> Result<(), RequestError> {
     settings.bake.validate()?;
     check_options(&settings.fit)?;
+    if settings.sample_poses > MAX_FRAMES {
+        return Err(RequestError::SamplePoses(settings.sample_poses));
+    }
     let (what, frames, mesh, entries, bones) = match poses {
         Poses::Meshes {
             files,
             meshes,
             angles,
         } => {
+            if settings.sample_poses > 0 {
+                return Err(RequestError::SamplePosesMeshes);
+            }
             let (Some(file), Some(mesh)) = (files.first(), meshes.first()) else {
                 return Ok(()); // nothing to bake; the fit refuses it
             };
@@ -354,7 +375,12 @@ pub fn check(poses: &Poses, settings: &TrainSettings) -> Result<(), RequestError
                 .ok();
             let bones = (settings.frame == ModelFrame::Bone).then(|| rig.skin().joint_count());
             let what = format!("clip {}", clip_names(clips));
-            let frames = clips.iter().chain(validation).map(|c| c.frames.len()).sum();
+            let frames = clips
+                .iter()
+                .chain(validation)
+                .map(|c| c.frames.len())
+                .sum::<usize>()
+                + settings.sample_poses;
             (what, frames, rig.bind_mesh(), entries, bones)
         }
     };
@@ -545,6 +571,7 @@ pub fn train(
     reporter: &dyn Reporter,
 ) -> Result<Outcome> {
     check(&poses, settings)?;
+    let poses = with_sampled_poses(poses, settings.sample_poses);
     if let Some(shard) = settings.shard {
         if !settings.bake.shadows {
             anyhow::bail!(
@@ -613,6 +640,30 @@ pub fn train(
             fit: total - outcome.bake_s,
         },
     })))
+}
+
+/// `poses` with `n` sampled training poses appended as the training clip `sampled` (a
+/// character's; [`check`] refuses it for meshes read from files). Sampled before
+/// anything is baked, so they are checkpointed like every other training frame and a resume
+/// samples the very same poses.
+fn with_sampled_poses(poses: Poses, n: usize) -> Poses {
+    match poses {
+        Poses::Rig {
+            rig,
+            mut clips,
+            validation,
+        } if n > 0 => {
+            let limits = rig.joint_limits();
+            let names = rig.angle_names();
+            clips.extend(sampled_clip(&names, &clips, limits.as_deref(), n));
+            Poses::Rig {
+                rig,
+                clips,
+                validation,
+            }
+        }
+        poses => poses,
+    }
 }
 
 /// A fitted model with what it took.

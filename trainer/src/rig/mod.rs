@@ -26,6 +26,7 @@ pub mod mannequin;
 pub mod mesh;
 pub mod mocap;
 pub mod pose_layout;
+pub mod pose_sampler;
 pub(crate) mod procedural;
 pub mod proxies;
 pub mod rotation_vector;
@@ -164,6 +165,13 @@ pub trait Rig: Sync {
     /// screen's up. The built-in characters are z-up (the default).
     fn up(&self) -> glam::Vec3 {
         glam::Vec3::Z
+    }
+
+    /// `(min, max)` of each pose-vector entry, in [`Rig::angle_names`] order, where the rig
+    /// documents joint limits (the built-in characters); None where the training clips' own
+    /// range is the only limit (glTF, BVH).
+    fn joint_limits(&self) -> Option<Vec<(f64, f64)>> {
+        None
     }
 
     /// Names of every clip [`Rig::clip`] accepts.

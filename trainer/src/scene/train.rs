@@ -155,6 +155,9 @@ pub fn train_scene(
         existing: options.existing,
         irradiance_rig: rig_kind,
         shard: options.shard,
+
+        // CLI-only (`aprt train --sample-poses`); a scene samples none.
+        sample_poses: 0,
     };
     let (trained, full) = match (train(poses, options.output, &settings, reporter)?, full) {
         (Outcome::Trained(trained), Some(full)) => (trained, full),

@@ -184,6 +184,10 @@ impl<S: Spec> Rig for BuiltinRig<S> {
         &self.bind
     }
 
+    fn joint_limits(&self) -> Option<Vec<(f64, f64)>> {
+        Some(self.limits())
+    }
+
     /// The bind pose: the angles for which `pose` returns the bind mesh.
     fn rest_pose(&self) -> Vec<f64> {
         self.angles.iter().map(|a| a.rest).collect()
