@@ -69,6 +69,16 @@ pub enum Frame {
     },
 }
 
+impl Frame {
+    /// The bone count: 0 for world space.
+    pub const fn bones(self) -> usize {
+        match self {
+            Frame::World => 0,
+            Frame::Bones { count } => count as usize,
+        }
+    }
+}
+
 /// How the vertex side of the model is represented.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Basis {

@@ -99,10 +99,7 @@ impl ModelInfo {
     /// Bone rotations the model's lighting needs per frame: the bone count of a bone-frame
     /// model, 0 for a world-frame one.
     pub fn bones(&self) -> usize {
-        match self.frame {
-            Frame::World => 0,
-            Frame::Bones { count } => count as usize,
-        }
+        self.frame.bones()
     }
     /// The fit's Tikhonov parameter.
     pub fn alpha(&self) -> f32 {

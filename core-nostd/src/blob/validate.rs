@@ -79,10 +79,7 @@ impl ModelInfo {
             })
         };
 
-        let bones = match h.frame {
-            Frame::World => 0,
-            Frame::Bones { count } => usize::from(count),
-        };
+        let bones = h.frame.bones();
         let mut found: [Option<Span>; SectionKind::KNOWN_COUNT] = [None; SectionKind::KNOWN_COUNT];
         let mut end_of_data = decoded.end;
         for e in &h.sections {

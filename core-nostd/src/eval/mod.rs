@@ -198,6 +198,19 @@ impl ModelInfo {
         Ok(())
     }
 
+    /// Vertices a transfer output of `len` values holds: a whole number of n² rows.
+    pub(crate) fn transfer_vertices(&self, len: usize) -> Result<usize, Error> {
+        let n2 = self.coeffs();
+        if !len.is_multiple_of(n2) {
+            return Err(Error::WrongLength {
+                what: Input::Transfer,
+                expected: len / n2 * n2,
+                found: len,
+            });
+        }
+        Ok(len / n2)
+    }
+
     /// SH lighting of this model: n² finite coefficients.
     pub(crate) fn check_sh_lighting(&self, lighting: &[f32]) -> Result<(), Error> {
         let n2 = self.coeffs();
@@ -407,14 +420,7 @@ impl ModelInfo {
     ) -> Result<(), Error> {
         check_stamp(pose.stamp, self)?;
         let n2 = self.coeffs();
-        if !out.len().is_multiple_of(n2) {
-            return Err(Error::WrongLength {
-                what: Input::Transfer,
-                expected: out.len() / n2 * n2,
-                found: out.len(),
-            });
-        }
-        let count = out.len() / n2;
+        let count = self.transfer_vertices(out.len())?;
         self.check_range(first, count)?;
         let end = first + count;
         let mut lanes = [0.0f32; VERTEX_BLOCK * MAX_COEFFS];

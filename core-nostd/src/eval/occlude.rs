@@ -126,14 +126,7 @@ impl ModelInfo {
             });
         }
         self.check_rotations(bones)?;
-        if !out.len().is_multiple_of(n2) {
-            return Err(Error::WrongLength {
-                what: Input::Transfer,
-                expected: out.len() / n2 * n2,
-                found: out.len(),
-            });
-        }
-        let count = out.len() / n2;
+        let count = self.transfer_vertices(out.len())?;
         self.check_occlusion_inputs(frame, positions, normals, first, count)?;
         let range = (first, count);
         self.each_occlusion(
