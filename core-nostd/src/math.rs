@@ -43,6 +43,18 @@ pub(crate) fn acos_f64(x: f64) -> f64 {
     libm::acos(x)
 }
 
+/// Arc cosine (the horizon-clipped occluder caps).
+#[inline]
+pub(crate) fn acos(x: f32) -> f32 {
+    libm::acosf(x)
+}
+
+/// Four-quadrant arc tangent of `y / x` (the horizon-clipped occluder caps).
+#[inline]
+pub(crate) fn atan2(y: f32, x: f32) -> f32 {
+    libm::atan2f(y, x)
+}
+
 /// `√(x² + y²)` without intermediate overflow, in f64.
 #[inline]
 pub(crate) fn hypot_f64(x: f64, y: f64) -> f64 {

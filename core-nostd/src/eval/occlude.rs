@@ -5,7 +5,7 @@
 use super::first_non_finite;
 use super::rig::check_positions;
 use crate::blob::{Error, Input, ModelInfo, Reader};
-use crate::proxies::{ProxyFrame, unit, vertex_occlusion};
+use crate::proxies::{ProxyFrame, vertex_occlusion};
 use crate::rotation::Rotation;
 use crate::sh::MAX_COEFFS;
 
@@ -59,11 +59,11 @@ impl ModelInfo {
             for j in lo..hi {
                 let (i, bone) = (j - first, bones[j - v0]);
                 let mask = frame.candidates.get(bone).copied().unwrap_or(0) & block;
-                let Some(normal) = unit(normals[i]).filter(|_| mask != 0) else {
+                if mask == 0 {
                     continue;
-                };
+                }
                 let rotation = rotations.and_then(|r| r.get(bone));
-                let vertex = (positions[i], normal);
+                let vertex = (positions[i], normals[i]);
                 if vertex_occlusion(frame, self.order, mask, vertex, rotation, &mut d) {
                     visit(i, &d[..n2]);
                 }

@@ -168,19 +168,12 @@ impl ProxyFrame {
         if first_non_finite(&position).is_some() {
             return Err(Error::NonFinitePosition { index: 0 });
         }
-        let Some(normal) = unit(normal).filter(|_| bone < MAX_BONES) else {
+        let mask = self.candidates.get(bone).copied().unwrap_or(0);
+        let reached = vertex_occlusion(self, order, mask, (position, normal), rotation, out);
+        if !reached {
             out[..n2].fill(0.0);
-            return Ok(false);
-        };
-        let mask = self.candidates[bone];
-        Ok(vertex_occlusion(
-            self,
-            order,
-            mask,
-            (position, normal),
-            rotation,
-            out,
-        ))
+        }
+        Ok(reached)
     }
 }
 

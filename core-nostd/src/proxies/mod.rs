@@ -28,7 +28,6 @@ mod frame;
 mod occlusion;
 mod section;
 
-pub(crate) use frame::unit;
 pub use frame::{ProxyFrame, ProxySet, Skinning};
 pub(crate) use occlusion::vertex_occlusion;
 pub use section::MAX_PROXIES;

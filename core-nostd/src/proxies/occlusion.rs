@@ -2,11 +2,11 @@
 
 use core::f32::consts::PI;
 
-use super::frame::ProxyFrame;
+use super::frame::{ProxyFrame, unit};
 use crate::light::sphere_irradiance;
 use crate::math;
 use crate::rotation::Rotation;
-use crate::sh::{MAX_COEFFS, MAX_ORDER, band_of, clamped_cosine, eval_basis};
+use crate::sh::{MAX_COEFFS, MAX_ORDER, clamped_cosine, eval_basis};
 
 /// The zonal bands of the cosine-weighted cap, `2π ∫_{cos α}^1 t P_l(t) dt`, relative to band
 /// 0 (`π sin²α`): with `c = cos α` they are `sin²α · q_l(c)`, `q = [1/2, (1 + c + c²)/(3(1 + c)),
@@ -98,8 +98,11 @@ fn add_cap(
     if eval_basis(order, frame(centre_of_weight), &mut y[..n2]).is_err() {
         return 0.0;
     }
-    for c in 0..n2 {
-        sum[c] += f * ratio[band_of(c)] * y[c];
+    for (l, ratio) in ratio.iter().enumerate().take(order) {
+        let weight = f * ratio;
+        for c in l * l..(l + 1) * (l + 1) {
+            sum[c] += weight * y[c];
+        }
     }
     f
 }
@@ -108,19 +111,39 @@ fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-/// The occlusion `D` of one vertex at `position` with unit `normal` by the proxies of `mask`
-/// (those `frame` lets touch the vertex's bone, and its block), into `out` (`order²` values, in the frame of
-/// `rotation` when given: the vertex's bone frame; world otherwise). Returns whether any
-/// proxy reached it (`out` is zero otherwise). The bone must be below the frame's bone count
-/// and the normal unit; a zero normal sees nothing.
+/// The proxies of `mask` whose reach holds `position`: one distance each, before the normal
+/// is even normalised, since most vertices of a block in reach are out of every cap's.
+fn within_reach(frame: &ProxyFrame, mut mask: u64, position: [f32; 3]) -> u64 {
+    let mut reached = 0;
+    while mask != 0 {
+        let i = mask.trailing_zeros() as usize;
+        mask &= mask - 1;
+        let c = frame.centres[i];
+        let v = [c[0] - position[0], c[1] - position[1], c[2] - position[2]];
+        if v[0] * v[0] + v[1] * v[1] + v[2] * v[2] < frame.reach2[i] {
+            reached |= 1 << i;
+        }
+    }
+    reached
+}
+
+/// The occlusion `D` of one vertex at `position` with `normal` (any length) by the proxies of
+/// `mask` (those `frame` lets touch the vertex's bone, and its block), into `out` (`order²`
+/// values, in the frame of `rotation` when given: the vertex's bone frame; world otherwise).
+/// Returns whether any proxy reached it (`out` is untouched otherwise). A zero or non-finite
+/// normal sees nothing.
 pub(crate) fn vertex_occlusion(
     frame: &ProxyFrame,
     order: usize,
-    mut mask: u64,
+    mask: u64,
     (position, normal): ([f32; 3], [f32; 3]),
     rotation: Option<&Rotation>,
     out: &mut [f32],
 ) -> bool {
+    let mut mask = within_reach(frame, mask, position);
+    let Some(normal) = unit(normal).filter(|_| mask != 0) else {
+        return false;
+    };
     let n2 = order * order;
     let mut sum = [0.0f32; MAX_COEFFS];
     let (mut total, mut visible) = (0.0f32, 1.0f32);
@@ -139,11 +162,10 @@ pub(crate) fn vertex_occlusion(
         total += f;
         visible *= (1.0 - f / PI).max(0.0);
     }
-    let out = &mut out[..n2];
     if total.is_nan() || total <= 0.0 {
-        out.fill(0.0);
         return false;
     }
+    let out = &mut out[..n2];
     // The caps overlap: their union blocks `π (1 − Π (1 − F_i/π))` of the lobe, not `Σ F_i`.
     let scale = PI * (1.0 - visible) / total;
     for (o, s) in out.iter_mut().zip(&sum) {
