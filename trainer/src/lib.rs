@@ -17,6 +17,7 @@
 
 pub mod bake;
 pub mod cli;
+pub mod input;
 pub mod io;
 pub mod lighting;
 pub mod lightmap;

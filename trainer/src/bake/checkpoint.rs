@@ -27,6 +27,7 @@ use std::path::{Path, PathBuf};
 
 use crate::bake::shard::Shard;
 use crate::bake::{BakeError, BakeSettings, bake_pose_progress};
+use crate::input::{InputError, InputKind, read_input, read_input_text};
 use crate::io::atomic::{write_atomic, write_new};
 use crate::progress::{BakeProgress, Reporter};
 use crate::rig::mesh::Mesh;
@@ -94,6 +95,9 @@ pub enum CheckpointError {
         #[source]
         source: std::io::Error,
     },
+    /// A checkpoint file is not a regular file, too large or unreadable (the error says which).
+    #[error(transparent)]
+    Input(#[from] InputError),
     /// A checkpoint exists and `--resume` was not given.
     #[error(
         "{} holds the checkpoint of an unfinished bake: pass --resume to continue it, or delete the directory to start over",
@@ -381,7 +385,7 @@ impl Checkpoint {
             if existing == OnExisting::Refuse {
                 return Err(CheckpointError::Exists { dir: dir.into() });
             }
-            let text = std::fs::read_to_string(&manifest_path).map_err(io(&manifest_path))?;
+            let text = read_input_text(&manifest_path, InputKind::Checkpoint)?;
             let stored: Manifest =
                 serde_json::from_str(&text).map_err(|e| CheckpointError::BadManifest {
                     path: manifest_path.clone(),
@@ -424,10 +428,10 @@ impl Checkpoint {
         reporter: &dyn Reporter,
     ) -> Result<Option<Vec<f32>>, CheckpointError> {
         let path = self.pose_path(pose);
-        let bytes = match std::fs::read(&path) {
+        let bytes = match read_input(&path, InputKind::Checkpoint) {
             Ok(b) => b,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-            Err(source) => return Err(CheckpointError::Io { path, source }),
+            Err(e) if e.is_missing() => return Ok(None),
+            Err(e) => return Err(e.into()),
         };
         let payload = bytes.get(POSE_HEADER..).unwrap_or_default();
         let whole = bytes.len() == POSE_HEADER + 4 * len

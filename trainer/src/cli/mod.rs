@@ -23,6 +23,7 @@ pub use terminal::Terminal;
 
 use crate::bake::budget::Workload;
 use crate::bake::checkpoint::{Checkpoint, OnExisting, ShardBaked};
+use crate::input::{InputKind, read_input};
 use crate::io::atomic::write_atomic;
 use crate::io::outputs::{Input, Output, check};
 use crate::io::scene::{Environment, Scene, read_scene};
@@ -192,8 +193,9 @@ fn demo(args: &DemoArgs) -> Result<()> {
     Ok(())
 }
 
-fn read_file(path: &Path) -> Result<Vec<u8>> {
-    std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))
+/// A user's file, through the one reader every input goes through (its error names the path).
+fn read_file(path: &Path, kind: InputKind) -> Result<Vec<u8>> {
+    Ok(read_input(path, kind)?)
 }
 
 fn write_npy(path: &Path, shape: &[usize], data: &[f32]) -> Result<()> {
@@ -202,7 +204,7 @@ fn write_npy(path: &Path, shape: &[usize], data: &[f32]) -> Result<()> {
 }
 
 fn inspect(args: &InspectArgs) -> Result<()> {
-    let blob = read_file(&args.model)?;
+    let blob = read_file(&args.model, InputKind::Model)?;
     let info = crate::model::runtime::describe(&blob)
         .with_context(|| format!("{}: invalid model", args.model.display()))?;
     if args.json {
@@ -217,7 +219,7 @@ fn eval(args: &EvalArgs) -> Result<()> {
     let mut inputs = vec![Input::new(&args.model, "the model")];
     inputs.extend(args.source.inputs());
     check(&[Output::file(&args.npy, "--npy")], &inputs)?;
-    let blob = read_file(&args.model)?;
+    let blob = read_file(&args.model, InputKind::Model)?;
     let info = crate::model::runtime::describe(&blob)
         .with_context(|| format!("{}: invalid model", args.model.display()))?;
     let model_name = args.model.display().to_string();

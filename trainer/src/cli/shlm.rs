@@ -13,6 +13,7 @@ use crate::cli::args::{BakeArgs, FitArgs, PrecisionArg};
 use crate::cli::source::SourceArgs;
 use crate::cli::terminal::Terminal;
 use crate::cli::{read_file, shard_done, write_npy};
+use crate::input::InputKind;
 use crate::io::atomic::write_atomic;
 use crate::io::outputs::{Input, Output, check};
 use crate::lightmap::bake::{CheckpointSettings, bake_light_map_shard, bake_light_maps};
@@ -311,7 +312,7 @@ fn eval(args: &ShlmEvalArgs) -> Result<()> {
         inputs.push(Input::new(truth, "--against"));
     }
     check(&[Output::file(&args.npy, "--npy")], &inputs)?;
-    let bytes = read_file(&args.input)?;
+    let bytes = read_file(&args.input, InputKind::LightMap)?;
     let (rig, clip) = args.source.rig(&Terminal)?;
     let (r, order, maps) = maps_of(&args.input, &bytes, rig.as_ref(), &clip)?;
     let n2 = order * order;
@@ -319,7 +320,7 @@ fn eval(args: &ShlmEvalArgs) -> Result<()> {
     let shape = [maps.len(), rig.bind_mesh().vertex_count(), n2];
     write_npy(&args.npy, &shape, &flat)?;
     if let Some(path) = &args.against {
-        let (truth_shape, truth) = crate::io::npy::decode_f32(&read_file(path)?)
+        let (truth_shape, truth) = crate::io::npy::decode_f32(&read_file(path, InputKind::Npy)?)
             .with_context(|| format!("{}: cannot read", path.display()))?;
         if truth_shape != shape {
             bail!(
@@ -339,7 +340,7 @@ fn eval(args: &ShlmEvalArgs) -> Result<()> {
 
 fn inspect(args: &ShlmInspectArgs) -> Result<()> {
     check(&[], &[Input::new(&args.input, "the sequence")])?;
-    let bytes = read_file(&args.input)?;
+    let bytes = read_file(&args.input, InputKind::LightMap)?;
     let summary =
         summarize(&bytes).with_context(|| format!("{}: invalid sequence", args.input.display()))?;
     if args.json {
@@ -376,7 +377,7 @@ fn compose(args: &ShlmComposeArgs) -> Result<()> {
     ];
     inputs.extend(args.source.inputs());
     check(&[Output::file(&args.png, "--png")], &inputs)?;
-    let bytes = read_file(&args.input)?;
+    let bytes = read_file(&args.input, InputKind::LightMap)?;
     let lights = crate::lighting::read_lights(&args.lights)?;
     let character = if args.source.names_rig() {
         Some(args.source.rig(&Terminal)?)

@@ -5,14 +5,9 @@ use std::path::{Path, PathBuf};
 /// A malformed angles file, with the place and the reason.
 #[derive(Debug, thiserror::Error)]
 pub enum AnglesError {
-    /// The file could not be read.
-    #[error("cannot read {path}")]
-    Read {
-        /// The file.
-        path: PathBuf,
-        /// The I/O error.
-        source: std::io::Error,
-    },
+    /// The file could not be read (the error names it and why).
+    #[error(transparent)]
+    Read(#[from] crate::input::InputError),
     /// A cell is not a finite number.
     #[error("{path}: row {row}, column {column}: {reason}")]
     Cell {
@@ -63,10 +58,7 @@ pub enum AnglesError {
 /// numeric is taken as a header; blank lines and lines starting with `#` are skipped. With
 /// `pose_len` (a model's pose length), a row of another width is an error naming that row.
 pub fn read_angles(path: &Path, pose_len: Option<usize>) -> Result<Vec<Vec<f64>>, AnglesError> {
-    let text = std::fs::read_to_string(path).map_err(|source| AnglesError::Read {
-        path: path.into(),
-        source,
-    })?;
+    let text = crate::input::read_input_text(path, crate::input::InputKind::Angles)?;
     parse_angles(path, &text, pose_len)
 }
 

@@ -18,6 +18,8 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard};
 
+use crate::input::file_type_name;
+
 /// Why a path cannot be written as an output.
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
@@ -148,7 +150,7 @@ pub fn output_target(path: &Path) -> Result<PathBuf, OutputError> {
         if !kind.is_symlink() {
             return Err(OutputError::NotAFile {
                 path: target,
-                kind: kind_name(&kind),
+                kind: file_type_name(&kind),
             });
         }
         let Ok(link) = std::fs::read_link(&target) else {
@@ -161,28 +163,6 @@ pub fn output_target(path: &Path) -> Result<PathBuf, OutputError> {
         };
     }
     Err(OutputError::SymlinkLoop { path: path.into() })
-}
-
-/// How an output error names what is in the way.
-fn kind_name(kind: &std::fs::FileType) -> &'static str {
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::FileTypeExt;
-        if kind.is_fifo() {
-            return "a named pipe (FIFO)";
-        }
-        if kind.is_socket() {
-            return "a socket";
-        }
-        if kind.is_char_device() || kind.is_block_device() {
-            return "a device";
-        }
-    }
-    if kind.is_dir() {
-        "a directory"
-    } else {
-        "not a file"
-    }
 }
 
 /// `.<name>.aprt-<pid>-`: the start of the name of every temporary this process writes for an

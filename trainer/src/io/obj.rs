@@ -13,6 +13,7 @@
 //! every face corner names one. OBJ's `v` points up (OpenGL's texture origin at the bottom
 //! left); the layout follows glTF's, `v` down, so it holds `1 − v`.
 
+use crate::input::{InputKind, read_input_text};
 use crate::lightmap::atlas::UvLayout;
 use crate::rig::mesh::{Mesh, area_weighted_normals};
 use glam::DVec3;
@@ -21,15 +22,9 @@ use std::path::{Path, PathBuf};
 /// Why an OBJ file could not be read. Every variant names the file; line errors name the line.
 #[derive(Debug, thiserror::Error)]
 pub enum ObjError {
-    /// The file could not be opened or read, or is not UTF-8.
-    #[error("cannot read {}", path.display())]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// What the operating system said.
-        #[source]
-        source: std::io::Error,
-    },
+    /// The file could not be read (the error names it and why).
+    #[error(transparent)]
+    Io(#[from] crate::input::InputError),
     /// A statement is malformed or references something that does not exist.
     #[error("{}:{line}: {kind}", path.display())]
     Line {
@@ -111,10 +106,7 @@ pub enum LineError {
 /// area-weighted normal of its faces.
 pub fn read_obj(path: impl AsRef<Path>) -> Result<Mesh, ObjError> {
     let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|source| ObjError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
+    let text = read_input_text(path, InputKind::Obj)?;
     parse_obj(&text, path)
 }
 
@@ -122,10 +114,7 @@ pub fn read_obj(path: impl AsRef<Path>) -> Result<Mesh, ObjError> {
 /// triangle corner (`None` unless every face corner has a `vt`; see the module docs).
 pub fn read_obj_with_uvs(path: impl AsRef<Path>) -> Result<(Mesh, Option<UvLayout>), ObjError> {
     let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|source| ObjError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
+    let text = read_input_text(path, InputKind::Obj)?;
     parse_obj_with_uvs(&text, path)
 }
 
@@ -584,7 +573,7 @@ mod tests {
         assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
         let missing = dir.path().join("missing.obj");
         let err = read_obj(&missing).unwrap_err();
-        assert!(matches!(err, ObjError::Io { .. }));
+        assert!(matches!(err, ObjError::Io(_)));
         assert!(err.to_string().contains("missing.obj"), "{err}");
     }
 }

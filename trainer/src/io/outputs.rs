@@ -8,8 +8,9 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::input::{InputKind, read_input};
 use crate::io::atomic::{OutputError, output_target};
-use crate::rig::gltf::{external_file, gltf_split, read_regular};
+use crate::rig::gltf::{external_file, gltf_split};
 
 /// A file or directory a command reads.
 #[derive(Clone, Debug)]
@@ -272,7 +273,7 @@ pub fn gltf_inputs(path: &Path) -> Vec<Input> {
 /// The JSON of a `.gltf` file, or the JSON chunk of a `.glb`; `None` when it is neither (the
 /// loader will say why).
 fn gltf_json(path: &Path) -> Option<serde_json::Value> {
-    let bytes = read_regular(path, None).ok()?;
+    let bytes = read_input(path, InputKind::Gltf).ok()?;
     let (text, _) = gltf_split(&bytes).ok()?;
     serde_json::from_slice(text).ok()
 }

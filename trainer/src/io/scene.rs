@@ -39,6 +39,7 @@ use std::path::{Path, PathBuf};
 use aprt_core::{Light, MAX_ORDER};
 use serde::Deserialize;
 
+use crate::input::{InputKind, read_input_text};
 use crate::io::source::BuiltinCharacter;
 use crate::lighting::{RigKind, light_from_table};
 use crate::model::ModelFrame;
@@ -250,10 +251,10 @@ struct RawEnvironment {
 
 /// Reads and validates a scene file.
 pub fn read_scene(path: &Path) -> Result<Scene, SceneError> {
-    let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+    let text = read_input_text(path, InputKind::Scene).map_err(|e| SceneError {
         path: path.to_owned(),
         item: "file".into(),
-        message: format!("cannot read it: {e}"),
+        message: e.problem(),
     })?;
     parse_scene(&text, path)
 }

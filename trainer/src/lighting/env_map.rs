@@ -36,26 +36,21 @@
 //! patch.
 
 use std::f64::consts::PI;
-use std::fs::File;
-use std::io::BufReader;
+use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
 use aprt_core::{MAX_COEFFS, MAX_ORDER, eval_basis};
 use image::{ImageFormat, ImageReader};
 use rayon::prelude::*;
 
+use crate::input::{InputError, InputKind, read_input};
+
 /// Why an environment map could not be read or projected.
 #[derive(Debug, thiserror::Error)]
 pub enum EnvMapError {
-    /// The file cannot be opened (the reason is the error's source, as for every variant
-    /// that wraps another error).
-    #[error("cannot read {}", path.display())]
-    Unreadable {
-        /// The file.
-        path: PathBuf,
-        /// Why.
-        source: std::io::Error,
-    },
+    /// The file cannot be read (the error names it and why).
+    #[error(transparent)]
+    Unreadable(#[from] InputError),
     /// The name does not end in `.hdr` or `.exr`.
     #[error(
         "{}: unknown extension: an environment map is an equirectangular .hdr (Radiance RGBE) or .exr (OpenEXR)",
@@ -183,11 +178,8 @@ pub fn read_equirect(path: &Path) -> Result<EnvironmentImage, EnvMapError> {
             });
         }
     };
-    let file = File::open(path).map_err(|source| EnvMapError::Unreadable {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let decoded = ImageReader::with_format(BufReader::new(file), format)
+    let bytes = read_input(path, InputKind::EnvironmentMap)?;
+    let decoded = ImageReader::with_format(Cursor::new(bytes), format)
         .decode()
         .map_err(|source| EnvMapError::Decode {
             path: path.to_path_buf(),

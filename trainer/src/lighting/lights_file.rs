@@ -25,14 +25,9 @@ use serde::Deserialize;
 /// Why a lights file was refused. Lights are numbered from 1 in the order of the file.
 #[derive(Debug, thiserror::Error)]
 pub enum LightsFileError {
-    /// The file cannot be read.
-    #[error("cannot read {}: {source}", path.display())]
-    Read {
-        /// The file.
-        path: PathBuf,
-        /// Why.
-        source: std::io::Error,
-    },
+    /// The file could not be read (the error names it and why).
+    #[error(transparent)]
+    Read(#[from] crate::input::InputError),
     /// Not TOML, or not a list of `[[light]]` tables.
     #[error("{}: {message}", path.display())]
     Syntax {
@@ -79,10 +74,7 @@ struct DirectionalTable {
 
 /// Reads a lights file.
 pub fn read_lights(path: &Path) -> Result<Vec<Light>, LightsFileError> {
-    let text = std::fs::read_to_string(path).map_err(|source| LightsFileError::Read {
-        path: path.to_owned(),
-        source,
-    })?;
+    let text = crate::input::read_input_text(path, crate::input::InputKind::Lights)?;
     parse_lights(&text, path)
 }
 

@@ -403,7 +403,7 @@ fn unknown_extensions_and_missing_files_are_refused() {
     let missing = dir.path().join("missing.exr");
     let err = read_environment(&missing, 3).unwrap_err();
     assert!(
-        matches!(&err, EnvMapError::Unreadable { path: p, .. } if p == &missing),
+        matches!(&err, EnvMapError::Unreadable(e) if e.path == missing),
         "{err}"
     );
 }

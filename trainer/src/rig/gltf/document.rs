@@ -9,13 +9,13 @@
 //! primitive's `POSITION` before checking that index, and `import_buffers` reads any file or
 //! device an URI names, whole, and reports a missing one without its name.
 
-use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use gltf::buffer::Source;
 use gltf::json;
 
 use super::GltfError;
+use crate::input::{InputKind, read_at_most};
 
 /// A validated document and the bytes of each of its buffers (at least `byteLength` each).
 pub struct Loaded {
@@ -270,14 +270,13 @@ fn load_buffers(
             }
             Source::Uri(uri) => {
                 let file = external_file(uri, base).map_err(|p| invalid(&item, p))?;
-                read_regular(&file, Some(buffer.length() as u64)).map_err(|source| {
-                    GltfError::Buffer {
+                read_at_most(&file, InputKind::GltfBuffer, buffer.length() as u64).map_err(
+                    |source| GltfError::Buffer {
                         path: path.to_path_buf(),
                         buffer: item.clone(),
-                        file: file.clone(),
                         source,
-                    }
-                })?
+                    },
+                )?
             }
         };
         if data.len() < buffer.length() {
@@ -317,19 +316,4 @@ pub(crate) fn external_file(uri: &str, base: Option<&Path>) -> Result<PathBuf, S
         format!("its uri {uri:?} is not a valid percent-encoded UTF-8 relative path")
     })?;
     Ok(base.join(decoded.as_ref()))
-}
-
-/// The bytes of a regular file, at most `limit` of them: a device or FIFO (named on the command
-/// line or by a buffer's URI) could otherwise be read without end.
-pub fn read_regular(file: &Path, limit: Option<u64>) -> std::io::Result<Vec<u8>> {
-    // Checked before opening: opening a FIFO for reading waits for a writer.
-    if !std::fs::metadata(file)?.is_file() {
-        return Err(std::io::Error::other("not a regular file"));
-    }
-    let handle = std::fs::File::open(file)?;
-    let mut data = Vec::new();
-    handle
-        .take(limit.unwrap_or(u64::MAX))
-        .read_to_end(&mut data)?;
-    Ok(data)
 }

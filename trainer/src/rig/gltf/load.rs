@@ -14,6 +14,7 @@ use super::animation::{Animation, Track};
 use super::curve::{Curve, Interpolation};
 use super::skeleton::{Skeleton, Trs};
 use super::spec;
+use crate::input::{InputKind, read_input};
 use crate::lightmap::atlas::UvLayout;
 use crate::rig::mesh::{Mesh, area_weighted_normals};
 use crate::rig::skin::Skin;
@@ -47,10 +48,7 @@ pub fn item(kind: &str, index: usize, name: Option<&str>) -> String {
 
 /// Reads `path` (`.gltf` with embedded or external buffers, or `.glb`).
 pub fn read(path: &Path) -> Result<Parts, GltfError> {
-    let bytes = super::document::read_regular(path, None).map_err(|source| GltfError::Read {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = read_input(path, InputKind::Gltf)?;
     parse(&bytes, path, path.parent())
 }
 

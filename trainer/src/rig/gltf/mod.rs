@@ -54,7 +54,7 @@ mod skeleton;
 mod spec;
 
 use crate::lightmap::atlas::UvLayout;
-pub(crate) use document::{external_file, read_regular, split as gltf_split};
+pub(crate) use document::{external_file, split as gltf_split};
 use std::path::{Path, PathBuf};
 
 use glam::{DVec3, Mat4, Vec3};
@@ -70,25 +70,18 @@ use skeleton::{Skeleton, Trs};
 /// item (mesh, primitive, accessor, node, skin, animation channel) and what is wrong with it.
 #[derive(Debug, thiserror::Error)]
 pub enum GltfError {
-    /// The file could not be read.
-    #[error("cannot read {path}", path = path.display())]
-    Read {
-        /// The file.
-        path: PathBuf,
-        /// Why.
-        source: std::io::Error,
-    },
+    /// The file could not be read (the error names it).
+    #[error(transparent)]
+    Read(#[from] crate::input::InputError),
     /// The external file of a buffer could not be read.
-    #[error("{path}: {buffer}: cannot read {file}", path = path.display(), file = file.display())]
+    #[error("{path}: {buffer}: {source}", path = path.display())]
     Buffer {
         /// The glTF file.
         path: PathBuf,
         /// The buffer, e.g. `buffer 0 "mesh"`.
         buffer: String,
-        /// The file its URI names.
-        file: PathBuf,
-        /// Why.
-        source: std::io::Error,
+        /// Why its file (named in the error) could not be read.
+        source: crate::input::InputError,
     },
     /// The bytes are not a glTF document: empty, truncated GLB, JSON that does not parse.
     #[error("{path}: {problem}", path = path.display())]

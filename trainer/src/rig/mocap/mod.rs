@@ -116,10 +116,7 @@ pub struct Mocap {
 impl Mocap {
     /// Reads and parses a BVH file. Errors name the file, the line and the problem.
     pub fn read(path: &Path) -> Result<Mocap, MocapError> {
-        let text = std::fs::read_to_string(path).map_err(|source| MocapError::Read {
-            path: path.to_owned(),
-            source,
-        })?;
+        let text = crate::input::read_input_text(path, crate::input::InputKind::Bvh)?;
         Mocap::parse(&text, path)
     }
 

@@ -16,14 +16,9 @@ use super::{Channel, Joint, Mocap};
 /// Why a BVH file could not be read.
 #[derive(Debug, thiserror::Error)]
 pub enum MocapError {
-    /// The file could not be read.
-    #[error("cannot read {path}")]
-    Read {
-        /// The file.
-        path: PathBuf,
-        /// The I/O error.
-        source: std::io::Error,
-    },
+    /// The file could not be read (the error names it and why).
+    #[error(transparent)]
+    Read(#[from] crate::input::InputError),
     /// The text is not valid BVH.
     #[error("{path}:{line}: {problem}")]
     Parse {
