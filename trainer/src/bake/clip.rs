@@ -16,6 +16,7 @@ use crate::rig::pose_layout::PoseLayout;
 use crate::rig::transfer_rotation::row_major;
 
 /// Ground truth of one clip: its poses, meshes and baked transfer.
+#[derive(Clone)]
 pub struct BakedClip {
     /// Clip name.
     pub name: String,

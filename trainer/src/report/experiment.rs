@@ -9,7 +9,7 @@ use anyhow::{Context, Result, bail};
 use aprt_core::{LitWeights, Model, ModelInfo, PoseWeights, ProxyFrame, Rotation, ShRotation};
 use glam::Mat4;
 
-use crate::bake::clip::{BakedClip, bake_rest};
+use crate::bake::clip::{BakedClip, bake_clip, bake_rest};
 use crate::bake::{BakeSettings, bake_poses};
 use crate::model::ModelFrame;
 use crate::model::export::{ExportError, Precision, encode_model};
@@ -23,6 +23,7 @@ use crate::rig::Rig;
 use crate::rig::bone_frames::dominant_bones;
 use crate::rig::mesh::Mesh;
 use crate::rig::pose_layout::PoseLayout;
+use crate::rig::pose_sampler::{SAMPLED_CLIP, SEED, sample_poses};
 
 /// One model shape the experiment fits.
 #[derive(Clone, Debug)]
@@ -33,6 +34,9 @@ pub struct ModelConfig {
     pub options: FitOptions,
     /// The frame the model learns transfer in.
     pub frame: ModelFrame,
+    /// Training poses sampled within the training clip's ranges and added to it, as
+    /// `aprt train --sample-poses` does (0: none).
+    pub sample_poses: usize,
 }
 
 /// The name of the default model's configuration, the first of [`standard_configs`].
@@ -59,6 +63,7 @@ pub fn standard_configs() -> Vec<ModelConfig> {
         name: name.into(),
         options,
         frame,
+        sample_poses: 0,
     };
     let full = FitOptions {
         pose_dims: Dims::All,
@@ -171,6 +176,38 @@ pub fn standard_configs() -> Vec<ModelConfig> {
     ]
 }
 
+/// The default trained with `n` sampled poses added to its training clip, exactly as `aprt
+/// train --sample-poses n` adds them (same sampler, seed and joint limits): named
+/// `default, --sample-poses n`.
+pub fn sampled_config(n: usize) -> ModelConfig {
+    ModelConfig {
+        name: format!("default, --sample-poses {n}"),
+        options: FitOptions::default(),
+        frame: ModelFrame::Bone,
+        sample_poses: n,
+    }
+}
+
+/// What a `default, --sample-poses N` row is, for the documents that print one.
+pub const SAMPLED_LEGEND: &str = "`default, --sample-poses N` is the default trained as `aprt train --sample-poses N` trains it: N poses, each a random training frame with 1 to 3 random joints re-drawn uniformly within the range each entry takes over the training clip (and the built-in characters' joint limits), baked and added to the training clip as a part of their own; its train err is on the training clip alone, and its fit s leaves out baking the N poses.";
+
+/// `train` with `n` poses sampled from its frames and baked appended as the part
+/// [`SAMPLED_CLIP`], the very poses `aprt train --sample-poses n` adds to the same frames.
+fn with_sampled(
+    rig: &dyn Rig,
+    layout: &PoseLayout,
+    train: &BakedClip,
+    n: usize,
+    settings: &BakeSettings,
+    reporter: &dyn Reporter,
+) -> Result<BakedClip> {
+    let limits = rig.joint_limits();
+    let poses = sample_poses(&rig.angle_names(), &train.poses, limits.as_deref(), n, SEED);
+    reporter.note(&format!("baking {n} sampled training poses"));
+    let (sampled, _) = bake_clip(rig, layout, SAMPLED_CLIP, poses, settings, reporter)?;
+    Ok(BakedClip::concat(vec![train.clone(), sampled]))
+}
+
 /// One row of the table.
 #[derive(Debug, serde::Serialize)]
 pub struct Row {
@@ -239,8 +276,8 @@ impl Experiment {
     }
 }
 
-/// Fits every configuration on `train` (skipping, with the reason, any whose model exceeds the
-/// runtime's limits), choosing each by `validation` when it is not empty (by segments of
+/// Fits every configuration on `train`, with its [`ModelConfig::sample_poses`] sampled poses
+/// baked and appended (skipping, with the reason, any whose model exceeds the runtime's limits), choosing each by `validation` when it is not empty (by segments of
 /// `train` otherwise), then measures each model and the baselines on `train` and `tests` (at
 /// least one). `lighting` is the SH lighting the timings shade with.
 /// Which configuration is being fitted, and which are skipped, goes to `reporter`.
@@ -264,13 +301,24 @@ pub fn run(
     let mut rows = Vec::new();
     let mut skipped = Vec::new();
     let rest = bake_rest(rig, layout, settings, &Silent)?;
-    let clips = ClipSet {
-        train,
-        rest: Some(&rest),
-        validation,
-    };
+    // The training sets with sampled poses, one per count the configurations ask for.
+    let mut sampled: Vec<(usize, BakedClip)> = Vec::new();
+    for config in configs {
+        let n = config.sample_poses;
+        if n > 0 && !sampled.iter().any(|(m, _)| *m == n) {
+            sampled.push((n, with_sampled(rig, layout, train, n, settings, reporter)?));
+        }
+    }
     for config in configs {
         reporter.note(&format!("fitting {}", config.name));
+        let clips = ClipSet {
+            train: sampled
+                .iter()
+                .find(|(n, _)| *n == config.sample_poses)
+                .map_or(train, |(_, clip)| clip),
+            rest: Some(&rest),
+            validation,
+        };
         let fitted = match fit_clip(rig, layout, clips, order, &config.options, config.frame) {
             Ok(fitted) => fitted,
             Err(err) if matches!(err.downcast_ref(), Some(FitError::NoLocalModel(_))) => {
@@ -603,6 +651,51 @@ pub fn table_markdown(rows: &[Row], test_clips: &[String]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::rig::Clip;
+    use crate::rig::character::Character;
+    use crate::rig::pose_sampler::sampled_clip;
+
+    /// The sampled row trains on the training clip followed by the very poses `aprt train
+    /// --sample-poses` adds to the same frames, as a part of their own, baked like the clip.
+    #[test]
+    fn the_sampled_row_trains_on_the_clip_and_the_poses_aprt_train_samples() {
+        let rig = Character::builtin();
+        let frames: Vec<Vec<f64>> = rig
+            .clip("walk")
+            .unwrap()
+            .frames
+            .into_iter()
+            .step_by(8)
+            .collect();
+        let layout = PoseLayout::from_training(&rig.angle_names(), &frames).unwrap();
+        let settings = BakeSettings {
+            order: 2,
+            shadows: false,
+            ..BakeSettings::default()
+        };
+        let (train, _) =
+            bake_clip(&rig, &layout, "walk", frames.clone(), &settings, &Silent).unwrap();
+        let all = with_sampled(&rig, &layout, &train, 5, &settings, &Silent).unwrap();
+        let clip = Clip {
+            name: "walk".into(),
+            fps: 30.0,
+            frames: frames.clone(),
+        };
+        let limits = rig.joint_limits();
+        let expected = sampled_clip(&rig.angle_names(), &[clip], limits.as_deref(), 5).unwrap();
+        assert_eq!(
+            all.parts,
+            vec![
+                ("walk".to_owned(), frames.len()),
+                (SAMPLED_CLIP.to_owned(), 5)
+            ]
+        );
+        assert_eq!(all.poses[..frames.len()], frames[..]);
+        assert_eq!(all.poses[frames.len()..], expected.frames[..]);
+        assert_eq!(all.transfer.len(), frames.len() + 5);
+        assert_eq!(all.transfer[..frames.len()], train.transfer[..]);
+        assert_eq!(sampled_config(5).name, "default, --sample-poses 5");
+    }
 
     #[test]
     fn a_skipped_or_unknown_model_is_an_error_that_says_why() {
