@@ -90,8 +90,16 @@ fn cases(out: &Path) -> Vec<(&'static str, &'static str, Vec<String>)> {
                 "0,0,1",
             ]),
         ),
-        ("sky.hdr", "environment map", args(&["light", "env", "{}", "--order", "3"])),
-        ("sky.exr", "environment map", args(&["light", "env", "{}", "--order", "3"])),
+        (
+            "sky.hdr",
+            "environment map",
+            args(&["light", "env", "{}", "--order", "3"]),
+        ),
+        (
+            "sky.exr",
+            "environment map",
+            args(&["light", "env", "{}", "--order", "3"]),
+        ),
         ("maps.shlm", "light map", args(&["shlm", "inspect", "{}"])),
         ("model.aprt", "model blob", args(&["inspect", "{}"])),
         (

@@ -15,8 +15,9 @@ use crate::io::scene::{Scene, parse_scene};
 use crate::lighting::rig_fit::FIT_POSES;
 use crate::lighting::{RigKind, fit_rig};
 use crate::model::export::{Precision, encode_model_with_rig};
+use crate::model::predict::predict_world;
 use crate::progress::Reporter;
-use crate::report::evaluate::{mean_transfer, nearest_pose};
+use crate::report::evaluate::{hard_vertex_errors, mean_transfer, nearest_pose};
 use crate::report::experiment::{self, Row, standard_configs, table_markdown};
 use crate::report::figures::{
     ErrorPanel, picture_lighting, save_model_frame, save_panels, shade_with,
@@ -64,6 +65,47 @@ pub struct Report {
     pub skipped: Vec<String>,
     /// The short sweep's recommendation within the scene's budget (sweep/report.md).
     pub recommended: Option<String>,
+    /// Per test clip, on the [`HARD_FRACTION`] of vertices the skinned bind transfer gets most
+    /// wrong: the default's relative error there, and the baseline's.
+    pub hard_vertices: Vec<HardVertices>,
+}
+
+/// The share of vertices [`Report::hard_vertices`] measures: the shadows a pose casts fall on
+/// few vertices, and the error over all of them dilutes what a model gets right there.
+pub const HARD_FRACTION: f64 = 0.05;
+
+/// One test clip's errors on the vertices the skinned bind transfer gets most wrong.
+#[derive(Debug, serde::Serialize)]
+pub struct HardVertices {
+    /// The clip.
+    pub clip: String,
+    /// The default model's relative error on those vertices.
+    pub default: f64,
+    /// The skinned bind transfer's.
+    pub baseline: f64,
+}
+
+/// [`HardVertices`] of the default model `blob` on each test clip.
+fn hard_vertices(
+    blob: &[u8],
+    tests: &[BakedClip],
+    skinned: &[Vec<Vec<f32>>],
+    coeffs: usize,
+) -> Result<Vec<HardVertices>> {
+    tests
+        .iter()
+        .zip(skinned)
+        .map(|(clip, baseline)| {
+            let pred = predict_world(blob, &clip.angles, &clip.rotations, Some(clip.geometry()))?;
+            let (default, baseline) =
+                hard_vertex_errors(&pred, baseline, &clip.transfer, coeffs, HARD_FRACTION);
+            Ok(HardVertices {
+                clip: clip.name.clone(),
+                default,
+                baseline,
+            })
+        })
+        .collect()
 }
 
 /// What the demo is asked for.
@@ -163,6 +205,7 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
     write_atomic(&out.join("model.aprt"), &blob)
         .with_context(|| format!("cannot write {}", out.join("model.aprt").display()))?;
 
+    let hard = hard_vertices(&default.blob, &tests, &result.skinned_tests, order * order)?;
     let test = &tests[0];
     let frame = test.angles.len() / 2;
     save_pictures(out, &blob, train, test, frame, &lighting)?;
@@ -193,6 +236,7 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
         rows: result.rows,
         irradiance_rig: kind.to_string(),
         rig_frame,
+        hard_vertices: hard,
     };
     write_atomic(
         &out.join("report.json"),
@@ -310,6 +354,22 @@ impl Report {
         let _ = writeln!(s, "{}\n", experiment::TABLE_LEGEND);
         let names: Vec<String> = self.test_clips.iter().map(|(n, _)| n.clone()).collect();
         s.push_str(&table_markdown(&self.rows, &names));
+        let _ = writeln!(
+            s,
+            "\nOn the {:.0} % of vertices the skinned bind transfer gets most wrong (per clip), the default's error against the baseline's: {}.\n",
+            100.0 * HARD_FRACTION,
+            self.hard_vertices
+                .iter()
+                .map(|h| format!(
+                    "`{}` {:.2} % against {:.2} % ({:.2}×)",
+                    h.clip,
+                    100.0 * h.default,
+                    100.0 * h.baseline,
+                    h.default / h.baseline
+                ))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
         if let Some(selection) = experiment::selection_markdown(&self.rows, "##") {
             let _ = writeln!(s, "{selection}");
         }

@@ -22,6 +22,49 @@ pub fn relative_error(pred: &[Vec<f32>], truth: &[Vec<f32>]) -> f64 {
     }
 }
 
+/// The errors of `pred` and of `reference` on the `fraction` of vertices where `reference`
+/// errs most (squared error summed over frames and `coeffs` coefficients per vertex), each
+/// relative to the truth there, as [`relative_error`]: how much of a baseline's worst error a
+/// model removes, which the error over all vertices dilutes when the worst are few.
+pub fn hard_vertex_errors(
+    pred: &[Vec<f32>],
+    reference: &[Vec<f32>],
+    truth: &[Vec<f32>],
+    coeffs: usize,
+    fraction: f64,
+) -> (f64, f64) {
+    let vertices = truth.first().map_or(0, |t| t.len() / coeffs.max(1));
+    let per_vertex = |values: &[Vec<f32>], of: &[Vec<f32>]| -> Vec<f64> {
+        let mut sums = vec![0.0f64; vertices];
+        for (p, t) in values.iter().zip(of) {
+            for (v, sum) in sums.iter_mut().enumerate() {
+                let span = v * coeffs..(v + 1) * coeffs;
+                *sum += p[span.clone()]
+                    .iter()
+                    .zip(&t[span])
+                    .map(|(a, b)| (*a as f64 - *b as f64).powi(2))
+                    .sum::<f64>();
+            }
+        }
+        sums
+    };
+    let zero: Vec<Vec<f32>> = truth.iter().map(|t| vec![0.0; t.len()]).collect();
+    let (reference_err, pred_err, truth_norm) = (
+        per_vertex(reference, truth),
+        per_vertex(pred, truth),
+        per_vertex(&zero, truth),
+    );
+    let mut order: Vec<usize> = (0..vertices).collect();
+    order.sort_by(|&a, &b| reference_err[b].total_cmp(&reference_err[a]));
+    let hard = &order[..((vertices as f64 * fraction).ceil() as usize).min(vertices)];
+    let total = |err: &[f64]| hard.iter().map(|&v| err[v]).sum::<f64>();
+    let norm = total(&truth_norm).max(f64::MIN_POSITIVE);
+    (
+        (total(&pred_err) / norm).sqrt(),
+        (total(&reference_err) / norm).sqrt(),
+    )
+}
+
 /// Mean transfer of the training poses: the model with no pose dependence at all.
 pub fn mean_transfer(train: &[Vec<f32>]) -> Vec<f32> {
     let n = train.len().max(1) as f64;
@@ -68,6 +111,22 @@ pub fn skinned_transfer(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn hard_vertices_are_the_references_worst() {
+        // Two coefficients, four vertices; the reference is wrong on vertex 2 only.
+        let truth = vec![vec![1.0f32, 0.0, 1.0, 0.0, 2.0, 0.0, 1.0, 0.0]];
+        let mut reference = truth.clone();
+        reference[0][4] = 0.0;
+        let mut pred = truth.clone();
+        pred[0][4] = 1.0;
+        pred[0][0] = 5.0; // wrong elsewhere: not counted
+        let (model, base) = hard_vertex_errors(&pred, &reference, &truth, 2, 0.25);
+        assert_eq!((model, base), (0.5, 1.0));
+        // All vertices: the plain relative error.
+        let (all, _) = hard_vertex_errors(&pred, &reference, &truth, 2, 1.0);
+        assert!((all - relative_error(&pred, &truth)).abs() < 1e-12);
+    }
 
     #[test]
     fn relative_error_is_scale_free() {

@@ -260,6 +260,9 @@ pub struct Experiment {
     pub frame_bytes: usize,
     /// The rest pose, baked: the anchor of the bone-frame models.
     pub rest: BakedClip,
+    /// The skinned bind transfer's prediction of each test clip, the baseline whose worst
+    /// vertices the demo measures the default on.
+    pub skinned_tests: Vec<Vec<Vec<f32>>>,
 }
 
 impl Experiment {
@@ -382,25 +385,28 @@ pub fn run(
             blob,
         });
     }
-    rows.extend(baselines(rig, train, tests, settings, frame_bytes)?);
+    let (baseline_rows, skinned_tests) = baselines(rig, train, tests, settings, frame_bytes)?;
+    rows.extend(baseline_rows);
     Ok(Experiment {
         models,
         rows,
         skipped,
         frame_bytes,
         rest,
+        skinned_tests,
     })
 }
 
 /// The three baselines: the mean training transfer, the nearest training pose, and the bind
-/// pose's transfer carried by the skinning.
+/// pose's transfer carried by the skinning; with the last one's prediction of each test clip.
+#[allow(clippy::type_complexity)]
 fn baselines(
     rig: &dyn Rig,
     train: &BakedClip,
     tests: &[BakedClip],
     settings: &BakeSettings,
     frame_bytes: usize,
-) -> Result<Vec<Row>> {
+) -> Result<(Vec<Row>, Vec<Vec<Vec<f32>>>)> {
     let mean = mean_transfer(&train.transfer);
     let mean_of =
         |set: &BakedClip| -> Result<Vec<Vec<f32>>> { Ok(vec![mean.clone(); set.transfer.len()]) };
@@ -466,7 +472,8 @@ fn baselines(
             &*corrected_of,
         )?);
     }
-    Ok(rows)
+    let skinned_tests = tests.iter().map(skinned_of).collect::<Result<Vec<_>>>()?;
+    Ok((rows, skinned_tests))
 }
 
 /// The skinned bind transfer with the occluder proxies' correction: what they block in the
@@ -705,6 +712,7 @@ mod tests {
             skipped: vec![(DEFAULT_CONFIG.into(), "2 GiB is too large".into())],
             frame_bytes: 0,
             rest: BakedClip::concat(Vec::new()),
+            skinned_tests: Vec::new(),
         };
         let message = |name: &str| result.model(name).err().unwrap().to_string();
         assert_eq!(
