@@ -208,7 +208,7 @@ fn malformed_lights_files_are_refused() {
             "--normal",
             "0,0,1",
         ],
-        &["cannot read no-such.toml"],
+        &["no-such.toml: cannot read this lights file: No such file"],
     );
 }
 
