@@ -1,0 +1,179 @@
+//! Sizes that files and flags claim are checked before any work (issue 30); each case's own
+//! doc says what it claims and what it cost before. Each case runs the real `aprt` as the
+//! only child of a copy of this test binary, under a time limit, and reads its peak memory
+//! with `getrusage(RUSAGE_CHILDREN)`: a non-zero exit with one `aprt: ` line naming the file
+//! or flag and the numbers, no panic, under 1 GB, every input unchanged and nothing written.
+
+#![cfg(unix)]
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+mod run;
+
+/// The environment variable that makes [`measure_child`] run `aprt` (its arguments joined
+/// by U+001F).
+const MEASURE: &str = "APRT_SIZES_MEASURE";
+/// Longest a refusal may take: every case here is refused in well under a second.
+const TIMEOUT: Duration = Duration::from_secs(60);
+/// Most memory a refusal may use.
+const MAX_MB: f64 = 1024.0;
+
+fn s(path: &Path) -> String {
+    path.to_str().unwrap().to_owned()
+}
+
+/// Not a check of its own. In a child started by [`refused`], runs `aprt` once under
+/// [`TIMEOUT`] (killed past it) and prints its peak resident memory, whether it timed out,
+/// its exit code and its stderr.
+#[test]
+fn measure_child() {
+    use nix::sys::resource::{UsageWho, getrusage};
+    let Ok(args) = std::env::var(MEASURE) else {
+        return;
+    };
+    let mut child = Command::new(env!("CARGO_BIN_EXE_aprt"))
+        .args(args.split('\u{1f}'))
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    let mut timed_out = false;
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > TIMEOUT {
+            child.kill().unwrap();
+            timed_out = true;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let out = child.wait_with_output().unwrap();
+    let usage = getrusage(UsageWho::RUSAGE_CHILDREN).unwrap();
+    println!(
+        "\nmeasured max_rss_kb={} timed_out={timed_out} code={}",
+        usage.max_rss(),
+        out.status.code().unwrap_or(-1)
+    );
+    for line in String::from_utf8_lossy(&out.stderr).lines() {
+        println!("stderr: {line}");
+    }
+}
+
+/// Runs `aprt args` through [`measure_child`]; it must be refused within [`TIMEOUT`] and
+/// [`MAX_MB`], with exactly one `aprt: ` line holding every fragment, no panic, every file of
+/// `inputs` unchanged and nothing in `out`. Returns the line.
+fn refused(args: &[String], inputs: &[PathBuf], out: &Path, fragments: &[&str]) -> String {
+    let before: Vec<Vec<u8>> = inputs.iter().map(|p| std::fs::read(p).unwrap()).collect();
+    let result = Command::new(std::env::current_exe().unwrap())
+        .args([
+            "measure_child",
+            "--exact",
+            "--nocapture",
+            "--test-threads=1",
+        ])
+        .env(MEASURE, args.join("\u{1f}"))
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&result.stdout);
+    let line = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("measured "))
+        .unwrap_or_else(|| panic!("no measurement in\n{stdout}"));
+    let field = |name: &str| {
+        line.split(' ')
+            .find_map(|kv| kv.strip_prefix(name)?.strip_prefix('='))
+            .unwrap()
+            .to_owned()
+    };
+    let stderr: Vec<&str> = stdout
+        .lines()
+        .filter_map(|l| l.strip_prefix("stderr: "))
+        .collect();
+    let stderr = stderr.join("\n");
+    assert_eq!(field("timed_out"), "false", "{args:?} hung:\n{stderr}");
+    assert_ne!(field("code"), "0", "{args:?} succeeded:\n{stderr}");
+    assert!(!stderr.contains("panicked"), "{args:?} panicked:\n{stderr}");
+    let rss_mb = field("max_rss_kb").parse::<f64>().unwrap() / 1024.0;
+    assert!(rss_mb < MAX_MB, "{args:?} used {rss_mb:.0} MB:\n{stderr}");
+    let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("aprt: ")).collect();
+    assert_eq!(
+        errors.len(),
+        1,
+        "{args:?}: not one `aprt: ` line:\n{stderr}"
+    );
+    for fragment in fragments {
+        assert!(
+            errors[0].contains(fragment),
+            "{args:?}: {fragment:?} missing from\n{stderr}"
+        );
+    }
+    for (path, bytes) in inputs.iter().zip(before) {
+        assert!(
+            std::fs::read(path).unwrap() == bytes,
+            "{args:?} changed {}",
+            path.display()
+        );
+    }
+    let left: Vec<_> = std::fs::read_dir(out).unwrap().collect();
+    assert!(
+        left.is_empty(),
+        "{args:?} left {left:?} in {}",
+        out.display()
+    );
+    errors[0].to_owned()
+}
+
+fn strings(args: &[&str]) -> Vec<String> {
+    args.iter().map(|a| (*a).to_owned()).collect()
+}
+
+/// A fresh empty directory for one case's outputs.
+fn out_dir(work: &Path, name: &str) -> PathBuf {
+    let dir = work.join(name);
+    std::fs::create_dir(&dir).unwrap();
+    dir
+}
+
+/// A lights file of `count` point lights.
+fn lights_file(path: &Path, count: usize) {
+    let light =
+        "[[light]]\nkind = \"point\"\nposition = [0.0, 0.0, 2.0]\nintensity = [1.0, 1.0, 1.0]\n";
+    std::fs::write(path, light.repeat(count)).unwrap();
+}
+
+/// A triangle, as an OBJ.
+fn triangle(path: &Path) {
+    std::fs::write(path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+}
+
+/// `--samples` is held to the core's 4096 rig samples before the lights file or the mesh is
+/// read: `u64::MAX` panicked ("capacity overflow"), 100 000 fitted for minutes before the
+/// core refused the rig, and 0 was blamed on the lights file.
+#[test]
+fn rig_samples_are_checked_against_the_core_limit_first() {
+    let work = tempfile::tempdir().unwrap();
+    let (mesh, lights) = (work.path().join("t.obj"), work.path().join("l.toml"));
+    triangle(&mesh);
+    lights_file(&lights, 1);
+    let out = out_dir(work.path(), "out");
+    for samples in ["18446744073709551615", "100000", "0"] {
+        let args = strings(&[
+            "rig",
+            &s(&mesh),
+            "--lights",
+            &s(&lights),
+            "--rig",
+            "gradient",
+            "--samples",
+            samples,
+        ]);
+        let line = refused(
+            &args,
+            &[mesh.clone(), lights.clone()],
+            &out,
+            &[&format!("--samples {samples}"), "1 to 4096"],
+        );
+        assert!(!line.contains("l.toml"), "{line}");
+    }
+}
