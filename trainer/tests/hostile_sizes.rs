@@ -177,3 +177,33 @@ fn rig_samples_are_checked_against_the_core_limit_first() {
         assert!(!line.contains("l.toml"), "{line}");
     }
 }
+
+/// Ten thousand repeated clip names sampled every clip before the frame limit refused them;
+/// now the clip is sampled once and the frames they add up to refused.
+#[test]
+fn repeated_clips_are_counted_before_they_are_sampled() {
+    let work = tempfile::tempdir().unwrap();
+    let out = out_dir(work.path(), "out");
+    let mut args = strings(&[
+        "simulate",
+        "--builtin",
+        "--order",
+        "1",
+        "--rays",
+        "4",
+        "--npy",
+    ]);
+    args.push(s(&out.join("x.npy")));
+    for _ in 0..10_000 {
+        args.extend(strings(&["--clip", "wave"]));
+    }
+    refused(
+        &args,
+        &[],
+        &out,
+        &[
+            "10000 clips (wave, wave, wave, …)",
+            "frames, more than the 10000",
+        ],
+    );
+}
