@@ -63,7 +63,7 @@ fn measure_child() {
 /// Runs `aprt args` through [`measure_child`]; it must be refused within [`TIMEOUT`] and
 /// [`MAX_MB`], with exactly one `aprt: ` line holding every fragment, no panic, every file of
 /// `inputs` unchanged and nothing in `out`. Returns the line.
-fn refused(args: &[String], inputs: &[PathBuf], out: &Path, fragments: &[&str]) -> String {
+fn refused(args: &[String], inputs: &[&Path], out: &Path, fragments: &[&str]) -> String {
     let before: Vec<Vec<u8>> = inputs.iter().map(|p| std::fs::read(p).unwrap()).collect();
     let result = Command::new(std::env::current_exe().unwrap())
         .args([
@@ -170,7 +170,7 @@ fn rig_samples_are_checked_against_the_core_limit_first() {
         ]);
         let line = refused(
             &args,
-            &[mesh.clone(), lights.clone()],
+            &[&mesh, &lights],
             &out,
             &[&format!("--samples {samples}"), "1 to 4096"],
         );
@@ -205,5 +205,59 @@ fn repeated_clips_are_counted_before_they_are_sampled() {
             "10000 clips (wave, wave, wave, …)",
             "frames, more than the 10000",
         ],
+    );
+}
+
+/// A lights file or scene of more lights than one run evaluates (100k ran over an hour) is
+/// refused after parsing, before any light is read into the core or evaluated; 100k lights
+/// in a 9 MB file parse within the memory bound.
+#[test]
+fn lights_beyond_the_limit_are_refused_before_evaluation() {
+    let work = tempfile::tempdir().unwrap();
+    let out = out_dir(work.path(), "out");
+    let (mesh, many, most) = (
+        work.path().join("t.obj"),
+        work.path().join("many.toml"),
+        work.path().join("most.toml"),
+    );
+    triangle(&mesh);
+    lights_file(&many, 100_000);
+    lights_file(&most, 1025);
+    for (lights, count) in [(&many, "100000"), (&most, "1025")] {
+        let args = strings(&[
+            "rig",
+            &s(&mesh),
+            "--lights",
+            &s(lights),
+            "--rig",
+            "gradient",
+        ]);
+        refused(
+            &args,
+            &[&mesh, lights],
+            &out,
+            &[&s(lights), &format!("{count} lights, more than the 1024")],
+        );
+    }
+    let scene = work.path().join("scene.toml");
+    let light = "[[light]]\nkind = \"directional\"\ndirection = [0.0, 0.0, 1.0]\n\
+                 irradiance = [1.0, 1.0, 1.0]\n";
+    let text = format!(
+        "[source]\nbuiltin = \"human\"\ntrain = [\"training\"]\n\n{}",
+        light.repeat(1025)
+    );
+    std::fs::write(&scene, text).unwrap();
+    let args = strings(&[
+        "train",
+        "--scene",
+        &s(&scene),
+        "-o",
+        &s(&out.join("m.aprt")),
+    ]);
+    refused(
+        &args,
+        &[&scene],
+        &out,
+        &["scene.toml", "[[light]]", "1025 lights, more than the 1024"],
     );
 }
