@@ -261,3 +261,28 @@ fn lights_beyond_the_limit_are_refused_before_evaluation() {
         &["scene.toml", "[[light]]", "1025 lights, more than the 1024"],
     );
 }
+
+/// A 16k × 8k Radiance map failed with "Memory limit exceeded" and no size; its header's size
+/// is now refused with the numbers before a texel is decoded.
+#[test]
+fn an_environment_map_is_sized_from_its_header() {
+    let work = tempfile::tempdir().unwrap();
+    let out = out_dir(work.path(), "out");
+    let sky = work.path().join("sky.hdr");
+    let mut bytes = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 8192 +X 16384\n".to_vec();
+    bytes.extend_from_slice(&[0x80; 64]);
+    std::fs::write(&sky, bytes).unwrap();
+    let args = strings(&["light", "env", &s(&sky), "--order", "2"]);
+    refused(
+        &args,
+        &[&sky],
+        &out,
+        &[
+            "sky.hdr",
+            "16384x8192",
+            "16384 × 8192 texels",
+            "5.4 GB",
+            "at most 4.0 GB",
+        ],
+    );
+}
