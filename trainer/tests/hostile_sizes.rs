@@ -178,6 +178,41 @@ fn rig_samples_are_checked_against_the_core_limit_first() {
     }
 }
 
+/// `shlm bake --resolution 8192` baked with no estimate; now it is estimated as `train` is,
+/// before the atlas is rasterised, and refused with its cost.
+#[test]
+fn a_light_map_bake_is_estimated_before_the_atlas() {
+    let work = tempfile::tempdir().unwrap();
+    let bvh = run::tiny_character(work.path(), 4);
+    let out = out_dir(work.path(), "out");
+    let args = strings(&[
+        "shlm",
+        "bake",
+        "--bvh",
+        &bvh,
+        "--resolution",
+        "8192",
+        "--order",
+        "2",
+        "--rays",
+        "16",
+        "-o",
+        &s(&out.join("m.shlm")),
+    ]);
+    refused(
+        &args,
+        &[Path::new(&bvh)],
+        &out,
+        &[
+            "--resolution 8192",
+            "67108864 texels",
+            "GB of memory",
+            "at most 4.0 GB",
+            "lower --resolution",
+        ],
+    );
+}
+
 /// Ten thousand repeated clip names sampled every clip before the frame limit refused them;
 /// now the clip is sampled once and the frames they add up to refused.
 #[test]

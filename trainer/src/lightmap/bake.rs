@@ -10,6 +10,7 @@ use anyhow::{Context, Result, bail};
 
 use super::atlas::{Atlas, UvLayout};
 use super::codec::MapSequence;
+use crate::bake::budget::Workload;
 use crate::bake::checkpoint::{BakeTarget, Checkpoint, OnExisting, ShardBaked};
 use crate::bake::clip::pose_all;
 use crate::bake::shard::Shard;
@@ -110,7 +111,8 @@ pub fn bake_light_maps(
     checkpoint: &CheckpointSettings<'_>,
     reporter: &dyn Reporter,
 ) -> Result<BakedMaps> {
-    let (layout, atlas, meshes) = atlas_and_meshes(rig, what, clip, resolution, reporter)?;
+    let (layout, atlas, meshes) =
+        atlas_and_meshes(rig, what, clip, (resolution, settings), reporter)?;
     let target = Texels::new(&atlas, layout);
     let mut store = Checkpoint::open_at(
         checkpoint.dir,
@@ -152,7 +154,8 @@ pub fn bake_light_map_shard(
     (dir, shard): (&Path, Shard),
     reporter: &dyn Reporter,
 ) -> Result<ShardBaked> {
-    let (layout, atlas, meshes) = atlas_and_meshes(rig, what, clip, resolution, reporter)?;
+    let (layout, atlas, meshes) =
+        atlas_and_meshes(rig, what, clip, (resolution, settings), reporter)?;
     let target = Texels::new(&atlas, layout);
     let mut store = Checkpoint::open_at(dir, OnExisting::Resume, settings, &meshes, &target)?;
     Ok(store.bake_shard(&meshes, &target, shard, frame_name(clip), reporter)?)
@@ -160,16 +163,28 @@ pub fn bake_light_map_shard(
 
 /// What a light-map bake of `clip` works on: the rig's UV layout, its atlas of
 /// `resolution`² texels (overlapping texels reported to `reporter`), and the posed meshes.
+/// The bake is estimated against the run's budget ([`crate::bake::budget`]) as `train` and
+/// `simulate` are: first with every texel of the atlas filled, before the atlas itself is
+/// rasterised (an 8192² atlas alone is gigabytes), then with the samples it really has, before
+/// any frame is posed.
 fn atlas_and_meshes<'r>(
     rig: &'r dyn Rig,
     what: &str,
     clip: &Clip,
-    resolution: usize,
+    (resolution, settings): (usize, &BakeSettings),
     reporter: &dyn Reporter,
 ) -> Result<(&'r UvLayout, Atlas, Vec<Mesh>)> {
     let layout = uv_layout(rig, what)?;
+    // The baked values, the maps gathered from them and the encoder's copy.
+    let copies = 3;
+    let frames = clip.frames.len();
+    let work = |texels| Workload::light_maps(frames, rig.bind_mesh(), texels, settings, copies);
+    let estimate = format!("clip {} at --resolution {resolution}", clip.name);
+    work(resolution.saturating_mul(resolution))
+        .check(&format!("{estimate} (every texel filled)"))?;
     let atlas = Atlas::build(layout, &rig.bind_mesh().triangles, resolution)
         .with_context(|| format!("{what}: building the {resolution}x{resolution} UV atlas"))?;
+    work(atlas.samples().len()).check(&estimate)?;
     let overlapping = atlas.overlapping_texels();
     if overlapping > 0 {
         reporter.note(&format!(
