@@ -178,6 +178,69 @@ fn rig_samples_are_checked_against_the_core_limit_first() {
     }
 }
 
+/// A `.shlm` header of `resolution`, `order`, `texels` (one frame, independent frames, the
+/// uniform quantiser) and section sizes, padded with zeros to `len` bytes.
+fn shlm(path: &Path, (resolution, order, texels): (u32, u32, u32), sections: [u32; 3], len: usize) {
+    let mut b = b"APRTSHLM".to_vec();
+    for v in [2, resolution, order, 1, texels] {
+        b.extend_from_slice(&v.to_le_bytes());
+    }
+    b.extend_from_slice(&[0, 3, 0, 7, 1, 0, 0, 0]);
+    b.extend_from_slice(&0u32.to_le_bytes());
+    for v in sections {
+        b.extend_from_slice(&v.to_le_bytes());
+    }
+    b.resize(len, 0);
+    std::fs::write(path, b).unwrap();
+}
+
+/// A 517-byte `.shlm` whose header claims 8192² texels at order 6 allocated 9.7 GB to decode;
+/// now the header is held to the budget, and sections to what their bytes can decompress to.
+#[test]
+fn shlm_header_sizes_are_checked_before_any_allocation() {
+    let work = tempfile::tempdir().unwrap();
+    let out = out_dir(work.path(), "out");
+    let huge = work.path().join("huge.shlm");
+    shlm(&huge, (8192, 6, 0), [0, 0, 0], 517);
+    let npy = s(&out.join("x.npy"));
+    for args in [
+        strings(&["shlm", "inspect", &s(&huge)]),
+        strings(&[
+            "shlm",
+            "eval",
+            &s(&huge),
+            "--builtin",
+            "--clip",
+            "wave",
+            "--npy",
+            &npy,
+        ]),
+    ] {
+        refused(
+            &args,
+            &[&huge],
+            &out,
+            &[
+                "huge.shlm",
+                "8192² map",
+                "SH order 6",
+                "19.3 GB",
+                "at most 4.0 GB",
+            ],
+        );
+    }
+    // 1024² at order 4 fits the budget, but 10 bytes of positions cannot hold 1M texels'.
+    let short = work.path().join("short.shlm");
+    shlm(&short, (1024, 4, 1 << 20), [100, 10, 0], 517);
+    let args = strings(&["shlm", "inspect", &s(&short)]);
+    refused(
+        &args,
+        &[&short],
+        &out,
+        &["short.shlm", "10-byte positions section", "12582912 bytes"],
+    );
+}
+
 /// `shlm bake --resolution 8192` baked with no estimate; now it is estimated as `train` is,
 /// before the atlas is rasterised, and refused with its cost.
 #[test]

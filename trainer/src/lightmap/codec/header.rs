@@ -3,6 +3,7 @@
 
 use super::shared_exp::{Grouping, PlaneSettings, SignMode};
 use super::{CodecError, CodecKind};
+use crate::bake::budget::{MAX_BYTES, bytes as show_bytes};
 
 /// The file's first eight bytes.
 pub const MAGIC: &[u8; 8] = b"APRTSHLM";
@@ -59,6 +60,24 @@ impl Header {
     /// `n²`.
     pub fn n2(&self) -> usize {
         self.order * self.order
+    }
+
+    /// Bytes a reader holds at once: two decoded frames of `R² · n²` f32 (`inspect` times a
+    /// copy, keyframes interpolate between two), the PCA basis of `k + 1` plane sets of
+    /// `T · n²` f32 (two plane sets otherwise), and each texel's index, position and its
+    /// decompressed bytes, and the mask. A header that claims more than the run's budget is
+    /// refused before any of it is allocated.
+    pub fn reader_bytes(&self) -> u64 {
+        let r2 = (self.resolution as u64).pow(2);
+        let (n2, t) = (self.n2() as u64, self.texels as u64);
+        let plane_sets = match self.kind {
+            StoredKind::Pca { components } => components as u64 + 1,
+            _ => 2,
+        };
+        (2 * r2 * n2 * 4)
+            .saturating_add(plane_sets.saturating_mul(t * n2 * 4))
+            .saturating_add(t * (8 + 12 + 12))
+            .saturating_add(r2.div_ceil(8))
     }
 
     /// Appends the 52 header bytes; fails if a field does not fit its `u32`.
@@ -148,7 +167,7 @@ impl Header {
             2 if param <= frames => StoredKind::Pca { components: param },
             k => return bad(format!("codec kind {k} with parameter {param}")),
         };
-        Ok(Header {
+        let header = Header {
             resolution,
             order,
             frames,
@@ -156,7 +175,20 @@ impl Header {
             kind,
             planes,
             sections: [field(40), field(44), field(48)],
-        })
+        };
+        let needed = header.reader_bytes();
+        if needed > MAX_BYTES {
+            let components = match kind {
+                StoredKind::Pca { components } => format!(" and {components} PCA components"),
+                _ => String::new(),
+            };
+            return bad(format!(
+                "a {resolution}² map of {texels} filled texels at SH order {order}{components} needs {} to read; a run holds at most {}",
+                show_bytes(needed),
+                show_bytes(MAX_BYTES)
+            ));
+        }
+        Ok(header)
     }
 }
 
