@@ -384,3 +384,91 @@ fn an_environment_map_is_sized_from_its_header() {
         ],
     );
 }
+
+/// A `.shlm` records the fingerprint of the UVs it was baked on, and `shlm eval` and
+/// `shlm compose` with a character refuse another character's (CesiumMan's maps were read at
+/// the Fox's UVs); a version-2 file, without one, is read with a note saying it is unchecked.
+#[test]
+fn a_light_map_refuses_another_characters_uvs() {
+    let work = tempfile::tempdir().unwrap();
+    let bvh = run::tiny_character(work.path(), 3);
+    let maps = work.path().join("maps.shlm");
+    let bake = [
+        "shlm",
+        "bake",
+        "--bvh",
+        &bvh,
+        "--resolution",
+        "32",
+        "--order",
+        "2",
+        "--rays",
+        "16",
+        "-o",
+        &s(&maps),
+    ];
+    run::succeed(&bake);
+    let out = out_dir(work.path(), "out");
+    let npy = s(&out.join("x.npy"));
+    let lights = work.path().join("l.toml");
+    lights_file(&lights, 1);
+    let png = s(&out.join("x.png"));
+    for args in [
+        strings(&[
+            "shlm",
+            "eval",
+            &s(&maps),
+            "--builtin",
+            "--clip",
+            "wave",
+            "--npy",
+            &npy,
+        ]),
+        strings(&[
+            "shlm",
+            "compose",
+            &s(&maps),
+            "--builtin",
+            "--clip",
+            "wave",
+            "--lights",
+            &s(&lights),
+            "--png",
+            &png,
+        ]),
+    ] {
+        refused(
+            &args,
+            &[&maps, &lights],
+            &out,
+            &[
+                "maps.shlm",
+                "was baked on UVs of atlas fingerprint",
+                "give the character the light map was baked from",
+            ],
+        );
+    }
+    // The same character passes; the file without its fingerprint (version 2) passes too,
+    // with the note.
+    let own = ["shlm", "eval", &s(&maps), "--bvh", &bvh, "--npy", &npy];
+    let ok = run::aprt(&own);
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    assert!(!String::from_utf8_lossy(&ok.stderr).contains("fingerprint"));
+    std::fs::remove_file(&npy).unwrap();
+    let mut old = std::fs::read(&maps).unwrap();
+    assert_eq!(&old[8..12], &3u32.to_le_bytes());
+    old[8..12].copy_from_slice(&2u32.to_le_bytes());
+    old.drain(52..56);
+    old.truncate(old.len() - 4);
+    let crc = crc32fast::hash(&old);
+    old.extend_from_slice(&crc.to_le_bytes());
+    std::fs::write(&maps, old).unwrap();
+    let ok = run::aprt(&own);
+    let stderr = String::from_utf8_lossy(&ok.stderr);
+    assert!(ok.status.success(), "{stderr}");
+    assert!(stderr.contains("records no atlas fingerprint"), "{stderr}");
+}

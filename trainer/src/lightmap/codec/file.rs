@@ -5,7 +5,7 @@ use std::ops::Range;
 
 use super::CodecError;
 use super::entropy::{compress, decompress_chunk, decompress_exact};
-use super::header::{HEADER_LEN, Header, StoredKind};
+use super::header::{Header, StoredKind};
 use super::shared_exp::{Grouping, SignMode, decode_planes_on};
 use super::uniform::{self, Grid};
 use crate::bake::budget::{MAX_BYTES, bytes as show_bytes};
@@ -68,6 +68,12 @@ fn u32_len(len: usize) -> Result<u32, CodecError> {
     u32::try_from(len).map_err(|_| CodecError::Input(format!("section of {len} bytes")))
 }
 
+/// The atlas fingerprint a `.shlm` file's header records (`None` before version 3), read
+/// without parsing the rest: for the readers that pair a file with a character.
+pub fn atlas_fingerprint(bytes: &[u8]) -> Result<Option<u32>, CodecError> {
+    Ok(Header::read(bytes)?.atlas)
+}
+
 /// A parsed `.shlm` file over its bytes. [`ShlmFile::parse`] validates the header, the
 /// checksum, the offset table, the mask, the positions and the shared PCA basis once;
 /// [`ShlmFile::decode_frame`] then touches only the chunks its frame needs.
@@ -100,7 +106,7 @@ impl<'a> ShlmFile<'a> {
         let sections = [mask_len, points_len, shared_len, table_len, 4];
         let needed = sections
             .iter()
-            .try_fold(HEADER_LEN, |a, &b| a.checked_add(b));
+            .try_fold(header.header_len(), |a, &b| a.checked_add(b));
         let len = bytes.len();
         match needed {
             Some(n) if n <= len => {}
@@ -119,7 +125,7 @@ impl<'a> ShlmFile<'a> {
         if stored != computed {
             return Err(CodecError::Checksum { stored, computed });
         }
-        let mask_at = HEADER_LEN;
+        let mask_at = header.header_len();
         let points_at = mask_at + mask_len;
         let shared_at = points_at + points_len;
         let table = shared_at + shared_len;

@@ -1,5 +1,6 @@
-//! The fixed 52-byte header of a `.shlm` file: dimensions, codec parameters, section sizes,
-//! and the limits every reader enforces before trusting them.
+//! The fixed 56-byte header of a `.shlm` file (52 before version 3): dimensions, codec
+//! parameters, section sizes, the atlas fingerprint, and the limits every reader enforces
+//! before trusting them.
 
 use super::shared_exp::{Grouping, PlaneSettings, SignMode};
 use super::{CodecError, CodecKind};
@@ -7,12 +8,14 @@ use crate::bake::budget::{MAX_BYTES, bytes as show_bytes};
 
 /// The file's first eight bytes.
 pub const MAGIC: &[u8; 8] = b"APRTSHLM";
-/// The layout version this module writes and reads.
-pub const VERSION: u32 = 2;
+/// The layout version this module writes and reads: 3 records the atlas fingerprint.
+pub const VERSION: u32 = 3;
+/// The version of a header without the atlas fingerprint.
+const UNFINGERPRINTED: u32 = 2;
 /// The oldest layout version this module reads (version 1 lacks sign mode 3).
 pub const MIN_VERSION: u32 = 1;
-/// Header bytes.
-pub const HEADER_LEN: usize = 52;
+/// Header bytes before version 3; version 3 adds the 4-byte atlas fingerprint.
+const OLD_HEADER_LEN: usize = 52;
 /// Largest resolution `R`.
 pub const MAX_RESOLUTION: usize = 8192;
 /// Largest SH order `n`.
@@ -54,12 +57,20 @@ pub struct Header {
     pub planes: PlaneSettings,
     /// Section sizes: mask, positions, shared.
     pub sections: [usize; 3],
+    /// The fingerprint of the UV atlas the maps were baked on; `None` in (and written as) a
+    /// version-2 header.
+    pub atlas: Option<u32>,
 }
 
 impl Header {
     /// `n²`.
     pub fn n2(&self) -> usize {
         self.order * self.order
+    }
+
+    /// Header bytes: where the mask section starts.
+    pub fn header_len(&self) -> usize {
+        OLD_HEADER_LEN + if self.atlas.is_some() { 4 } else { 0 }
     }
 
     /// Bytes a reader holds at once: two decoded frames of `R² · n²` f32 (`inspect` times a
@@ -80,7 +91,8 @@ impl Header {
             .saturating_add(r2.div_ceil(8))
     }
 
-    /// Appends the 52 header bytes; fails if a field does not fit its `u32`.
+    /// Appends the header's bytes (version 3 with an atlas fingerprint, 2 without); fails if a
+    /// field does not fit its `u32`.
     pub fn write(&self, out: &mut Vec<u8>) -> Result<(), CodecError> {
         let u32_of = |v: usize, what: &str| {
             u32::try_from(v).map_err(|_| CodecError::Input(format!("{what} {v} exceeds u32")))
@@ -91,8 +103,13 @@ impl Header {
             StoredKind::Pca { components } => (2, components),
         };
         out.extend_from_slice(MAGIC);
+        let version = if self.atlas.is_some() {
+            VERSION
+        } else {
+            UNFINGERPRINTED
+        };
         for v in [
-            VERSION as usize,
+            version as usize,
             self.resolution,
             self.order,
             self.frames,
@@ -120,6 +137,9 @@ impl Header {
         for len in self.sections {
             out.extend_from_slice(&u32_of(len, "section")?.to_le_bytes());
         }
+        if let Some(atlas) = self.atlas {
+            out.extend_from_slice(&atlas.to_le_bytes());
+        }
         Ok(())
     }
 
@@ -128,12 +148,13 @@ impl Header {
         if bytes.len() < MAGIC.len() || &bytes[..MAGIC.len()] != MAGIC {
             return Err(CodecError::BadMagic);
         }
-        if bytes.len() < HEADER_LEN {
-            return Err(CodecError::Truncated {
-                what: "header",
-                needed: HEADER_LEN as u64,
-                len: bytes.len() as u64,
-            });
+        let truncated = |needed: usize| CodecError::Truncated {
+            what: "header",
+            needed: needed as u64,
+            len: bytes.len() as u64,
+        };
+        if bytes.len() < OLD_HEADER_LEN {
+            return Err(truncated(OLD_HEADER_LEN));
         }
         let word = |at: usize| {
             u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]])
@@ -142,6 +163,13 @@ impl Header {
         if !(MIN_VERSION..=VERSION).contains(&version) || (version == 1 && bytes[29] == 3) {
             return Err(CodecError::Version(version));
         }
+        let atlas = match version {
+            VERSION if bytes.len() < OLD_HEADER_LEN + 4 => {
+                return Err(truncated(OLD_HEADER_LEN + 4));
+            }
+            VERSION => Some(word(OLD_HEADER_LEN)),
+            _ => None,
+        };
         let field = |at: usize| word(at) as usize;
         let bad = |m: String| Err(CodecError::Header(m));
         let (resolution, order, frames, texels) = (field(12), field(16), field(20), field(24));
@@ -175,6 +203,7 @@ impl Header {
             kind,
             planes,
             sections: [field(40), field(44), field(48)],
+            atlas,
         };
         let needed = header.reader_bytes();
         if needed > MAX_BYTES {
