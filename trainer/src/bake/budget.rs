@@ -38,6 +38,10 @@ pub struct Workload {
     pub frames: usize,
     /// Vertices of the mesh.
     pub vertices: usize,
+    /// Points baked or evaluated per frame: the vertices, or a light map's texel samples.
+    pub points: usize,
+    /// What the points are, for the message: `"vertices"` or `"texels"`.
+    pub point_name: &'static str,
     /// Triangles of each posed mesh; 0 when no mesh is posed (evaluation).
     pub triangles: usize,
     /// SH coefficients per vertex (n²).
@@ -60,6 +64,8 @@ impl Workload {
         Workload {
             frames,
             vertices: mesh.vertex_count(),
+            points: mesh.vertex_count(),
+            point_name: "vertices",
             triangles: mesh.triangles.len(),
             coeffs: settings.order * settings.order,
             rays: settings.rays,
@@ -75,12 +81,30 @@ impl Workload {
         Workload {
             frames,
             vertices,
+            points: vertices,
+            point_name: "vertices",
             triangles: 0,
             coeffs,
             rays: 0,
             bounces: false,
             copies,
             checkpoint: false,
+        }
+    }
+
+    /// Baking `frames` poses of `mesh` at `texels` texel samples of a light map instead of its
+    /// vertices, holding `copies` of the maps.
+    pub fn light_maps(
+        frames: usize,
+        mesh: &Mesh,
+        texels: usize,
+        settings: &BakeSettings,
+        copies: usize,
+    ) -> Workload {
+        Workload {
+            points: texels,
+            point_name: "texels",
+            ..Workload::bake(frames, mesh, settings, copies)
         }
     }
 
@@ -94,7 +118,7 @@ impl Workload {
 
     /// Bytes of one frame's f32 transfer.
     fn frame_transfer_bytes(&self) -> u64 {
-        (self.vertices as u64)
+        (self.points as u64)
             .saturating_mul(self.coeffs as u64)
             .saturating_mul(4)
     }
@@ -110,7 +134,7 @@ impl Workload {
                 .saturating_add(self.triangles as u64 * TRIANGLE_BYTES)
         };
         let hits = if self.bounces {
-            (self.vertices as u64)
+            (self.points as u64)
                 .saturating_mul(self.rays as u64)
                 .saturating_mul(std::mem::size_of::<Hit>() as u64)
         } else {
@@ -129,7 +153,7 @@ impl Workload {
     /// Rays cast by the bake.
     pub fn ray_casts(&self) -> u64 {
         (self.frames as u64)
-            .saturating_mul(self.vertices as u64)
+            .saturating_mul(self.points as u64)
             .saturating_mul(self.rays as u64)
     }
 
@@ -203,8 +227,13 @@ impl BudgetError {
                 "one run bakes or evaluates at most {MAX_FRAMES} frames: take fewer frames or a lower frame rate"
             ),
             Bound::Bytes => format!(
-                "one run holds at most {}: take fewer frames, a lower frame rate or a lower SH order",
-                bytes(MAX_BYTES)
+                "one run holds at most {}: take fewer frames, a lower frame rate{} or a lower SH order",
+                bytes(MAX_BYTES),
+                if w.point_name == "texels" {
+                    ", a lower --resolution"
+                } else {
+                    ""
+                }
             ),
             Bound::Rays => format!(
                 "one bake casts at most {:.1e} rays (about 40 hours on 2 cores): take fewer rays or fewer frames",
@@ -212,10 +241,11 @@ impl BudgetError {
             ),
         };
         format!(
-            "{}: {verb} {} frames of {} vertices at SH order {order} would need {}; {limit}",
+            "{}: {verb} {} frames of {} {} at SH order {order} would need {}; {limit}",
             self.what,
             w.frames,
-            w.vertices,
+            w.points,
+            w.point_name,
             cost.join(", "),
         )
     }

@@ -36,6 +36,27 @@ fn meshes(args: &RigArgs) -> Result<(Vec<Mesh>, Mesh)> {
     }
 }
 
+/// The flags no input can make valid, refused before any file is read. `--samples` is held to
+/// the core's limit on a rig's sample points, which would otherwise refuse the rig only after
+/// minutes of fitting (or, near `usize::MAX`, the allocation would abort the run).
+fn check_flags(args: &RigArgs) -> Result<()> {
+    if !(args.target_error.is_finite() && args.target_error > 0.0) {
+        bail!(
+            "--target-error {}: give a positive number of grey levels",
+            args.target_error
+        );
+    }
+    if let Some(n) = args.samples
+        && !(1..=aprt_core::MAX_RIG_SAMPLES).contains(&n)
+    {
+        bail!(
+            "--samples {n}: a rig is fitted over 1 to {} surface samples (the most the runtime's rig holds)",
+            aprt_core::MAX_RIG_SAMPLES
+        );
+    }
+    Ok(())
+}
+
 /// Runs `aprt rig`.
 pub fn run(args: &RigArgs) -> Result<()> {
     let mut inputs = args.source.inputs();
@@ -43,13 +64,8 @@ pub fn run(args: &RigArgs) -> Result<()> {
     if let Some(mesh) = &args.mesh {
         inputs.push(Input::new(mesh, "the mesh"));
     }
+    check_flags(args)?;
     check(&[], &inputs)?;
-    if !(args.target_error.is_finite() && args.target_error > 0.0) {
-        bail!(
-            "--target-error {}: give a positive number of grey levels",
-            args.target_error
-        );
-    }
     let lights = read_lights(&args.lights)?;
     let (fitting, posed) = meshes(args)?;
     let settings = RigSettings {

@@ -16,7 +16,9 @@ use crate::cli::{read_file, shard_done, write_npy};
 use crate::input::InputKind;
 use crate::io::atomic::write_atomic;
 use crate::io::outputs::{Input, Output, check};
-use crate::lightmap::bake::{CheckpointSettings, bake_light_map_shard, bake_light_maps};
+use crate::lightmap::bake::{
+    CheckpointSettings, bake_light_map_shard, bake_light_maps, check_atlas,
+};
 use crate::lightmap::codec::{CodecSettings, ShlmFile, encode};
 use crate::lightmap::compose::{ComposeSource, save_preview};
 use crate::lightmap::model::{LightMapTraining, predict_maps, train_light_maps};
@@ -288,6 +290,7 @@ fn maps_of(
 ) -> Result<(usize, usize, Vec<Vec<f32>>)> {
     let name = input.display().to_string();
     if bytes.starts_with(crate::lightmap::codec::MAGIC) {
+        check_atlas(&name, bytes, rig, &Terminal)?;
         let file = ShlmFile::parse(bytes).with_context(|| format!("{name}: invalid sequence"))?;
         if file.frames() != clip.frames.len() {
             bail!(
@@ -384,8 +387,14 @@ fn compose(args: &ShlmComposeArgs) -> Result<()> {
     } else {
         None
     };
+    let name = args.input.display().to_string();
+    if let Some((rig, _)) = &character
+        && bytes.starts_with(crate::lightmap::codec::MAGIC)
+    {
+        check_atlas(&name, &bytes, rig.as_ref(), &Terminal)?;
+    }
     let source = ComposeSource {
-        name: &args.input.display().to_string(),
+        name: &name,
         bytes: &bytes,
         character: character.as_ref().map(|(rig, clip)| (rig.as_ref(), clip)),
         frame: args.frame,

@@ -41,6 +41,7 @@ use serde::Deserialize;
 
 use crate::input::{InputKind, read_input_text};
 use crate::io::source::BuiltinCharacter;
+use crate::lighting::lights_file::check_light_count;
 use crate::lighting::{RigKind, light_from_table};
 use crate::model::ModelFrame;
 use crate::model::export::Precision;
@@ -278,6 +279,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
         None => None,
         Some(env) => Some(environment(env, &resolve).map_err(|m| fail("[environment]", m))?),
     };
+    check_light_count(raw.light.len()).map_err(|m| fail("[[light]]", m))?;
     let lights = raw
         .light
         .iter()

@@ -2,11 +2,13 @@
 //! character, a glTF skin, a mannequin driven by motion capture) and clips of it. The command
 //! line's source options (`cli::source`) name one of these; loading happens here.
 
+use std::collections::HashMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 
+use crate::bake::budget::MAX_FRAMES;
 use crate::progress::Reporter;
 use crate::rig::character::Character;
 use crate::rig::creature::Creature;
@@ -136,7 +138,7 @@ pub enum RigSource {
 }
 
 /// A clip to take from a loaded character.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub enum ClipSpec {
     /// A named clip: the built-in character's, or a glTF animation.
     Named(String),
@@ -257,10 +259,57 @@ impl LoadedRig {
         }
     }
 
-    /// Every clip `specs` names, in order.
+    /// Every clip `specs` names, in order. Their frames together are held to the most one run
+    /// bakes or evaluates ([`MAX_FRAMES`]) before the work grows with the names: a glTF
+    /// animation's frames are counted from its length before any clip is sampled, a clip named
+    /// twice is sampled once, and sampling stops once the distinct clips pass the limit.
     pub fn clips(&self, specs: &[ClipSpec], reporter: &dyn Reporter) -> Result<Vec<Clip>> {
-        specs.iter().map(|s| self.clip(s, reporter)).collect()
+        if let LoadedRig::Gltf(rig, _) = self {
+            let mut total = 0usize;
+            for spec in specs {
+                if let ClipSpec::Named(name) = spec {
+                    total = total.saturating_add(rig.frame_count(name)?);
+                }
+            }
+            check_frames(specs, total, "")?;
+        }
+        let mut index: HashMap<&ClipSpec, usize> = HashMap::new();
+        let mut distinct: Vec<Clip> = Vec::new();
+        let mut sampled = 0usize;
+        for spec in specs {
+            if !index.contains_key(spec) {
+                let clip = self.clip(spec, reporter)?;
+                sampled = sampled.saturating_add(clip.frames.len());
+                check_frames(specs, sampled, "at least ")?;
+                index.insert(spec, distinct.len());
+                distinct.push(clip);
+            }
+        }
+        let total = specs.iter().map(|s| distinct[index[s]].frames.len()).sum();
+        check_frames(specs, total, "")?;
+        Ok(specs.iter().map(|s| distinct[index[s]].clone()).collect())
     }
+}
+
+/// Refuses clips `specs` that hold `total` frames (`at_least` when not all are counted) if
+/// that is more than one run bakes or evaluates.
+fn check_frames(specs: &[ClipSpec], total: usize, at_least: &str) -> Result<()> {
+    if total <= MAX_FRAMES {
+        return Ok(());
+    }
+    let name = |s: &ClipSpec| match s {
+        ClipSpec::Named(name) => name.clone(),
+        ClipSpec::Motion { path, .. } => path.display().to_string(),
+    };
+    let mut names: Vec<String> = specs.iter().take(3).map(name).collect();
+    if specs.len() > names.len() {
+        names.push("…".into());
+    }
+    bail!(
+        "{} clips ({}) hold {at_least}{total} frames, more than the {MAX_FRAMES} one run bakes or evaluates: name fewer clips",
+        specs.len(),
+        names.join(", ")
+    )
 }
 
 /// `path`'s motion (frames `frames` of it, all when `None`) retargeted onto `rig`, the

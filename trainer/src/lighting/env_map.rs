@@ -43,7 +43,12 @@ use aprt_core::{MAX_COEFFS, MAX_ORDER, eval_basis};
 use image::{ImageFormat, ImageReader};
 use rayon::prelude::*;
 
+use crate::bake::budget::{self, MAX_BYTES};
 use crate::input::{InputError, InputKind, read_input};
+
+/// Bytes a decoded texel holds at the peak: the decoder's RGBA f32, its RGB f32 conversion and
+/// the pixels kept, 16 + 12 + 12.
+const ENV_TEXEL_BYTES: u64 = 40;
 
 /// Why an environment map could not be read or projected.
 #[derive(Debug, thiserror::Error)]
@@ -69,6 +74,21 @@ pub enum EnvMapError {
         format: &'static str,
         /// What the decoder said.
         source: image::ImageError,
+    },
+    /// The header claims more texels than one run may decode.
+    #[error(
+        "{}: a {width}x{height} environment map needs {} to decode ({width} × {height} texels, {ENV_TEXEL_BYTES} bytes each); one run holds at most {}: give a smaller map",
+        path.display(),
+        budget::bytes(*width as u64 * *height as u64 * ENV_TEXEL_BYTES),
+        budget::bytes(MAX_BYTES)
+    )]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Its width, from the header.
+        width: u32,
+        /// Its height, from the header.
+        height: u32,
     },
     /// The image has no texels.
     #[error("{}: the image is {width}x{height}, with no texels", origin(file))]
@@ -179,14 +199,29 @@ pub fn read_equirect(path: &Path) -> Result<EnvironmentImage, EnvMapError> {
         }
     };
     let bytes = read_input(path, InputKind::EnvironmentMap)?;
-    let decoded = ImageReader::with_format(Cursor::new(bytes), format)
-        .decode()
-        .map_err(|source| EnvMapError::Decode {
+    let decode_error = |source| EnvMapError::Decode {
+        path: path.to_path_buf(),
+        format: name,
+        source,
+    };
+    // The size is read from the header and checked before a texel is decoded.
+    let (width, height) = ImageReader::with_format(Cursor::new(&bytes), format)
+        .into_dimensions()
+        .map_err(decode_error)?;
+    if u64::from(width) * u64::from(height) * ENV_TEXEL_BYTES > MAX_BYTES {
+        return Err(EnvMapError::TooLarge {
             path: path.to_path_buf(),
-            format: name,
-            source,
-        })?
-        .into_rgb32f();
+            width,
+            height,
+        });
+    }
+    let mut reader = ImageReader::with_format(Cursor::new(&bytes), format);
+    // The decoder's own default (512 MiB) would refuse maps the check above allows, without
+    // their size.
+    let mut limits = image::Limits::default();
+    limits.max_alloc = Some(MAX_BYTES);
+    reader.limits(limits);
+    let decoded = reader.decode().map_err(decode_error)?.into_rgb32f();
     Ok(EnvironmentImage {
         path: path.to_path_buf(),
         width: decoded.width() as usize,

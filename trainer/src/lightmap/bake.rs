@@ -9,7 +9,8 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 
 use super::atlas::{Atlas, UvLayout};
-use super::codec::MapSequence;
+use super::codec::{MapSequence, atlas_fingerprint};
+use crate::bake::budget::Workload;
 use crate::bake::checkpoint::{BakeTarget, Checkpoint, OnExisting, ShardBaked};
 use crate::bake::clip::pose_all;
 use crate::bake::shard::Shard;
@@ -28,13 +29,9 @@ pub struct Texels<'a> {
 impl<'a> Texels<'a> {
     /// The texels of `atlas`, built from `layout`.
     pub fn new(atlas: &'a Atlas, layout: &UvLayout) -> Self {
-        let mut h = crc32fast::Hasher::new();
-        for uv in layout.corners.iter().flatten().flatten() {
-            h.update(&uv.to_le_bytes());
-        }
         Texels {
             atlas,
-            uv_crc: h.finalize(),
+            uv_crc: layout.fingerprint(),
         }
     }
 }
@@ -98,6 +95,26 @@ pub fn uv_layout<'r>(rig: &'r dyn Rig, what: &str) -> Result<&'r UvLayout> {
     }
 }
 
+/// Refuses a sequence file (`bytes`, called `name`) baked on other UVs than `rig`'s: its maps
+/// would be sampled at the wrong texels without any other sign. A file older than the
+/// fingerprint (version 1 or 2) is read unchecked, with a note to `reporter` saying so.
+pub fn check_atlas(name: &str, bytes: &[u8], rig: &dyn Rig, reporter: &dyn Reporter) -> Result<()> {
+    let recorded = atlas_fingerprint(bytes).with_context(|| format!("{name}: invalid sequence"))?;
+    let Some(recorded) = recorded else {
+        reporter.note(&format!(
+            "note: {name} is a .shlm older than version 3 and records no atlas fingerprint: whether it was baked on this character's UVs is not checked"
+        ));
+        return Ok(());
+    };
+    let ours = uv_layout(rig, "the character")?.fingerprint();
+    if recorded != ours {
+        bail!(
+            "{name} was baked on UVs of atlas fingerprint {recorded:08x}, the character's UVs are {ours:08x}: give the character the light map was baked from"
+        );
+    }
+    Ok(())
+}
+
 /// Bakes every frame of `clip` of `rig` at the texels of an atlas of `resolution`² on the
 /// rig's UV layout, through the checkpoint `checkpoint` (removed once every frame is baked).
 /// Overlapping texels (mirrored or overlapping UVs take the mean) are reported to `reporter`.
@@ -110,7 +127,8 @@ pub fn bake_light_maps(
     checkpoint: &CheckpointSettings<'_>,
     reporter: &dyn Reporter,
 ) -> Result<BakedMaps> {
-    let (layout, atlas, meshes) = atlas_and_meshes(rig, what, clip, resolution, reporter)?;
+    let (layout, atlas, meshes) =
+        atlas_and_meshes(rig, what, clip, (resolution, settings), reporter)?;
     let target = Texels::new(&atlas, layout);
     let mut store = Checkpoint::open_at(
         checkpoint.dir,
@@ -126,6 +144,7 @@ pub fn bake_light_maps(
     let frames = values.iter().map(|v| atlas.gather(v, n2)).collect();
     let sequence = MapSequence {
         resolution,
+        atlas: Some(layout.fingerprint()),
         order: settings.order,
         filled: atlas.filled(),
         positions: texel_positions(&atlas, rig.bind_mesh()),
@@ -152,7 +171,8 @@ pub fn bake_light_map_shard(
     (dir, shard): (&Path, Shard),
     reporter: &dyn Reporter,
 ) -> Result<ShardBaked> {
-    let (layout, atlas, meshes) = atlas_and_meshes(rig, what, clip, resolution, reporter)?;
+    let (layout, atlas, meshes) =
+        atlas_and_meshes(rig, what, clip, (resolution, settings), reporter)?;
     let target = Texels::new(&atlas, layout);
     let mut store = Checkpoint::open_at(dir, OnExisting::Resume, settings, &meshes, &target)?;
     Ok(store.bake_shard(&meshes, &target, shard, frame_name(clip), reporter)?)
@@ -160,16 +180,28 @@ pub fn bake_light_map_shard(
 
 /// What a light-map bake of `clip` works on: the rig's UV layout, its atlas of
 /// `resolution`² texels (overlapping texels reported to `reporter`), and the posed meshes.
+/// The bake is estimated against the run's budget ([`crate::bake::budget`]) as `train` and
+/// `simulate` are: first with every texel of the atlas filled, before the atlas itself is
+/// rasterised (an 8192² atlas alone is gigabytes), then with the samples it really has, before
+/// any frame is posed.
 fn atlas_and_meshes<'r>(
     rig: &'r dyn Rig,
     what: &str,
     clip: &Clip,
-    resolution: usize,
+    (resolution, settings): (usize, &BakeSettings),
     reporter: &dyn Reporter,
 ) -> Result<(&'r UvLayout, Atlas, Vec<Mesh>)> {
     let layout = uv_layout(rig, what)?;
+    // The baked values, the maps gathered from them and the encoder's copy.
+    let copies = 3;
+    let frames = clip.frames.len();
+    let work = |texels| Workload::light_maps(frames, rig.bind_mesh(), texels, settings, copies);
+    let estimate = format!("clip {} at --resolution {resolution}", clip.name);
+    work(resolution.saturating_mul(resolution))
+        .check(&format!("{estimate} (every texel filled)"))?;
     let atlas = Atlas::build(layout, &rig.bind_mesh().triangles, resolution)
         .with_context(|| format!("{what}: building the {resolution}x{resolution} UV atlas"))?;
+    work(atlas.samples().len()).check(&estimate)?;
     let overlapping = atlas.overlapping_texels();
     if overlapping > 0 {
         reporter.note(&format!(

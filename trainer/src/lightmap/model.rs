@@ -168,6 +168,7 @@ mod tests {
         let frame: Vec<f32> = (0..r * r).map(|t| t as f32).collect();
         let sequence = MapSequence {
             resolution: r,
+            atlas: None,
             order: 1,
             filled: filled.clone(),
             positions: vec![[0.0; 3]; 4],

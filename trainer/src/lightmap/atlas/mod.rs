@@ -66,6 +66,16 @@ pub struct UvLayout {
 }
 
 impl UvLayout {
+    /// CRC-32 of every corner's UV: what a `.shlm` records of the atlas it was baked on, and
+    /// a checkpoint of the texels it bakes, so maps are never read or resumed on other UVs.
+    pub fn fingerprint(&self) -> u32 {
+        let mut h = crc32fast::Hasher::new();
+        for uv in self.corners.iter().flatten().flatten() {
+            h.update(&uv.to_le_bytes());
+        }
+        h.finalize()
+    }
+
     /// The layout of a mesh with one UV per vertex (as glTF stores them). A corner naming a
     /// vertex without a UV gets NaN, which [`Atlas::build`] refuses, naming the triangle.
     pub fn from_vertex_uvs(uvs: &[[f32; 2]], triangles: &[[u32; 3]]) -> UvLayout {

@@ -68,6 +68,9 @@ pub enum CodecError {
         /// What is wrong.
         message: String,
     },
+    /// Work on a valid file that needs more memory than one run holds (every frame decoded).
+    #[error("{0}")]
+    OverBudget(String),
     /// The sequence to encode holds NaN or infinity, or a setting is out of range.
     #[error("cannot encode: {0}")]
     Input(String),

@@ -5,9 +5,10 @@ use std::ops::Range;
 
 use super::CodecError;
 use super::entropy::{compress, decompress_chunk, decompress_exact};
-use super::header::{HEADER_LEN, Header, StoredKind};
+use super::header::{Header, StoredKind};
 use super::shared_exp::{Grouping, SignMode, decode_planes_on};
 use super::uniform::{self, Grid};
+use crate::bake::budget::{MAX_BYTES, bytes as show_bytes};
 
 /// Whether frame `f` of `frames` is stored under keyframe interval `interval`: every
 /// `interval`-th frame, and the last, so every in-between has a keyframe on each side.
@@ -67,6 +68,12 @@ fn u32_len(len: usize) -> Result<u32, CodecError> {
     u32::try_from(len).map_err(|_| CodecError::Input(format!("section of {len} bytes")))
 }
 
+/// The atlas fingerprint a `.shlm` file's header records (`None` before version 3), read
+/// without parsing the rest: for the readers that pair a file with a character.
+pub fn atlas_fingerprint(bytes: &[u8]) -> Result<Option<u32>, CodecError> {
+    Ok(Header::read(bytes)?.atlas)
+}
+
 /// A parsed `.shlm` file over its bytes. [`ShlmFile::parse`] validates the header, the
 /// checksum, the offset table, the mask, the positions and the shared PCA basis once;
 /// [`ShlmFile::decode_frame`] then touches only the chunks its frame needs.
@@ -99,7 +106,7 @@ impl<'a> ShlmFile<'a> {
         let sections = [mask_len, points_len, shared_len, table_len, 4];
         let needed = sections
             .iter()
-            .try_fold(HEADER_LEN, |a, &b| a.checked_add(b));
+            .try_fold(header.header_len(), |a, &b| a.checked_add(b));
         let len = bytes.len();
         match needed {
             Some(n) if n <= len => {}
@@ -111,13 +118,14 @@ impl<'a> ShlmFile<'a> {
                 });
             }
         }
+        check_compressed_sizes(&header)?;
         let (body, stored) = bytes.split_at(len - 4);
         let stored = u32::from_le_bytes([stored[0], stored[1], stored[2], stored[3]]);
         let computed = crc32fast::hash(body);
         if stored != computed {
             return Err(CodecError::Checksum { stored, computed });
         }
-        let mask_at = HEADER_LEN;
+        let mask_at = header.header_len();
         let points_at = mask_at + mask_len;
         let shared_at = points_at + points_len;
         let table = shared_at + shared_len;
@@ -176,9 +184,20 @@ impl<'a> ShlmFile<'a> {
         (h.frames as u64) * (h.resolution as u64).pow(2) * (h.n2() as u64) * 4
     }
 
-    /// Every frame decoded, in order (`frames` maps of `R² · n²`).
+    /// Every frame decoded, in order (`frames` maps of `R² · n²`); refused before any is
+    /// decoded when they would not fit the run's memory budget.
     pub fn decode_all(&self) -> Result<Vec<Vec<f32>>, CodecError> {
         let h = &self.header;
+        if self.raw_bytes() > MAX_BYTES {
+            return Err(CodecError::OverBudget(format!(
+                "decoding all {} frames of {}² texels at SH order {} holds {}; a run holds at most {}",
+                h.frames,
+                h.resolution,
+                h.order,
+                show_bytes(self.raw_bytes()),
+                show_bytes(MAX_BYTES)
+            )));
+        }
         (0..h.frames)
             .map(|k| {
                 let mut map = vec![0.0f32; h.resolution * h.resolution * h.n2()];
@@ -417,7 +436,7 @@ impl<'a> ShlmFile<'a> {
     }
 
     /// Chunk sizes the kind implies: `4k` bytes of finite weights for PCA, nothing between
-    /// keyframes.
+    /// keyframes, and enough bytes for zstd to give a plane set otherwise.
     fn check_chunks(&self) -> Result<(), CodecError> {
         let h = &self.header;
         for k in 0..h.frames {
@@ -432,12 +451,15 @@ impl<'a> ShlmFile<'a> {
                         message: format!("frame {k} has a non-finite weight"),
                     });
                 }
-                StoredKind::Keyframes { interval }
-                    if !is_keyframe(k, interval, h.frames) && len != 0 =>
-                {
-                    return Err(size("in-between frame chunk", 0, len));
+                StoredKind::Keyframes { interval } if !is_keyframe(k, interval, h.frames) => {
+                    if len != 0 {
+                        return Err(size("in-between frame chunk", 0, len));
+                    }
                 }
-                _ => {}
+                StoredKind::Pca { .. } => {}
+                StoredKind::Frames | StoredKind::Keyframes { .. } => {
+                    zstd_can_hold("frame chunk", len, plane_bytes(h)?)?;
+                }
             }
         }
         Ok(())
@@ -452,6 +474,34 @@ type Basis = (Vec<Vec<f32>>, Vec<IntComponent>);
 struct IntComponent {
     steps: Vec<f32>,
     q: Vec<i16>,
+}
+
+/// Most bytes zstd decompresses per byte of input: a frame's blocks hold at most 128 KiB each,
+/// and the smallest block (an RLE block) is 4 bytes. Real sections compress 3–60:1.
+const ZSTD_MAX_RATIO: usize = 32 * 1024;
+
+/// Refuses a compressed section of `len` bytes that cannot decompress to the `expected` bytes
+/// the header implies, before anything is decompressed or allocated.
+fn zstd_can_hold(what: &str, len: usize, expected: usize) -> Result<(), CodecError> {
+    if len.saturating_mul(ZSTD_MAX_RATIO) >= expected {
+        return Ok(());
+    }
+    Err(CodecError::Header(format!(
+        "the {len}-byte {what} cannot hold the {expected} bytes the header implies (zstd gives at most {ZSTD_MAX_RATIO} bytes per byte)"
+    )))
+}
+
+/// The mask, positions and PCA sections against the bytes the header says they decompress to.
+fn check_compressed_sizes(h: &Header) -> Result<(), CodecError> {
+    let [mask, points, shared] = h.sections;
+    let r2 = h.resolution * h.resolution;
+    zstd_can_hold("filled mask", mask, r2.div_ceil(8))?;
+    zstd_can_hold("positions section", points, h.texels * 12)?;
+    if let StoredKind::Pca { components } = h.kind {
+        let basis = plane_bytes(h)?.saturating_mul(components + 1);
+        zstd_can_hold("shared PCA section", shared, basis)?;
+    }
+    Ok(())
 }
 
 /// Reads one sign-mode-3 component: every `q · step` must be finite.

@@ -1,17 +1,21 @@
-//! The fixed 52-byte header of a `.shlm` file: dimensions, codec parameters, section sizes,
-//! and the limits every reader enforces before trusting them.
+//! The fixed 56-byte header of a `.shlm` file (52 before version 3): dimensions, codec
+//! parameters, section sizes, the atlas fingerprint, and the limits every reader enforces
+//! before trusting them.
 
 use super::shared_exp::{Grouping, PlaneSettings, SignMode};
 use super::{CodecError, CodecKind};
+use crate::bake::budget::{MAX_BYTES, bytes as show_bytes};
 
 /// The file's first eight bytes.
 pub const MAGIC: &[u8; 8] = b"APRTSHLM";
-/// The layout version this module writes and reads.
-pub const VERSION: u32 = 2;
+/// The layout version this module writes and reads: 3 records the atlas fingerprint.
+pub const VERSION: u32 = 3;
+/// The version of a header without the atlas fingerprint.
+const UNFINGERPRINTED: u32 = 2;
 /// The oldest layout version this module reads (version 1 lacks sign mode 3).
 pub const MIN_VERSION: u32 = 1;
-/// Header bytes.
-pub const HEADER_LEN: usize = 52;
+/// Header bytes before version 3; version 3 adds the 4-byte atlas fingerprint.
+const OLD_HEADER_LEN: usize = 52;
 /// Largest resolution `R`.
 pub const MAX_RESOLUTION: usize = 8192;
 /// Largest SH order `n`.
@@ -53,6 +57,9 @@ pub struct Header {
     pub planes: PlaneSettings,
     /// Section sizes: mask, positions, shared.
     pub sections: [usize; 3],
+    /// The fingerprint of the UV atlas the maps were baked on; `None` in (and written as) a
+    /// version-2 header.
+    pub atlas: Option<u32>,
 }
 
 impl Header {
@@ -61,7 +68,31 @@ impl Header {
         self.order * self.order
     }
 
-    /// Appends the 52 header bytes; fails if a field does not fit its `u32`.
+    /// Header bytes: where the mask section starts.
+    pub fn header_len(&self) -> usize {
+        OLD_HEADER_LEN + if self.atlas.is_some() { 4 } else { 0 }
+    }
+
+    /// Bytes a reader holds at once: two decoded frames of `R² · n²` f32 (`inspect` times a
+    /// copy, keyframes interpolate between two), the PCA basis of `k + 1` plane sets of
+    /// `T · n²` f32 (two plane sets otherwise), and each texel's index, position and its
+    /// decompressed bytes, and the mask. A header that claims more than the run's budget is
+    /// refused before any of it is allocated.
+    pub fn reader_bytes(&self) -> u64 {
+        let r2 = (self.resolution as u64).pow(2);
+        let (n2, t) = (self.n2() as u64, self.texels as u64);
+        let plane_sets = match self.kind {
+            StoredKind::Pca { components } => components as u64 + 1,
+            _ => 2,
+        };
+        (2 * r2 * n2 * 4)
+            .saturating_add(plane_sets.saturating_mul(t * n2 * 4))
+            .saturating_add(t * (8 + 12 + 12))
+            .saturating_add(r2.div_ceil(8))
+    }
+
+    /// Appends the header's bytes (version 3 with an atlas fingerprint, 2 without); fails if a
+    /// field does not fit its `u32`.
     pub fn write(&self, out: &mut Vec<u8>) -> Result<(), CodecError> {
         let u32_of = |v: usize, what: &str| {
             u32::try_from(v).map_err(|_| CodecError::Input(format!("{what} {v} exceeds u32")))
@@ -72,8 +103,13 @@ impl Header {
             StoredKind::Pca { components } => (2, components),
         };
         out.extend_from_slice(MAGIC);
+        let version = if self.atlas.is_some() {
+            VERSION
+        } else {
+            UNFINGERPRINTED
+        };
         for v in [
-            VERSION as usize,
+            version as usize,
             self.resolution,
             self.order,
             self.frames,
@@ -101,6 +137,9 @@ impl Header {
         for len in self.sections {
             out.extend_from_slice(&u32_of(len, "section")?.to_le_bytes());
         }
+        if let Some(atlas) = self.atlas {
+            out.extend_from_slice(&atlas.to_le_bytes());
+        }
         Ok(())
     }
 
@@ -109,12 +148,13 @@ impl Header {
         if bytes.len() < MAGIC.len() || &bytes[..MAGIC.len()] != MAGIC {
             return Err(CodecError::BadMagic);
         }
-        if bytes.len() < HEADER_LEN {
-            return Err(CodecError::Truncated {
-                what: "header",
-                needed: HEADER_LEN as u64,
-                len: bytes.len() as u64,
-            });
+        let truncated = |needed: usize| CodecError::Truncated {
+            what: "header",
+            needed: needed as u64,
+            len: bytes.len() as u64,
+        };
+        if bytes.len() < OLD_HEADER_LEN {
+            return Err(truncated(OLD_HEADER_LEN));
         }
         let word = |at: usize| {
             u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]])
@@ -123,6 +163,13 @@ impl Header {
         if !(MIN_VERSION..=VERSION).contains(&version) || (version == 1 && bytes[29] == 3) {
             return Err(CodecError::Version(version));
         }
+        let atlas = match version {
+            VERSION if bytes.len() < OLD_HEADER_LEN + 4 => {
+                return Err(truncated(OLD_HEADER_LEN + 4));
+            }
+            VERSION => Some(word(OLD_HEADER_LEN)),
+            _ => None,
+        };
         let field = |at: usize| word(at) as usize;
         let bad = |m: String| Err(CodecError::Header(m));
         let (resolution, order, frames, texels) = (field(12), field(16), field(20), field(24));
@@ -148,7 +195,7 @@ impl Header {
             2 if param <= frames => StoredKind::Pca { components: param },
             k => return bad(format!("codec kind {k} with parameter {param}")),
         };
-        Ok(Header {
+        let header = Header {
             resolution,
             order,
             frames,
@@ -156,7 +203,21 @@ impl Header {
             kind,
             planes,
             sections: [field(40), field(44), field(48)],
-        })
+            atlas,
+        };
+        let needed = header.reader_bytes();
+        if needed > MAX_BYTES {
+            let components = match kind {
+                StoredKind::Pca { components } => format!(" and {components} PCA components"),
+                _ => String::new(),
+            };
+            return bad(format!(
+                "a {resolution}² map of {texels} filled texels at SH order {order}{components} needs {} to read; a run holds at most {}",
+                show_bytes(needed),
+                show_bytes(MAX_BYTES)
+            ));
+        }
+        Ok(header)
     }
 }
 

@@ -15,7 +15,7 @@
 //! | offset | size | field |
 //! | --- | --- | --- |
 //! | 0 | 8 | magic `APRTSHLM` |
-//! | 8 | 4 | version (2; version 1 is read too: the same layout without sign mode 3) |
+//! | 8 | 4 | version (3; versions 1 and 2 are read too: the same layout without the atlas fingerprint, and version 1 without sign mode 3) |
 //! | 12 | 4 | resolution `R` (1..=8192) |
 //! | 16 | 4 | SH order `n` (1..=6); `n2 = n²` |
 //! | 20 | 4 | frames `F` (1..=1 000 000) |
@@ -30,7 +30,8 @@
 //! | 40 | 4 | mask section bytes |
 //! | 44 | 4 | positions section bytes |
 //! | 48 | 4 | shared section bytes |
-//! | 52 | … | mask: zstd of `⌈R²/8⌉` bytes, texel `t` at bit `t % 8` of byte `t / 8` |
+//! | 52 | 4 | atlas fingerprint: CRC-32 of the UV layout's corners (`UvLayout::fingerprint`); absent before version 3, where the sections start at 52 |
+//! | 56 | … | mask: zstd of `⌈R²/8⌉` bytes, texel `t` at bit `t % 8` of byte `t / 8` |
 //! | | … | positions: zstd of `T × 3` f32, bind-pose point of each filled texel in texel order |
 //! | | … | shared: PCA only: `u32` count (`k + 1`), `count` × `u32` lengths, then zstd plane sets of the mean and the `k` components |
 //! | | `8(F+1)` | frame offset table: `u64` offsets into the chunk area, non-decreasing, last = its size |
@@ -65,7 +66,7 @@ pub mod uniform;
 
 pub use compare::{CodecReport, compare};
 pub use error::CodecError;
-pub use file::ShlmFile;
+pub use file::{ShlmFile, atlas_fingerprint};
 pub use header::MAGIC;
 pub use sequence::encode;
 pub use shared_exp::{Grouping, PlaneSettings, SignMode};
@@ -75,6 +76,10 @@ pub use shared_exp::{Grouping, PlaneSettings, SignMode};
 pub struct MapSequence {
     /// `R`: the maps are `R × R` texels.
     pub resolution: usize,
+    /// The fingerprint of the UV layout the maps were baked on
+    /// ([`crate::lightmap::atlas::UvLayout::fingerprint`]), which readers compare with the
+    /// character's; `None` writes a version-2 file, which records none.
+    pub atlas: Option<u32>,
     /// SH order `n`; each texel holds `n²` coefficients.
     pub order: usize,
     /// `R²` flags: which texels lie inside a UV chart and hold transfer.

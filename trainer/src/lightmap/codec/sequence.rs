@@ -74,6 +74,7 @@ pub fn encode(seq: &MapSequence, settings: &CodecSettings) -> Result<Vec<u8>, Co
         kind: stored_kind(&settings.kind, components),
         planes: settings.planes,
         sections: [0; 3],
+        atlas: seq.atlas,
     };
     assemble(
         header,

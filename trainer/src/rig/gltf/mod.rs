@@ -291,6 +291,12 @@ impl GltfRig {
             .joint_matrices(&animation.locals_at(&self.skeleton.rest, t)))
     }
 
+    /// Frames of the animation called `name` at the rig's frame rate, counted from its length
+    /// (the times only, no pose is sampled).
+    pub fn frame_count(&self, name: &str) -> Result<usize, GltfError> {
+        Ok(self.frame_times(name)?.1.len())
+    }
+
     /// The animation called `name` and its frame times `min(i/fps, end)`, `i = 0..=⌈end·fps⌉`.
     fn frame_times(&self, name: &str) -> Result<(&Animation, Vec<f64>), GltfError> {
         if self.animations.is_empty() {

@@ -136,6 +136,7 @@ fn uniform_fields_are_checked() {
     };
     for bad_step in [-1.0f32, f32::NAN, f32::INFINITY] {
         let one = crate::lightmap::codec::MapSequence {
+            atlas: None,
             frames: seq.frames[..1].to_vec(),
             ..seq.clone()
         };

@@ -1,7 +1,9 @@
 //! Round trips of whole clips: constant fields, random access, the target ratio.
 
 use super::synth::clip;
-use crate::lightmap::codec::{CodecKind, CodecSettings, MapSequence, ShlmFile, compare, encode};
+use crate::lightmap::codec::{
+    CodecKind, CodecSettings, MapSequence, ShlmFile, atlas_fingerprint, compare, encode,
+};
 
 /// Every temporal scheme, with the default quantiser.
 fn kinds() -> Vec<CodecSettings> {
@@ -91,6 +93,7 @@ fn bad_sequences_are_refused() {
     let mut positions = good.clone();
     positions.positions.pop();
     let empty = MapSequence {
+        atlas: None,
         frames: Vec::new(),
         ..good.clone()
     };
@@ -166,4 +169,23 @@ fn relative_error(seq: &MapSequence, decoded: &[Vec<f32>]) -> f64 {
         }
     }
     (e / n).sqrt()
+}
+
+/// A sequence with an atlas fingerprint is written as version 3 and decodes as the version-2
+/// file of the same maps does; the fingerprint is read back from the header alone.
+#[test]
+fn the_atlas_fingerprint_is_a_version_3_header_field() {
+    let mut seq = clip(16, 2, 4, 0.01);
+    let old = encode(&seq, &CodecSettings::default()).unwrap();
+    seq.atlas = Some(0x1234_5678);
+    let new = encode(&seq, &CodecSettings::default()).unwrap();
+    assert_eq!((old[8], new[8]), (2, 3));
+    assert_eq!(new.len(), old.len() + 4);
+    assert_eq!(atlas_fingerprint(&old), Ok(None));
+    assert_eq!(atlas_fingerprint(&new), Ok(Some(0x1234_5678)));
+    let (old, new) = (
+        ShlmFile::parse(&old).unwrap(),
+        ShlmFile::parse(&new).unwrap(),
+    );
+    assert_eq!(decode_all(&old), decode_all(&new));
 }

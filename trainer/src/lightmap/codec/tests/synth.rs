@@ -77,6 +77,7 @@ pub fn clip(resolution: usize, order: usize, frames: usize, noise: f32) -> MapSe
         })
         .collect();
     MapSequence {
+        atlas: None,
         resolution,
         order,
         filled,

@@ -1,0 +1,474 @@
+//! Sizes that files and flags claim are checked before any work (issue 30); each case's own
+//! doc says what it claims and what it cost before. Each case runs the real `aprt` as the
+//! only child of a copy of this test binary, under a time limit, and reads its peak memory
+//! with `getrusage(RUSAGE_CHILDREN)`: a non-zero exit with one `aprt: ` line naming the file
+//! or flag and the numbers, no panic, under 1 GB, every input unchanged and nothing written.
+
+#![cfg(unix)]
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+mod run;
+
+/// The environment variable that makes [`measure_child`] run `aprt` (its arguments joined
+/// by U+001F).
+const MEASURE: &str = "APRT_SIZES_MEASURE";
+/// Longest a refusal may take: every case here is refused in well under a second.
+const TIMEOUT: Duration = Duration::from_secs(60);
+/// Most memory a refusal may use.
+const MAX_MB: f64 = 1024.0;
+
+fn s(path: &Path) -> String {
+    path.to_str().unwrap().to_owned()
+}
+
+/// Not a check of its own. In a child started by [`refused`], runs `aprt` once under
+/// [`TIMEOUT`] (killed past it) and prints its peak resident memory, whether it timed out,
+/// its exit code and its stderr.
+#[test]
+fn measure_child() {
+    use nix::sys::resource::{UsageWho, getrusage};
+    let Ok(args) = std::env::var(MEASURE) else {
+        return;
+    };
+    let mut child = Command::new(env!("CARGO_BIN_EXE_aprt"))
+        .args(args.split('\u{1f}'))
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    let mut timed_out = false;
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > TIMEOUT {
+            child.kill().unwrap();
+            timed_out = true;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let out = child.wait_with_output().unwrap();
+    let usage = getrusage(UsageWho::RUSAGE_CHILDREN).unwrap();
+    println!(
+        "\nmeasured max_rss_kb={} timed_out={timed_out} code={}",
+        usage.max_rss(),
+        out.status.code().unwrap_or(-1)
+    );
+    for line in String::from_utf8_lossy(&out.stderr).lines() {
+        println!("stderr: {line}");
+    }
+}
+
+/// Runs `aprt args` through [`measure_child`]; it must be refused within [`TIMEOUT`] and
+/// [`MAX_MB`], with exactly one `aprt: ` line holding every fragment, no panic, every file of
+/// `inputs` unchanged and nothing in `out`. Returns the line.
+fn refused(args: &[String], inputs: &[&Path], out: &Path, fragments: &[&str]) -> String {
+    let before: Vec<Vec<u8>> = inputs.iter().map(|p| std::fs::read(p).unwrap()).collect();
+    let result = Command::new(std::env::current_exe().unwrap())
+        .args([
+            "measure_child",
+            "--exact",
+            "--nocapture",
+            "--test-threads=1",
+        ])
+        .env(MEASURE, args.join("\u{1f}"))
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&result.stdout);
+    let line = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("measured "))
+        .unwrap_or_else(|| panic!("no measurement in\n{stdout}"));
+    let field = |name: &str| {
+        line.split(' ')
+            .find_map(|kv| kv.strip_prefix(name)?.strip_prefix('='))
+            .unwrap()
+            .to_owned()
+    };
+    let stderr: Vec<&str> = stdout
+        .lines()
+        .filter_map(|l| l.strip_prefix("stderr: "))
+        .collect();
+    let stderr = stderr.join("\n");
+    assert_eq!(field("timed_out"), "false", "{args:?} hung:\n{stderr}");
+    assert_ne!(field("code"), "0", "{args:?} succeeded:\n{stderr}");
+    assert!(!stderr.contains("panicked"), "{args:?} panicked:\n{stderr}");
+    let rss_mb = field("max_rss_kb").parse::<f64>().unwrap() / 1024.0;
+    assert!(rss_mb < MAX_MB, "{args:?} used {rss_mb:.0} MB:\n{stderr}");
+    let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("aprt: ")).collect();
+    assert_eq!(
+        errors.len(),
+        1,
+        "{args:?}: not one `aprt: ` line:\n{stderr}"
+    );
+    for fragment in fragments {
+        assert!(
+            errors[0].contains(fragment),
+            "{args:?}: {fragment:?} missing from\n{stderr}"
+        );
+    }
+    for (path, bytes) in inputs.iter().zip(before) {
+        assert!(
+            std::fs::read(path).unwrap() == bytes,
+            "{args:?} changed {}",
+            path.display()
+        );
+    }
+    let left: Vec<_> = std::fs::read_dir(out).unwrap().collect();
+    assert!(
+        left.is_empty(),
+        "{args:?} left {left:?} in {}",
+        out.display()
+    );
+    errors[0].to_owned()
+}
+
+fn strings(args: &[&str]) -> Vec<String> {
+    args.iter().map(|a| (*a).to_owned()).collect()
+}
+
+/// A fresh empty directory for one case's outputs.
+fn out_dir(work: &Path, name: &str) -> PathBuf {
+    let dir = work.join(name);
+    std::fs::create_dir(&dir).unwrap();
+    dir
+}
+
+/// A lights file of `count` point lights.
+fn lights_file(path: &Path, count: usize) {
+    let light =
+        "[[light]]\nkind = \"point\"\nposition = [0.0, 0.0, 2.0]\nintensity = [1.0, 1.0, 1.0]\n";
+    std::fs::write(path, light.repeat(count)).unwrap();
+}
+
+/// A triangle, as an OBJ.
+fn triangle(path: &Path) {
+    std::fs::write(path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+}
+
+/// `--samples` is held to the core's 4096 rig samples before the lights file or the mesh is
+/// read: `u64::MAX` panicked ("capacity overflow"), 100 000 fitted for minutes before the
+/// core refused the rig, and 0 was blamed on the lights file.
+#[test]
+fn rig_samples_are_checked_against_the_core_limit_first() {
+    let work = tempfile::tempdir().unwrap();
+    let (mesh, lights) = (work.path().join("t.obj"), work.path().join("l.toml"));
+    triangle(&mesh);
+    lights_file(&lights, 1);
+    let out = out_dir(work.path(), "out");
+    for samples in ["18446744073709551615", "100000", "0"] {
+        let args = strings(&[
+            "rig",
+            &s(&mesh),
+            "--lights",
+            &s(&lights),
+            "--rig",
+            "gradient",
+            "--samples",
+            samples,
+        ]);
+        let line = refused(
+            &args,
+            &[&mesh, &lights],
+            &out,
+            &[&format!("--samples {samples}"), "1 to 4096"],
+        );
+        assert!(!line.contains("l.toml"), "{line}");
+    }
+}
+
+/// A `.shlm` header of `resolution`, `order`, `texels` (one frame, independent frames, the
+/// uniform quantiser) and section sizes, padded with zeros to `len` bytes.
+fn shlm(path: &Path, (resolution, order, texels): (u32, u32, u32), sections: [u32; 3], len: usize) {
+    let mut b = b"APRTSHLM".to_vec();
+    for v in [2, resolution, order, 1, texels] {
+        b.extend_from_slice(&v.to_le_bytes());
+    }
+    b.extend_from_slice(&[0, 3, 0, 7, 1, 0, 0, 0]);
+    b.extend_from_slice(&0u32.to_le_bytes());
+    for v in sections {
+        b.extend_from_slice(&v.to_le_bytes());
+    }
+    b.resize(len, 0);
+    std::fs::write(path, b).unwrap();
+}
+
+/// A 517-byte `.shlm` whose header claims 8192² texels at order 6 allocated 9.7 GB to decode;
+/// now the header is held to the budget, and sections to what their bytes can decompress to.
+#[test]
+fn shlm_header_sizes_are_checked_before_any_allocation() {
+    let work = tempfile::tempdir().unwrap();
+    let out = out_dir(work.path(), "out");
+    let huge = work.path().join("huge.shlm");
+    shlm(&huge, (8192, 6, 0), [0, 0, 0], 517);
+    let npy = s(&out.join("x.npy"));
+    for args in [
+        strings(&["shlm", "inspect", &s(&huge)]),
+        strings(&[
+            "shlm",
+            "eval",
+            &s(&huge),
+            "--builtin",
+            "--clip",
+            "wave",
+            "--npy",
+            &npy,
+        ]),
+    ] {
+        refused(
+            &args,
+            &[&huge],
+            &out,
+            &[
+                "huge.shlm",
+                "8192² map",
+                "SH order 6",
+                "19.3 GB",
+                "at most 4.0 GB",
+            ],
+        );
+    }
+    // 1024² at order 4 fits the budget, but 10 bytes of positions cannot hold 1M texels'.
+    let short = work.path().join("short.shlm");
+    shlm(&short, (1024, 4, 1 << 20), [100, 10, 0], 517);
+    let args = strings(&["shlm", "inspect", &s(&short)]);
+    refused(
+        &args,
+        &[&short],
+        &out,
+        &["short.shlm", "10-byte positions section", "12582912 bytes"],
+    );
+}
+
+/// `shlm bake --resolution 8192` baked with no estimate; now it is estimated as `train` is,
+/// before the atlas is rasterised, and refused with its cost.
+#[test]
+fn a_light_map_bake_is_estimated_before_the_atlas() {
+    let work = tempfile::tempdir().unwrap();
+    let bvh = run::tiny_character(work.path(), 4);
+    let out = out_dir(work.path(), "out");
+    let args = strings(&[
+        "shlm",
+        "bake",
+        "--bvh",
+        &bvh,
+        "--resolution",
+        "8192",
+        "--order",
+        "2",
+        "--rays",
+        "16",
+        "-o",
+        &s(&out.join("m.shlm")),
+    ]);
+    refused(
+        &args,
+        &[Path::new(&bvh)],
+        &out,
+        &[
+            "--resolution 8192",
+            "67108864 texels",
+            "GB of memory",
+            "at most 4.0 GB",
+            "lower --resolution",
+        ],
+    );
+}
+
+/// Ten thousand repeated clip names sampled every clip before the frame limit refused them;
+/// now the clip is sampled once and the frames they add up to refused.
+#[test]
+fn repeated_clips_are_counted_before_they_are_sampled() {
+    let work = tempfile::tempdir().unwrap();
+    let out = out_dir(work.path(), "out");
+    let mut args = strings(&[
+        "simulate",
+        "--builtin",
+        "--order",
+        "1",
+        "--rays",
+        "4",
+        "--npy",
+    ]);
+    args.push(s(&out.join("x.npy")));
+    for _ in 0..10_000 {
+        args.extend(strings(&["--clip", "wave"]));
+    }
+    refused(
+        &args,
+        &[],
+        &out,
+        &[
+            "10000 clips (wave, wave, wave, …)",
+            "frames, more than the 10000",
+        ],
+    );
+}
+
+/// A lights file or scene of more lights than one run evaluates (100k ran over an hour) is
+/// refused after parsing, before any light is read into the core or evaluated; 100k lights
+/// in a 9 MB file parse within the memory bound.
+#[test]
+fn lights_beyond_the_limit_are_refused_before_evaluation() {
+    let work = tempfile::tempdir().unwrap();
+    let out = out_dir(work.path(), "out");
+    let (mesh, many, most) = (
+        work.path().join("t.obj"),
+        work.path().join("many.toml"),
+        work.path().join("most.toml"),
+    );
+    triangle(&mesh);
+    lights_file(&many, 100_000);
+    lights_file(&most, 1025);
+    for (lights, count) in [(&many, "100000"), (&most, "1025")] {
+        let args = strings(&[
+            "rig",
+            &s(&mesh),
+            "--lights",
+            &s(lights),
+            "--rig",
+            "gradient",
+        ]);
+        refused(
+            &args,
+            &[&mesh, lights],
+            &out,
+            &[&s(lights), &format!("{count} lights, more than the 1024")],
+        );
+    }
+    let scene = work.path().join("scene.toml");
+    let light = "[[light]]\nkind = \"directional\"\ndirection = [0.0, 0.0, 1.0]\n\
+                 irradiance = [1.0, 1.0, 1.0]\n";
+    let text = format!(
+        "[source]\nbuiltin = \"human\"\ntrain = [\"training\"]\n\n{}",
+        light.repeat(1025)
+    );
+    std::fs::write(&scene, text).unwrap();
+    let args = strings(&[
+        "train",
+        "--scene",
+        &s(&scene),
+        "-o",
+        &s(&out.join("m.aprt")),
+    ]);
+    refused(
+        &args,
+        &[&scene],
+        &out,
+        &["scene.toml", "[[light]]", "1025 lights, more than the 1024"],
+    );
+}
+
+/// A 16k × 8k Radiance map failed with "Memory limit exceeded" and no size; its header's size
+/// is now refused with the numbers before a texel is decoded.
+#[test]
+fn an_environment_map_is_sized_from_its_header() {
+    let work = tempfile::tempdir().unwrap();
+    let out = out_dir(work.path(), "out");
+    let sky = work.path().join("sky.hdr");
+    let mut bytes = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 8192 +X 16384\n".to_vec();
+    bytes.extend_from_slice(&[0x80; 64]);
+    std::fs::write(&sky, bytes).unwrap();
+    let args = strings(&["light", "env", &s(&sky), "--order", "2"]);
+    refused(
+        &args,
+        &[&sky],
+        &out,
+        &[
+            "sky.hdr",
+            "16384x8192",
+            "16384 × 8192 texels",
+            "5.4 GB",
+            "at most 4.0 GB",
+        ],
+    );
+}
+
+/// A `.shlm` records the fingerprint of the UVs it was baked on, and `shlm eval` and
+/// `shlm compose` with a character refuse another character's (CesiumMan's maps were read at
+/// the Fox's UVs); a version-2 file, without one, is read with a note saying it is unchecked.
+#[test]
+fn a_light_map_refuses_another_characters_uvs() {
+    let work = tempfile::tempdir().unwrap();
+    let bvh = run::tiny_character(work.path(), 3);
+    let maps = work.path().join("maps.shlm");
+    let bake = [
+        "shlm",
+        "bake",
+        "--bvh",
+        &bvh,
+        "--resolution",
+        "32",
+        "--order",
+        "2",
+        "--rays",
+        "16",
+        "-o",
+        &s(&maps),
+    ];
+    run::succeed(&bake);
+    let out = out_dir(work.path(), "out");
+    let npy = s(&out.join("x.npy"));
+    let lights = work.path().join("l.toml");
+    lights_file(&lights, 1);
+    let png = s(&out.join("x.png"));
+    for args in [
+        strings(&[
+            "shlm",
+            "eval",
+            &s(&maps),
+            "--builtin",
+            "--clip",
+            "wave",
+            "--npy",
+            &npy,
+        ]),
+        strings(&[
+            "shlm",
+            "compose",
+            &s(&maps),
+            "--builtin",
+            "--clip",
+            "wave",
+            "--lights",
+            &s(&lights),
+            "--png",
+            &png,
+        ]),
+    ] {
+        refused(
+            &args,
+            &[&maps, &lights],
+            &out,
+            &[
+                "maps.shlm",
+                "was baked on UVs of atlas fingerprint",
+                "give the character the light map was baked from",
+            ],
+        );
+    }
+    // The same character passes; the file without its fingerprint (version 2) passes too,
+    // with the note.
+    let own = ["shlm", "eval", &s(&maps), "--bvh", &bvh, "--npy", &npy];
+    let ok = run::aprt(&own);
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    assert!(!String::from_utf8_lossy(&ok.stderr).contains("fingerprint"));
+    std::fs::remove_file(&npy).unwrap();
+    let mut old = std::fs::read(&maps).unwrap();
+    assert_eq!(&old[8..12], &3u32.to_le_bytes());
+    old[8..12].copy_from_slice(&2u32.to_le_bytes());
+    old.drain(52..56);
+    old.truncate(old.len() - 4);
+    let crc = crc32fast::hash(&old);
+    old.extend_from_slice(&crc.to_le_bytes());
+    std::fs::write(&maps, old).unwrap();
+    let ok = run::aprt(&own);
+    let stderr = String::from_utf8_lossy(&ok.stderr);
+    assert!(ok.status.success(), "{stderr}");
+    assert!(stderr.contains("records no atlas fingerprint"), "{stderr}");
+}
