@@ -183,7 +183,8 @@ fn light_env(args: &EnvArgs) -> Result<()> {
 }
 
 fn demo(args: &DemoArgs) -> Result<()> {
-    check(&[Output::directory(&args.out, "--out")], &[])?;
+    // The demo reads no file of the user's (its character and scene are built in).
+    check(&[Output::directory(&args.out, "--out", &[])], &[])?;
     let markdown = crate::report::demo::run(&args.settings()?, &Terminal)?;
     print!("{markdown}");
     eprintln!(
@@ -277,7 +278,8 @@ fn results(args: &ResultsArgs) -> Result<()> {
     use crate::report::results::{ResultsSettings, asset_studies, default_assets, write_document};
     let assets = args.assets.clone().unwrap_or_else(default_assets);
     check(
-        &[Output::directory(&args.out, "--out")],
+        // Inputs are files of the assets directory, which the output may not lie inside.
+        &[Output::directory(&args.out, "--out", &[])],
         &[Input::new(&assets, "the assets directory")],
     )?;
     let studies = asset_studies(&assets)
@@ -304,7 +306,8 @@ fn results(args: &ResultsArgs) -> Result<()> {
 }
 
 fn rig_study(args: &RigStudyArgs) -> Result<()> {
-    check(&[Output::directory(&args.out, "--out")], &[])?;
+    // The study reads no file of the user's (its creature is built in).
+    check(&[Output::directory(&args.out, "--out", &[])], &[])?;
     let command = format!(
         "cargo run --release -p aprt-trainer --bin aprt -- rig-study --out {} --order {}",
         args.out.display(),
@@ -351,10 +354,11 @@ fn train(args: &TrainArgs) -> Result<()> {
         None => (args.source.clone(), args.validate.clone()),
     };
     let checkpoint = match &args.checkpoint {
-        Some(dir) => Output::directory(dir, "--checkpoint"),
+        Some(dir) => Output::directory(dir, "--checkpoint", &[]),
         None => Output::directory(
             Checkpoint::default_dir(&args.output),
             "the checkpoint directory (-o's path + .bake)",
+            &[],
         ),
     };
     // A checkpoint being resumed is read too: the model must not land on one of its files.
@@ -507,7 +511,7 @@ fn report(args: &ReportArgs) -> Result<()> {
     let mut inputs = source.inputs();
     inputs.extend(source.validation_inputs(&held));
     inputs.extend(scene_inputs(&scene));
-    let mut outputs = vec![Output::directory(&args.out, "--out")];
+    let mut outputs = vec![Output::directory(&args.out, "--out", document::FILES)];
     if let Some(model) = &args.write_model {
         outputs.push(Output::file(model, "--write-model"));
     }

@@ -2,7 +2,7 @@
 //! at the vertices (comparable with `aprt simulate`), inspect it, compose it under lights, and
 //! train the pose-driven light-map model.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand};
@@ -192,10 +192,11 @@ pub fn run(args: &ShlmArgs) -> Result<()> {
 /// resumed (inputs, which the output must not land on).
 fn checkpoint_output(atlas: &AtlasArgs, output: &std::path::Path) -> (Output, Vec<Input>) {
     let checkpoint = match &atlas.checkpoint {
-        Some(dir) => Output::directory(dir, "--checkpoint"),
+        Some(dir) => Output::directory(dir, "--checkpoint", &[]),
         None => Output::directory(
             Checkpoint::default_dir(output),
             "the checkpoint directory (-o's path + .bake)",
+            &[],
         ),
     };
     let stored = std::fs::read_dir(&checkpoint.path).into_iter().flatten();
@@ -315,22 +316,24 @@ fn eval(args: &ShlmEvalArgs) -> Result<()> {
         inputs.push(Input::new(truth, "--against"));
     }
     check(&[Output::file(&args.npy, "--npy")], &inputs)?;
+    // The truth is read first, so a file that cannot be one is refused before any work.
+    let truth = args.against.as_deref().map(read_truth).transpose()?;
     let bytes = read_file(&args.input, InputKind::LightMap)?;
     let (rig, clip) = args.source.rig(&Terminal)?;
     let (r, order, maps) = maps_of(&args.input, &bytes, rig.as_ref(), &clip)?;
     let n2 = order * order;
     let flat: Vec<f32> = maps_at_vertices(rig.as_ref(), &maps, r, n2)?.concat();
     let shape = [maps.len(), rig.bind_mesh().vertex_count(), n2];
+    if let (Some(path), Some((truth_shape, _))) = (&args.against, &truth)
+        && truth_shape != &shape
+    {
+        bail!(
+            "--against {}: the shape is {truth_shape:?}, the evaluation's {shape:?}",
+            path.display()
+        );
+    }
     write_npy(&args.npy, &shape, &flat)?;
-    if let Some(path) = &args.against {
-        let (truth_shape, truth) = crate::io::npy::decode_f32(&read_file(path, InputKind::Npy)?)
-            .with_context(|| format!("{}: cannot read", path.display()))?;
-        if truth_shape != shape {
-            bail!(
-                "{} has shape {truth_shape:?}, the evaluation {shape:?}",
-                path.display()
-            );
-        }
+    if let (Some(path), Some((_, truth))) = (&args.against, truth) {
         let error = crate::report::evaluate::relative_error(&[flat], &[truth]);
         println!(
             "relative transfer error against {}: {:.2}%",
@@ -339,6 +342,32 @@ fn eval(args: &ShlmEvalArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The `--against` array: its shape and values, every value finite (a NaN made the error
+/// "NaN%").
+fn read_truth(path: &Path) -> Result<(Vec<usize>, Vec<f32>)> {
+    let (shape, values) = crate::io::npy::decode_f32(&read_file(path, InputKind::Npy)?)
+        .with_context(|| format!("--against {}", path.display()))?;
+    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+        bail!(
+            "--against {}: value {i} (index {:?}) is {}: the truth must be finite",
+            path.display(),
+            unravel(i, &shape),
+            values[i]
+        );
+    }
+    Ok((shape, values))
+}
+
+/// The C-order index of the flat position `i` in an array of `shape`.
+fn unravel(mut i: usize, shape: &[usize]) -> Vec<usize> {
+    let mut index = vec![0; shape.len()];
+    for (slot, &d) in index.iter_mut().zip(shape).rev() {
+        *slot = i % d;
+        i /= d;
+    }
+    index
 }
 
 fn inspect(args: &ShlmInspectArgs) -> Result<()> {
@@ -451,7 +480,8 @@ fn study(args: &ShlmStudyArgs) -> Result<()> {
         .clone()
         .unwrap_or_else(crate::report::results::default_assets);
     check(
-        &[Output::directory(&args.out, "--out")],
+        // Inputs are files of the assets directory, which the output may not lie inside.
+        &[Output::directory(&args.out, "--out", &[])],
         &[Input::new(&assets, "the assets directory")],
     )?;
     let bake = args.bake.settings();

@@ -3,10 +3,14 @@
 //!
 //! Two paths are the same file when their canonical paths are equal or, on Unix, when they
 //! have the same device and inode, so a symlink, a `..` detour or a hard link to an input is
-//! caught as well as the same spelling. An output that does not exist yet cannot be an
-//! existing input; it is still compared by where it would be created with the other outputs.
+//! caught as well as the same spelling. An output that does not exist yet is compared by
+//! where it would be created (the canonical path of its nearest existing ancestor, joined with
+//! the rest of the path, `..` and `.` resolved): `new/../scene.toml` is `scene.toml` once
+//! `new/` is created. A directory output is compared file by file: each file the command
+//! writes into it is an output too, and the directory may not lie inside an input directory
+//! (whose files the command reads by names it does not list).
 
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
 
 use crate::input::{InputKind, read_input};
 use crate::io::atomic::{OutputError, output_target};
@@ -41,6 +45,8 @@ pub struct Output {
     pub flag: String,
     /// Whether a file is written there (replaced whole) or a directory filled.
     pub kind: OutputKind,
+    /// For a directory, the files the command writes into it, relative to it.
+    pub files: Vec<PathBuf>,
 }
 
 /// What a command writes at an [`Output`].
@@ -59,15 +65,19 @@ impl Output {
             path: path.into(),
             flag: flag.into(),
             kind: OutputKind::File,
+            files: Vec::new(),
         }
     }
 
-    /// A directory filled at `path`, named `flag` on the command line.
-    pub fn directory(path: impl Into<PathBuf>, flag: impl Into<String>) -> Output {
+    /// A directory filled at `path`, named `flag` on the command line, into which the command
+    /// writes `files` (relative paths): each is checked against the inputs as a file output
+    /// is, so `aprt report DIR/report.md --out DIR` cannot overwrite the scene it reads.
+    pub fn directory(path: impl Into<PathBuf>, flag: impl Into<String>, files: &[&str]) -> Output {
         Output {
             path: path.into(),
             flag: flag.into(),
             kind: OutputKind::Directory,
+            files: files.iter().map(PathBuf::from).collect(),
         }
     }
 }
@@ -89,6 +99,41 @@ pub enum GuardError {
         /// What the input is.
         role: String,
         /// The input as given.
+        input: PathBuf,
+    },
+    /// A file a command writes into its output directory is one of the inputs.
+    #[error(
+        "{flag} {}: the command writes {} there, which is {role} {}; writing it would destroy the input, so give another output directory",
+        output.display(),
+        file.display(),
+        input.display()
+    )]
+    WritesInput {
+        /// The output directory's flag.
+        flag: String,
+        /// The output directory as given.
+        output: PathBuf,
+        /// The file written into it, as it would be named.
+        file: PathBuf,
+        /// What the input is.
+        role: String,
+        /// The input as given.
+        input: PathBuf,
+    },
+    /// An output directory lies inside an input directory.
+    #[error(
+        "{flag} {}: that is inside {role} {}; the command would write among the files it reads, so give an output directory outside it",
+        output.display(),
+        input.display()
+    )]
+    InsideInput {
+        /// The output directory's flag.
+        flag: String,
+        /// The output directory as given.
+        output: PathBuf,
+        /// What the input is.
+        role: String,
+        /// The input directory as given.
         input: PathBuf,
     },
     /// Two outputs are the same path.
@@ -128,13 +173,21 @@ pub enum GuardError {
     },
 }
 
-/// Refuses `outputs` when one of them is one of `inputs` or another output, when a file
-/// output exists and is not a regular file (after following symlinks), or when a directory
-/// output exists and is not a directory. Reads metadata only.
+/// Refuses `outputs` when one of them (or a file written into an output directory) is one of
+/// `inputs` or another output, when a file output exists and is not a regular file (after
+/// following symlinks), or when a directory output exists and is not a directory or lies
+/// inside an input directory. Reads metadata only.
 pub fn check(outputs: &[Output], inputs: &[Input]) -> Result<(), GuardError> {
+    // An input missing now is compared by place: `--npy Y --against Y` would otherwise write Y
+    // and then read it back as the truth.
     let inputs: Vec<(&Input, Identity)> = inputs
         .iter()
-        .filter_map(|i| Identity::of(&i.path).map(|id| (i, id)))
+        .map(|i| {
+            (
+                i,
+                Identity::of(&i.path).unwrap_or_else(|| Identity::missing(&i.path)),
+            )
+        })
         .collect();
     let mut seen: Vec<(&Output, PathBuf)> = Vec::new();
     for output in outputs {
@@ -148,21 +201,22 @@ pub fn check(outputs: &[Output], inputs: &[Input]) -> Result<(), GuardError> {
             }
             OutputKind::Directory => output.path.clone(),
         };
-        if let Some(id) = Identity::of(&target) {
-            if output.kind == OutputKind::Directory && !target.is_dir() {
-                return Err(GuardError::NotADirectory {
-                    flag: output.flag.clone(),
-                    path: output.path.clone(),
-                });
-            }
-            if let Some((input, _)) = inputs.iter().find(|(_, i)| i.same_as(&id)) {
-                return Err(GuardError::IsInput {
-                    flag: output.flag.clone(),
-                    output: output.path.clone(),
-                    role: input.role.clone(),
-                    input: input.path.clone(),
-                });
-            }
+        if output.kind == OutputKind::Directory && target.exists() && !target.is_dir() {
+            return Err(GuardError::NotADirectory {
+                flag: output.flag.clone(),
+                path: output.path.clone(),
+            });
+        }
+        if let Some(input) = input_at(&target, &inputs) {
+            return Err(GuardError::IsInput {
+                flag: output.flag.clone(),
+                output: output.path.clone(),
+                role: input.role.clone(),
+                input: input.path.clone(),
+            });
+        }
+        if output.kind == OutputKind::Directory {
+            check_directory(output, &inputs)?;
         }
         let place = location(&target);
         if let Some((other, _)) = seen.iter().find(|(_, p)| *p == place) {
@@ -178,11 +232,53 @@ pub fn check(outputs: &[Output], inputs: &[Input]) -> Result<(), GuardError> {
     Ok(())
 }
 
-/// What makes an existing file the file it is.
+/// The input that `path` is, or would be once written: the same file if it exists, or the
+/// same place.
+fn input_at<'a>(path: &Path, inputs: &[(&'a Input, Identity)]) -> Option<&'a Input> {
+    let existing = Identity::of(path);
+    let place = location(path);
+    inputs
+        .iter()
+        .find(|(_, i)| existing.as_ref().is_some_and(|e| i.same_as(e)) || i.canonical == place)
+        .map(|(input, _)| *input)
+}
+
+/// A directory output neither lies inside an input directory nor receives a file that is an
+/// input.
+fn check_directory(output: &Output, inputs: &[(&Input, Identity)]) -> Result<(), GuardError> {
+    let place = location(&output.path);
+    if let Some((input, _)) = inputs
+        .iter()
+        .find(|(_, i)| i.is_dir && place.starts_with(&i.canonical))
+    {
+        return Err(GuardError::InsideInput {
+            flag: output.flag.clone(),
+            output: output.path.clone(),
+            role: input.role.clone(),
+            input: input.path.clone(),
+        });
+    }
+    for file in &output.files {
+        let written = output.path.join(file);
+        if let Some(input) = input_at(&written, inputs) {
+            return Err(GuardError::WritesInput {
+                flag: output.flag.clone(),
+                output: output.path.clone(),
+                file: written,
+                role: input.role.clone(),
+                input: input.path.clone(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// What makes a file the file it is: where it is and, when it exists, its device and inode.
 struct Identity {
     canonical: PathBuf,
+    is_dir: bool,
     #[cfg(unix)]
-    device_inode: (u64, u64),
+    device_inode: Option<(u64, u64)>,
 }
 
 impl Identity {
@@ -190,41 +286,58 @@ impl Identity {
     fn of(path: &Path) -> Option<Identity> {
         let meta = std::fs::metadata(path).ok()?;
         let canonical = std::fs::canonicalize(path).ok()?;
-        #[cfg(not(unix))]
-        let _ = meta;
         Some(Identity {
             canonical,
+            is_dir: meta.is_dir(),
             #[cfg(unix)]
             device_inode: {
                 use std::os::unix::fs::MetadataExt;
-                (meta.dev(), meta.ino())
+                Some((meta.dev(), meta.ino()))
             },
         })
     }
 
+    /// The identity of a file that does not exist: where it would be.
+    fn missing(path: &Path) -> Identity {
+        Identity {
+            canonical: location(path),
+            is_dir: false,
+            #[cfg(unix)]
+            device_inode: None,
+        }
+    }
+
     fn same_as(&self, other: &Identity) -> bool {
         #[cfg(unix)]
-        if self.device_inode == other.device_inode {
+        if self.device_inode.is_some() && self.device_inode == other.device_inode {
             return true;
         }
         self.canonical == other.canonical
     }
 }
 
-/// Where `path` is or would be created: its canonical path if it exists, else its directory's
-/// canonical path joined with its name (or the path made absolute, if the directory is
-/// missing too).
+/// Where `path` is or would be created: the canonical path of its nearest existing ancestor
+/// joined with the rest, `.` dropped and `..` taken lexically (the missing directories will be
+/// created as plain directories, so `..` after one is its parent).
 fn location(path: &Path) -> PathBuf {
-    if let Ok(canonical) = std::fs::canonicalize(path) {
-        return canonical;
-    }
     let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
-    match (absolute.parent(), absolute.file_name()) {
-        (Some(dir), Some(name)) => std::fs::canonicalize(dir)
-            .map(|d| d.join(name))
-            .unwrap_or(absolute.clone()),
-        _ => absolute,
+    let parts: Vec<Component> = absolute.components().collect();
+    for known in (1..=parts.len()).rev() {
+        let prefix: PathBuf = parts[..known].iter().collect();
+        if let Ok(mut resolved) = std::fs::canonicalize(&prefix) {
+            for part in &parts[known..] {
+                match part {
+                    Component::ParentDir => {
+                        resolved.pop();
+                    }
+                    Component::CurDir => {}
+                    other => resolved.push(other),
+                }
+            }
+            return resolved;
+        }
     }
+    absolute
 }
 
 /// The inputs an OBJ sequence directory stands for: the directory and every `.obj` file in it.
@@ -316,13 +429,50 @@ mod tests {
         check(&[Output::file(&fresh, "--npy")], &inputs).unwrap();
     }
 
+    /// Files written into a directory output are outputs too, compared where they would be
+    /// created; a directory inside an input directory and an output at a missing input's
+    /// place are refused.
+    #[test]
+    fn directory_outputs_are_compared_file_by_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let scene = d.join("report.md");
+        std::fs::write(&scene, "[source]\n").unwrap();
+        let inputs = [Input::new(&scene, "the scene file")];
+        for out in [d.to_path_buf(), d.join("new/.."), d.join("new/./../.")] {
+            let err = check(&[Output::directory(&out, "--out", &["report.md"])], &inputs);
+            assert!(
+                matches!(err, Err(GuardError::WritesInput { .. })),
+                "{}: {err:?}",
+                out.display()
+            );
+        }
+        check(
+            &[Output::directory(d.join("new"), "--out", &["report.md"])],
+            &inputs,
+        )
+        .unwrap();
+        let assets = [Input::new(d, "the assets directory")];
+        let err = check(&[Output::directory(d.join("a/b"), "--out", &[])], &assets);
+        assert!(
+            matches!(err, Err(GuardError::InsideInput { .. })),
+            "{err:?}"
+        );
+        let truth = d.join("missing.npy");
+        let err = check(
+            &[Output::file(d.join("x/../missing.npy"), "--npy")],
+            &[Input::new(&truth, "--against")],
+        );
+        assert!(matches!(err, Err(GuardError::IsInput { .. })), "{err:?}");
+    }
+
     #[test]
     fn two_outputs_at_one_place_are_refused_before_either_exists() {
         let dir = tempfile::tempdir().unwrap();
         let model = dir.path().join("m.aprt");
         let outputs = [
             Output::file(&model, "-o"),
-            Output::directory(dir.path().join(".").join("m.aprt"), "--checkpoint"),
+            Output::directory(dir.path().join(".").join("m.aprt"), "--checkpoint", &[]),
         ];
         let err = check(&outputs, &[]).unwrap_err().to_string();
         assert!(err.contains("are the same path"), "{err}");

@@ -15,6 +15,17 @@ pub const TIME_PLOT: &str = "pareto_us";
 /// The error-against-bytes plot.
 pub const BYTES_PLOT: &str = "pareto_bytes";
 
+/// The files [`write`] writes into its directory, which `aprt report` checks against its
+/// inputs before any work.
+pub const FILES: &[&str] = &[
+    "report.json",
+    "report.md",
+    "pareto_us.png",
+    "pareto_us.svg",
+    "pareto_bytes.png",
+    "pareto_bytes.svg",
+];
+
 /// Writes report.json, report.md and the plots into `out`; `command` is how to rerun it.
 pub fn write(report: &SweepReport, out: &Path, command: &str) -> Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
@@ -196,4 +207,22 @@ pub fn markdown(report: &SweepReport, command: &str) -> String {
         }
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The list the output guard checks names the plots [`write`] writes.
+    #[test]
+    fn the_listed_files_name_the_plots() {
+        for stem in [TIME_PLOT, BYTES_PLOT] {
+            for ext in ["png", "svg"] {
+                assert!(
+                    FILES.contains(&format!("{stem}.{ext}").as_str()),
+                    "{stem}.{ext}"
+                );
+            }
+        }
+    }
 }

@@ -1,0 +1,169 @@
+//! Values and files that once gave a wrong result with exit 0 (issue 30), through the real
+//! `aprt` binary: each is now refused with one `aprt:` line naming the file, the item and what
+//! is wrong, before any work, with no panic and every input byte for byte as it was.
+
+mod run;
+
+use std::path::{Path, PathBuf};
+
+use run::{refuse, tiny_character};
+
+/// A scene for the small character in `dir`, saved as `name`, ending with `lighting` (lines
+/// of TOML after `[effects] rays`).
+fn scene(dir: &Path, name: &str, lighting: &str) -> PathBuf {
+    tiny_character(dir, 12);
+    let text = format!(
+        "[source]\nbvh = \"character.bvh\"\ntrain = [\"0..8\"]\ntest = [\"8..12\"]\n\
+         [effects]\nrays = 8\n{lighting}"
+    );
+    let file = dir.join(name);
+    std::fs::write(&file, text).unwrap();
+    file
+}
+
+/// A directional light of unit irradiance, the lighting of scenes whose lighting is not the
+/// point.
+const LIGHT: &str =
+    "[[light]]\nkind = \"directional\"\ndirection = [0, 1, 0]\nirradiance = [1, 1, 1]\n";
+
+fn s(path: &Path) -> &str {
+    path.to_str().unwrap()
+}
+
+/// Every file under `dir` with its bytes, sorted by path.
+fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+    let mut files = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for entry in std::fs::read_dir(&d).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+            } else {
+                files.push((path.clone(), std::fs::read(&path).unwrap()));
+            }
+        }
+    }
+    files.sort();
+    files
+}
+
+/// Refuses `args` (see [`refuse`]) and asserts nothing under `dir` changed.
+fn refuse_untouched(dir: &Path, args: &[&str], fragments: &[&str]) -> String {
+    let before = snapshot(dir);
+    let line = refuse(args, fragments);
+    assert_eq!(before, snapshot(dir), "{args:?} changed its inputs");
+    line
+}
+
+/// `aprt report DIR/report.md --out DIR` once overwrote the scene it was reading: the guard
+/// compared the directory with the inputs, not the files written into it. Also a directory
+/// that does not exist yet but would hold the scene once created (`DIR/new/..`), and an output
+/// directory inside an input directory.
+#[test]
+fn a_file_written_into_an_output_directory_is_never_an_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let file = scene(d, "report.md", LIGHT);
+    for out in [d.to_path_buf(), d.join("new/..")] {
+        refuse_untouched(
+            d,
+            &["report", s(&file), "--out", s(&out)],
+            &[
+                "--out",
+                "writes",
+                "report.md",
+                "the scene file",
+                "would destroy the input",
+            ],
+        );
+    }
+    refuse_untouched(
+        d,
+        &["results", "--assets", s(d), "--out", s(&d.join("docs"))],
+        &["--out", "inside the assets directory"],
+    );
+}
+
+/// A float32 `.npy` of `shape` with `values` and `header` edited by `edit` (which keeps its
+/// length, so the length field holds), written at `path`.
+fn npy(path: &Path, values: &[f32], edit: (&str, &str)) {
+    let header = format!(
+        "{{'descr': '<f4', 'fortran_order': False, 'shape': ({},), }}",
+        values.len()
+    );
+    assert!(header.contains(edit.0), "{}", edit.0);
+    let header = header.replacen(edit.0, &format!("{:<w$}", edit.1, w = edit.0.len()), 1);
+    let padded = format!("{header:<w$}\n", w = 64 - 10 - 1);
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    bytes.extend_from_slice(&(padded.len() as u16).to_le_bytes());
+    bytes.extend_from_slice(padded.as_bytes());
+    values
+        .iter()
+        .for_each(|v| bytes.extend_from_slice(&v.to_le_bytes()));
+    std::fs::write(path, bytes).unwrap();
+}
+
+/// `shlm eval --against`: a Fortran-order or big-endian header once passed a substring search
+/// and was read scrambled, a NaN in the truth printed "NaN%", and `--against` naming the
+/// `--npy` about to be written compared the output with itself ("0.00 %"). Each is refused
+/// before the light maps are read (the light-map file here is not even one).
+#[test]
+fn a_truth_array_that_is_not_plain_finite_float32_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let bvh = tiny_character(d, 4);
+    let maps = d.join("maps.shlm");
+    std::fs::write(&maps, "not read").unwrap();
+    let truth = d.join("truth.npy");
+    let out = d.join("out.npy");
+    let eval = |against: &Path, npy: &Path, fragments: &[&str]| {
+        refuse_untouched(
+            d,
+            &[
+                "shlm",
+                "eval",
+                s(&maps),
+                "--npy",
+                s(npy),
+                "--against",
+                s(against),
+                "--bvh",
+                &bvh,
+            ],
+            fragments,
+        );
+    };
+    for (edit, what) in [
+        (
+            ("False", "True"),
+            "'fortran_order' is True: only C-order arrays are read",
+        ),
+        (
+            ("'<f4'", "'>f4'"),
+            "'descr' is '>f4': only '<f4' (little-endian float32)",
+        ),
+        (("'descr'", "'dtype'"), "unknown key 'dtype'"),
+    ] {
+        npy(&truth, &[1.0, 2.0], edit);
+        eval(&truth, &out, &["--against", "truth.npy", "header", what]);
+    }
+    npy(&truth, &[1.0, f32::NAN, 3.0], ("", ""));
+    eval(
+        &truth,
+        &out,
+        &[
+            "--against",
+            "truth.npy",
+            "value 1 (index [1]) is NaN",
+            "finite",
+        ],
+    );
+    let fresh = d.join("fresh.npy");
+    eval(
+        &fresh,
+        &d.join("x/../fresh.npy"),
+        &["--npy", "that is --against", "fresh.npy"],
+    );
+    assert!(!out.exists() && !fresh.exists());
+}
