@@ -17,7 +17,8 @@ pub enum InputKind {
     Scene,
     /// A lights file (TOML): 16 MiB, some 100k lights.
     Lights,
-    /// A Radiance HDR or OpenEXR environment map: 512 MiB (an uncompressed 16k × 8k HDR).
+    /// A Radiance HDR or OpenEXR environment map: 512 MiB (an uncompressed 16k × 8k RGBE file,
+    /// though decoding one needs more than a run holds: its header is checked for that).
     EnvironmentMap,
     /// A `.shlm` SH light map: 1 GiB.
     LightMap,
