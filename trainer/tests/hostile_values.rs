@@ -167,3 +167,160 @@ fn a_truth_array_that_is_not_plain_finite_float32_is_refused() {
     );
     assert!(!out.exists() && !fresh.exists());
 }
+
+/// Runs `aprt train --scene` on a scene ending with `lighting` and asserts it is refused with
+/// `fragments`, before any model is written.
+fn train_refused(lighting: &str, fragments: &[&str]) {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let file = scene(d, "scene.toml", lighting);
+    let model = d.join("m.aprt");
+    let mut expect = vec!["scene.toml"];
+    expect.extend_from_slice(fragments);
+    refuse_untouched(d, &["train", "--scene", s(&file), "-o", s(&model)], &expect);
+    assert!(!model.exists());
+}
+
+/// Lighting finite as the TOML's f64 but infinite as the f32 it is computed in, and an
+/// error target that becomes infinity, are refused naming the key; so is a light whose
+/// irradiance is finite but whose grey levels are not (the order once chosen on `null`s).
+#[test]
+fn values_beyond_f32_are_refused_naming_the_key() {
+    train_refused(
+        "[environment]\nsh = [[1e300, 1, 1]]\n",
+        &["[environment] sh", "`sh[0]` holds 1e300", "finite f32"],
+    );
+    train_refused(
+        &format!("error_target = 1e300\n{LIGHT}"),
+        &[
+            "[effects] error_target",
+            "1e300",
+            "positive number of grey levels",
+        ],
+    );
+    train_refused(
+        "[[light]]\nkind = \"sphere\"\nposition = [0, 1, 0]\nradius = 0.1\nradiance = [1, 1e300, 1]\n",
+        &["light 1 (sphere)", "`radiance` holds 1e300", "finite f32"],
+    );
+    train_refused(
+        "[[light]]\nkind = \"directional\"\ndirection = [0, 1, 0]\nirradiance = [3e38, 3e38, 3e38]\n",
+        &["lighting:", "bind-pose vertex", "too bright for f32"],
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let lights = dir.path().join("lights.toml");
+    std::fs::write(
+        &lights,
+        "[[light]]\nkind = \"directional\"\ndirection = [0, 1, 0]\nirradiance = [3e38, 3e38, 3e38]\n",
+    )
+    .unwrap();
+    refuse_untouched(
+        dir.path(),
+        &[
+            "light",
+            "irradiance",
+            s(&lights),
+            "--at",
+            "0,0,0",
+            "--normal",
+            "0,1,0",
+            "--json",
+        ],
+        &[
+            "lights.toml",
+            "grey levels",
+            "beyond f32",
+            "scale the lights down",
+        ],
+    );
+}
+
+/// A negative band-0 environment and `light = []` are refused naming the key.
+#[test]
+fn a_negative_environment_and_an_empty_light_list_are_refused() {
+    train_refused(
+        "[environment]\nsh = [[-1, 0.5, 0.5]]\n",
+        &[
+            "[environment] sh",
+            "`sh[0]` (band 0) holds -1",
+            "must not be negative",
+        ],
+    );
+    let dir = tempfile::tempdir().unwrap();
+    // `light` is a top-level key, so it comes before the tables.
+    let empty = dir.path().join("empty.toml");
+    let text = std::fs::read_to_string(scene(dir.path(), "x.toml", LIGHT)).unwrap();
+    let text = text.replace(LIGHT, "[environment]\nsh = [[1, 1, 1]]\n");
+    std::fs::write(&empty, format!("light = []\n{text}")).unwrap();
+    let model = dir.path().join("m.aprt");
+    refuse_untouched(
+        dir.path(),
+        &["train", "--scene", s(&empty), "-o", s(&model)],
+        &["empty.toml: light:", "`light = []` lists no lights"],
+    );
+    let lights = dir.path().join("lights.toml");
+    std::fs::write(&lights, "light = []\n").unwrap();
+    refuse_untouched(
+        dir.path(),
+        &[
+            "light",
+            "irradiance",
+            s(&lights),
+            "--at",
+            "0,0,0",
+            "--normal",
+            "0,1,0",
+        ],
+        &["lights.toml", "`light = []` lists no lights"],
+    );
+}
+
+/// A 2x1 Radiance file of texels `rgbe` (flat, uncompressed: rows narrower than 8 are) with
+/// `header` (lines, each ending in a newline) after FORMAT.
+fn hdr(path: &Path, header: &str, rgbe: [u8; 4]) {
+    let mut bytes =
+        format!("#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n{header}\n-Y 1 +X 2\n").into_bytes();
+    bytes.extend_from_slice(&rgbe);
+    bytes.extend_from_slice(&rgbe);
+    std::fs::write(path, bytes).unwrap();
+}
+
+/// Band 0 of `aprt light env FILE --order 1 --json`.
+fn band0(file: &Path) -> f64 {
+    let out = run::succeed(&["light", "env", s(file), "--order", "1", "--json"]);
+    let json: serde_json::Value = serde_json::from_slice(&out).unwrap();
+    json["coefficients"][0][0].as_f64().unwrap()
+}
+
+/// Radiance's `EXPOSURE=` is honoured (radiance is the stored value divided by it), a
+/// non-positive one is refused, and texels whose projection overflows f32 are refused naming
+/// the file and the brightest texel.
+#[test]
+fn radiance_exposure_is_honoured_and_overflow_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let one = [128, 128, 128, 129]; // 1.0 in RGBE
+    let (plain, exposed) = (d.join("plain.hdr"), d.join("exposed.hdr"));
+    hdr(&plain, "", one);
+    hdr(&exposed, "EXPOSURE=2\nEXPOSURE=2\n", one);
+    let (a, b) = (band0(&plain), band0(&exposed));
+    assert!((a - 4.0 * b).abs() < 1e-5 * a, "{a} vs {b}");
+    let zero = d.join("zero.hdr");
+    hdr(&zero, "EXPOSURE=0\n", one);
+    refuse_untouched(
+        d,
+        &["light", "env", s(&zero), "--order", "1"],
+        &["zero.hdr", "EXPOSURE is 0", "positive"],
+    );
+    let bright = d.join("bright.hdr");
+    hdr(&bright, "", [255, 255, 255, 255]);
+    refuse_untouched(
+        d,
+        &["light", "env", s(&bright), "--order", "1"],
+        &[
+            "bright.hdr",
+            "SH coefficient 0",
+            "beyond f32",
+            "brightest texel (0, 0)",
+        ],
+    );
+}

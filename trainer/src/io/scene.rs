@@ -42,7 +42,7 @@ use serde::Deserialize;
 use crate::input::{InputKind, read_input_text};
 use crate::io::source::BuiltinCharacter;
 use crate::lighting::lights_file::check_light_count;
-use crate::lighting::{RigKind, light_from_table};
+use crate::lighting::{RigKind, finite_f32s, light_from_table};
 use crate::model::ModelFrame;
 use crate::model::export::Precision;
 
@@ -192,8 +192,8 @@ struct RawScene {
     #[serde(default)]
     budget: RawBudget,
     environment: Option<RawEnvironment>,
-    #[serde(default)]
-    light: Vec<toml::Table>,
+    /// `None` when the key is absent; `light = []` is refused rather than read as no lights.
+    light: Option<Vec<toml::Table>>,
 }
 
 #[derive(Deserialize)]
@@ -277,12 +277,21 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
     let budget = budget(&raw.budget).map_err(|(k, m)| fail(&format!("[budget] {k}"), m))?;
     let environment = match &raw.environment {
         None => None,
-        Some(env) => Some(environment(env, &resolve).map_err(|m| fail("[environment]", m))?),
+        Some(env) => Some(
+            environment(env, &resolve).map_err(|(k, m)| fail(&format!("[environment]{k}"), m))?,
+        ),
     };
-    check_light_count(raw.light.len()).map_err(|m| fail("[[light]]", m))?;
+    if raw.light.as_ref().is_some_and(Vec::is_empty) {
+        return Err(fail(
+            "light",
+            "`light = []` lists no lights: give [[light]] tables, or leave the key out when the [environment] alone lights the scene".into(),
+        ));
+    }
+    check_light_count(raw.light.as_ref().map_or(0, Vec::len)).map_err(|m| fail("[[light]]", m))?;
     let lights = raw
         .light
         .iter()
+        .flatten()
         .enumerate()
         .map(|(i, t)| {
             light_from_table(t).map_err(|(kind, m)| fail(&format!("light {} ({kind})", i + 1), m))
@@ -421,13 +430,18 @@ fn effects(raw: &RawEffects) -> Result<Effects, (&'static str, String)> {
         }
     };
     if let Some(t) = raw.error_target {
-        if !(t.is_finite() && t > 0.0) {
+        // Compared with f32 errors, so it must be a positive f32 (1e300 became infinity).
+        let t32 = t as f32;
+        if !(t32.is_finite() && t32 > 0.0) {
             return Err((
                 "error_target",
-                format!("{t}: expected a positive number of grey levels"),
+                format!(
+                    "{t:?}: expected a positive number of grey levels that an f32 holds (up to {:e})",
+                    f32::MAX
+                ),
             ));
         }
-        e.error_target = t as f32;
+        e.error_target = t32;
     }
     e.rig = match raw.rig.as_deref() {
         None | Some("auto") => RigChoice::Auto,
@@ -481,29 +495,43 @@ fn budget(raw: &RawBudget) -> Result<Budget, (&'static str, String)> {
     })
 }
 
+/// The environment; on error, the key (after `[environment]`) and what is wrong.
 fn environment(
     raw: &RawEnvironment,
     resolve: &dyn Fn(&str) -> PathBuf,
-) -> Result<Environment, String> {
+) -> Result<Environment, (&'static str, String)> {
     match (&raw.sh, &raw.hdr, &raw.exr) {
         (Some(sh), None, None) => {
             let n = sh.len();
             let order = (1..=MAX_ORDER).find(|o| o * o == n);
             if order.is_none() {
-                return Err(format!(
-                    "sh has {n} coefficients: expected a square number up to {} (1, 4, 9, …)",
-                    MAX_ORDER * MAX_ORDER
+                return Err((
+                    " sh",
+                    format!(
+                        "{n} coefficients: expected a square number up to {} (1, 4, 9, …)",
+                        MAX_ORDER * MAX_ORDER
+                    ),
                 ));
             }
-            if let Some(i) = sh.iter().position(|c| !c.iter().all(|x| x.is_finite())) {
-                return Err(format!("sh coefficient {i} is not finite"));
+            // Lighting is computed in f32: 1e300 is finite here and infinite there.
+            let sh = sh
+                .iter()
+                .enumerate()
+                .map(|(i, c)| finite_f32s(&format!("sh[{i}]"), c))
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|m| (" sh", m))?;
+            if let Some(x) = sh[0].iter().find(|&&x| x < 0.0) {
+                return Err((
+                    " sh",
+                    format!(
+                        "`sh[0]` (band 0) holds {x}: it is the environment's mean radiance, which must not be negative"
+                    ),
+                ));
             }
-            Ok(Environment::Sh(
-                sh.iter().map(|c| c.map(|x| x as f32)).collect(),
-            ))
+            Ok(Environment::Sh(sh))
         }
         (None, Some(map), None) | (None, None, Some(map)) => Ok(Environment::Map(resolve(map))),
-        _ => Err("give exactly one of sh, hdr or exr".into()),
+        _ => Err(("", "give exactly one of sh, hdr or exr".into())),
     }
 }
 
@@ -614,7 +642,7 @@ mod tests {
             ),
             (
                 format!("{base}[environment]\nsh = [[1,1,1],[0,0,0]]\n"),
-                "[environment]",
+                "[environment] sh",
                 "square",
             ),
             (

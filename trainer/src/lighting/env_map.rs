@@ -125,6 +125,38 @@ pub enum EnvMapError {
         /// Its RGB.
         value: [f32; 3],
     },
+    /// A Radiance `EXPOSURE=` header that is not a positive number, so radiance cannot be
+    /// recovered from the stored values.
+    #[error(
+        "{}: EXPOSURE is {exposure}: a Radiance file's exposure must be a positive number (radiance is the stored value divided by it)",
+        path.display()
+    )]
+    BadExposure {
+        /// The file.
+        path: PathBuf,
+        /// The product of its `EXPOSURE=` lines.
+        exposure: f32,
+    },
+    /// A coefficient of the projection is beyond f32, the precision lighting is computed in.
+    #[error(
+        "{}: SH coefficient {index} of the projection is {value:e}, beyond f32 (up to {max:e}); the brightest texel ({x}, {y}) is {texel:?}: scale the map down",
+        origin(file),
+        max = f32::MAX
+    )]
+    Overflow {
+        /// The file, when the image came from one.
+        file: Option<PathBuf>,
+        /// The coefficient, from 0.
+        index: usize,
+        /// Its value in f64.
+        value: f64,
+        /// The brightest texel's column.
+        x: usize,
+        /// Its row.
+        y: usize,
+        /// Its RGB.
+        texel: [f32; 3],
+    },
     /// The SH order is 0 or above the core's [`MAX_ORDER`].
     #[error("SH order {order} is outside 1..={MAX_ORDER}")]
     BadOrder {
@@ -144,7 +176,10 @@ fn origin(file: &Option<PathBuf>) -> String {
 impl EnvMapError {
     /// The same error naming `path`, for problems [`project_equirect`] finds in a file's image.
     fn in_file(mut self, path: &Path) -> Self {
-        if let Self::ZeroSize { file, .. } | Self::BadTexel { file, .. } = &mut self {
+        if let Self::ZeroSize { file, .. }
+        | Self::BadTexel { file, .. }
+        | Self::Overflow { file, .. } = &mut self
+        {
             *file = Some(path.to_path_buf());
         }
         self
@@ -199,6 +234,10 @@ pub fn read_equirect(path: &Path) -> Result<EnvironmentImage, EnvMapError> {
         }
     };
     let bytes = read_input(path, InputKind::EnvironmentMap)?;
+    let exposure = match format {
+        ImageFormat::Hdr => hdr_exposure(path, &bytes)?,
+        _ => 1.0,
+    };
     let decode_error = |source| EnvMapError::Decode {
         path: path.to_path_buf(),
         format: name,
@@ -226,8 +265,33 @@ pub fn read_equirect(path: &Path) -> Result<EnvironmentImage, EnvMapError> {
         path: path.to_path_buf(),
         width: decoded.width() as usize,
         height: decoded.height() as usize,
-        pixels: decoded.pixels().map(|p| p.0).collect(),
+        pixels: decoded
+            .pixels()
+            .map(|p| p.0.map(|v| v / exposure))
+            .collect(),
     })
+}
+
+/// The exposure a Radiance file's texels were scaled by when written: the product of its
+/// `EXPOSURE=` lines, 1 without one. Radiance is the stored value divided by it (Radiance's
+/// file format documentation); the image crate reads the header but leaves the values as
+/// stored, so the division is ours.
+fn hdr_exposure(path: &Path, bytes: &[u8]) -> Result<f32, EnvMapError> {
+    let decoder = image::codecs::hdr::HdrDecoder::new(Cursor::new(bytes)).map_err(|source| {
+        EnvMapError::Decode {
+            path: path.to_path_buf(),
+            format: "Radiance HDR",
+            source,
+        }
+    })?;
+    match decoder.metadata().exposure {
+        None => Ok(1.0),
+        Some(e) if e.is_finite() && e > 0.0 => Ok(e),
+        Some(exposure) => Err(EnvMapError::BadExposure {
+            path: path.to_path_buf(),
+            exposure,
+        }),
+    }
 }
 
 /// The projection itself on an in-memory RGB f32 image, width×height row-major, row 0 at the
@@ -270,7 +334,27 @@ pub fn project_equirect(
             (0..3).for_each(|k| t[k] += r[k]);
         }
     }
+    let values = total.iter().flatten().enumerate();
+    if let Some((i, &value)) = values.clone().find(|(_, v)| !(**v as f32).is_finite()) {
+        // The first of equals (max_by keeps the last).
+        let brightest = (0..pixels.len())
+            .rev()
+            .max_by(|&a, &b| max_channel(pixels[a]).total_cmp(&max_channel(pixels[b])))
+            .unwrap_or(0);
+        return Err(EnvMapError::Overflow {
+            file: None,
+            index: i / 3,
+            value,
+            x: brightest % width,
+            y: brightest / width,
+            texel: pixels[brightest],
+        });
+    }
     Ok(total.iter().map(|c| c.map(|v| v as f32)).collect())
+}
+
+fn max_channel(rgb: [f32; 3]) -> f32 {
+    rgb.into_iter().fold(0.0, f32::max)
 }
 
 /// `Σ_x L(x) y(ω_x)` along one row of polar angle θ (every texel of a row has the same solid

@@ -70,23 +70,23 @@ pub enum LightsFileError {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct SphereTable {
-    position: [f32; 3],
-    radius: f32,
-    radiance: [f32; 3],
+    position: [f64; 3],
+    radius: f64,
+    radiance: [f64; 3],
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct PointTable {
-    position: [f32; 3],
-    intensity: [f32; 3],
+    position: [f64; 3],
+    intensity: [f64; 3],
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct DirectionalTable {
-    direction: [f32; 3],
-    irradiance: [f32; 3],
+    direction: [f64; 3],
+    irradiance: [f64; 3],
 }
 
 /// Reads a lights file.
@@ -115,6 +115,11 @@ pub fn parse_lights(text: &str, path: &Path) -> Result<Vec<Light>, LightsFileErr
     let toml::Value::Array(lights) = lights else {
         return Err(syntax("`light` must be [[light]] tables".into()));
     };
+    if lights.is_empty() {
+        return Err(syntax(
+            "`light = []` lists no lights: a lights file holds at least one [[light]] table".into(),
+        ));
+    }
     check_light_count(lights.len()).map_err(syntax)?;
     lights
         .iter()
@@ -159,42 +164,36 @@ pub fn light_from_table(table: &toml::Table) -> Result<Light, (String, String)> 
     let light = match kind.as_str() {
         "sphere" => {
             let t: SphereTable = fields.try_into().map_err(de)?;
-            finite("position", &t.position).map_err(fail)?;
-            finite("radius", &[t.radius]).map_err(fail)?;
-            if t.radius <= 0.0 {
+            let [radius] = finite_f32s("radius", &[t.radius]).map_err(fail)?;
+            if radius <= 0.0 {
                 return Err(fail(format!(
-                    "`radius` is {}: it must be greater than 0",
-                    t.radius
+                    "`radius` is {radius}: it must be greater than 0"
                 )));
             }
-            colour("radiance", &t.radiance).map_err(fail)?;
             Light::Sphere(SphereLight {
-                position: t.position,
-                radius: t.radius,
-                radiance: t.radiance,
+                position: finite_f32s("position", &t.position).map_err(fail)?,
+                radius,
+                radiance: colour("radiance", &t.radiance).map_err(fail)?,
             })
         }
         "point" => {
             let t: PointTable = fields.try_into().map_err(de)?;
-            finite("position", &t.position).map_err(fail)?;
-            colour("intensity", &t.intensity).map_err(fail)?;
             Light::Point(PointLight {
-                position: t.position,
-                intensity: t.intensity,
+                position: finite_f32s("position", &t.position).map_err(fail)?,
+                intensity: colour("intensity", &t.intensity).map_err(fail)?,
             })
         }
         "directional" => {
             let t: DirectionalTable = fields.try_into().map_err(de)?;
-            finite("direction", &t.direction).map_err(fail)?;
-            if t.direction.iter().all(|&x| x == 0.0) {
+            let direction = finite_f32s("direction", &t.direction).map_err(fail)?;
+            if direction.iter().all(|&x| x == 0.0) {
                 return Err(fail(
                     "`direction` is zero: it points towards the light".into(),
                 ));
             }
-            colour("irradiance", &t.irradiance).map_err(fail)?;
             Light::Directional(DirectionalLight {
-                direction: t.direction,
-                irradiance: t.irradiance,
+                direction,
+                irradiance: colour("irradiance", &t.irradiance).map_err(fail)?,
             })
         }
         other => {
@@ -208,18 +207,24 @@ pub fn light_from_table(table: &toml::Table) -> Result<Light, (String, String)> 
     Ok(light)
 }
 
-fn finite(key: &str, values: &[f32]) -> Result<(), String> {
-    match values.iter().find(|x| !x.is_finite()) {
-        Some(x) => Err(format!("`{key}` holds {x}: every value must be finite")),
-        None => Ok(()),
+/// `values` in f32, the precision lighting is computed in: each must be finite there (1e300
+/// is a finite f64 and an infinite f32).
+pub fn finite_f32s<const N: usize>(key: &str, values: &[f64; N]) -> Result<[f32; N], String> {
+    match values.iter().find(|&&x| !(x as f32).is_finite()) {
+        Some(x) => Err(format!(
+            "`{key}` holds {x:?}: every value must be a finite f32 (magnitude up to {:e})",
+            f32::MAX
+        )),
+        None => Ok(values.map(|x| x as f32)),
     }
 }
 
-fn colour(key: &str, values: &[f32; 3]) -> Result<(), String> {
-    finite(key, values)?;
-    match values.iter().find(|&&x| x < 0.0) {
+/// A colour: finite in f32 and not negative.
+fn colour(key: &str, values: &[f64; 3]) -> Result<[f32; 3], String> {
+    let rgb = finite_f32s(key, values)?;
+    match rgb.iter().find(|&&x| x < 0.0) {
         Some(x) => Err(format!("`{key}` holds {x}: colours must not be negative")),
-        None => Ok(()),
+        None => Ok(rgb),
     }
 }
 
@@ -271,7 +276,15 @@ mod tests {
             ),
             (
                 format!("{sphere}radius = nan\nradiance = [1, 1, 1]\n"),
-                &["`radius` holds NaN"],
+                &["`radius` holds NaN", "finite f32"],
+            ),
+            (
+                format!("{sphere}radius = 1\nradiance = [1, 1e300, 1]\n"),
+                &["light 1 (sphere)", "`radiance` holds 1e300", "finite f32"],
+            ),
+            (
+                "light = []\n".into(),
+                &["l.toml", "`light = []` lists no lights"],
             ),
             (
                 format!("{sphere}radius = 1\nradiance = [1, -1, 1]\n"),

@@ -18,7 +18,7 @@ pub use env_map::{
     EnvMapError, EnvironmentImage, project_equirect, read_environment, read_equirect,
 };
 pub use evaluate::{RigErrors, RigEvaluation, RigSettings, evaluate_rig, rig_errors};
-pub use lights_file::{LightsFileError, light_from_table, parse_lights, read_lights};
+pub use lights_file::{LightsFileError, finite_f32s, light_from_table, parse_lights, read_lights};
 pub use rig_fit::{FittedRig, GreyError, fit_rig, rig_vectors};
 pub use rig_kind::{RigKind, RigKindError};
 
@@ -69,6 +69,26 @@ pub struct LightEvalError {
     pub error: LightError,
 }
 
+/// Why irradiance at a point could not be reported.
+#[derive(Debug, thiserror::Error)]
+pub enum IrradianceError {
+    /// A light the core could not evaluate there.
+    #[error(transparent)]
+    Light(#[from] LightEvalError),
+    /// A figure of the report is beyond f32 (lights each finite whose sum or error is not),
+    /// which JSON would print as `null`.
+    #[error(
+        "the {figure} is {value:?}, beyond f32 (up to {max:e}), the precision lights are evaluated in: scale the lights down",
+        max = f32::MAX
+    )]
+    Overflow {
+        /// Which figure.
+        figure: &'static str,
+        /// Its RGB.
+        value: Rgb,
+    },
+}
+
 /// The kind's name, as the lights file spells it.
 pub fn kind_name(light: &Light) -> &'static str {
     match light {
@@ -94,7 +114,7 @@ pub fn irradiance(
     normal: [f32; 3],
     order: usize,
     window: Option<Window>,
-) -> Result<IrradianceReport, LightEvalError> {
+) -> Result<IrradianceReport, IrradianceError> {
     let mut report = IrradianceReport {
         order,
         at,
@@ -136,6 +156,15 @@ pub fn irradiance(
     for k in 0..3 {
         report.abs_error[k] = (report.sh[k] - report.exact[k]).abs();
         report.grey_levels[k] = 255.0 * report.abs_error[k] / std::f32::consts::PI;
+    }
+    for (figure, value) in [
+        ("irradiance through SH", report.sh),
+        ("exact irradiance", report.exact),
+        ("error in grey levels", report.grey_levels),
+    ] {
+        if !value.iter().all(|v| v.is_finite()) {
+            return Err(IrradianceError::Overflow { figure, value });
+        }
     }
     Ok(report)
 }

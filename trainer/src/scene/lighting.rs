@@ -2,7 +2,7 @@
 //! plus the lights, projected at a point, and the exact unshadowed irradiance it is judged by.
 
 use anyhow::{Context, Result};
-use aprt_core::{Light, MAX_COEFFS, MAX_ORDER, Rgb, irradiance_sh};
+use aprt_core::{Light, LightError, MAX_COEFFS, MAX_ORDER, Rgb, irradiance_sh};
 
 use crate::io::scene::{Environment, Scene};
 use crate::lighting::rig_fit::{GREY_PER_IRRADIANCE, bounds};
@@ -57,37 +57,55 @@ impl SceneLighting {
 
     /// Irradiance at `at` on `normal` through SH of `order`, and exactly (the environment at
     /// all its bands, the lights in closed form, clipped by the horizon), light by light:
-    /// `(sh, exact)` of the environment first, then of each light. Lights the core cannot
-    /// evaluate there (a point light at the point itself) give `None`.
+    /// `(sh, exact)` of the environment first, then of each light. `Ok(None)` where the core
+    /// cannot evaluate a part (a point light at the point itself, a zero normal); a result
+    /// beyond f32 is an error naming the part, never a point quietly left out.
     pub fn irradiance_parts(
         &self,
         order: usize,
         at: [f32; 3],
         normal: [f32; 3],
-    ) -> Option<Vec<(Rgb, Rgb)>> {
+    ) -> Result<Option<Vec<(Rgb, Rgb)>>, String> {
         let mut parts = Vec::with_capacity(1 + self.lights.len());
         let env_order = (1..=MAX_ORDER).find(|o| o * o >= self.environment.len());
-        parts.push(match env_order {
+        match env_order {
             Some(full) if !self.environment.is_empty() => {
                 let n = order.min(full);
-                (
-                    irradiance_sh(n, &self.environment[..n * n], normal).ok()?,
-                    irradiance_sh(full, &self.environment, normal).ok()?,
-                )
+                let env = irradiance_sh(n, &self.environment[..n * n], normal)
+                    .and_then(|sh| Ok((sh, irradiance_sh(full, &self.environment, normal)?)));
+                match env {
+                    Ok(part) => parts.push(part),
+                    Err(e) => return left_out("the environment", e),
+                }
             }
-            _ => ([0.0; 3], [0.0; 3]),
-        });
+            _ => parts.push(([0.0; 3], [0.0; 3])),
+        }
         let mut sh = [[0.0f32; 3]; MAX_COEFFS];
-        for light in &self.lights {
+        for (i, light) in self.lights.iter().enumerate() {
             let sh = &mut sh[..order * order];
             sh.fill([0.0; 3]);
-            light.add_radiance_sh(order, at, sh).ok()?;
-            parts.push((
-                irradiance_sh(order, sh, normal).ok()?,
-                light.irradiance(at, normal).ok()?,
-            ));
+            let part = light.add_radiance_sh(order, at, sh).and_then(|()| {
+                Ok((
+                    irradiance_sh(order, sh, normal)?,
+                    light.irradiance(at, normal)?,
+                ))
+            });
+            match part {
+                Ok(part) => parts.push(part),
+                Err(e) => return left_out(&format!("light {}", i + 1), e),
+            }
         }
-        Some(parts)
+        Ok(Some(parts))
+    }
+}
+
+/// A part the core refused at a point: left out (`Ok(None)`) when irradiance has no value
+/// there, an error when a result is beyond f32 (the core says `Overflow` for a sum and
+/// `NotFinite` for an irradiance).
+fn left_out<T>(part: &str, error: LightError) -> Result<Option<T>, String> {
+    match error {
+        LightError::Overflow | LightError::NotFinite => Err(format!("{part}: {error}")),
+        _ => Ok(None),
     }
 }
 

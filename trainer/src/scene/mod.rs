@@ -32,10 +32,17 @@ pub struct BakePlan {
 }
 
 /// The bake `scene` needs, its SH order checked against `lighting` at `bind`'s vertices.
-/// `poses` is how many poses the bake covers, for the sentences' counts.
-pub fn plan_bake(scene: &Scene, lighting: &SceneLighting, bind: &Mesh, poses: usize) -> BakePlan {
+/// `poses` is how many poses the bake covers, for the sentences' counts. Refused, naming the
+/// scene, when the lighting's figures are beyond f32.
+pub fn plan_bake(
+    scene: &Scene,
+    lighting: &SceneLighting,
+    bind: &Mesh,
+    poses: usize,
+) -> anyhow::Result<BakePlan> {
     let e = &scene.effects;
-    let mut order = choose_order(lighting, bind, e.error_target);
+    let mut order = choose_order(lighting, bind, e.error_target)
+        .map_err(|m| anyhow::anyhow!("{}: lighting: {m}", scene.path.display()))?;
     if let Choice::Fixed(n) = e.order {
         order.reason = format!(
             "order {n}, as the scene asks (the lighting alone would need order {}: {})",
@@ -89,12 +96,12 @@ pub fn plan_bake(scene: &Scene, lighting: &SceneLighting, bind: &Mesh, poses: us
             MAX_ORDER * MAX_ORDER
         ));
     }
-    BakePlan {
+    Ok(BakePlan {
         bake,
         order,
         computed,
         skipped,
-    }
+    })
 }
 
 /// `n` with commas between thousands, as the reports print counts.

@@ -34,12 +34,25 @@ fn points(mesh: &Mesh) -> std::iter::StepBy<std::ops::Range<usize>> {
     (0..mesh.vertex_count()).step_by(step)
 }
 
-/// The worst truncation error at `order` over the points, and the part (0: the environment,
-/// `i`: light `i`) whose own error is the largest there.
-fn worst_error(lighting: &SceneLighting, mesh: &Mesh, order: usize) -> (f32, usize, usize) {
+/// The worst truncation error at `order` over the points, the part (0: the environment,
+/// `i`: light `i`) whose own error is the largest there, and the points left out (where a
+/// part has no value, see [`SceneLighting::irradiance_parts`]). An error when a figure is beyond f32, the precision shading is computed in: a
+/// choice made on it would be made on nothing.
+fn worst_error(
+    lighting: &SceneLighting,
+    mesh: &Mesh,
+    order: usize,
+) -> Result<(f32, usize, usize), String> {
     let (mut worst, mut culprit, mut skipped) = (0.0f32, 0usize, 0usize);
     for j in points(mesh) {
-        let Some(parts) = lighting.irradiance_parts(order, mesh.positions[j], mesh.normals[j])
+        let beyond = |what: String| {
+            format!(
+                "at bind-pose vertex {j}, {what}: the lighting is too bright for f32, the precision it is shaded in; scale it down"
+            )
+        };
+        let Some(parts) = lighting
+            .irradiance_parts(order, mesh.positions[j], mesh.normals[j])
+            .map_err(beyond)?
         else {
             skipped += 1;
             continue;
@@ -53,6 +66,11 @@ fn worst_error(lighting: &SceneLighting, mesh: &Mesh, order: usize) -> (f32, usi
                 )
             });
         let error = grey_error(total.0, total.1);
+        if !error.is_finite() {
+            return Err(beyond(format!(
+                "the order-{order} irradiance error is {error} grey levels"
+            )));
+        }
         if error > worst {
             worst = error;
             culprit = parts
@@ -62,7 +80,7 @@ fn worst_error(lighting: &SceneLighting, mesh: &Mesh, order: usize) -> (f32, usi
                 .map_or(0, |(i, _)| i);
         }
     }
-    (worst, culprit, skipped)
+    Ok((worst, culprit, skipped))
 }
 
 /// What part `i` of [`SceneLighting::irradiance_parts`] is, and why it needs high bands,
@@ -86,18 +104,23 @@ fn part_name(lighting: &SceneLighting, part: usize) -> String {
 }
 
 /// The lowest order that keeps the worst irradiance error at `mesh`'s vertices within
-/// `target` grey levels (order 6 when none does, saying which part of the lighting misses).
-pub fn choose_order(lighting: &SceneLighting, mesh: &Mesh, target: f32) -> OrderChoice {
+/// `target` grey levels (order 6 when none does, saying which part of the lighting misses);
+/// an error when the lighting's figures are beyond f32.
+pub fn choose_order(
+    lighting: &SceneLighting,
+    mesh: &Mesh,
+    target: f32,
+) -> Result<OrderChoice, String> {
     let errors: Vec<(f32, usize, usize)> = (1..=MAX_ORDER)
         .map(|n| worst_error(lighting, mesh, n))
-        .collect();
+        .collect::<Result<_, _>>()?;
     let grey_by_order: Vec<f32> = errors.iter().map(|e| e.0).collect();
     let visited = points(mesh).len();
     let skipped = match errors[0].2 {
         0 => String::new(),
         s => format!("; {s} vertices where a light cannot be evaluated are left out"),
     };
-    match grey_by_order.iter().position(|&e| e <= target) {
+    Ok(match grey_by_order.iter().position(|&e| e <= target) {
         Some(0) => OrderChoice {
             order: 1,
             reason: format!(
@@ -130,7 +153,7 @@ pub fn choose_order(lighting: &SceneLighting, mesh: &Mesh, target: f32) -> Order
                 grey_by_order,
             }
         }
-    }
+    })
 }
 
 #[cfg(test)]
@@ -165,7 +188,7 @@ mod tests {
     /// A constant environment is band 0 alone: order 1 is exact.
     #[test]
     fn a_constant_environment_needs_order_one() {
-        let choice = choose_order(&environment(&[[1.0, 1.0, 1.0]]), &ball(), 1.0);
+        let choice = choose_order(&environment(&[[1.0, 1.0, 1.0]]), &ball(), 1.0).unwrap();
         assert_eq!(choice.order, 1, "{}", choice.reason);
         assert!(choice.grey_by_order.iter().all(|&e| e < 1e-3));
     }
@@ -179,7 +202,7 @@ mod tests {
         env[2] = [0.5; 3];
         env[6] = [0.4; 3];
         env[12] = [0.4; 3];
-        let choice = choose_order(&environment(&env), &ball(), 1.0);
+        let choice = choose_order(&environment(&env), &ball(), 1.0).unwrap();
         assert_eq!(choice.order, 3, "{}", choice.reason);
         // Order 2 misses by the band-2 term: Â_2 · 0.4 · y_20(n), largest at the ball's
         // poles, |z| = 0.95: y_20 = √(5/16π) (3z² − 1).
@@ -199,8 +222,8 @@ mod tests {
                 irradiance: [e; 3],
             })],
         };
-        let dim = choose_order(&sun(0.05), &ball(), 1.0);
-        let bright = choose_order(&sun(3.0), &ball(), 1.0);
+        let dim = choose_order(&sun(0.05), &ball(), 1.0).unwrap();
+        let bright = choose_order(&sun(3.0), &ball(), 1.0).unwrap();
         assert!(dim.order <= 3, "{}", dim.reason);
         assert!(
             bright.order > dim.order,
@@ -226,7 +249,7 @@ mod tests {
                 radiance: [200.0; 3],
             })],
         };
-        let choice = choose_order(&lighting, &ball(), 1.0);
+        let choice = choose_order(&lighting, &ball(), 1.0).unwrap();
         assert_eq!(choice.order, MAX_ORDER);
         assert!(
             choice.reason.contains("no order meets"),

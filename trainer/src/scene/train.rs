@@ -122,7 +122,7 @@ pub fn train_scene(
     let fitting = fitting_surfaces(&poses)?;
     let bind = &fitting[0];
     let baked = baked_pose_count(&poses, scene);
-    let plan = plan_bake(scene, &lighting, bind, baked);
+    let plan = plan_bake(scene, &lighting, bind, baked)?;
     let order = plan.bake.order;
     let (rig_kind, rig) = choose_rig(
         scene.effects.rig,

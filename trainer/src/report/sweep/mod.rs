@@ -200,7 +200,7 @@ pub fn bake_reference(
     let frames: Vec<Vec<f64>> = train.iter().flat_map(|c| c.frames.clone()).collect();
     let layout = PoseLayout::from_training(&rig.angle_names(), &frames)?;
     let lighting = SceneLighting::of(scene)?;
-    let plan = plan_bake(scene, &lighting, rig.bind_mesh(), frames.len());
+    let plan = plan_bake(scene, &lighting, rig.bind_mesh(), frames.len())?;
     let settings = BakeSettings {
         order: MAX_ORDER,
         ..plan.bake
