@@ -9,7 +9,7 @@ fn main() -> ExitCode {
     match aprt_trainer::cli::run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("aprt: {err:#}");
+            eprintln!("aprt: {}", aprt_trainer::cli::error_line(&err));
             ExitCode::FAILURE
         }
     }

@@ -231,3 +231,151 @@ fn a_scene_sharded_three_ways_trains_the_same_bytes_as_one_run() {
         &["--shard 0/2", "closed-form"],
     );
 }
+
+/// Writes a scene for the small character in `dir` whose `[source]` names `clips` (lines of
+/// `train = …`, `validate = …`, `test = …`).
+fn clips_scene(dir: &Path, name: &str, clips: &str) -> String {
+    tiny_character(dir, FRAMES);
+    let text = format!(
+        "[source]\nbvh = \"character.bvh\"\n{clips}\n[effects]\nrays = 8\n\
+         [environment]\nsh = [[0.6, 0.6, 0.6]]\n"
+    );
+    let file = dir.join(name);
+    std::fs::write(&file, text).unwrap();
+    path(&file).to_owned()
+}
+
+/// Every clip a scene names is checked by every command that reads it, before any bake, and
+/// train, validate and test clips share no frame: refused naming the scene, the key and both
+/// clips (a missing clip by its key, not by a flag the user never gave), nothing written.
+#[test]
+fn every_scene_clip_is_checked_and_held_out_clips_share_no_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let cases: [(&str, &[&str]); 6] = [
+        (
+            "train = [\"0..8\"]\ntest = [\"8..80\"]",
+            &["[source] test", "8..80", "12 frames"],
+        ),
+        (
+            "train = [\"0..8\"]\nvalidate = [\"nofile.bvh\"]",
+            &["[source] validate", "nofile.bvh", "no such file"],
+        ),
+        (
+            "train = [\"0..8\"]\ntest = [\"4..12\"]",
+            &[
+                "[source] test",
+                "\"4..12\"",
+                "train clip \"0..8\"",
+                "frames 4..8",
+            ],
+        ),
+        (
+            "train = [\"0..8\"]\nvalidate = [\"character.bvh\"]",
+            &[
+                "[source] validate",
+                "\"character.bvh\"",
+                "train clip \"0..8\"",
+            ],
+        ),
+        (
+            "train = [\"0..4\"]\nvalidate = [\"4..8\"]\ntest = [\"6..12\"]",
+            &["[source] test", "validate clip \"4..8\"", "share no frame"],
+        ),
+        (
+            "train = [\"10..5\"]",
+            &["[source] train", "\"10..5\"", "empty or reversed"],
+        ),
+    ];
+    for (i, (clips, words)) in cases.iter().enumerate() {
+        let name = format!("clips{i}.toml");
+        let file = clips_scene(d, &name, clips);
+        let before = std::fs::read(&file).unwrap();
+        let model = d.join("m.aprt");
+        let mut said = words.to_vec();
+        said.push(&name);
+        let line = refuse(&["train", "--scene", &file, "-o", path(&model)], &said);
+        assert!(!line.contains("--validate"), "{line}");
+        refuse(&["report", &file, "--out", path(&d.join("r"))], &said);
+        assert!(!model.exists() && !d.join("r").exists());
+        assert_eq!(std::fs::read(&file).unwrap(), before);
+    }
+}
+
+/// Messages name what the user wrote: an environment map's error starts with the scene file
+/// (not the character's), `order = 2.0` says what order takes (not how serde failed), and a
+/// decoder's cause that its error already quotes is said once.
+#[test]
+fn scene_messages_name_the_scene_key_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let file = clips_scene(d, "env.toml", "train = [\"0..8\"]");
+    let text = std::fs::read_to_string(&file).unwrap();
+    let env = text.replace("sh = [[0.6, 0.6, 0.6]]", "hdr = \"missing.hdr\"");
+    std::fs::write(&file, env).unwrap();
+    let model = d.join("m.aprt");
+    let line = refuse(
+        &["train", "--scene", &file, "-o", path(&model)],
+        &["[environment]", "missing.hdr"],
+    );
+    assert!(
+        line.starts_with(&format!("aprt: {file}: [environment]")),
+        "{line}"
+    );
+    let order = text.replace("rays = 8", "rays = 8\norder = 2.0");
+    std::fs::write(&file, order).unwrap();
+    let line = refuse(
+        &["train", "--scene", &file, "-o", path(&model)],
+        &["[effects] order", "order must be an integer 1..=6"],
+    );
+    assert!(!line.contains("untagged"), "{line}");
+    let exr = d.join("sky.exr");
+    std::fs::write(&exr, b"not an exr").unwrap();
+    let line = refuse(&["light", "env", path(&exr), "--order", "2"], &["sky.exr"]);
+    let cause = line.rsplit(": ").next().unwrap();
+    assert_eq!(line.matches(cause).count(), 1, "{line}");
+    assert!(!model.exists());
+}
+
+/// A scene path that points at a file of another kind is refused without quoting it (as
+/// `/etc/passwd` would be), and content quoted elsewhere is cut to a short line.
+#[test]
+fn errors_quote_no_file_of_another_kind_and_cut_what_they_quote() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("secret.txt"), "root:x:0:0:root:/root:/bin/bash\n").unwrap();
+    let file = d.join("leak.toml");
+    std::fs::write(
+        &file,
+        "[source]\nbvh = \"secret.txt\"\ntrain = [\"0..3\"]\n[environment]\nsh = [[1, 1, 1]]\n",
+    )
+    .unwrap();
+    let model = d.join("m.aprt");
+    let line = refuse(
+        &["train", "--scene", path(&file), "-o", path(&model)],
+        &["secret.txt:1: not a BVH file (it does not start with HIERARCHY)"],
+    );
+    assert!(!line.contains("root"), "{line}");
+    let long = "Y".repeat(400_000);
+    std::fs::write(
+        d.join("long.bvh"),
+        format!("HIERARCHY\nROOT {long}\n{long}\n"),
+    )
+    .unwrap();
+    std::fs::write(
+        &file,
+        "[source]\nbvh = \"long.bvh\"\ntrain = [\"0..3\"]\n[environment]\nsh = [[1, 1, 1]]\n",
+    )
+    .unwrap();
+    let line = refuse(
+        &["train", "--scene", path(&file), "-o", path(&model)],
+        &["long.bvh"],
+    );
+    assert!(line.len() < 400, "{} bytes: {}", line.len(), &line[..400]);
+    std::fs::write(&file, format!("[source]\nbuiltin = {long}\n")).unwrap();
+    let line = refuse(
+        &["train", "--scene", path(&file), "-o", path(&model)],
+        &["leak.toml: TOML: line 2"],
+    );
+    assert!(line.len() < 400, "{} bytes", line.len());
+}

@@ -26,12 +26,14 @@ use crate::bake::checkpoint::{Checkpoint, OnExisting, ShardBaked};
 use crate::input::{InputKind, read_input};
 use crate::io::atomic::write_atomic;
 use crate::io::outputs::{Input, Output, check};
-use crate::io::scene::{Environment, Scene, read_scene};
+use crate::io::scene::{CLIP_KEYS, Environment, Scene, read_scene};
+use crate::io::source::ClipSpec;
 use crate::model::ModelFrame;
 use crate::model::predict::{predict_clip, predict_world};
 use crate::model::train::{Outcome, TrainSettings};
 use crate::progress::Reporter;
 use crate::rig::mesh::degenerate_note;
+use crate::scene::lighting::SceneLighting;
 use crate::scene::train::{SceneOutcome, SceneTrainOptions, SceneTrainReport, train_scene};
 
 /// Pose-driven precomputed radiance transfer for skinned characters.
@@ -75,6 +77,22 @@ pub enum Command {
     /// SH light maps: bake a clip into a compressed light-map sequence, sample it at the
     /// vertices, inspect it, compose it under lights, or train the pose-driven light-map model.
     Shlm(shlm::ShlmArgs),
+}
+
+/// `err` and its causes on one line, each cause said once: a cause whose text its parent's
+/// message already includes is left out (an image decoder's error that quotes its own source
+/// would otherwise print "invalid: file identifier missing" twice).
+pub fn error_line(err: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in err.chain() {
+        let text = cause.to_string();
+        if line.is_empty() {
+            line = text;
+        } else if !line.contains(&text) {
+            line = format!("{line}: {text}");
+        }
+    }
+    line
 }
 
 /// Runs one command. An interrupted run (SIGINT, SIGTERM, SIGHUP) leaves no temporary file.
@@ -347,10 +365,7 @@ fn shard_done(baked: &ShardBaked, command: &str) {
 fn train(args: &TrainArgs) -> Result<()> {
     let scene = args.scene.as_deref().map(read_scene).transpose()?;
     let (source, validate) = match &scene {
-        Some(scene) => (
-            SourceArgs::from_scene(scene, &scene.train)?,
-            scene.validate.clone(),
-        ),
+        Some(scene) => (SourceArgs::from_scene(scene), Vec::new()),
         None => (args.source.clone(), args.validate.clone()),
     };
     let checkpoint = match &args.checkpoint {
@@ -384,7 +399,8 @@ fn train(args: &TrainArgs) -> Result<()> {
         OnExisting::Refuse
     };
     if let Some(scene) = &scene {
-        let poses = source.poses(&validate, &Terminal)?;
+        let poses = scene_poses(&source, scene)?;
+        let lighting = SceneLighting::of(scene)?;
         let options = SceneTrainOptions {
             output: &args.output,
             checkpoint: checkpoint.path,
@@ -392,7 +408,7 @@ fn train(args: &TrainArgs) -> Result<()> {
             fit: args.fit.options()?,
             shard: args.shard,
         };
-        return match source.in_origin(train_scene(scene, poses, options, &Terminal))? {
+        return match source.in_origin(train_scene(scene, &lighting, poses, options, &Terminal))? {
             SceneOutcome::Trained(report) => print_scene_report(&report, args.report.as_deref()),
             SceneOutcome::Shard(baked) => {
                 shard_done(&baked, "aprt train --scene");
@@ -442,11 +458,32 @@ fn train(args: &TrainArgs) -> Result<()> {
     Ok(())
 }
 
-/// The files a scene reads besides its character: itself and its environment map.
+/// The poses `aprt train --scene` trains on: the scene's OBJ sequence, or its character's
+/// `train` clips with its `validate` clips held out. Its `test` clips are taken too, so a
+/// missing one is refused before the bake rather than by the report that needs it.
+fn scene_poses(source: &SourceArgs, scene: &Scene) -> Result<crate::io::source::Poses> {
+    if !source.names_rig() {
+        return source.poses(&[], &Terminal);
+    }
+    let (rig, [clips, validation, _test]) = source.load_scene(scene, &Terminal)?;
+    Ok(crate::io::source::Poses::Rig {
+        rig,
+        clips,
+        validation,
+    })
+}
+
+/// The files a scene reads besides its character: itself, its environment map and the BVH
+/// files its clips name.
 fn scene_inputs(scene: &Scene) -> Vec<Input> {
     let mut inputs = vec![Input::new(&scene.path, "the scene file")];
     if let Some(Environment::Map(map)) = &scene.environment {
         inputs.push(Input::new(map, "the scene's environment map"));
+    }
+    for spec in CLIP_KEYS.iter().flat_map(|key| scene.clip_specs(key)) {
+        if let ClipSpec::Motion { path, .. } = spec {
+            inputs.push(Input::new(path, "a BVH clip of the scene"));
+        }
     }
     inputs
 }
@@ -506,10 +543,8 @@ fn report(args: &ReportArgs) -> Result<()> {
         bail!("--budget-us {us}: expected a positive number of microseconds per frame");
     }
     let scene = read_scene(&args.scene)?;
-    let source = SourceArgs::from_scene(&scene, &scene.train)?;
-    let held: Vec<String> = scene.validate.iter().chain(&scene.test).cloned().collect();
+    let source = SourceArgs::from_scene(&scene);
     let mut inputs = source.inputs();
-    inputs.extend(source.validation_inputs(&held));
     inputs.extend(scene_inputs(&scene));
     let mut outputs = vec![Output::directory(&args.out, "--out", document::FILES)];
     if let Some(model) = &args.write_model {
@@ -522,8 +557,8 @@ fn report(args: &ReportArgs) -> Result<()> {
             args.scene.display()
         );
     }
-    let (rig, clips, mut validation) = source.load(&held, &Terminal)?;
-    let tests = validation.split_off(scene.validate.len());
+    let (rig, [clips, validation, tests]) = source.load_scene(&scene, &Terminal)?;
+    let lighting = SceneLighting::of(&scene)?;
     let settings = ReportSettings {
         budget_us: args.budget_us,
         budget_bytes: args.budget_bytes,
@@ -535,7 +570,7 @@ fn report(args: &ReportArgs) -> Result<()> {
         validation: &validation,
         tests: &tests,
     };
-    let report = source.in_origin(run(&scene, &scene_clips, &settings, &Terminal))?;
+    let report = source.in_origin(run(&scene, lighting, &scene_clips, &settings, &Terminal))?;
     let mut command = format!(
         "aprt report {} --out {}",
         args.scene.display(),
@@ -581,4 +616,22 @@ fn report(args: &ReportArgs) -> Result<()> {
         b = document::BYTES_PLOT
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A cause its parent already quotes is said once; distinct causes all are.
+    #[test]
+    fn each_cause_is_said_once() {
+        #[derive(Debug, thiserror::Error)]
+        #[error("decoding: {0}")]
+        struct Quoting(#[source] std::io::Error);
+        let inner = std::io::Error::other("identifier missing");
+        let err = anyhow::Error::new(Quoting(inner)).context("sky.exr");
+        assert_eq!(error_line(&err), "sky.exr: decoding: identifier missing");
+        let err = anyhow::anyhow!("no such clip").context("scene.toml: [source] test");
+        assert_eq!(error_line(&err), "scene.toml: [source] test: no such clip");
+    }
 }

@@ -10,9 +10,9 @@ use crate::bake::BakeSettings;
 use crate::bake::budget::Workload;
 use crate::bake::clip::pose_all;
 use crate::io::outputs::{Input, gltf_inputs, obj_sequence_inputs};
-use crate::io::scene::{Scene, SceneSource};
+use crate::io::scene::{CLIP_KEYS, Scene, SceneSource};
 use crate::io::source::{
-    BuiltinCharacter, ClipSpec, Poses, RigSource, joined, obj_sequence_meshes,
+    BuiltinCharacter, ClipSpec, Poses, RigSource, joined, obj_sequence_meshes, parse_frames,
 };
 use crate::progress::Reporter;
 use crate::rig::mannequin::MocapOptions;
@@ -55,7 +55,7 @@ pub struct SourceArgs {
     pub fps: Option<f64>,
     /// BVH frames A..B (half-open, at the file's rate, before resampling); default all.
     /// Repeat for several ranges of one --bvh file, or give one per --bvh file.
-    #[arg(long, value_parser = parse_range)]
+    #[arg(long, value_parser = parse_frames)]
     pub frames: Vec<Range<usize>>,
     /// Build the mannequin from this BVH's skeleton and retarget --bvh's motion onto it by
     /// joint name, so a model trained on one file can be evaluated on another.
@@ -90,15 +90,16 @@ impl From<CharacterArg> for BuiltinCharacter {
 /// A character, the clips to use and the clips held out to validate on.
 type RigClips = (Box<dyn Rig>, Vec<Clip>, Vec<Clip>);
 
+/// A scene's character and the clips of its `train`, `validate` and `test` keys.
+type SceneRigClips = (Box<dyn Rig>, [Vec<Clip>; 3]);
+
 /// The rate glTF clips are sampled at unless --fps says otherwise.
 const GLTF_FPS: f64 = 30.0;
 
 impl SourceArgs {
-    /// The source options a scene's `[source]` stands for, with `clips` as its clips (its
-    /// `train` list, or its `test` list to load those): named clips of a built-in or glTF
-    /// character; for BVH, frame ranges `A..B` of the scene's file or other BVH files (whose
-    /// motion is retargeted onto the scene file's mannequin).
-    pub fn from_scene(scene: &Scene, clips: &[String]) -> Result<SourceArgs> {
+    /// The source options a scene's `[source]` stands for: its character, without clips
+    /// (take them with [`SourceArgs::load_scene`]).
+    pub fn from_scene(scene: &Scene) -> SourceArgs {
         let mut args = SourceArgs::default();
         match &scene.source {
             SceneSource::Builtin(character) => {
@@ -107,36 +108,39 @@ impl SourceArgs {
                     BuiltinCharacter::Human => CharacterArg::Human,
                     BuiltinCharacter::Creature => CharacterArg::Creature,
                 });
-                args.clip = clips.to_vec();
             }
             SceneSource::Gltf { path, fps } => {
                 args.gltf = Some(path.clone());
                 args.fps = *fps;
-                args.clip = clips.to_vec();
             }
-            SceneSource::Bvh(file) => {
-                let ranges: Vec<Result<Range<usize>, String>> =
-                    clips.iter().map(|c| parse_range(c)).collect();
-                if ranges.iter().all(Result::is_ok) {
-                    args.bvh = vec![file.clone()];
-                    args.frames = ranges.into_iter().flatten().collect();
-                } else if ranges.iter().all(Result::is_err) {
-                    let base = scene.path.parent().unwrap_or(std::path::Path::new(""));
-                    args.bvh = clips.iter().map(|c| base.join(c)).collect();
-                    args.mannequin = Some(file.clone());
-                } else {
-                    bail!(
-                        "{}: [source]: clips {clips:?} mix frame ranges of the bvh file with other files; give one or the other",
-                        scene.path.display()
-                    );
-                }
-            }
+            SceneSource::Bvh(file) => args.bvh = vec![file.clone()],
             SceneSource::ObjSeq { dir, angles } => {
                 args.obj_seq = Some(dir.clone());
                 args.angles = Some(angles.clone());
             }
         }
-        Ok(args)
+        args
+    }
+
+    /// The character of `scene` (whose source options these are) and the clips of its
+    /// `train`, `validate` and `test` keys, in that order. Every clip is taken, so each is
+    /// checked (it exists, its frames are in its file) by every command that reads the scene,
+    /// before anything is baked; an error names the scene file and the key.
+    pub fn load_scene(&self, scene: &Scene, reporter: &dyn Reporter) -> Result<SceneRigClips> {
+        let Some(source) = self.rig_source() else {
+            bail!(
+                "{}: [source]: an OBJ sequence has no clips of a character",
+                scene.path.display()
+            )
+        };
+        let loaded = source.load(reporter)?;
+        let mut clips: [Vec<Clip>; 3] = Default::default();
+        for (list, key) in clips.iter_mut().zip(CLIP_KEYS) {
+            *list = loaded
+                .clips(scene.clip_specs(key), reporter)
+                .with_context(|| format!("{}: [source] {key}", scene.path.display()))?;
+        }
+        Ok((loaded.into_rig(), clips))
     }
 
     /// The files and directories the options read, which no output may be.
@@ -304,7 +308,7 @@ impl SourceArgs {
     /// The clip `--validate VALUE` names: a clip of a character with named clips; for a BVH
     /// mannequin, frames `A..B` of the first --bvh file or another BVH file.
     fn validation_spec(&self, value: &str) -> ClipSpec {
-        match (self.bvh.first(), parse_range(value)) {
+        match (self.bvh.first(), parse_frames(value)) {
             (None, _) => ClipSpec::Named(value.to_owned()),
             (Some(first), Ok(range)) => ClipSpec::Motion {
                 path: first.clone(),
@@ -404,21 +408,4 @@ impl SourceArgs {
         };
         Poses::from_obj_sequence(dir, csv, reporter)
     }
-}
-
-/// Parses `A..B` (half-open frame indices).
-fn parse_range(text: &str) -> Result<Range<usize>, String> {
-    let (a, b) = text
-        .split_once("..")
-        .ok_or_else(|| format!("{text:?}: expected A..B, e.g. 0..120"))?;
-    let number = |s: &str| {
-        s.trim()
-            .parse::<usize>()
-            .map_err(|_| format!("{text:?}: {s:?} is not a frame index"))
-    };
-    let range = number(a)?..number(b)?;
-    if range.is_empty() {
-        return Err(format!("{text:?}: the range is empty"));
-    }
-    Ok(range)
 }

@@ -8,6 +8,7 @@
 //! train = ["Survey"]       # clips (BVH: frame ranges "0..240" of the bvh file, or other files)
 //! test = ["Walk", "Run"]   # clips the report measures on (never trained on)
 //! validate = []            # clips held out of training to choose the model by (optional)
+//!                          # train, validate and test share no frame (checked when read)
 //!
 //! [effects]
 //! shadows = true           # false: no visibility rays at all
@@ -40,7 +41,7 @@ use aprt_core::{Light, MAX_ORDER};
 use serde::Deserialize;
 
 use crate::input::{InputKind, read_input_text};
-use crate::io::source::BuiltinCharacter;
+use crate::io::source::{BuiltinCharacter, ClipSpec, parse_frames};
 use crate::lighting::lights_file::check_light_count;
 use crate::lighting::{RigKind, finite_f32s, light_from_table};
 use crate::model::ModelFrame;
@@ -67,6 +68,23 @@ pub struct Scene {
     pub environment: Option<Environment>,
     /// The local and directional lights.
     pub lights: Vec<Light>,
+    /// The clips of `train`, `validate` and `test` ([`CLIP_KEYS`]'s order), read once with
+    /// their paths resolved, so every command takes the same clips.
+    specs: [Vec<ClipSpec>; 3],
+}
+
+/// The `[source]` keys that name clips, in the order they are checked and taken.
+pub const CLIP_KEYS: [&str; 3] = ["train", "validate", "test"];
+
+impl Scene {
+    /// The clips `[source] key` names, to take from the character (`key` one of
+    /// [`CLIP_KEYS`]; any other key names none).
+    pub fn clip_specs(&self, key: &str) -> &[ClipSpec] {
+        CLIP_KEYS
+            .iter()
+            .position(|k| *k == key)
+            .map_or(&[], |i| &self.specs[i])
+    }
 }
 
 /// Where the character comes from.
@@ -213,12 +231,14 @@ struct RawSource {
     validate: Vec<String>,
 }
 
-/// A key that is `"auto"` or a value.
+/// A key that is `"auto"` or a value; `Other` catches a value of any other type (`2.0`), so
+/// the error says what the key takes rather than how serde failed to match it.
 #[derive(Deserialize)]
 #[serde(untagged)]
 enum Word {
     Number(i64),
     Text(String),
+    Other(toml::Value),
 }
 
 #[derive(Default, Deserialize)]
@@ -268,8 +288,8 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
         item: item.to_owned(),
         message,
     };
-    let raw: RawScene = toml::from_str(text)
-        .map_err(|e| fail("TOML", e.to_string().trim_end().replace('\n', " ")))?;
+    let raw: RawScene =
+        toml::from_str(text).map_err(|e| fail("TOML", crate::io::toml_problem(text, &e)))?;
     let base = path.parent().unwrap_or(Path::new(""));
     let resolve = |p: &str| base.join(p);
     let source = source(&raw.source, &resolve).map_err(|m| fail("[source]", m))?;
@@ -318,6 +338,8 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
             "an OBJ sequence is one clip: its OBJ files with their angles; train, test and validate name clips of a character".into(),
         ));
     }
+    let specs = clip_lists(&source, [&s.train, &s.validate, &s.test], &resolve)
+        .map_err(|(key, m)| fail(&format!("[source] {key}"), m))?;
     Ok(Scene {
         path: path.to_owned(),
         source,
@@ -328,7 +350,100 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
         budget,
         environment,
         lights,
+        specs,
     })
+}
+
+/// The clips each of [`CLIP_KEYS`] names, read, and refused where two keys share a frame: a
+/// model chosen or measured on frames it was trained on would be reported as held out. An
+/// error is the key at fault and what is wrong, naming both clips.
+fn clip_lists(
+    source: &SceneSource,
+    names: [&Vec<String>; 3],
+    resolve: &dyn Fn(&str) -> PathBuf,
+) -> Result<[Vec<ClipSpec>; 3], (&'static str, String)> {
+    let mut specs: [Vec<ClipSpec>; 3] = Default::default();
+    for (k, list) in names.iter().enumerate() {
+        specs[k] = list
+            .iter()
+            .map(|text| clip_spec(source, text, resolve))
+            .collect::<Result<_, _>>()
+            .map_err(|m| (CLIP_KEYS[k], m))?;
+    }
+    for (i, j) in [(0, 1), (0, 2), (1, 2)] {
+        for (a, a_spec) in names[i].iter().zip(&specs[i]) {
+            for (b, b_spec) in names[j].iter().zip(&specs[j]) {
+                if let Some(frames) = shared_frames(a_spec, b_spec) {
+                    return Err((
+                        CLIP_KEYS[j],
+                        format!(
+                            "clip {b:?} shares {frames} with {} clip {a:?}: train, validate and test clips must share no frame",
+                            CLIP_KEYS[i]
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    Ok(specs)
+}
+
+/// The clip `text` names: a clip of a built-in or glTF character by name; for a BVH scene,
+/// frames `A..B` of the scene's file when written as two numbers (an empty or reversed range
+/// is refused, not taken for a file name), else another BVH file, relative to the scene.
+fn clip_spec(
+    source: &SceneSource,
+    text: &str,
+    resolve: &dyn Fn(&str) -> PathBuf,
+) -> Result<ClipSpec, String> {
+    let SceneSource::Bvh(file) = source else {
+        return Ok(ClipSpec::Named(text.to_owned()));
+    };
+    let numeric = |s: &str| !s.trim().is_empty() && s.trim().bytes().all(|b| b.is_ascii_digit());
+    Ok(match text.split_once("..") {
+        Some((a, b)) if numeric(a) && numeric(b) => ClipSpec::Motion {
+            path: file.clone(),
+            frames: Some(parse_frames(text)?),
+        },
+        _ => ClipSpec::Motion {
+            path: resolve(text),
+            frames: None,
+        },
+    })
+}
+
+/// The frames clips `a` and `b` both take, in words, or `None`: the same named clip, or
+/// overlapping frames of one BVH file (a whole file's frames overlap any of its ranges; two
+/// whole files start at frame 0, so they share every frame).
+fn shared_frames(a: &ClipSpec, b: &ClipSpec) -> Option<String> {
+    match (a, b) {
+        (ClipSpec::Named(x), ClipSpec::Named(y)) => (x == y).then(|| "every frame".to_owned()),
+        (
+            ClipSpec::Motion { path, frames: f },
+            ClipSpec::Motion {
+                path: other,
+                frames: g,
+            },
+        ) if same_file(path, other) => {
+            let whole = 0..usize::MAX;
+            let (f, g) = (
+                f.clone().unwrap_or(whole.clone()),
+                g.clone().unwrap_or(whole),
+            );
+            let (start, end) = (f.start.max(g.start), f.end.min(g.end));
+            (start < end).then(|| match end {
+                usize::MAX => format!("every frame of {}", path.display()),
+                _ => format!("frames {start}..{end} of {}", path.display()),
+            })
+        }
+        _ => None,
+    }
+}
+
+/// Whether two paths name one file: equal as written, or once canonicalised (`./a.bvh`, a
+/// symlink).
+fn same_file(a: &Path, b: &Path) -> bool {
+    a == b || matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y)
 }
 
 fn source(raw: &RawSource, resolve: &dyn Fn(&str) -> PathBuf) -> Result<SceneSource, String> {
@@ -426,6 +541,12 @@ fn effects(raw: &RawEffects) -> Result<Effects, (&'static str, String)> {
             return Err((
                 "order",
                 format!("{t:?}: expected 1 to {MAX_ORDER} or \"auto\""),
+            ));
+        }
+        Some(Word::Other(v)) => {
+            return Err((
+                "order",
+                format!("{v}: order must be an integer 1..={MAX_ORDER} or \"auto\""),
             ));
         }
     };
@@ -609,6 +730,25 @@ mod tests {
                 format!("{base}[effects]\norder = \"high\"\n{LIGHT}"),
                 "[effects] order",
                 "auto",
+            ),
+            (
+                format!("{base}[effects]\norder = 2.0\n{LIGHT}"),
+                "[effects] order",
+                "order must be an integer 1..=6",
+            ),
+            (
+                format!(
+                    "[source]\nbuiltin = \"human\"\ntrain = [\"walk\"]\nvalidate = [\"walk\"]\n{LIGHT}"
+                ),
+                "[source] validate",
+                "clip \"walk\" shares every frame with train clip \"walk\"",
+            ),
+            (
+                format!(
+                    "[source]\nbvh = \"a.bvh\"\ntrain = [\"0..9\"]\ntest = [\"a.bvh\"]\n{LIGHT}"
+                ),
+                "[source] test",
+                "shares frames 0..9 of scenes/a.bvh with train clip \"0..9\"",
             ),
             (
                 format!("{base}[effects]\nshadows = false\nbounces = 1\n{LIGHT}"),

@@ -137,6 +137,26 @@ pub enum RigSource {
     },
 }
 
+/// Parses frames `A..B` (half-open indices), refusing an empty or reversed range: the one
+/// reading of `--frames`, `--validate A..B` and a BVH scene's clips.
+pub fn parse_frames(text: &str) -> Result<Range<usize>, String> {
+    let (a, b) = text
+        .split_once("..")
+        .ok_or_else(|| format!("{text:?}: expected A..B, e.g. 0..120"))?;
+    let number = |s: &str| {
+        s.trim()
+            .parse::<usize>()
+            .map_err(|_| format!("{text:?}: {s:?} is not a frame index"))
+    };
+    let range = number(a)?..number(b)?;
+    if range.is_empty() {
+        return Err(format!(
+            "{text:?}: the frame range is empty or reversed (A..B needs A < B)"
+        ));
+    }
+    Ok(range)
+}
+
 /// A clip to take from a loaded character.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub enum ClipSpec {

@@ -27,6 +27,7 @@ use crate::report::sweep::{self, SceneClips};
 use crate::rig::character::Character;
 use crate::rig::mesh::Mesh;
 use crate::rig::{Clip, Rig};
+use crate::scene::lighting::SceneLighting;
 
 /// The rig the demo's model carries: the paper's mixed rig turned to a standing figure, three
 /// lattice nodes up its height, a gradient front to back, constant across.
@@ -157,7 +158,8 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
         validation: &validation_clips,
         tests: &test_clips,
     };
-    let reference = sweep::bake_reference(&scene, &clips, args.stride, reporter)?;
+    let lighting = SceneLighting::of(&scene)?;
+    let reference = sweep::bake_reference(&scene, lighting, &clips, args.stride, reporter)?;
     let plan = &reference.plan;
     for line in plan.computed.iter().chain(&plan.skipped) {
         reporter.note(line);

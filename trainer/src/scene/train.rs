@@ -107,22 +107,23 @@ pub enum SceneOutcome {
     Shard(ShardBaked),
 }
 
-/// Plans `scene`, trains its model from `poses` into `options.output`, and reports what was
+/// Plans `scene` under `lighting` (its lighting, read by the caller so that its errors name
+/// the scene file), trains its model from `poses` into `options.output`, and reports what was
 /// computed and skipped. A shard bakes its share with the same plan (every decision is
 /// deterministic, so every shard and the final run agree) and stops. Notes and progress go to
 /// `reporter`.
 pub fn train_scene(
     scene: &Scene,
+    lighting: &SceneLighting,
     poses: Poses,
     options: SceneTrainOptions<'_>,
     reporter: &dyn Reporter,
 ) -> Result<SceneOutcome> {
     let started = Instant::now();
-    let lighting = SceneLighting::of(scene)?;
     let fitting = fitting_surfaces(&poses)?;
     let bind = &fitting[0];
     let baked = baked_pose_count(&poses, scene);
-    let plan = plan_bake(scene, &lighting, bind, baked)?;
+    let plan = plan_bake(scene, lighting, bind, baked)?;
     let order = plan.bake.order;
     let (rig_kind, rig) = choose_rig(
         scene.effects.rig,

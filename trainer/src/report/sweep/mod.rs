@@ -181,9 +181,11 @@ pub struct Reference {
     pub stride: usize,
 }
 
-/// Bakes `clips` (every `stride`-th frame) at the scene's effects and SH order 6.
+/// Bakes `clips` (every `stride`-th frame) at the scene's effects and SH order 6, under
+/// `lighting` (the scene's, read by the caller, whose errors name the scene file).
 pub fn bake_reference(
     scene: &Scene,
+    lighting: SceneLighting,
     clips: &SceneClips<'_>,
     stride: usize,
     reporter: &dyn Reporter,
@@ -199,7 +201,6 @@ pub fn bake_reference(
     let (train, validation) = strided_clips(clips, stride);
     let frames: Vec<Vec<f64>> = train.iter().flat_map(|c| c.frames.clone()).collect();
     let layout = PoseLayout::from_training(&rig.angle_names(), &frames)?;
-    let lighting = SceneLighting::of(scene)?;
     let plan = plan_bake(scene, &lighting, rig.bind_mesh(), frames.len())?;
     let settings = BakeSettings {
         order: MAX_ORDER,
@@ -230,12 +231,13 @@ pub fn bake_reference(
 /// Sweeps the knobs on `scene` and returns the measured points.
 pub fn run(
     scene: &Scene,
+    lighting: SceneLighting,
     clips: &SceneClips<'_>,
     settings: &ReportSettings,
     reporter: &dyn Reporter,
 ) -> Result<SweepReport> {
     let started = Instant::now();
-    let reference = bake_reference(scene, clips, settings.stride, reporter)?;
+    let reference = bake_reference(scene, lighting, clips, settings.stride, reporter)?;
     let list = candidates(scene, reference.plan.order.order, Knobs::All);
     let mut report = sweep(scene, clips, &reference, &list, settings, reporter)?;
     report.seconds = started.elapsed().as_secs_f64();

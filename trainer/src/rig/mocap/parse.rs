@@ -12,6 +12,7 @@ use std::str::SplitAsciiWhitespace;
 use glam::DVec3;
 
 use super::{Channel, Joint, Mocap};
+use crate::io::excerpt;
 
 /// Why a BVH file could not be read.
 #[derive(Debug, thiserror::Error)]
@@ -42,6 +43,9 @@ pub enum Problem {
         /// The token found.
         found: String,
     },
+    /// The file does not start with `HIERARCHY`, so it is not BVH; its content is not quoted.
+    #[error("not a BVH file (it does not start with HIERARCHY)")]
+    NotBvh,
     /// The text ends in the middle of the hierarchy or the motion header.
     #[error("the file ends where {expected} should be")]
     UnexpectedEnd {
@@ -194,7 +198,7 @@ impl<'a> Lexer<'a> {
                 line,
                 Problem::Expected {
                     expected: word,
-                    found: token.into(),
+                    found: excerpt(token),
                 },
             ))
         }
@@ -215,10 +219,10 @@ fn number(token: &str) -> Result<f64, Problem> {
     match token.parse::<f64>() {
         Ok(v) if v.is_finite() => Ok(v),
         Ok(_) => Err(Problem::NonFinite {
-            token: token.into(),
+            token: excerpt(token),
         }),
         Err(_) => Err(Problem::NotANumber {
-            token: token.into(),
+            token: excerpt(token),
         }),
     }
 }
@@ -260,7 +264,11 @@ pub(super) fn parse(text: &str) -> Result<Mocap, Failure> {
     // A leading byte-order mark would glue itself to `HIERARCHY`.
     let text = crate::io::without_bom(text);
     let mut lex = Lexer::new(text);
-    lex.expect("HIERARCHY")?;
+    // Nothing of a file that is not BVH is quoted: it may be any file a path points at.
+    let (line, first) = lex.expect_any("HIERARCHY")?;
+    if first != "HIERARCHY" {
+        return Err((line, Problem::NotBvh));
+    }
     let joints = hierarchy(&mut lex)?;
     motion(&mut lex, joints, text.len())
 }
@@ -327,7 +335,7 @@ fn hierarchy(lex: &mut Lexer) -> Result<Vec<Joint>, Failure> {
                     line,
                     Problem::Expected {
                         expected,
-                        found: found.into(),
+                        found: excerpt(found),
                     },
                 ));
             }
@@ -397,7 +405,7 @@ fn read_channels(
             return Err((
                 line,
                 Problem::BadChannelCount {
-                    found: count.into(),
+                    found: excerpt(count),
                 },
             ));
         }
@@ -405,8 +413,14 @@ fn read_channels(
     joint.first_channel = *channel_count;
     for _ in 0..count {
         let (line, name) = lex.expect_any("a channel name")?;
-        let c =
-            channel(name).ok_or_else(|| (line, Problem::UnknownChannel { name: name.into() }))?;
+        let c = channel(name).ok_or_else(|| {
+            (
+                line,
+                Problem::UnknownChannel {
+                    name: excerpt(name),
+                },
+            )
+        })?;
         if joint.channels.contains(&c) {
             return Err((
                 line,
@@ -490,7 +504,7 @@ fn motion(lex: &mut Lexer, joints: Vec<Joint>, text_len: usize) -> Result<Mocap,
         (
             line,
             Problem::NotANumber {
-                token: token.into(),
+                token: excerpt(token),
             },
         )
     })?;
@@ -506,7 +520,7 @@ fn motion(lex: &mut Lexer, joints: Vec<Joint>, text_len: usize) -> Result<Mocap,
             lex.line,
             Problem::Expected {
                 expected: "the end of the Frame Time line",
-                found: extra.into(),
+                found: excerpt(extra),
             },
         ));
     }
