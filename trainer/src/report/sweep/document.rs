@@ -15,7 +15,7 @@ pub const TIME_PLOT: &str = "pareto_us";
 /// The error-against-bytes plot.
 pub const BYTES_PLOT: &str = "pareto_bytes";
 
-/// The files [`write`] writes into its directory, which `aprt report` checks against its
+/// The files [`write()`] writes into its directory, which `aprt report` checks against its
 /// inputs before any work.
 pub const FILES: &[&str] = &[
     "report.json",
