@@ -9,6 +9,8 @@
 //! test = ["Walk", "Run"]   # clips the report measures on (never trained on)
 //! validate = []            # clips held out of training to choose the model by (optional)
 //!                          # train, validate and test share no frame (checked when read)
+//! up = "z"                 # optional: "y" or "z", the character's up axis (default: the
+//!                          # rig's own; an OBJ sequence's is z); environment maps turn to it
 //!
 //! [effects]
 //! shadows = true           # false: no visibility rays at all
@@ -63,6 +65,9 @@ pub struct Scene {
     pub effects: Effects,
     /// What the runtime may spend.
     pub budget: Budget,
+    /// The character's up axis from `[source] up`, overriding the rig's: environment maps,
+    /// projected with +Y up, are turned to it.
+    pub up: Option<glam::Vec3>,
     /// The distant lighting, if any.
     pub environment: Option<Environment>,
     /// The local and directional lights.
@@ -222,6 +227,7 @@ struct RawSource {
     obj_seq: Option<String>,
     angles: Option<String>,
     fps: Option<f64>,
+    up: Option<String>,
     #[serde(default)]
     train: Vec<String>,
     #[serde(default)]
@@ -292,6 +298,20 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
     let base = path.parent().unwrap_or(Path::new(""));
     let resolve = |p: &str| base.join(p);
     let source = source(&raw.source, &resolve).map_err(|m| fail("[source]", m))?;
+    let up = match raw.source.up.as_deref() {
+        None => None,
+        Some("y") => Some(glam::Vec3::Y),
+        Some("z") => Some(glam::Vec3::Z),
+        Some(other) => {
+            return Err(fail(
+                "[source] up",
+                format!(
+                    "{:?}: expected \"y\" or \"z\" (the character's up axis)",
+                    crate::io::excerpt(other)
+                ),
+            ));
+        }
+    };
     let effects = effects(&raw.effects).map_err(|(k, m)| fail(&format!("[effects] {k}"), m))?;
     let budget = budget(&raw.budget).map_err(|(k, m)| fail(&format!("[budget] {k}"), m))?;
     let environment = match &raw.environment {
@@ -337,6 +357,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
         validate: s.validate.clone(),
         effects,
         budget,
+        up,
         environment,
         lights,
         specs,
