@@ -368,6 +368,11 @@ fn shard_done(baked: &ShardBaked, command: &str) {
 
 fn train(args: &TrainArgs) -> Result<()> {
     let scene = args.scene.as_deref().map(read_scene).transpose()?;
+    if let Some(scene) = &scene
+        && args.confine
+    {
+        scene.confine("--confine")?;
+    }
     let (source, validate) = match &scene {
         Some(scene) => (SourceArgs::from_scene(scene), Vec::new()),
         None => (args.source.clone(), args.validate.clone()),
@@ -546,6 +551,9 @@ fn report(args: &ReportArgs) -> Result<()> {
         bail!("--budget-us {us}: expected a positive number of microseconds per frame");
     }
     let scene = read_scene(&args.scene)?;
+    if args.confine {
+        scene.confine("--confine")?;
+    }
     let source = SourceArgs::from_scene(&scene);
     let mut inputs = source.inputs();
     inputs.extend(scene_inputs(&scene));

@@ -3,6 +3,7 @@
 //! `aprt train --scene`, `aprt report` and `aprt demo`; planned by [`crate::scene`].
 //!
 //! ```toml
+//! confine = false          # true: refuse paths outside the scene's directory (--confine)
 //! [source]                 # exactly one of: builtin, gltf, bvh, obj_seq (+ angles)
 //! gltf = "Fox.gltf"        # paths relative to the scene file
 //! train = ["Survey"]       # clips (BVH: frame ranges "0..240" of the bvh file, or other files)
@@ -81,6 +82,60 @@ pub struct Scene {
 pub const CLIP_KEYS: [&str; 3] = ["train", "validate", "test"];
 
 impl Scene {
+    /// Refuses the scene when a path it names (its character, environment map or a BVH clip)
+    /// is absolute or leaves the scene's directory once symlinks are followed, so a service
+    /// that takes users' scenes reads no other file. `why` is what asked (`--confine`, or the
+    /// scene's own key), for the error. A path that does not exist yet is judged as written:
+    /// it may not climb with `..`.
+    pub fn confine(&self, why: &str) -> Result<(), SceneError> {
+        let base = self.path.parent().unwrap_or(Path::new(""));
+        let home = Path::new(".").join(base).canonicalize();
+        for (item, path) in self.named_paths() {
+            let inside = match (path.strip_prefix(base), &home, path.canonicalize()) {
+                (Err(_), ..) => false,
+                (Ok(_), Ok(home), Ok(real)) => real.starts_with(home),
+                (Ok(rel), ..) => !rel
+                    .components()
+                    .any(|c| matches!(c, std::path::Component::ParentDir)),
+            };
+            if !inside {
+                return Err(SceneError {
+                    path: self.path.clone(),
+                    item,
+                    message: format!(
+                        "{}: outside the scene's directory, refused by {why}",
+                        path.display()
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Every path the scene names, resolved, with the item that names it.
+    fn named_paths(&self) -> Vec<(String, &Path)> {
+        let mut named: Vec<(String, &Path)> = match &self.source {
+            SceneSource::Builtin(_) => Vec::new(),
+            SceneSource::Gltf { path, .. } => vec![("[source] gltf".into(), path)],
+            SceneSource::Bvh(path) => vec![("[source] bvh".into(), path)],
+            SceneSource::ObjSeq { dir, angles } => vec![
+                ("[source] obj_seq".into(), dir),
+                ("[source] angles".into(), angles),
+            ],
+        };
+        if let Some(Environment::Map(path)) = &self.environment {
+            named.push(("[environment]".into(), path));
+        }
+        for key in CLIP_KEYS {
+            for spec in self.clip_specs(key) {
+                if let ClipSpec::Motion { path, .. } = spec {
+                    named.push((format!("[source] {key}"), path));
+                }
+            }
+        }
+        named
+    }
+
     /// The clips `[source] key` names, to take from the character (`key` one of
     /// [`CLIP_KEYS`]; any other key names none).
     pub fn clip_specs(&self, key: &str) -> &[ClipSpec] {
@@ -208,6 +263,8 @@ pub struct SceneError {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawScene {
+    #[serde(default)]
+    confine: bool,
     source: RawSource,
     #[serde(default)]
     effects: RawEffects,
@@ -349,7 +406,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
     }
     let specs = clip_lists(&source, [&s.train, &s.validate, &s.test], &resolve)
         .map_err(|(key, m)| fail(&format!("[source] {key}"), m))?;
-    Ok(Scene {
+    let scene = Scene {
         path: path.to_owned(),
         source,
         train: s.train.clone(),
@@ -361,7 +418,11 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
         environment,
         lights,
         specs,
-    })
+    };
+    if raw.confine {
+        scene.confine("confine = true")?;
+    }
+    Ok(scene)
 }
 
 /// The clips each of [`CLIP_KEYS`] names, read, and refused where two keys share a frame: a
