@@ -395,7 +395,7 @@ fn confined_scenes_refuse_paths_outside_their_directory() {
     std::os::unix::fs::symlink(d.join("character.bvh"), inside.join("link.bvh")).unwrap();
     let outside = path(&d.join("character.bvh")).to_owned();
     let lit = "[effects]\nrays = 8\nshadows = false\n";
-    let cases = [
+    let mut cases = vec![
         (
             format!("bvh = {outside:?}\ntrain = [\"0..8\"]"),
             "[source] bvh",
@@ -418,6 +418,12 @@ fn confined_scenes_refuse_paths_outside_their_directory() {
             "sub/../../character.bvh".into(),
         ),
     ];
+    let spelled = path(&inside.join("character.bvh")).to_owned();
+    cases.push((
+        format!("bvh = {spelled:?}\ntrain = [\"0..8\"]"),
+        "[source] bvh",
+        spelled,
+    ));
     let model = d.join("m.aprt");
     for (i, (source, key, named)) in cases.iter().enumerate() {
         let name = format!("confined{i}.toml");

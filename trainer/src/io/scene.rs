@@ -76,6 +76,9 @@ pub struct Scene {
     /// The clips of `train`, `validate` and `test` ([`CLIP_KEYS`]'s order), read once with
     /// their paths resolved, so every command takes the same clips.
     specs: [Vec<ClipSpec>; 3],
+    /// The paths the scene spells as absolute, which [`Scene::confine`] refuses even inside
+    /// the scene's directory: resolved against an absolute scene path, they look alike.
+    absolute: Vec<PathBuf>,
 }
 
 /// The `[source]` keys that name clips, in the order they are checked and taken.
@@ -92,6 +95,7 @@ impl Scene {
         let home = Path::new(".").join(base).canonicalize();
         for (item, path) in self.named_paths() {
             let inside = match (path.strip_prefix(base), &home, path.canonicalize()) {
+                _ if self.absolute.iter().any(|a| a == path) => false,
                 (Err(_), ..) => false,
                 (Ok(_), Ok(home), Ok(real)) => real.starts_with(home),
                 (Ok(rel), ..) => !rel
@@ -353,7 +357,13 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
     let raw: RawScene =
         toml::from_str(text).map_err(|e| fail("TOML", crate::io::toml_problem(text, &e)))?;
     let base = path.parent().unwrap_or(Path::new(""));
-    let resolve = |p: &str| base.join(p);
+    let absolute = std::cell::RefCell::new(Vec::new());
+    let resolve = |p: &str| {
+        if Path::new(p).is_absolute() {
+            absolute.borrow_mut().push(PathBuf::from(p));
+        }
+        base.join(p)
+    };
     let source = source(&raw.source, &resolve).map_err(|m| fail("[source]", m))?;
     let up = match raw.source.up.as_deref() {
         None => None,
@@ -418,6 +428,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
         environment,
         lights,
         specs,
+        absolute: absolute.into_inner(),
     };
     if raw.confine {
         scene.confine("confine = true")?;
