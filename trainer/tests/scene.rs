@@ -379,3 +379,122 @@ fn errors_quote_no_file_of_another_kind_and_cut_what_they_quote() {
     );
     assert!(line.len() < 400, "{} bytes", line.len());
 }
+
+/// `--confine` (train --scene, report) and the scene key `confine = true` refuse every path
+/// a scene names that is absolute or leaves its directory, symlinks followed: the character,
+/// a clip, the environment map; the error names the scene, the key and the path, and nothing
+/// is written. A scene whose paths stay inside still trains under `--confine`.
+#[test]
+fn confined_scenes_refuse_paths_outside_their_directory() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let inside = d.join("scenes");
+    std::fs::create_dir(&inside).unwrap();
+    tiny_character(d, FRAMES);
+    tiny_character(&inside, FRAMES);
+    std::os::unix::fs::symlink(d.join("character.bvh"), inside.join("link.bvh")).unwrap();
+    let outside = path(&d.join("character.bvh")).to_owned();
+    let lit = "[effects]\nrays = 8\nshadows = false\n";
+    let mut cases = vec![
+        (
+            format!("bvh = {outside:?}\ntrain = [\"0..8\"]"),
+            "[source] bvh",
+            outside.clone(),
+        ),
+        (
+            "bvh = \"../character.bvh\"\ntrain = [\"0..8\"]".into(),
+            "[source] bvh",
+            "../character.bvh".into(),
+        ),
+        (
+            "bvh = \"link.bvh\"\ntrain = [\"0..8\"]".into(),
+            "[source] bvh",
+            "link.bvh".into(),
+        ),
+        (
+            "bvh = \"character.bvh\"\ntrain = [\"0..8\"]\ntest = [\"sub/../../character.bvh\"]"
+                .into(),
+            "[source] test",
+            "sub/../../character.bvh".into(),
+        ),
+    ];
+    let spelled = path(&inside.join("character.bvh")).to_owned();
+    cases.push((
+        format!("bvh = {spelled:?}\ntrain = [\"0..8\"]"),
+        "[source] bvh",
+        spelled,
+    ));
+    let model = d.join("m.aprt");
+    for (i, (source, key, named)) in cases.iter().enumerate() {
+        let name = format!("confined{i}.toml");
+        let file = inside.join(&name);
+        let text = format!("[source]\n{source}\n{lit}[environment]\nsh = [[0.6, 0.6, 0.6]]\n");
+        std::fs::write(&file, &text).unwrap();
+        let said = [
+            name.as_str(),
+            key,
+            named.as_str(),
+            "outside the scene's directory",
+        ];
+        refuse(
+            &[
+                "train",
+                "--scene",
+                path(&file),
+                "--confine",
+                "-o",
+                path(&model),
+            ],
+            &said,
+        );
+        refuse(
+            &[
+                "report",
+                path(&file),
+                "--confine",
+                "--out",
+                path(&d.join("r")),
+            ],
+            &said,
+        );
+        std::fs::write(&file, format!("confine = true\n{text}")).unwrap();
+        refuse(
+            &["train", "--scene", path(&file), "-o", path(&model)],
+            &said,
+        );
+    }
+    let file = inside.join("sky.toml");
+    std::fs::write(
+        &file,
+        format!("[source]\nbvh = \"character.bvh\"\ntrain = [\"0..8\"]\n{lit}[environment]\nhdr = \"../sky.hdr\"\n"),
+    )
+    .unwrap();
+    let said = ["sky.toml", "[environment]", "../sky.hdr", "outside"];
+    refuse(
+        &[
+            "train",
+            "--scene",
+            path(&file),
+            "--confine",
+            "-o",
+            path(&model),
+        ],
+        &said,
+    );
+    assert!(!model.exists() && !d.join("r").exists());
+    let file = inside.join("inside.toml");
+    std::fs::write(
+        &file,
+        format!("confine = true\n[source]\nbvh = \"./character.bvh\"\ntrain = [\"0..8\"]\n{lit}[environment]\nsh = [[0.6, 0.6, 0.6]]\n"),
+    )
+    .unwrap();
+    succeed(&[
+        "train",
+        "--scene",
+        path(&file),
+        "--confine",
+        "-o",
+        path(&model),
+    ]);
+    assert!(model.exists());
+}

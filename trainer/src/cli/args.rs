@@ -37,6 +37,10 @@ pub struct ResultsArgs {
 pub struct ReportArgs {
     /// The scene file (see fixtures/scenes/); its `test` clips are what the report measures on.
     pub scene: PathBuf,
+    /// Refuse any path the scene names that is absolute or leaves the scene's directory
+    /// (symlinks followed), for scenes from users (also the scene key `confine`).
+    #[arg(long)]
+    pub confine: bool,
     /// Output directory for report.md, report.json and the Pareto plots (PNG and SVG).
     #[arg(long)]
     pub out: PathBuf,
@@ -226,6 +230,10 @@ pub struct TrainArgs {
         "bounces", "albedo", "rig", "precision",
     ])]
     pub scene: Option<PathBuf>,
+    /// With --scene: refuse any path the scene names that is absolute or leaves the scene's
+    /// directory (symlinks followed), for scenes from users (also the scene key `confine`).
+    #[arg(long, requires = "scene")]
+    pub confine: bool,
     /// With --scene: write what was computed and skipped, and what the full simulation would
     /// have cost, as JSON (keys rays_cast, bounce_passes, sh_order, skipped, seconds, …).
     #[arg(long, requires = "scene")]

@@ -161,10 +161,16 @@ fn light_irradiance(args: &IrradianceArgs) -> Result<()> {
     Ok(())
 }
 
+/// The frame `aprt light env` prints in: the map's, before a scene turns it to a character's
+/// up axis, which the built-in characters (z-up) do not share.
+const ENV_FRAME: &str = "frame +Y up (the map's; scenes turn it to the character's up axis)";
+
 /// What `aprt light env --json` prints.
 #[derive(serde::Serialize)]
 struct EnvReport<'a> {
     file: &'a Path,
+    /// The frame the coefficients are in: the map's own, +Y up, not yet a character's.
+    frame: &'static str,
     order: usize,
     width: usize,
     height: usize,
@@ -178,6 +184,7 @@ fn light_env(args: &EnvArgs) -> Result<()> {
     if args.json {
         let report = EnvReport {
             file: &args.file,
+            frame: ENV_FRAME,
             order,
             width: image.width,
             height: image.height,
@@ -187,7 +194,7 @@ fn light_env(args: &EnvArgs) -> Result<()> {
         return Ok(());
     }
     println!(
-        "{}: {}x{} equirectangular, SH order {order} ({} RGB coefficients, +Y up)",
+        "{}: {}x{} equirectangular, SH order {order} ({} RGB coefficients, {ENV_FRAME})",
         args.file.display(),
         image.width,
         image.height,
@@ -364,6 +371,11 @@ fn shard_done(baked: &ShardBaked, command: &str) {
 
 fn train(args: &TrainArgs) -> Result<()> {
     let scene = args.scene.as_deref().map(read_scene).transpose()?;
+    if let Some(scene) = &scene
+        && args.confine
+    {
+        scene.confine("--confine")?;
+    }
     let (source, validate) = match &scene {
         Some(scene) => (SourceArgs::from_scene(scene), Vec::new()),
         None => (args.source.clone(), args.validate.clone()),
@@ -400,7 +412,7 @@ fn train(args: &TrainArgs) -> Result<()> {
     };
     if let Some(scene) = &scene {
         let poses = scene_poses(&source, scene)?;
-        let lighting = SceneLighting::of(scene)?;
+        let lighting = SceneLighting::of(scene, poses.up())?;
         let options = SceneTrainOptions {
             output: &args.output,
             checkpoint: checkpoint.path,
@@ -543,6 +555,9 @@ fn report(args: &ReportArgs) -> Result<()> {
         bail!("--budget-us {us}: expected a positive number of microseconds per frame");
     }
     let scene = read_scene(&args.scene)?;
+    if args.confine {
+        scene.confine("--confine")?;
+    }
     let source = SourceArgs::from_scene(&scene);
     let mut inputs = source.inputs();
     inputs.extend(scene_inputs(&scene));
@@ -558,7 +573,7 @@ fn report(args: &ReportArgs) -> Result<()> {
         );
     }
     let (rig, [clips, validation, tests]) = source.load_scene(&scene, &Terminal)?;
-    let lighting = SceneLighting::of(&scene)?;
+    let lighting = SceneLighting::of(&scene, rig.up())?;
     let settings = ReportSettings {
         budget_us: args.budget_us,
         budget_bytes: args.budget_bytes,

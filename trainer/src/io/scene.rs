@@ -3,12 +3,15 @@
 //! `aprt train --scene`, `aprt report` and `aprt demo`; planned by [`crate::scene`].
 //!
 //! ```toml
+//! confine = false          # true: refuse paths outside the scene's directory (--confine)
 //! [source]                 # exactly one of: builtin, gltf, bvh, obj_seq (+ angles)
 //! gltf = "Fox.gltf"        # paths relative to the scene file
 //! train = ["Survey"]       # clips (BVH: frame ranges "0..240" of the bvh file, or other files)
 //! test = ["Walk", "Run"]   # clips the report measures on (never trained on)
 //! validate = []            # clips held out of training to choose the model by (optional)
 //!                          # train, validate and test share no frame (checked when read)
+//! up = "z"                 # optional: "y" or "z", the character's up axis (default: the
+//!                          # rig's own; an OBJ sequence's is z); environment maps turn to it
 //!
 //! [effects]
 //! shadows = true           # false: no visibility rays at all
@@ -64,6 +67,9 @@ pub struct Scene {
     pub effects: Effects,
     /// What the runtime may spend.
     pub budget: Budget,
+    /// The character's up axis from `[source] up`, overriding the rig's: environment maps,
+    /// projected with +Y up, are turned to it.
+    pub up: Option<glam::Vec3>,
     /// The distant lighting, if any.
     pub environment: Option<Environment>,
     /// The local and directional lights.
@@ -71,12 +77,70 @@ pub struct Scene {
     /// The clips of `train`, `validate` and `test` ([`CLIP_KEYS`]'s order), read once with
     /// their paths resolved, so every command takes the same clips.
     specs: [Vec<ClipSpec>; 3],
+    /// The paths the scene spells as absolute, which [`Scene::confine`] refuses even inside
+    /// the scene's directory: resolved against an absolute scene path, they look alike.
+    absolute: Vec<PathBuf>,
 }
 
 /// The `[source]` keys that name clips, in the order they are checked and taken.
 pub const CLIP_KEYS: [&str; 3] = ["train", "validate", "test"];
 
 impl Scene {
+    /// Refuses the scene when a path it names (its character, environment map or a BVH clip)
+    /// is absolute or leaves the scene's directory once symlinks are followed, so a service
+    /// that takes users' scenes reads no other file. `why` is what asked (`--confine`, or the
+    /// scene's own key), for the error. A path that does not exist yet is judged as written:
+    /// it may not climb with `..`.
+    pub fn confine(&self, why: &str) -> Result<(), SceneError> {
+        let base = self.path.parent().unwrap_or(Path::new(""));
+        let home = Path::new(".").join(base).canonicalize();
+        for (item, path) in self.named_paths() {
+            let inside = match (path.strip_prefix(base), &home, path.canonicalize()) {
+                _ if self.absolute.iter().any(|a| a == path) => false,
+                (Err(_), ..) => false,
+                (Ok(_), Ok(home), Ok(real)) => real.starts_with(home),
+                (Ok(rel), ..) => !rel
+                    .components()
+                    .any(|c| matches!(c, std::path::Component::ParentDir)),
+            };
+            if !inside {
+                return Err(SceneError {
+                    path: self.path.clone(),
+                    item,
+                    message: format!(
+                        "{}: outside the scene's directory, refused by {why}",
+                        path.display()
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Every path the scene names, resolved, with the item that names it.
+    fn named_paths(&self) -> Vec<(String, &Path)> {
+        let mut named: Vec<(String, &Path)> = match &self.source {
+            SceneSource::Builtin(_) => Vec::new(),
+            SceneSource::Gltf { path, .. } => vec![("[source] gltf".into(), path)],
+            SceneSource::Bvh(path) => vec![("[source] bvh".into(), path)],
+            SceneSource::ObjSeq { dir, angles } => vec![
+                ("[source] obj_seq".into(), dir),
+                ("[source] angles".into(), angles),
+            ],
+        };
+        if let Some(Environment::Map(path)) = &self.environment {
+            named.push(("[environment]".into(), path));
+        }
+        for key in CLIP_KEYS {
+            for spec in self.clip_specs(key) {
+                if let ClipSpec::Motion { path, .. } = spec {
+                    named.push((format!("[source] {key}"), path));
+                }
+            }
+        }
+        named
+    }
+
     /// The clips `[source] key` names, to take from the character (`key` one of
     /// [`CLIP_KEYS`]; any other key names none).
     pub fn clip_specs(&self, key: &str) -> &[ClipSpec] {
@@ -204,6 +268,8 @@ pub struct SceneError {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawScene {
+    #[serde(default)]
+    confine: bool,
     source: RawSource,
     #[serde(default)]
     effects: RawEffects,
@@ -223,6 +289,7 @@ struct RawSource {
     obj_seq: Option<String>,
     angles: Option<String>,
     fps: Option<f64>,
+    up: Option<String>,
     #[serde(default)]
     train: Vec<String>,
     #[serde(default)]
@@ -291,8 +358,28 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
     let raw: RawScene =
         toml::from_str(text).map_err(|e| fail("TOML", crate::io::toml_problem(text, &e)))?;
     let base = path.parent().unwrap_or(Path::new(""));
-    let resolve = |p: &str| base.join(p);
+    let absolute = std::cell::RefCell::new(Vec::new());
+    let resolve = |p: &str| {
+        if Path::new(p).is_absolute() {
+            absolute.borrow_mut().push(PathBuf::from(p));
+        }
+        base.join(p)
+    };
     let source = source(&raw.source, &resolve).map_err(|m| fail("[source]", m))?;
+    let up = match raw.source.up.as_deref() {
+        None => None,
+        Some("y") => Some(glam::Vec3::Y),
+        Some("z") => Some(glam::Vec3::Z),
+        Some(other) => {
+            return Err(fail(
+                "[source] up",
+                format!(
+                    "{:?}: expected \"y\" or \"z\" (the character's up axis)",
+                    crate::io::excerpt(other)
+                ),
+            ));
+        }
+    };
     let effects = effects(&raw.effects).map_err(|(k, m)| fail(&format!("[effects] {k}"), m))?;
     let budget = budget(&raw.budget).map_err(|(k, m)| fail(&format!("[budget] {k}"), m))?;
     let environment = match &raw.environment {
@@ -340,7 +427,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
     }
     let specs = clip_lists(&source, [&s.train, &s.validate, &s.test], &resolve)
         .map_err(|(key, m)| fail(&format!("[source] {key}"), m))?;
-    Ok(Scene {
+    let scene = Scene {
         path: path.to_owned(),
         source,
         train: s.train.clone(),
@@ -348,10 +435,16 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
         validate: s.validate.clone(),
         effects,
         budget,
+        up,
         environment,
         lights,
         specs,
-    })
+        absolute: absolute.into_inner(),
+    };
+    if raw.confine {
+        scene.confine("confine = true")?;
+    }
+    Ok(scene)
 }
 
 /// The clips each of [`CLIP_KEYS`] names, read, and refused where two keys share a frame: a

@@ -41,6 +41,15 @@ pub enum Poses {
 }
 
 impl Poses {
+    /// The character's up axis: the rig's, or z for an OBJ sequence, which has no rig to say
+    /// and is taken to stand like the built-in characters.
+    pub fn up(&self) -> glam::Vec3 {
+        match self {
+            Poses::Meshes { .. } => glam::Vec3::Z,
+            Poses::Rig { rig, .. } => rig.up(),
+        }
+    }
+
     /// An OBJ sequence (every `.obj` file of `dir`, sorted by name, all with the same mesh)
     /// with one row of `angles` per file. Degenerate triangles are noted to `reporter`.
     pub fn from_obj_sequence(dir: &Path, angles: &Path, reporter: &dyn Reporter) -> Result<Poses> {

@@ -158,7 +158,7 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
         validation: &validation_clips,
         tests: &test_clips,
     };
-    let lighting = SceneLighting::of(&scene)?;
+    let lighting = SceneLighting::of(&scene, character.up())?;
     let reference = sweep::bake_reference(&scene, lighting, &clips, args.stride, reporter)?;
     let plan = &reference.plan;
     for line in plan.computed.iter().chain(&plan.skipped) {
