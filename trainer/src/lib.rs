@@ -6,6 +6,7 @@
 //! - [`rig`]: characters posed by a pose vector (the [`Rig`] trait, meshes, skinning, the
 //!   built-in character, glTF skins, the motion-capture mannequin) and the frames transfer is
 //!   learned in;
+//! - [`input`]: the one way a user's file is opened (regular files, size limits);
 //! - [`io`]: OBJ, angle CSV and `.npy` files, atomic writes, and where poses come from;
 //! - [`bake`]: the transfer simulation, with checkpoints for long bakes;
 //! - [`model`]: the linear model, its fit, the blob writer and evaluation through `aprt-core`;
