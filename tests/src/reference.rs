@@ -78,6 +78,19 @@ fn steps(model: &LinearModel) -> usize {
         + 16
 }
 
+/// Roundings that feed one shading value: every product of the lighting-weight stage (pose
+/// weights × lighting, per coefficient and basis vector) and of the basis stage. Relative
+/// errors grow along the longest chain ([`steps`]); absolute ones, the subnormal results'
+/// (at most 2⁻¹⁴⁹ each), add up over every term, so they are counted here instead.
+fn shading_terms(model: &LinearModel) -> usize {
+    let n2 = model.order * model.order;
+    let kv = match model.basis {
+        VertexBasis::Stored { coef_dims, .. } => coef_dims,
+        VertexBasis::Identity => 1,
+    };
+    (model.pose_dims() + 1) * (n2 + 1) * kv + kv + n2
+}
+
 /// Relative error bound of the f32 evaluation: ε = 2u per rounding step, doubled for margin.
 pub fn rounding(model: &LinearModel) -> f64 {
     steps(model) as f64 * f32::EPSILON as f64
@@ -168,9 +181,10 @@ pub fn assert_matches(reference: &LinearModel, eval: &Evaluation, stored: impl F
         Some(_) => 2e-4 * norm1 + (order * (2 * order - 1) * (n2 + 2) + 4 * order) as f64 * TINY,
         None => 0.0,
     };
+    let shade_slack = slack + shading_terms(reference) as f64 * TINY * largest;
     for (j, got) in eval.shading.iter().enumerate() {
         let l = &local[eval.bones[j] as usize];
-        let (mut want_j, mut bound_j) = (0.0f64, slack);
+        let (mut want_j, mut bound_j) = (0.0f64, shade_slack);
         for (c, &lc) in l.iter().enumerate().take(n2) {
             let i = j * n2 + c;
             want_j += lc as f64 * want[i];

@@ -32,6 +32,12 @@ pub fn refuse<S: AsRef<OsStr> + std::fmt::Debug>(args: &[S], fragments: &[&str])
     let out = aprt(args);
     let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
     assert!(!out.status.success(), "{args:?} succeeded:\n{stderr}");
+    the_one_error(args, &stderr, fragments)
+}
+
+/// Asserts that a failed run's `stderr` holds no panic and exactly one `aprt: ` line, holding
+/// every fragment; returns the line.
+pub fn the_one_error<S: std::fmt::Debug>(args: &[S], stderr: &str, fragments: &[&str]) -> String {
     assert!(!stderr.contains("panicked"), "{args:?} panicked:\n{stderr}");
     let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("aprt: ")).collect();
     assert_eq!(
