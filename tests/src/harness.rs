@@ -144,6 +144,8 @@ pub struct Evaluation {
     pub shading: Vec<f32>,
     /// `vertex_bones`.
     pub bones: Vec<u16>,
+    /// How the blob stores its per-vertex values.
+    pub encoding: aprt_core::Encoding,
 }
 
 /// Reads `blob` resident and streamed and, when valid, evaluates it with `probe`'s inputs and
@@ -471,6 +473,7 @@ fn evaluate(model: &mut impl Eval, probe: &Probe) -> Result<Evaluation, Error> {
         transfer,
         shading,
         bones,
+        encoding: model.info().encoding(),
     })
 }
 
