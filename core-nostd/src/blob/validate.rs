@@ -79,43 +79,13 @@ impl ModelInfo {
             })
         };
 
-        let bones = h.frame.bones();
-        let mut found: [Option<Span>; SectionKind::KNOWN_COUNT] = [None; SectionKind::KNOWN_COUNT];
-        let mut end_of_data = decoded.end;
-        for e in &h.sections {
-            end_of_data = end_of_data.max(e.offset + e.len); // no overflow: checked above
-            let kind = SectionKind::from_tag(e.kind);
-            let Some(slot) = kind.known_index() else {
-                if e.required {
-                    return Err(Error::UnknownRequiredSection { section: kind });
-                }
-                // An optional section from a newer writer, or metadata for tools.
-                check_crc(r, e, |_| {})?;
-                continue;
-            };
-            if kind == SectionKind::PoseFeatures {
-                continue; // read and checked by `pose_features`
-            }
-            if found[slot].is_some() {
-                return Err(Error::DuplicateSection { section: kind });
-            }
-            let Some(span) = check_section(
-                r,
-                e,
-                kind,
-                expected_elems(kind),
-                (vertices, pose_len, bones),
-            )?
-            else {
-                continue;
-            };
-            found[slot] = Some(span);
-        }
-        if r.len() > end_of_data {
-            return Err(Error::TrailingBytes {
-                extra: r.len() - end_of_data,
-            });
-        }
+        let found = read_sections(
+            r,
+            &h.sections,
+            decoded.end,
+            &expected_elems,
+            (vertices, pose_len, h.frame.bones()),
+        )?;
         let get = |kind: SectionKind| kind.known_index().and_then(|i| found[i]);
         let need = |kind: SectionKind| get(kind).ok_or(Error::MissingSection { section: kind });
         let (weights, rows) = match h.basis {
@@ -437,6 +407,46 @@ fn verify_array<R: Reader>(r: &mut R, e: &SectionEntry, span: Span) -> Result<()
         return Err(Error::NonFinite { section });
     }
     Ok(())
+}
+
+/// Checks every section of the table but the pose features (read first by `pose_features`):
+/// unknown optional ones by their CRC, known ones by [`check_section`], each at most once, and
+/// no bytes after the last. Returns each known section's span by [`SectionKind::known_index`].
+/// `expected_elems` gives the element count of each array section the basis uses.
+fn read_sections<R: Reader>(
+    r: &mut R,
+    sections: &[SectionEntry],
+    end_of_header: u64,
+    expected_elems: &dyn Fn(SectionKind) -> Option<Result<u64, Error>>,
+    sizes: (usize, usize, usize),
+) -> Result<[Option<Span>; SectionKind::KNOWN_COUNT], Error> {
+    let mut found: [Option<Span>; SectionKind::KNOWN_COUNT] = [None; SectionKind::KNOWN_COUNT];
+    let mut end_of_data = end_of_header;
+    for e in sections {
+        end_of_data = end_of_data.max(e.offset + e.len); // no overflow: checked by the caller
+        let kind = SectionKind::from_tag(e.kind);
+        let Some(slot) = kind.known_index() else {
+            if e.required {
+                return Err(Error::UnknownRequiredSection { section: kind });
+            }
+            // An optional section from a newer writer, or metadata for tools.
+            check_crc(r, e, |_| {})?;
+            continue;
+        };
+        if kind == SectionKind::PoseFeatures {
+            continue;
+        }
+        if found[slot].is_some() {
+            return Err(Error::DuplicateSection { section: kind });
+        }
+        found[slot] = check_section(r, e, kind, expected_elems(kind), sizes)?;
+    }
+    if r.len() > end_of_data {
+        return Err(Error::TrailingBytes {
+            extra: r.len() - end_of_data,
+        });
+    }
+    Ok(found)
 }
 
 /// Validates one known section other than the pose features (read first by
