@@ -34,25 +34,28 @@ pub fn hard_vertex_errors(
     fraction: f64,
 ) -> (f64, f64) {
     let vertices = truth.first().map_or(0, |t| t.len() / coeffs.max(1));
-    let per_vertex = |values: &[Vec<f32>], of: &[Vec<f32>]| -> Vec<f64> {
+    // Per vertex, Σ (value − truth)² over frames and coefficients; Σ truth² without values.
+    let per_vertex = |values: Option<&[Vec<f32>]>| -> Vec<f64> {
         let mut sums = vec![0.0f64; vertices];
-        for (p, t) in values.iter().zip(of) {
+        for (f, t) in truth.iter().enumerate() {
             for (v, sum) in sums.iter_mut().enumerate() {
                 let span = v * coeffs..(v + 1) * coeffs;
-                *sum += p[span.clone()]
+                *sum += t[span.clone()]
                     .iter()
-                    .zip(&t[span])
-                    .map(|(a, b)| (*a as f64 - *b as f64).powi(2))
+                    .enumerate()
+                    .map(|(k, b)| {
+                        let a = values.map_or(0.0, |p| p[f][span.start + k] as f64);
+                        (a - *b as f64).powi(2)
+                    })
                     .sum::<f64>();
             }
         }
         sums
     };
-    let zero: Vec<Vec<f32>> = truth.iter().map(|t| vec![0.0; t.len()]).collect();
     let (reference_err, pred_err, truth_norm) = (
-        per_vertex(reference, truth),
-        per_vertex(pred, truth),
-        per_vertex(&zero, truth),
+        per_vertex(Some(reference)),
+        per_vertex(Some(pred)),
+        per_vertex(None),
     );
     let mut order: Vec<usize> = (0..vertices).collect();
     order.sort_by(|&a, &b| reference_err[b].total_cmp(&reference_err[a]));
