@@ -324,3 +324,50 @@ fn radiance_exposure_is_honoured_and_overflow_refused() {
         ],
     );
 }
+
+/// OpenEXR texels of 3.4e38 are finite in f32, but the projection's sums over a row of them
+/// are not: refused naming the file, the coefficient and a brightest texel; an infinite texel
+/// is refused by position before any sum.
+#[test]
+fn exr_texels_that_overflow_f32_are_refused() {
+    use image::{ImageEncoder, codecs::openexr::OpenExrEncoder};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let exr = |name: &str, texel: f32| {
+        let mut texels = vec![1.0f32; 4 * 2 * 3];
+        texels[3 * 4..].fill(texel);
+        let path = d.join(name);
+        let file = std::io::BufWriter::new(std::fs::File::create(&path).unwrap());
+        OpenExrEncoder::new(file)
+            .write_image(
+                &native_bytes(&texels),
+                4,
+                2,
+                image::ExtendedColorType::Rgb32F,
+            )
+            .unwrap();
+        path
+    };
+    let bright = exr("bright.exr", 3.4e38);
+    refuse_untouched(
+        d,
+        &["light", "env", s(&bright), "--order", "1"],
+        &[
+            "bright.exr",
+            "SH coefficient 0",
+            "beyond f32",
+            "brightest texel (",
+        ],
+    );
+    let infinite = exr("infinite.exr", f32::INFINITY);
+    refuse_untouched(
+        d,
+        &["light", "env", s(&infinite), "--order", "1"],
+        &["infinite.exr", "(0, 1)"],
+    );
+}
+
+/// The bytes of `values`, native order, as the encoder takes them.
+fn native_bytes(values: &[f32]) -> Vec<u8> {
+    values.iter().flat_map(|v| v.to_ne_bytes()).collect()
+}

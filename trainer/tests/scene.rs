@@ -382,7 +382,7 @@ fn errors_quote_no_file_of_another_kind_and_cut_what_they_quote() {
 
 /// `--confine` (train --scene, report) and the scene key `confine = true` refuse every path
 /// a scene names that is absolute or leaves its directory, symlinks followed: the character,
-/// a clip, the environment map; the error names the scene, the key and the path, and nothing
+/// its glTF's buffers, a clip, the environment map; the error names the scene, the key and the path, and nothing
 /// is written. A scene whose paths stay inside still trains under `--confine`.
 #[test]
 fn confined_scenes_refuse_paths_outside_their_directory() {
@@ -481,6 +481,41 @@ fn confined_scenes_refuse_paths_outside_their_directory() {
         ],
         &said,
     );
+    // A glTF inside the directory whose buffers climb out of it, or name a file: URI.
+    std::fs::write(d.join("secret.bin"), [0u8; 4]).unwrap();
+    let secret = path(&d.join("secret.bin")).to_owned();
+    for (i, uri) in ["../secret.bin".to_owned(), format!("file://{secret}")]
+        .iter()
+        .enumerate()
+    {
+        let gltf = format!(
+            "{{\"asset\":{{\"version\":\"2.0\"}},\"buffers\":[{{\"uri\":{uri:?},\"byteLength\":4}}]}}"
+        );
+        std::fs::write(inside.join(format!("leaky{i}.gltf")), gltf).unwrap();
+        let file = inside.join(format!("leaky{i}.toml"));
+        std::fs::write(
+            &file,
+            format!("[source]\ngltf = \"leaky{i}.gltf\"\ntrain = [\"walk\"]\n{lit}[environment]\nsh = [[0.6, 0.6, 0.6]]\n"),
+        )
+        .unwrap();
+        let name = format!("leaky{i}.toml");
+        refuse(
+            &[
+                "train",
+                "--scene",
+                path(&file),
+                "--confine",
+                "-o",
+                path(&model),
+            ],
+            &[
+                &name,
+                &format!("[source] gltf, a buffer of leaky{i}.gltf"),
+                "secret.bin",
+                "outside the scene's directory",
+            ],
+        );
+    }
     assert!(!model.exists() && !d.join("r").exists());
     let file = inside.join("inside.toml");
     std::fs::write(

@@ -44,6 +44,7 @@ use aprt_core::{Light, MAX_ORDER};
 use serde::Deserialize;
 
 use crate::input::{InputKind, read_input_text};
+use crate::io::outputs::gltf_inputs;
 use crate::io::source::{BuiltinCharacter, ClipSpec, parse_frames};
 use crate::lighting::lights_file::check_light_count;
 use crate::lighting::{RigKind, finite_f32s, light_from_table};
@@ -86,17 +87,17 @@ pub struct Scene {
 pub const CLIP_KEYS: [&str; 3] = ["train", "validate", "test"];
 
 impl Scene {
-    /// Refuses the scene when a path it names (its character, environment map or a BVH clip)
-    /// is absolute or leaves the scene's directory once symlinks are followed, so a service
-    /// that takes users' scenes reads no other file. `why` is what asked (`--confine`, or the
-    /// scene's own key), for the error. A path that does not exist yet is judged as written:
-    /// it may not climb with `..`.
+    /// Refuses the scene when a path it names (its character, the buffers and images its glTF
+    /// references, its environment map or a BVH clip) is absolute or leaves the scene's
+    /// directory once symlinks are followed, so a service that takes users' scenes reads no
+    /// other file. `why` is what asked (`--confine`, or the scene's own key), for the error. A
+    /// path that does not exist yet is judged as written: it may not climb with `..`.
     pub fn confine(&self, why: &str) -> Result<(), SceneError> {
         let base = self.path.parent().unwrap_or(Path::new(""));
         let home = Path::new(".").join(base).canonicalize();
         for (item, path) in self.named_paths() {
             let inside = match (path.strip_prefix(base), &home, path.canonicalize()) {
-                _ if self.absolute.iter().any(|a| a == path) => false,
+                _ if self.absolute.contains(&path) => false,
                 (Err(_), ..) => false,
                 (Ok(_), Ok(home), Ok(real)) => real.starts_with(home),
                 (Ok(rel), ..) => !rel
@@ -117,24 +118,32 @@ impl Scene {
         Ok(())
     }
 
-    /// Every path the scene names, resolved, with the item that names it.
-    fn named_paths(&self) -> Vec<(String, &Path)> {
-        let mut named: Vec<(String, &Path)> = match &self.source {
+    /// Every path the scene names, resolved, with the item that names it; a glTF character's
+    /// external files (as its importer resolves them) count as named by `[source] gltf`.
+    fn named_paths(&self) -> Vec<(String, PathBuf)> {
+        let mut named: Vec<(String, PathBuf)> = match &self.source {
             SceneSource::Builtin(_) => Vec::new(),
-            SceneSource::Gltf { path, .. } => vec![("[source] gltf".into(), path)],
-            SceneSource::Bvh(path) => vec![("[source] bvh".into(), path)],
+            SceneSource::Gltf { path, .. } => gltf_inputs(path)
+                .into_iter()
+                .enumerate()
+                .map(|(i, input)| match i {
+                    0 => ("[source] gltf".into(), input.path),
+                    _ => (format!("[source] gltf, {}", input.role), input.path),
+                })
+                .collect(),
+            SceneSource::Bvh(path) => vec![("[source] bvh".into(), path.clone())],
             SceneSource::ObjSeq { dir, angles } => vec![
-                ("[source] obj_seq".into(), dir),
-                ("[source] angles".into(), angles),
+                ("[source] obj_seq".into(), dir.clone()),
+                ("[source] angles".into(), angles.clone()),
             ],
         };
         if let Some(Environment::Map(path)) = &self.environment {
-            named.push(("[environment]".into(), path));
+            named.push(("[environment]".into(), path.clone()));
         }
         for key in CLIP_KEYS {
             for spec in self.clip_specs(key) {
                 if let ClipSpec::Motion { path, .. } = spec {
-                    named.push((format!("[source] {key}"), path));
+                    named.push((format!("[source] {key}"), path.clone()));
                 }
             }
         }

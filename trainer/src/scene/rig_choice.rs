@@ -10,6 +10,7 @@ use aprt_core::Light;
 
 use crate::io::scene::RigChoice;
 use crate::lighting::{RigKind, RigSettings, evaluate_rig, fit_rig};
+use crate::progress::StepProgress;
 use crate::rig::mesh::Mesh;
 
 /// The kinds tried, cheapest first.
@@ -25,13 +26,15 @@ pub struct RigDecision {
 }
 
 /// Chooses the rig for `lights` on `meshes` (the bind pose first, then training poses, in the
-/// rig's root frame) at `order` and `target` grey levels.
+/// rig's root frame) at `order` and `target` grey levels. Each candidate tried is a step of
+/// `progress`: with a thousand near lights, one takes seconds on a small character.
 pub fn choose_rig(
     choice: RigChoice,
     lights: &[Light],
     meshes: &[Mesh],
     order: usize,
     target: f32,
+    progress: &dyn StepProgress,
 ) -> Result<(Option<RigKind>, RigDecision)> {
     let decision = |kind: Option<RigKind>, reason: String| {
         (
@@ -66,6 +69,11 @@ pub fn choose_rig(
     };
     let mut tried = Vec::new();
     for name in CANDIDATES {
+        progress.step(&format!(
+            "trying a {name} rig: {} lights at {} vertices",
+            lights.len(),
+            meshes[0].vertex_count()
+        ));
         let kind: RigKind = name.parse()?;
         let mut fitted = fit_rig(kind, &refs, None);
         fitted.tabulate(&meshes[0], order);
@@ -100,4 +108,68 @@ pub fn choose_rig(
             others.join(", ")
         ),
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use std::cell::RefCell;
+
+    use aprt_core::PointLight;
+
+    use super::*;
+
+    /// Records the steps it is told of.
+    #[derive(Default)]
+    struct Steps(RefCell<Vec<String>>);
+
+    impl StepProgress for Steps {
+        fn step(&self, what: &str) {
+            self.0.borrow_mut().push(what.to_owned());
+        }
+        fn finish(&self) {}
+    }
+
+    /// A double cone (a ring of vertices facing out and two apexes), and point lights just off
+    /// it: no rig carries them all, so every candidate is tried, each one a step of the
+    /// progress display.
+    #[test]
+    fn every_rig_tried_is_a_step_of_the_progress() {
+        let mut positions: Vec<[f32; 3]> = (0..24)
+            .map(|i| {
+                let a = i as f32 * core::f32::consts::TAU / 24.0;
+                [a.cos(), a.sin(), 0.0]
+            })
+            .collect();
+        let lights: Vec<Light> = positions
+            .iter()
+            .step_by(6)
+            .map(|p| {
+                Light::Point(PointLight {
+                    position: p.map(|c| 1.2 * c),
+                    intensity: [1.0; 3],
+                })
+            })
+            .collect();
+        positions.extend([[0.0, 0.0, 0.5], [0.0, 0.0, -0.5]]);
+        let triangles = (0..24u32)
+            .flat_map(|i| [[24, i, (i + 1) % 24], [25, (i + 1) % 24, i]])
+            .collect();
+        let mesh = Mesh {
+            normals: positions.clone(),
+            positions,
+            triangles,
+        };
+        let steps = Steps::default();
+        let (kind, decision) =
+            choose_rig(RigChoice::Auto, &lights, &[mesh], 3, 1.0, &steps).unwrap();
+        assert!(kind.is_some(), "{}", decision.reason);
+        let steps = steps.0.into_inner();
+        assert_eq!(steps.len(), CANDIDATES.len(), "{steps:?}");
+        for (step, name) in steps.iter().zip(CANDIDATES) {
+            assert_eq!(
+                step,
+                &format!("trying a {name} rig: 4 lights at 26 vertices")
+            );
+        }
+    }
 }

@@ -10,7 +10,7 @@ use anyhow::Result;
 use aprt_core::{MAX_ORDER, Rgb};
 
 use super::lighting::SceneLighting;
-use super::rig_choice::{RigDecision, choose_rig};
+use super::rig_choice::{CANDIDATES, RigDecision, choose_rig};
 use super::{BakePlan, plan_bake};
 use crate::bake::checkpoint::OnExisting;
 use crate::bake::shard::Shard;
@@ -123,6 +123,14 @@ pub fn train_scene(
     let fitting = fitting_surfaces(&poses)?;
     let bind = &fitting[0];
     let baked = baked_pose_count(&poses, scene);
+    // The order and the rig are judged light by light at every vertex: many near lights
+    // take long enough to deserve a progress display.
+    let progress = reporter.step_progress(1 + CANDIDATES.len());
+    progress.step(&format!(
+        "choosing the SH order: {} lights at {} vertices",
+        lighting.lights.len(),
+        bind.vertex_count()
+    ));
     let plan = plan_bake(scene, lighting, bind, baked)?;
     let order = plan.bake.order;
     let (rig_kind, rig) = choose_rig(
@@ -131,7 +139,9 @@ pub fn train_scene(
         &fitting,
         order,
         scene.effects.error_target,
+        progress.as_ref(),
     )?;
+    progress.finish();
     let precision = match scene.effects.precision {
         Choice::Fixed(p) => PrecisionChoice::Fixed(p),
         Choice::Auto => PrecisionChoice::Auto {

@@ -2,7 +2,7 @@
 //! error (section 6), the shading error in 8-bit grey levels under the scene's lighting, and
 //! the per-frame cost through aprt-core on one core.
 
-use anyhow::Result;
+use anyhow::{Result, bail};
 
 use crate::bake::clip::BakedClip;
 use crate::lighting::rig_fit::GREY_PER_IRRADIANCE;
@@ -38,7 +38,25 @@ pub struct Measured {
     pub megaops: f64,
 }
 
-/// Measures `blob` (a model learned in `frame`) on `truth`.
+impl Measured {
+    /// The first figure that is not a finite number, by name: a report that printed it, or
+    /// chose a setting by it, would say nothing true.
+    pub fn non_finite(&self) -> Option<(&'static str, f64)> {
+        [
+            ("RMS shading error", self.grey_rms),
+            ("largest shading error", self.grey_max),
+            ("relative transfer error", self.transfer_error),
+            ("µs per frame", self.us_per_frame),
+            ("transfer µs per frame", self.transfer_us),
+            ("million multiply-adds per frame", self.megaops),
+        ]
+        .into_iter()
+        .find(|(_, v)| !v.is_finite())
+    }
+}
+
+/// Measures `blob` (a model learned in `frame`) on `truth`; refuses a figure that is not
+/// finite, naming it.
 pub fn measure(blob: &[u8], frame: ModelFrame, truth: &Truth<'_>) -> Result<Measured> {
     let info = *aprt_core::Model::parse(blob)?.info();
     let m2 = info.coeffs();
@@ -83,12 +101,53 @@ pub fn measure(blob: &[u8], frame: ModelFrame, truth: &Truth<'_>) -> Result<Meas
         Some(geometry),
     )?;
     let us_per_frame = shade_us + proxies_us.unwrap_or(0.0);
-    Ok(Measured {
+    let measured = Measured {
         grey_rms: (grey2 / count.max(1) as f64).sqrt(),
         grey_max,
         transfer_error: (diff / norm.max(f64::MIN_POSITIVE)).sqrt(),
         us_per_frame,
         transfer_us,
         megaops: megaops(&info),
-    })
+    };
+    match measured.non_finite() {
+        Some((figure, value)) => bail!(
+            "its {figure} is {value}: the lighting or the model's values are beyond what f32 \
+             shading holds; scale the lighting down"
+        ),
+        None => Ok(measured),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Measured;
+
+    #[test]
+    fn the_first_figure_that_is_not_finite_is_named() {
+        let fine = Measured {
+            grey_rms: 1.0,
+            grey_max: 2.0,
+            transfer_error: 0.1,
+            us_per_frame: 50.0,
+            transfer_us: 900.0,
+            megaops: 1.5,
+        };
+        assert_eq!(fine.non_finite(), None);
+        let nan = Measured {
+            grey_max: f64::NAN,
+            us_per_frame: f64::INFINITY,
+            ..fine
+        };
+        let (figure, value) = nan.non_finite().unwrap();
+        assert_eq!(figure, "largest shading error");
+        assert!(value.is_nan());
+        let huge = Measured {
+            grey_rms: f64::INFINITY,
+            ..fine
+        };
+        assert_eq!(
+            huge.non_finite(),
+            Some(("RMS shading error", f64::INFINITY))
+        );
+    }
 }

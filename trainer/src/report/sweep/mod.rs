@@ -538,7 +538,8 @@ fn fit_and_measure(
     for precision in [Precision::F32, Precision::F16, Precision::I8] {
         let blob = encode_model(model, precision)
             .with_context(|| format!("writing {} in {}", candidate.label, precision.name()))?;
-        let measured = measure(&blob, frame, truth)?;
+        let measured = measure(&blob, frame, truth)
+            .with_context(|| format!("measuring {}, {}", candidate.label, precision.name()))?;
         let info = *aprt_core::Model::parse(&blob)?.info();
         points.push(Point {
             setting: Setting {
