@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use aprt_core::{Light, Model, Placement, PoseWeights, RigLitWeights, Rotation, SphereLight};
 use aprt_tests::{median_seconds, noise, random_model};
-use aprt_trainer::lighting::{RigKind, fit_rig, rig_vectors};
+use aprt_trainer::irradiance_rig::{RigKind, fit_rig, rig_vectors};
 use aprt_trainer::{BoneFrames, Character, LinearModel, Precision, Rig, encode_model_with_rig};
 
 const ORDER: usize = 4;
@@ -103,7 +103,7 @@ fn main() {
     ] {
         let kind: RigKind = kind.parse().unwrap();
         let mut fitted = fit_rig(kind, &[human.bind_mesh()], None);
-        fitted.tabulate(human.bind_mesh(), ORDER);
+        fitted.tabulate(human.bind_mesh(), ORDER).unwrap();
         let blob =
             encode_model_with_rig(&reference, Precision::F32, Some(&fitted.bytes())).unwrap();
         let model = Model::parse(&blob).unwrap();

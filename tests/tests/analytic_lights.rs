@@ -9,7 +9,7 @@ use aprt_core::{
     sphere_light_bands,
 };
 use aprt_tests::{axis_angle, noise, random_model};
-use aprt_trainer::lighting::evaluate::static_model;
+use aprt_trainer::model::runtime::static_model;
 use aprt_trainer::{BoneFrames, LinearModel, Precision, encode_model};
 
 const ROTATIONS: [([f32; 3], f32); 3] = [

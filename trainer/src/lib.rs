@@ -1,37 +1,46 @@
 //! aprt-trainer: bakes SH precomputed radiance transfer for posed characters, fits the
 //! pose-driven linear model, and writes model blobs that `aprt-core` evaluates.
 //!
-//! One folder per stage:
+//! Its stages, lowest first; each uses only those above it in this list (ARCHITECTURE.md's
+//! "Stages", enforced by `tests/layering.rs`):
 //!
-//! - [`rig`]: characters posed by a pose vector (the [`Rig`] trait, meshes, skinning, the
-//!   built-in character, glTF skins, the motion-capture mannequin) and the frames transfer is
-//!   learned in;
+//! - [`limits`]: the limits one run holds to;
+//! - [`text`]: a user's text as read and quoted in errors;
 //! - [`input`]: the one way a user's file is opened (regular files, size limits);
+//! - [`progress`]: the reporting seam;
+//! - [`rig`]: characters posed by a pose vector (the [`Rig`] trait, meshes, skinning, bone
+//!   frames, UV atlases, the built-in characters, glTF skins, the motion-capture mannequin);
 //! - [`io`]: OBJ, angle CSV and `.npy` files, atomic writes, and where poses come from;
-//! - [`bake`]: the transfer simulation, with checkpoints for long bakes;
+//! - [`bake`]: the transfer simulation, with checkpoints and shards for long bakes;
+//! - [`lighting`]: lights, environment maps, irradiance through SH and exactly;
+//! - [`irradiance_rig`]: irradiance rigs (*Irradiance Rigs*): kinds, fit, accuracy;
 //! - [`model`]: the linear model, its fit, the blob writer and evaluation through `aprt-core`;
-//! - [`lighting`]: lights (the lights file) and irradiance through SH and exactly
-//!   (*Irradiance Rigs*);
-//! - [`report`]: experiments against baselines, pictures, plots, the demo and the results
-//!   document;
+//! - [`lightmap`]: SH light maps: texel bake, the `.shlm` codec, the light-map model;
+//! - [`scene`]: scene files and what a scene needs computed;
+//! - [`pipeline`]: `aprt train` and `aprt train --scene`, which call the stages in order;
+//! - [`report`]: experiments against baselines, pictures, plots, the demo, results, sweeps;
 //! - [`cli`]: the `aprt` command line.
 
 pub mod bake;
 pub mod cli;
 pub mod input;
 pub mod io;
+pub mod irradiance_rig;
 pub mod lighting;
 pub mod lightmap;
+pub mod limits;
 pub mod model;
+pub mod pipeline;
 pub mod progress;
 pub mod report;
 pub mod rig;
 pub mod scene;
+pub mod text;
 
 // Module paths the tests, benches and fuzz harnesses use.
 pub use model::{export, runtime};
 pub use report::evaluate;
-pub use rig::bone_frames;
+pub use rig::bone_frames::{self, BoneFrames};
 
 pub use bake::{
     Accel, BakeError, BakeSettings, bake_pose, bake_pose_with, bake_poses, bake_vertices,
@@ -42,7 +51,7 @@ pub use model::export::{
 };
 pub use model::features::PoseFeatures;
 pub use model::fit::{Alpha, CoefDims, Dims, Fit, FitError, FitOptions, FitReport, fit};
-pub use model::{BoneFrames, LinearModel, ModelFrame, PoseBounds, VertexBasis};
+pub use model::{LinearModel, ModelFrame, PoseBounds, VertexBasis};
 pub use progress::{BakeProgress, Reporter, Silent};
 pub use report::render::{
     Colormap, RenderError, View, lambert, render_scalar, save_png_atomic, side_by_side,

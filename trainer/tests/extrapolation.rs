@@ -8,7 +8,7 @@ mod common;
 use aprt_trainer::bake::clip::{bake_clip, bake_rest};
 use aprt_trainer::evaluate::relative_error;
 use aprt_trainer::model::predict::predict_world;
-use aprt_trainer::model::train::{ClipSet, fit_clip};
+use aprt_trainer::pipeline::train::{ClipSet, fit_clip};
 use aprt_trainer::rig::pose_layout::PoseLayout;
 use aprt_trainer::{
     BakeSettings, FitOptions, GltfRig, MocapOptions, MocapRig, ModelFrame, Precision, Rig, Silent,

@@ -206,7 +206,7 @@ fn render_posed_frames_on_request() {
 /// Prints what a 256² atlas covers, how many texels overlapping UVs share, and the build time.
 #[test]
 fn sample_characters_have_uv_layouts_that_rasterise() {
-    use aprt_trainer::lightmap::atlas::Atlas;
+    use aprt_trainer::rig::uv::Atlas;
     let Some(dir) = common::assets("sample_characters_have_uv_layouts") else {
         return;
     };

@@ -85,7 +85,15 @@ intensity = [5.0, 5.0, 5.0]
         "lattice:4x2x2",
         "mixed:x=lattice3,y=gradient,z=constant",
     ] {
-        let v = json(&["rig", &mesh, "--lights", &lights, "--rig", rig, "--json"]);
+        let v = json(&[
+            "irradiance-rig",
+            &mesh,
+            "--lights",
+            &lights,
+            "--rig",
+            rig,
+            "--json",
+        ]);
         assert_eq!(v["rig"], rig);
         let ls = v["lights"].as_array().unwrap();
         assert_eq!(ls.len(), 3);

@@ -45,7 +45,7 @@ fn a_sequence_reads_back_at_the_vertices_as_aprt_simulate_bakes_them() {
     args.extend(bake);
     succeed(&args);
     let inspect: serde_json::Value =
-        serde_json::from_slice(&succeed(&["shlm", "inspect", path(&seq), "--json"])).unwrap();
+        serde_json::from_slice(&succeed(&["lightmap", "inspect", path(&seq), "--json"])).unwrap();
     for key in [
         "frames",
         "resolution",

@@ -12,15 +12,9 @@
 
 use crate::bake::BakeSettings;
 use crate::bake::tracer::Hit;
+use crate::limits::{MAX_BYTES, MAX_FRAMES};
 use crate::rig::mesh::Mesh;
 
-/// Most frames one run bakes or evaluates: 83 s of 120 fps capture, 5.5 min at 30 fps. At the
-/// bake's measured 0.1–1 s per pose that is up to about three hours, and as many checkpoint
-/// files.
-pub const MAX_FRAMES: usize = 10_000;
-/// Most bytes of posed meshes, transfer and ray hits one run may hold: a sixth of this
-/// machine's 24 GB, since the fit needs more on top and the machine is shared.
-pub const MAX_BYTES: u64 = 4_000_000_000;
 /// Most rays one bake casts: about 40 hours at the 7 Mrays/s the bake bench measures on
 /// 2 cores.
 pub const MAX_RAY_CASTS: u64 = 1_000_000_000_000;

@@ -55,6 +55,7 @@ use rayon::prelude::*;
 use std::ops::Range;
 use tracer::{Hit, Tracer, TraversalStack};
 
+use crate::limits::{MAX_EXTENT, MAX_RAYS};
 use crate::progress::{BakeProgress, Reporter, Silent};
 use crate::rig::mesh::{Mesh, area_weighted_normals};
 
@@ -62,15 +63,6 @@ use crate::rig::mesh::{Mesh, area_weighted_normals};
 pub const ORIGIN_OFFSET: f64 = 1e-4;
 /// Hits closer than this fraction of the bounding-box diagonal are ignored.
 pub const T_MIN: f64 = 1e-4;
-/// Largest accepted `max |coordinate| + bounding-box diagonal`: far beyond any character in
-/// any unit, and small enough that the triple products inside the ray–triangle test (cubes of
-/// coordinates, at most ~1e36 here) stay below `f32::MAX` (3.4e38) instead of overflowing
-/// into infinities that would silently turn occluders into misses.
-pub const MAX_EXTENT: f64 = 1e12;
-/// Upper bound on rays per vertex: 65 536 already puts QMC error far below f32 resolution of
-/// the transfer, and bounce bakes store one hit per occluded ray.
-pub const MAX_RAYS: usize = 1 << 16;
-
 /// What to simulate.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BakeSettings {

@@ -12,7 +12,7 @@ use crate::model::export::ExportError;
 use crate::model::export::Precision;
 use crate::model::fit::{Alpha, CoefDims, Dims, Features, FitOptions, Local, Prior};
 use crate::model::occluders::Occluders;
-use crate::model::train::{OptionError, check_options};
+use crate::pipeline::train::{OptionError, check_options};
 use crate::report::demo::DemoSettings;
 
 /// `aprt results`.
@@ -270,7 +270,7 @@ pub struct TrainArgs {
     /// mixed:x=KIND,y=KIND,z=KIND) to the character's bind and training poses and store it in
     /// the model, so an engine lights it from a handful of SH vectors (see `aprt rig`).
     #[arg(long)]
-    pub rig: Option<crate::lighting::RigKind>,
+    pub rig: Option<crate::irradiance_rig::RigKind>,
     /// Bake only shard I of N (frames f with f % N == I, 0-based) into the checkpoint and
     /// stop; when every shard is done, the same command with --resume instead fits the model
     /// (see docs/bake-farm.md).
@@ -393,7 +393,7 @@ pub struct RigArgs {
     /// Rig kind: constant, gradient, lattice:NXxNYxNZ or mixed:x=KIND,y=KIND,z=KIND (KIND
     /// constant, gradient or latticeN), over the character's own axes.
     #[arg(long)]
-    pub rig: crate::lighting::RigKind,
+    pub rig: crate::irradiance_rig::RigKind,
     /// The error a light may cost the rig before it is evaluated per vertex, in 8-bit grey
     /// levels (of a white Lambertian surface, radiance 1 = white).
     #[arg(long, default_value_t = 1.0)]

@@ -6,8 +6,10 @@ use anyhow::{Context, Result, bail};
 use crate::cli::args::RigArgs;
 use crate::cli::terminal::Terminal;
 use crate::io::outputs::{Input, check};
-use crate::lighting::rig_fit::fitting_meshes;
-use crate::lighting::{RigEvaluation, RigSettings, evaluate_rig, fit_rig, read_lights};
+use crate::irradiance_rig::fit::fitting_meshes;
+use crate::irradiance_rig::{RigEvaluation, RigSettings, evaluate_rig, fit_rig};
+use crate::lighting::read_lights;
+use crate::model::runtime::{FrameCost, rig_frame_cost};
 use crate::rig::mesh::Mesh;
 
 /// The meshes the rig is fitted over and the mesh it is evaluated on.
@@ -75,9 +77,23 @@ pub fn run(args: &RigArgs) -> Result<()> {
     };
     let refs: Vec<&Mesh> = fitting.iter().collect();
     let mut fitted = fit_rig(args.rig, &refs, args.samples);
-    fitted.tabulate(&posed, settings.order);
-    let report = evaluate_rig(&fitted, &posed, &lights, &settings)
+    fitted
+        .tabulate(&posed, settings.order)
+        .context("tabulating the rig's error")?;
+    let evaluation = evaluate_rig(&fitted, &posed, &lights, &settings)
         .with_context(|| format!("{}", args.lights.display()))?;
+    let us_per_frame = rig_frame_cost(
+        &fitted,
+        &posed,
+        &lights,
+        &evaluation.shares(),
+        settings.order,
+    )
+    .with_context(|| format!("{}: timing the rig", args.lights.display()))?;
+    let report = RigReport {
+        evaluation,
+        us_per_frame,
+    };
     if args.json {
         println!(
             "{}",
@@ -89,7 +105,17 @@ pub fn run(args: &RigArgs) -> Result<()> {
     Ok(())
 }
 
-fn print_report(r: &RigEvaluation) {
+/// What `aprt rig` reports: the rig's evaluation and, beside it, what it costs the core.
+#[derive(serde::Serialize)]
+struct RigReport {
+    #[serde(flatten)]
+    evaluation: RigEvaluation,
+    /// aprt-core's cost per frame for the rig's share.
+    us_per_frame: FrameCost,
+}
+
+fn print_report(report: &RigReport) {
+    let r = &report.evaluation;
     println!(
         "rig {}: {} SH vectors from {} surface samples, order {}, {} vertices, radius {:.3}",
         r.rig, r.sh_vectors, r.samples, r.order, r.vertices, r.radius
@@ -103,7 +129,7 @@ fn print_report(r: &RigEvaluation) {
             l.index, l.kind, l.mode, l.rig_share, l.transition_distance
         );
     }
-    let g = |e: crate::lighting::GreyError| format!("mean {:.3}, max {:.3}", e.mean, e.max);
+    let g = |e: crate::irradiance_rig::GreyError| format!("mean {:.3}, max {:.3}", e.mean, e.max);
     println!(
         "  error against exact, grey levels (target {}):",
         r.target_error
@@ -114,7 +140,7 @@ fn print_report(r: &RigEvaluation) {
         "    every light per vertex (SH floor) {}",
         g(r.error_grey_per_vertex)
     );
-    let c = r.us_per_frame;
+    let c = report.us_per_frame;
     println!(
         "  aprt-core per frame: {:.1} us rig vectors + {:.1} us rig shading + {:.1} us per-vertex lights = {:.1} us",
         c.rig_vectors, c.shade, c.analytic, c.total

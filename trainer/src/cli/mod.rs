@@ -4,7 +4,7 @@
 
 mod args;
 mod irradiance_rig;
-mod shlm;
+mod lightmap;
 mod source;
 mod terminal;
 
@@ -26,15 +26,15 @@ use crate::bake::checkpoint::{Checkpoint, OnExisting, ShardBaked};
 use crate::input::{InputKind, read_input};
 use crate::io::atomic::write_atomic;
 use crate::io::outputs::{Input, Output, check};
-use crate::io::scene::{CLIP_KEYS, Environment, Scene, read_scene};
 use crate::io::source::ClipSpec;
 use crate::model::ModelFrame;
 use crate::model::predict::{predict_clip, predict_world};
-use crate::model::train::{Outcome, TrainSettings};
+use crate::pipeline::scene::{SceneOutcome, SceneTrainOptions, SceneTrainReport, train_scene};
+use crate::pipeline::train::{Outcome, TrainSettings};
 use crate::progress::Reporter;
 use crate::rig::mesh::degenerate_note;
+use crate::scene::file::{CLIP_KEYS, Environment, Scene, read_scene};
 use crate::scene::lighting::SceneLighting;
-use crate::scene::train::{SceneOutcome, SceneTrainOptions, SceneTrainReport, train_scene};
 
 /// Pose-driven precomputed radiance transfer for skinned characters.
 #[derive(Debug, Parser)]
@@ -67,16 +67,22 @@ pub enum Command {
     /// maps projected to SH.
     Light(LightArgs),
     /// Fit an irradiance rig to a mesh or character and report, for a lights file, which
-    /// lights it carries, its error against exact evaluation and its cost per frame.
-    Rig(RigArgs),
+    /// lights it carries, its error against exact evaluation and its cost per frame (also
+    /// spelled `rig`, its earlier name).
+    #[command(alias = "rig")]
+    IrradianceRig(RigArgs),
     /// Sweep a scene's accuracy knobs and report error against µs per frame and bytes, the
     /// Pareto-optimal settings and the most accurate one within a budget.
     Report(ReportArgs),
-    /// Regenerate the irradiance-rig study on the built-in creature (docs/rigs).
-    RigStudy(RigStudyArgs),
-    /// SH light maps: bake a clip into a compressed light-map sequence, sample it at the
-    /// vertices, inspect it, compose it under lights, or train the pose-driven light-map model.
-    Shlm(shlm::ShlmArgs),
+    /// Regenerate the irradiance-rig study on the built-in creature (docs/rigs; also spelled
+    /// `rig-study`, its earlier name).
+    #[command(alias = "rig-study")]
+    IrradianceRigStudy(RigStudyArgs),
+    /// SH light maps (`.shlm` files): bake a clip into a compressed light-map sequence, sample
+    /// it at the vertices, inspect it, compose it under lights, or train the pose-driven
+    /// light-map model (also spelled `shlm`, its earlier name).
+    #[command(alias = "shlm")]
+    Lightmap(lightmap::LightmapArgs),
 }
 
 /// `err` and its causes on one line, each cause said once: a cause whose text its parent's
@@ -106,10 +112,10 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Eval(args) => eval(&args),
         Command::Inspect(args) => inspect(&args),
         Command::Results(args) => results(&args),
-        Command::Rig(args) => irradiance_rig::run(&args),
-        Command::RigStudy(args) => rig_study(&args),
+        Command::IrradianceRig(args) => irradiance_rig::run(&args),
+        Command::IrradianceRigStudy(args) => irradiance_rig_study(&args),
         Command::Report(args) => report(&args),
-        Command::Shlm(args) => shlm::run(&args),
+        Command::Lightmap(args) => lightmap::run(&args),
 
         Command::Light(args) => match args.command {
             LightCommand::Irradiance(args) => light_irradiance(&args),
@@ -330,7 +336,7 @@ fn results(args: &ResultsArgs) -> Result<()> {
     Ok(())
 }
 
-fn rig_study(args: &RigStudyArgs) -> Result<()> {
+fn irradiance_rig_study(args: &RigStudyArgs) -> Result<()> {
     // The study reads no file of the user's (its creature is built in).
     check(&[Output::directory(&args.out, "--out", &[])], &[])?;
     let command = format!(
@@ -338,7 +344,12 @@ fn rig_study(args: &RigStudyArgs) -> Result<()> {
         args.out.display(),
         args.order
     );
-    let path = crate::report::rig_study::run(&args.out, args.order as usize, &command, &Terminal)?;
+    let path = crate::report::irradiance_rig_study::run(
+        &args.out,
+        args.order as usize,
+        &command,
+        &Terminal,
+    )?;
     eprintln!("wrote {}", path.display());
     Ok(())
 }
@@ -446,8 +457,8 @@ fn train(args: &TrainArgs) -> Result<()> {
     settings.bake.validate()?;
     let poses = args.source.poses(&args.validate, &Terminal)?;
     args.source
-        .in_origin(crate::model::train::check(&poses, &settings))?;
-    let trained = match crate::model::train::train(poses, &args.output, &settings, &Terminal)? {
+        .in_origin(crate::pipeline::train::check(&poses, &settings))?;
+    let trained = match crate::pipeline::train::train(poses, &args.output, &settings, &Terminal)? {
         Outcome::Trained(trained) => *trained,
         Outcome::Shard(baked) => {
             shard_done(&baked, "aprt train");

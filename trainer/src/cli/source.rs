@@ -10,7 +10,6 @@ use crate::bake::BakeSettings;
 use crate::bake::budget::Workload;
 use crate::bake::clip::pose_all;
 use crate::io::outputs::{Input, gltf_inputs, obj_sequence_inputs};
-use crate::io::scene::{CLIP_KEYS, Scene, SceneSource};
 use crate::io::source::{
     BuiltinCharacter, ClipSpec, Poses, RigSource, joined, obj_sequence_meshes, parse_frames,
 };
@@ -18,6 +17,7 @@ use crate::progress::Reporter;
 use crate::rig::mannequin::MocapOptions;
 use crate::rig::mesh::Mesh;
 use crate::rig::{Clip, Rig};
+use crate::scene::file::{CLIP_KEYS, Scene, SceneSource};
 
 /// Source options shared by `train`, `simulate` and `eval`.
 #[derive(Debug, Clone, Default, clap::Args)]

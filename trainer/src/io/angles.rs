@@ -70,7 +70,7 @@ pub fn parse_angles(
     text: &str,
     pose_len: Option<usize>,
 ) -> Result<Vec<Vec<f64>>, AnglesError> {
-    let text = crate::io::without_bom(text);
+    let text = crate::text::without_bom(text);
     let mut rows: Vec<Vec<f64>> = Vec::new();
     let mut first_row = 0;
     for (i, line) in text.lines().enumerate() {

@@ -14,8 +14,8 @@
 //! left); the layout follows glTF's, `v` down, so it holds `1 − v`.
 
 use crate::input::{InputKind, read_input_text};
-use crate::lightmap::atlas::UvLayout;
 use crate::rig::mesh::{Mesh, area_weighted_normals};
+use crate::rig::uv::UvLayout;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
 
@@ -144,7 +144,7 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<Mesh, ObjError> {
 
 /// Parses OBJ text with its texture coordinates; see [`read_obj_with_uvs`].
 pub fn parse_obj_with_uvs(text: &str, path: &Path) -> Result<(Mesh, Option<UvLayout>), ObjError> {
-    let text = crate::io::without_bom(text);
+    let text = crate::text::without_bom(text);
     let at = |line: usize| {
         move |kind: LineError| ObjError::Line {
             path: path.to_owned(),

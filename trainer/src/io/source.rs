@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 
-use crate::bake::budget::MAX_FRAMES;
+use crate::limits::MAX_FRAMES;
 use crate::progress::Reporter;
 use crate::rig::character::Character;
 use crate::rig::creature::Creature;

@@ -43,8 +43,9 @@ use aprt_core::{MAX_COEFFS, MAX_ORDER, eval_basis};
 use image::{ImageFormat, ImageReader};
 use rayon::prelude::*;
 
-use crate::bake::budget::{self, MAX_BYTES};
+use crate::bake::budget;
 use crate::input::{InputError, InputKind, read_input};
+use crate::limits::MAX_BYTES;
 
 /// Bytes a decoded texel holds at the peak: the decoder's RGBA f32, its RGB f32 conversion and
 /// the pixels kept, 16 + 12 + 12.

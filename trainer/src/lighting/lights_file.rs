@@ -103,7 +103,7 @@ pub fn parse_lights(text: &str, path: &Path) -> Result<Vec<Light>, LightsFileErr
     };
     let table: toml::Table = text
         .parse()
-        .map_err(|e: toml::de::Error| syntax(crate::io::toml_problem(text, &e)))?;
+        .map_err(|e: toml::de::Error| syntax(crate::text::toml_problem(text, &e)))?;
     if let Some(key) = table.keys().find(|k| *k != "light") {
         return Err(syntax(format!(
             "unknown key `{key}`: a lights file holds only [[light]] tables"

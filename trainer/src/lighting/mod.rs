@@ -1,15 +1,11 @@
-//! Lighting from *Irradiance Rigs* (Yuan, Nowrouzezahrai and Sloan): the lights file,
-//! environment maps projected to SH, and irradiance at a point through the SH path next to the
-//! exact closed form. The formulas live in `aprt_core` (`Light`), so engines and the trainer
-//! evaluate the same ones. (In the trainer, `rig/` is the skinned character; paper 2's lighting
-//! rigs are called irradiance rigs here.)
+//! Lighting: the lights file, environment maps projected to SH, irradiance at a point through
+//! the SH path next to the exact closed form (*Irradiance Rigs*, Yuan, Nowrouzezahrai and
+//! Sloan, eq. 2), and the grey levels and luminance every error is shown in. The formulas live
+//! in `aprt_core` (`Light`), so engines and the trainer evaluate the same ones; the rigs that
+//! carry lights over a character are `irradiance_rig/`.
 
 pub mod env_map;
-pub mod evaluate;
 pub mod lights_file;
-pub mod rig_fit;
-pub mod rig_kind;
-pub mod surface_samples;
 
 use aprt_core::{Light, LightError, MAX_COEFFS, Rgb, Window, apply_window, irradiance_sh};
 use serde::Serialize;
@@ -17,10 +13,17 @@ use serde::Serialize;
 pub use env_map::{
     EnvMapError, EnvironmentImage, project_equirect, read_environment, read_equirect,
 };
-pub use evaluate::{RigErrors, RigEvaluation, RigSettings, evaluate_rig, rig_errors};
 pub use lights_file::{LightsFileError, finite_f32s, light_from_table, parse_lights, read_lights};
-pub use rig_fit::{FittedRig, GreyError, fit_rig, rig_vectors};
-pub use rig_kind::{RigKind, RigKindError};
+
+/// Grey levels per unit of irradiance: the radiance a white Lambertian surface reflects,
+/// `E / π`, on an 8-bit display where radiance 1 is white.
+pub const GREY_PER_IRRADIANCE: f64 = 255.0 / std::f64::consts::PI;
+
+/// Rec. 709 luminance: the one channel the model's shading takes of RGB lighting, and how an
+/// RGB shading is shown in grey.
+pub fn luminance(c: Rgb) -> f32 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
 
 /// One light's share of an [`IrradianceReport`].
 #[derive(Clone, Debug, Serialize)]

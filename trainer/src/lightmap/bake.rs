@@ -8,7 +8,6 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 
-use super::atlas::{Atlas, UvLayout};
 use super::codec::{MapSequence, atlas_fingerprint};
 use crate::bake::budget::Workload;
 use crate::bake::checkpoint::{BakeTarget, Checkpoint, OnExisting, ShardBaked};
@@ -17,6 +16,7 @@ use crate::bake::shard::Shard;
 use crate::bake::{BakeError, BakeSettings, PatternRotation, bake_points};
 use crate::progress::{BakeProgress, Reporter};
 use crate::rig::mesh::Mesh;
+use crate::rig::uv::{Atlas, UvLayout};
 use crate::rig::{Clip, Rig};
 
 /// The texels of an atlas, as the points a checkpoint bakes.

@@ -3,10 +3,8 @@
 //! atlas, one map per SH coefficient per frame, compressed as a sequence and composed under
 //! any lighting; and the pose-driven light map, the linear model fitted with texels as rows.
 
-pub mod atlas;
 pub mod bake;
 pub mod codec;
-pub mod compose;
 pub mod model;
 pub mod sample;
 pub mod summary;

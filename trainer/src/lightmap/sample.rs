@@ -3,9 +3,9 @@
 
 use anyhow::Result;
 
-use super::atlas::sample_bilinear;
 use super::bake::uv_layout;
 use crate::rig::Rig;
+use crate::rig::uv::sample_bilinear;
 
 /// Every map of `maps` (`resolution`² texels × `n2`) read at every vertex of `rig`'s bind mesh
 /// ([`at_vertices`] at the UVs of its layout): what `aprt shlm eval` writes.

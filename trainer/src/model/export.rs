@@ -9,7 +9,8 @@ use aprt_core::{
     MAX_LIT, MAX_ORDER, MAX_POSE_DIMS, MAX_POSE_LEN, MAX_VERTICES, SectionKind, VERTEX_BLOCK,
 };
 
-use crate::model::{BoneFrames, LinearModel, VertexBasis};
+use crate::model::{LinearModel, VertexBasis};
+use crate::rig::bone_frames::BoneFrames;
 
 /// Storage precision of the large sections (weights and per-vertex rows); pose sections are
 /// always f32.

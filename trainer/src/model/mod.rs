@@ -12,13 +12,16 @@
 pub mod export;
 pub mod features;
 pub mod fit;
+pub mod locality;
 pub mod occluders;
 pub mod precision;
 pub mod predict;
+pub mod proxies;
 pub mod runtime;
-pub mod train;
 
 use features::PoseFeatures;
+
+use crate::rig::bone_frames::BoneFrames;
 
 /// The vertex side of the model.
 #[derive(Clone, Debug, PartialEq)]
@@ -42,15 +45,6 @@ pub enum ModelFrame {
     Bone,
     /// World space: no bone rotations at runtime.
     World,
-}
-
-/// For bone-frame models: which bone's frame each vertex's transfer is expressed in.
-#[derive(Clone, Debug, PartialEq)]
-pub struct BoneFrames {
-    /// Number of bones.
-    pub count: usize,
-    /// The bone of each vertex.
-    pub vertex_bone: Vec<u16>,
 }
 
 /// The pose bound of a model, in the runtime's form (aprt-core's `PoseBounds` section): each

@@ -14,10 +14,10 @@ use aprt_core::{MAX_PROXIES, ProxyFrame, ProxySet, Skinning};
 use glam::Mat4;
 
 use crate::bake::clip::BakedClip;
-use crate::model::BoneFrames;
+use crate::model::proxies::{ProxyFit, ProxyOptions, fit_proxies};
 use crate::rig::Rig;
+use crate::rig::bone_frames::BoneFrames;
 use crate::rig::mesh::Mesh;
-use crate::rig::proxies::{ProxyFit, ProxyOptions, fit_proxies};
 
 /// One sphere of a proxies section.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -279,7 +279,7 @@ pub fn with_occlusion(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rig::proxies::Proxy;
+    use crate::model::proxies::Proxy;
 
     /// Two bones of four vertices each, far apart, and a third bone touching the first.
     fn parts() -> (Mesh, BoneFrames) {

@@ -4,7 +4,7 @@
 use anyhow::Result;
 use aprt_core::Rotation;
 
-use crate::lighting::rig_fit::GREY_PER_IRRADIANCE;
+use crate::lighting::GREY_PER_IRRADIANCE;
 use crate::model::LinearModel;
 use crate::model::export::{Precision, encode_model_with_rig};
 use crate::model::runtime::predict_shading;

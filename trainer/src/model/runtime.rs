@@ -1,12 +1,20 @@
 //! The trainer's view of a written model: evaluation through `aprt-core`, exactly as an
-//! engine would run it, and a description of the blob for `aprt inspect`.
+//! engine would run it, a description of the blob for `aprt inspect`, and what an irradiance
+//! rig costs the core per frame on a static mesh.
 
 use aprt_core::format::read_header;
+use std::time::{Duration, Instant};
+
 use aprt_core::{
-    Basis, Encoding, Frame, LitWeights, Model, PoseWeights, ProxyFrame, Rotation, SectionKind,
+    Basis, Encoding, Frame, Light, LitWeights, MAX_COEFFS, Model, Placement, PoseWeights,
+    ProxyFrame, RigLitWeights, Rotation, SectionKind, clamped_cosine,
 };
 
-use crate::model::BoneFrames;
+use crate::irradiance_rig::fit::{FittedRig, rig_vectors};
+use crate::model::export::{Precision, encode_model_with_rig};
+use crate::model::{LinearModel, VertexBasis};
+use crate::rig::bone_frames::BoneFrames;
+use crate::rig::mesh::Mesh;
 
 /// Per-vertex transfer (`v × n²`, vertex-major) for each pose, through `aprt-core`, in the
 /// model's frame (world, or each vertex's bone).
@@ -160,7 +168,7 @@ pub struct RigInfo {
 
 impl RigInfo {
     fn of(rig: &aprt_core::IrradianceRig<'_>, info: &aprt_core::ModelInfo) -> RigInfo {
-        let kind = crate::lighting::RigKind {
+        let kind = crate::irradiance_rig::RigKind {
             shape: rig.shape(),
             // A constant rig of one sample is the centroid probe; fitted ones have many.
             centroid: rig.vectors() == 1 && rig.samples() == 1,
@@ -336,7 +344,7 @@ pub fn predict_rig_shading(
         .zip(&shares)
         .map(|(l, &s)| l.scaled(s))
         .collect();
-    let vectors = crate::lighting::rig_vectors(&rig, &in_rig, order, &place)?;
+    let vectors = crate::irradiance_rig::rig_vectors(&rig, &in_rig, order, &place)?;
     let mut buffer = vec![0.0f32; model.info().rig_lit_weights_len(rig.vectors())];
     let mut lit = RigLitWeights::new(&mut buffer);
     model.light_rig(&pose, &vectors, rotations, &mut lit)?;
@@ -367,4 +375,125 @@ pub fn predict_rig_shading(
         })?;
     }
     Ok((out, shares))
+}
+
+/// Microseconds per frame in aprt-core, median of repeated frames.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct FrameCost {
+    /// The lights projected at the rig's samples and mapped to its SH vectors.
+    pub rig_vectors: f64,
+    /// The vectors pushed through the transfer and every vertex shaded.
+    pub shade: f64,
+    /// The lights' per-vertex shares, through each vertex's transfer.
+    pub analytic: f64,
+    /// All three together.
+    pub total: f64,
+}
+
+/// A world-frame model whose vertex `j` has the transfer of an unoccluded point of normal
+/// `normals[j]`, the clamped cosine (one pose entry, no pose dimensions): what the core shades
+/// a static mesh with, so a bare mesh's rig is timed on the core's own per-frame path.
+pub fn static_model(normals: &[[f32; 3]], order: usize) -> LinearModel {
+    let (n2, v) = (order * order, normals.len());
+    let mut weights = vec![0.0f64; n2 * v];
+    let mut t = [0.0f32; MAX_COEFFS];
+    for (j, n) in normals.iter().enumerate() {
+        if clamped_cosine(order, *n, &mut t[..n2]).is_ok() {
+            for c in 0..n2 {
+                weights[c * v + j] = f64::from(t[c]);
+            }
+        }
+    }
+    LinearModel {
+        order,
+        vertices: v,
+        pose_len: 1,
+        pose_mean: vec![0.0],
+        pose_projection: Vec::new(),
+        weights,
+        basis: VertexBasis::Identity,
+        alpha: 0.0,
+        bones: None,
+        angle_names: vec!["static".into()],
+        bounds: None,
+        cosines: Vec::new(),
+        proxies: None,
+    }
+}
+
+/// Median microseconds of `f` over repeated calls within about a tenth of a second.
+fn median_us(mut f: impl FnMut()) -> f64 {
+    let mut times = Vec::new();
+    let start = Instant::now();
+    while times.len() < 5 || (start.elapsed() < Duration::from_millis(100) && times.len() < 1000) {
+        let t = Instant::now();
+        f();
+        times.push(t.elapsed().as_secs_f64() * 1e6);
+    }
+    times.sort_by(f64::total_cmp);
+    times[times.len() / 2]
+}
+
+/// The core's cost per frame of `lights` on `mesh` (in the rig's root frame) lit through
+/// `fitted`, each light split by its rig share (`shares`, as the rig's evaluation chose): the
+/// rig's vectors, the rig-lit shading of a static model of `mesh`'s normals, and the
+/// per-vertex shares. Each step runs once before it is timed, so a refusal of the core is an
+/// error here, never a cost of 0 µs.
+pub fn rig_frame_cost(
+    fitted: &FittedRig,
+    mesh: &Mesh,
+    lights: &[Light],
+    shares: &[f32],
+    order: usize,
+) -> anyhow::Result<FrameCost> {
+    let in_rig: Vec<Light> = lights
+        .iter()
+        .zip(shares)
+        .map(|(l, &s)| l.scaled(s))
+        .collect();
+    let rest: Vec<f32> = shares.iter().map(|s| 1.0 - s).collect();
+    let blob = encode_model_with_rig(
+        &static_model(&mesh.normals, order),
+        Precision::F32,
+        Some(&fitted.bytes()),
+    )?;
+    let model = Model::parse(&blob)?;
+    let rig = model
+        .irradiance_rig()
+        .ok_or_else(|| anyhow::anyhow!("the static model written with the rig has no rig"))?;
+    let mut pose = PoseWeights::new();
+    model.set_pose(&[0.0], &mut pose)?;
+    let mut vectors = rig_vectors(&rig, &in_rig, order, &Placement::IDENTITY)?;
+    let rig_vectors_us = median_us(|| {
+        vectors = rig_vectors(&rig, &in_rig, order, &Placement::IDENTITY).unwrap_or_default();
+    });
+    let mut buffer = vec![0.0f32; model.info().rig_lit_weights_len(rig.vectors())];
+    let mut shading = vec![[0.0f32; 3]; mesh.vertex_count()];
+    let mut shade = || {
+        let mut lit = RigLitWeights::new(&mut buffer);
+        model.light_rig(&pose, &vectors, &[], &mut lit)?;
+        let placement = &Placement::IDENTITY;
+        model.shade_rig(&lit, &rig, placement, &mesh.positions, 0, &mut shading)
+    };
+    shade()?;
+    let shade_us = median_us(|| {
+        let _ = shade();
+    });
+    let analytic_us = match rest.iter().any(|&w| w > 0.0) {
+        true => {
+            let mut per_vertex =
+                || model.shade_lights(&pose, &[], lights, &rest, &mesh.positions, 0, &mut shading);
+            per_vertex()?;
+            median_us(|| {
+                let _ = per_vertex();
+            })
+        }
+        false => 0.0,
+    };
+    Ok(FrameCost {
+        rig_vectors: rig_vectors_us,
+        shade: shade_us,
+        analytic: analytic_us,
+        total: rig_vectors_us + shade_us + analytic_us,
+    })
 }

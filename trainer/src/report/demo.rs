@@ -11,9 +11,8 @@ use std::path::{Path, PathBuf};
 use crate::bake::BakeSettings;
 use crate::bake::clip::BakedClip;
 use crate::io::atomic::write_atomic;
-use crate::io::scene::{Scene, parse_scene};
-use crate::lighting::rig_fit::FIT_POSES;
-use crate::lighting::{RigKind, fit_rig};
+use crate::irradiance_rig::fit::FIT_POSES;
+use crate::irradiance_rig::{RigKind, fit_rig};
 use crate::model::export::{Precision, encode_model_with_rig};
 use crate::model::predict::predict_world;
 use crate::progress::Reporter;
@@ -22,11 +21,12 @@ use crate::report::experiment::{self, Row, standard_configs, table_markdown};
 use crate::report::figures::{
     ErrorPanel, picture_lighting, save_model_frame, save_panels, shade_with,
 };
-use crate::report::rig_frame::{RigFrame, demo_lights, save_rig_frame};
+use crate::report::irradiance_rig_frame::{RigFrame, demo_lights, save_rig_frame};
 use crate::report::sweep::{self, SceneClips};
 use crate::rig::character::Character;
 use crate::rig::mesh::Mesh;
 use crate::rig::{Clip, Rig};
+use crate::scene::file::{Scene, parse_scene};
 use crate::scene::lighting::SceneLighting;
 
 /// The rig the demo's model carries: the paper's mixed rig turned to a standing figure, three
@@ -202,7 +202,8 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
         )
         .collect();
     let mut rig = fit_rig(kind, &meshes, None);
-    rig.tabulate(bind, order);
+    rig.tabulate(bind, order)
+        .context("tabulating the irradiance rig's error")?;
     let blob = encode_model_with_rig(&default.fit.model, Precision::F32, Some(&rig.bytes()))?;
     write_atomic(&out.join("model.aprt"), &blob)
         .with_context(|| format!("cannot write {}", out.join("model.aprt").display()))?;

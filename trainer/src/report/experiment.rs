@@ -16,7 +16,7 @@ use crate::model::export::{ExportError, Precision, encode_model};
 use crate::model::fit::{Alpha, CoefDims, Dims, Features, Fit, FitError, FitOptions, Local, Prior};
 use crate::model::occluders::{DEFAULT_CULL, Occluders, occlusion, rig_section, skinning_of};
 use crate::model::predict::predict_world;
-use crate::model::train::{ClipSet, Selection, fit_clip};
+use crate::pipeline::train::{ClipSet, Selection, fit_clip};
 use crate::progress::{Reporter, Silent};
 use crate::report::evaluate::{mean_transfer, nearest_pose, relative_error, skinned_transfer};
 use crate::rig::Rig;

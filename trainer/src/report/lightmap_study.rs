@@ -23,7 +23,7 @@ use crate::model::export::{Extras, Precision, encode_model, encode_model_with};
 use crate::model::fit::{FitOptions, fit};
 use crate::model::predict::predict_clip;
 use crate::model::runtime::{describe, predict_transfer};
-use crate::model::train::{ClipSet, fit_clip};
+use crate::pipeline::train::{ClipSet, fit_clip};
 use crate::progress::Reporter;
 use crate::report::evaluate::{nearest_pose, relative_error};
 use crate::rig::pose_layout::PoseLayout;
@@ -495,7 +495,7 @@ fn preview(
     scratch: &Path,
     reporter: &dyn Reporter,
 ) -> Result<String> {
-    use crate::lightmap::compose::{ComposeSource, save_preview};
+    use crate::report::lightmap_preview::{ComposeSource, save_preview};
     let frame = clip.frames.len() / 2;
     let one = Clip {
         name: format!("{} frame {frame}", clip.name),

@@ -17,7 +17,7 @@ use crate::model::ModelFrame;
 use crate::model::export::{Precision, encode_model};
 use crate::model::fit::{Alpha, CoefDims, FitOptions};
 use crate::model::predict::predict_world;
-use crate::model::train::{ClipSet, fit_clip};
+use crate::pipeline::train::{ClipSet, fit_clip};
 use crate::progress::Reporter;
 use crate::report::evaluate::relative_error;
 use crate::report::experiment::{

@@ -6,9 +6,17 @@ use anyhow::{Result, bail};
 use aprt_core::ShRotation;
 use glam::DMat3;
 
-use crate::model::BoneFrames;
 use crate::rig::Rig;
 use crate::rig::transfer_rotation::{nearest_rotation, rotate_each};
+
+/// For bone-frame models: which bone's frame each vertex's transfer is expressed in.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BoneFrames {
+    /// Number of bones.
+    pub count: usize,
+    /// The bone of each vertex.
+    pub vertex_bone: Vec<u16>,
+}
 
 /// Every bone's world rotation in a pose: the rotation part of its skinning matrix.
 pub fn bone_rotations(rig: &dyn Rig, angles: &[f64]) -> Result<Vec<DMat3>> {

@@ -28,8 +28,8 @@
 //!   with its own area, instead of collapsing to a point;
 //! - charts are `mean ring circumference × profile length` in the mesh's units (the ring
 //!   polygons' perimeters averaged over the rings), and all share one scale to UV, so texel
-//!   density is uniform over the body; [`crate::lightmap::atlas::shelf_pack`] places them in
-//!   `[0,1]²`, [`crate::lightmap::atlas::pack::CHART_PADDING`] apart (`2·GUTTER + 2` texels at
+//!   density is uniform over the body; [`crate::rig::uv::shelf_pack`] places them in
+//!   `[0,1]²`, [`crate::rig::uv::pack::CHART_PADDING`] apart (`2·GUTTER + 2` texels at
 //!   256²), so that no chart's gutter reaches another's texels.
 //!
 //! The stretch of a chart is that of a cylinder's unrolling: exact along the shaft of a
@@ -39,7 +39,7 @@ use std::ops::Range;
 
 use glam::{DVec2, DVec3};
 
-use crate::lightmap::atlas::{UvLayout, shelf_pack};
+use crate::rig::uv::{UvLayout, shelf_pack};
 
 /// The joint that takes over at axial position `at` along a part, blending over `±half_width`.
 pub(crate) struct Band {

@@ -21,23 +21,22 @@ pub mod character;
 pub mod creature;
 pub mod gltf;
 pub(crate) mod lathe;
-pub mod locality;
 pub mod mannequin;
 pub mod mesh;
 pub mod mocap;
 pub mod pose_layout;
 pub mod pose_sampler;
 pub(crate) mod procedural;
-pub mod proxies;
 pub mod rotation_vector;
 pub mod skin;
 pub mod transfer_rotation;
+pub mod uv;
 
 pub use procedural::BuiltinRig;
 
 use glam::Mat4;
 
-use crate::lightmap::atlas::UvLayout;
+use crate::rig::uv::UvLayout;
 use character::CharacterError;
 use gltf::GltfError;
 use mannequin::MocapRigError;
@@ -181,7 +180,7 @@ pub trait Rig: Sync {
     fn clip(&self, name: &str) -> Result<Clip, RigError>;
 
     /// The bind mesh's UVs, per triangle corner, if the character has them: what an SH light
-    /// map is laid out by ([`crate::lightmap::atlas`]).
+    /// map is laid out by ([`crate::rig::uv`]).
     fn uv_layout(&self) -> Option<&UvLayout> {
         None
     }

@@ -5,9 +5,10 @@ use anyhow::{Context, Result};
 use aprt_core::{Light, LightError, MAX_COEFFS, MAX_ORDER, Rgb, ShRotation, irradiance_sh};
 use glam::{DQuat, DVec3, Vec3};
 
-use crate::io::scene::{Environment, Scene};
-use crate::lighting::rig_fit::{GREY_PER_IRRADIANCE, bounds};
+use crate::irradiance_rig::fit::bounds;
+use crate::lighting::GREY_PER_IRRADIANCE;
 use crate::rig::mesh::Mesh;
+use crate::scene::file::{Environment, Scene};
 
 /// A scene's lighting, ready to project.
 #[derive(Clone, Debug, Default)]
@@ -144,13 +145,6 @@ pub fn grey_error(a: Rgb, b: Rgb) -> f32 {
     (0..3).map(|k| (a[k] - b[k]).abs()).fold(0.0, f32::max) * GREY_PER_IRRADIANCE as f32
 }
 
-/// Luminance (Rec. 709) of each RGB coefficient: the one channel the model's shading takes.
-pub fn luminance(rgb: &[Rgb]) -> Vec<f32> {
-    rgb.iter()
-        .map(|&c| crate::report::rig_frame::luminance(c))
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use std::path::Path;
@@ -161,7 +155,7 @@ mod tests {
     use image::codecs::hdr::HdrEncoder;
 
     use super::SceneLighting;
-    use crate::io::scene::parse_scene;
+    use crate::scene::file::parse_scene;
 
     /// A 16×8 equirect sky: bright above the horizon (the top rows, +Y in the map's frame),
     /// dark below.

@@ -1,20 +1,20 @@
-//! Planning a scene: from what the scene file asks for (`crate::io::scene`), derive what to
+//! Planning a scene: from what the scene file asks for (`crate::scene::file`), derive what to
 //! compute and nothing else: no visibility rays without shadows, no bounce pass without
 //! bounces, the lowest SH order the lighting needs at the error target, no irradiance rig when
 //! the lights are far enough, the smallest precision within the target. Each decision is
 //! recorded as a sentence, so `aprt train --scene --report` and `aprt demo` can say what was
 //! computed and what was skipped.
 
+pub mod file;
+pub mod irradiance_rig_choice;
 pub mod lighting;
 pub mod order;
-pub mod rig_choice;
-pub mod train;
 
 use aprt_core::MAX_ORDER;
 
 use crate::bake::BakeSettings;
-use crate::io::scene::{Choice, Scene};
 use crate::rig::mesh::Mesh;
+use crate::scene::file::{Choice, Scene};
 use lighting::SceneLighting;
 use order::{OrderChoice, choose_order};
 

@@ -8,7 +8,8 @@ use super::entropy::{compress, decompress_chunk, decompress_exact};
 use super::header::{Header, StoredKind};
 use super::shared_exp::{Grouping, SignMode, decode_planes_on};
 use super::uniform::{self, Grid};
-use crate::bake::budget::{MAX_BYTES, bytes as show_bytes};
+use crate::bake::budget::bytes as show_bytes;
+use crate::limits::MAX_BYTES;
 
 /// Whether frame `f` of `frames` is stored under keyframe interval `interval`: every
 /// `interval`-th frame, and the last, so every in-between has a keyframe on each side.

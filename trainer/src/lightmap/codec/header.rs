@@ -4,7 +4,8 @@
 
 use super::shared_exp::{Grouping, PlaneSettings, SignMode};
 use super::{CodecError, CodecKind};
-use crate::bake::budget::{MAX_BYTES, bytes as show_bytes};
+use crate::bake::budget::bytes as show_bytes;
+use crate::limits::MAX_BYTES;
 
 /// The file's first eight bytes.
 pub const MAGIC: &[u8; 8] = b"APRTSHLM";

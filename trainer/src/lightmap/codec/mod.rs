@@ -77,7 +77,7 @@ pub struct MapSequence {
     /// `R`: the maps are `R × R` texels.
     pub resolution: usize,
     /// The fingerprint of the UV layout the maps were baked on
-    /// ([`crate::lightmap::atlas::UvLayout::fingerprint`]), which readers compare with the
+    /// ([`crate::rig::uv::UvLayout::fingerprint`]), which readers compare with the
     /// character's; `None` writes a version-2 file, which records none.
     pub atlas: Option<u32>,
     /// SH order `n`; each texel holds `n²` coefficients.

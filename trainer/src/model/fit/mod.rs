@@ -29,7 +29,7 @@ pub use input::{Anchor, FitInput, Validation};
 pub use local::{EntryGroup, Locality};
 pub use pose_pca::PosePca;
 pub use report::{
-    Choice, FAR_REST_DISTANCE, Fit, FitReport, HeldOutKind, StageSeconds, rest_distance,
+    Choice, FAR_REST_DISTANCE, Fit, FitReport, FitSeconds, HeldOutKind, rest_distance,
     rest_distance_sentence,
 };
 pub use ridge::{
@@ -283,7 +283,7 @@ pub fn fit_input(input: &FitInput<'_>, options: &FitOptions) -> Result<Fit, FitE
         .and_then(|a| rest_distance(input.angles, a.angles));
     let mut best: Option<Fit> = None;
     let mut choices = Vec::new();
-    let mut seconds = StageSeconds {
+    let mut seconds = FitSeconds {
         validate: clock.elapsed().as_secs_f64(),
         ..Default::default()
     };
@@ -389,7 +389,7 @@ fn fit_features(
         input.transfers.len(),
         input.order * input.order,
     );
-    let mut seconds = StageSeconds::default();
+    let mut seconds = FitSeconds::default();
     let with_cosines = !features.is_angles();
 
     let clock = Instant::now();

@@ -61,7 +61,7 @@ pub enum HeldOutKind {
 
 /// Wall-clock seconds per stage (summed over the feature sets tried).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct StageSeconds {
+pub struct FitSeconds {
     /// Input checks.
     pub validate: f64,
     /// Pose PCA.
@@ -76,9 +76,9 @@ pub struct StageSeconds {
     pub solve: f64,
 }
 
-impl StageSeconds {
+impl FitSeconds {
     /// Adds `other`'s seconds stage by stage.
-    pub(super) fn add(&mut self, other: &StageSeconds) {
+    pub(super) fn add(&mut self, other: &FitSeconds) {
         self.validate += other.validate;
         self.pose_pca += other.pose_pca;
         self.vertex_basis += other.vertex_basis;
@@ -116,7 +116,7 @@ pub struct FitReport {
     /// [`rest_distance`] of the anchor, when the fit has one and some entry moves.
     pub rest_distance: Option<f64>,
     /// Time per stage.
-    pub seconds: StageSeconds,
+    pub seconds: FitSeconds,
     /// What the occluder proxies did, when they were tried (`model::train::fit_clip`).
     pub occluders: Option<OccluderChoice>,
 }

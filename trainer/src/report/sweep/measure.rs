@@ -5,7 +5,7 @@
 use anyhow::{Result, bail};
 
 use crate::bake::clip::BakedClip;
-use crate::lighting::rig_fit::GREY_PER_IRRADIANCE;
+use crate::lighting::GREY_PER_IRRADIANCE;
 use crate::model::ModelFrame;
 use crate::model::predict::predict_world;
 use crate::report::experiment::{megaops, time_core};

@@ -16,16 +16,17 @@ use aprt_core::MAX_ORDER;
 
 use crate::bake::BakeSettings;
 use crate::bake::clip::{BakedClip, bake_clip, bake_rest};
-use crate::io::scene::Scene;
+use crate::lighting::luminance;
 use crate::model::ModelFrame;
 use crate::model::export::{Precision, encode_model};
 use crate::model::fit::{CoefDims, Dims, FitOptions};
 use crate::model::occluders::Occluders;
-use crate::model::train::{ClipSet, fit_clip};
+use crate::pipeline::train::{ClipSet, fit_clip};
 use crate::progress::{Reporter, Silent};
 use crate::rig::pose_layout::PoseLayout;
 use crate::rig::{Clip, Rig};
-use crate::scene::lighting::{SceneLighting, luminance};
+use crate::scene::file::Scene;
+use crate::scene::lighting::SceneLighting;
 use crate::scene::{BakePlan, plan_bake};
 use measure::{Measured, Truth, measure};
 use pareto::{Cost, Presets, front, presets, recommend};
@@ -258,7 +259,10 @@ pub fn sweep(
     let e = &scene.effects;
     let plan = &reference.plan;
     let bind = rig.bind_mesh();
-    let lum = luminance(&reference.lighting.sh_at_centre(MAX_ORDER, bind)?);
+    let lum: Vec<f32> = (reference.lighting.sh_at_centre(MAX_ORDER, bind)?)
+        .into_iter()
+        .map(luminance)
+        .collect();
     let truth = Truth {
         tests: &reference.tests,
         lighting: &lum,

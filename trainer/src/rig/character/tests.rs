@@ -20,8 +20,7 @@ fn character_charts_are_packed_apart() {
     // The build stays well under a second at the largest resolution a bake would use.
     let start = std::time::Instant::now();
     let layout = c.uv_layout().unwrap();
-    let atlas =
-        crate::lightmap::atlas::Atlas::build(layout, &c.bind_mesh().triangles, 1024).unwrap();
+    let atlas = crate::rig::uv::Atlas::build(layout, &c.bind_mesh().triangles, 1024).unwrap();
     let seconds = start.elapsed().as_secs_f64();
     let covered = atlas.filled().iter().filter(|&&f| f).count();
     eprintln!("built-in human at 1024²: {seconds:.3} s, {covered} texels filled");

@@ -182,7 +182,7 @@ fn check_positions(root: &json::Root, path: &Path) -> Result<(), GltfError> {
             let Some(index) = primitive.attributes.get(&position) else {
                 continue;
             };
-            let mesh_item = super::load::item("mesh", m, mesh.name.as_deref());
+            let mesh_item = super::item("mesh", m, mesh.name.as_deref());
             let within = format!("POSITION of {mesh_item} primitive {p}");
             let refuse = |item: String, problem: String| GltfError::Invalid {
                 path: path.to_path_buf(),
@@ -250,7 +250,7 @@ fn load_buffers(
     };
     let mut buffers = Vec::new();
     for buffer in document.buffers() {
-        let item = super::load::item("buffer", buffer.index(), buffer.name());
+        let item = super::item("buffer", buffer.index(), buffer.name());
         let data = match buffer.source() {
             Source::Bin => match blob {
                 Some(blob) if buffer.index() == 0 => blob.to_vec(),

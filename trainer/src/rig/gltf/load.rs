@@ -9,15 +9,15 @@ use glam::{DMat4, DQuat, DVec3};
 use gltf::animation::util::ReadOutputs;
 use gltf::mesh::{Mode, Semantic};
 
-use super::GltfError;
 use super::animation::{Animation, Track};
 use super::curve::{Curve, Interpolation};
 use super::skeleton::{Skeleton, Trs};
 use super::spec;
+use super::{GltfError, item};
 use crate::input::{InputKind, read_input};
-use crate::lightmap::atlas::UvLayout;
 use crate::rig::mesh::{Mesh, area_weighted_normals};
 use crate::rig::skin::Skin;
+use crate::rig::uv::UvLayout;
 
 /// Everything [`super::GltfRig`] is built from.
 pub struct Parts {
@@ -37,14 +37,6 @@ type Influences = Vec<Vec<(u32, f32)>>;
 
 /// The merged bind mesh, its influences and its `TEXCOORD_0` (see [`merge_primitives`]).
 type Merged = (Mesh, Influences, Option<Vec<[f32; 2]>>);
-
-/// `kind index "name"`, the way every error names an item.
-pub fn item(kind: &str, index: usize, name: Option<&str>) -> String {
-    match name {
-        Some(name) => format!("{kind} {index} {name:?}"),
-        None => format!("{kind} {index}"),
-    }
-}
 
 /// Reads `path` (`.gltf` with embedded or external buffers, or `.glb`).
 pub fn read(path: &Path) -> Result<Parts, GltfError> {
@@ -543,7 +535,7 @@ where
 }
 
 /// The primitive's `TEXCOORD_0` as floats (normalized integers mapped to `[0,1]`), if it has
-/// them (`n` positions). Non-finite values are kept: [`crate::lightmap::atlas::Atlas::build`]
+/// them (`n` positions). Non-finite values are kept: [`crate::rig::uv::Atlas::build`]
 /// refuses them naming the triangle, while the rig stays usable without a light map.
 fn read_uvs<'a, 's, F>(
     primitive: &'a gltf::Primitive<'a>,

@@ -53,18 +53,26 @@ mod load;
 mod skeleton;
 mod spec;
 
-use crate::lightmap::atlas::UvLayout;
+use crate::rig::uv::UvLayout;
 pub(crate) use document::{external_file, split as gltf_split};
 use std::path::{Path, PathBuf};
 
 use glam::{DVec3, Mat4, Vec3};
 
-use crate::bake::budget::MAX_FRAMES;
+use crate::limits::MAX_FRAMES;
 use crate::rig::mesh::Mesh;
 use crate::rig::skin::{Skin, SkinError};
 use crate::rig::{Clip, PoseError, Rig, RigError, check_fps, check_pose};
 use animation::Animation;
 use skeleton::{Skeleton, Trs};
+
+/// `kind index "name"`, the way every error names an item.
+pub fn item(kind: &str, index: usize, name: Option<&str>) -> String {
+    match name {
+        Some(name) => format!("{kind} {index} {name:?}"),
+        None => format!("{kind} {index}"),
+    }
+}
 
 /// Why a glTF rig could not be loaded, posed or sampled. Load errors name the file and the
 /// item (mesh, primitive, accessor, node, skin, animation channel) and what is wrong with it.

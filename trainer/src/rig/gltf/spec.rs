@@ -21,7 +21,7 @@ use gltf::animation::Property;
 use gltf::json::validation::Checked;
 use gltf::mesh::Semantic;
 
-use super::load::item;
+use super::item;
 
 /// Most vertices the merged skinned meshes may have: what a model blob can hold.
 pub const MAX_VERTICES: usize = aprt_core::MAX_VERTICES;

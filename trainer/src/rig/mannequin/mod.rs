@@ -34,13 +34,13 @@ use std::path::Path;
 
 use glam::{DAffine3, DQuat, DVec3, Mat4};
 
-use crate::bake::MAX_EXTENT;
-use crate::bake::budget::MAX_FRAMES;
-use crate::lightmap::atlas::UvLayout;
+use crate::limits::MAX_EXTENT;
+use crate::limits::MAX_FRAMES;
 use crate::rig::mesh::Mesh;
 use crate::rig::mocap::{Mocap, MocapError};
 use crate::rig::rotation_vector;
 use crate::rig::skin::Skin;
+use crate::rig::uv::UvLayout;
 use crate::rig::{Clip, PoseError, Rig, RigError, check_fps, check_pose};
 
 /// Most joints a mannequin is built for: the most bones a model may have

@@ -12,7 +12,7 @@ use std::str::SplitAsciiWhitespace;
 use glam::DVec3;
 
 use super::{Channel, Joint, Mocap};
-use crate::io::excerpt;
+use crate::text::excerpt;
 
 /// Why a BVH file could not be read.
 #[derive(Debug, thiserror::Error)]
@@ -262,7 +262,7 @@ impl Open {
 
 pub(super) fn parse(text: &str) -> Result<Mocap, Failure> {
     // A leading byte-order mark would glue itself to `HIERARCHY`.
-    let text = crate::io::without_bom(text);
+    let text = crate::text::without_bom(text);
     let mut lex = Lexer::new(text);
     // Nothing of a file that is not BVH is quoted: it may be any file a path points at.
     let (line, first) = lex.expect_any("HIERARCHY")?;

@@ -8,10 +8,10 @@ use std::ops::Range;
 use glam::Mat4;
 
 use super::skeleton::{Dof, Skeleton, joint_matrices};
-use crate::lightmap::atlas::UvLayout;
 use crate::rig::lathe::Body;
 use crate::rig::mesh::Mesh;
 use crate::rig::skin::{Skin, SkinError};
+use crate::rig::uv::UvLayout;
 use crate::rig::{Clip, PoseError, Rig, RigError, check_pose};
 
 /// Why a pose or clip request failed.

@@ -271,7 +271,7 @@ pub(crate) fn assert_charts_apart<'a>(
     rig: &dyn Rig,
     parts: impl Iterator<Item = (&'a str, Range<usize>)>,
 ) {
-    use crate::lightmap::atlas::{Atlas, sample_bilinear};
+    use crate::rig::uv::{Atlas, sample_bilinear};
     let triangles = &rig.bind_mesh().triangles;
     let layout = rig.uv_layout().expect("a lathe body has a UV layout");
     assert_eq!(layout.corners.len(), triangles.len());

@@ -10,8 +10,8 @@ use image::RgbImage;
 use plotters::prelude::*;
 
 use super::measure::{Agg, Measured};
-use crate::lighting::rig_fit::GREY_PER_IRRADIANCE;
-use crate::lighting::{FittedRig, rig_vectors};
+use crate::irradiance_rig::{FittedRig, rig_vectors};
+use crate::lighting::GREY_PER_IRRADIANCE;
 use crate::report::plots::{Axes, Series, line_plot, register_font};
 use crate::report::render::{
     BACKGROUND, Colormap, GUTTER, View, render_scalar, save_png_atomic, side_by_side,

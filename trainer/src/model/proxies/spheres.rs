@@ -227,7 +227,7 @@ pub(super) fn misfit(points: &[DVec3], part: &[bool], centres: &[DVec3], radii: 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rig::proxies::solid::box_points;
+    use crate::model::proxies::solid::box_points;
 
     #[test]
     fn two_blobs_get_one_centre_each() {

@@ -15,7 +15,7 @@ use anyhow::{Context, Result};
 use serde::Serialize;
 
 use crate::io::atomic::write_atomic;
-use crate::lighting::fit_rig;
+use crate::irradiance_rig::fit_rig;
 use crate::progress::Reporter;
 use crate::rig::creature::Creature;
 use crate::rig::mesh::Mesh;

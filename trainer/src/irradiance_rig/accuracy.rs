@@ -1,22 +1,28 @@
 //! A fitted irradiance rig under a set of lights, on one posed mesh: which lights it carries
 //! and which go per vertex (the error-driven choice of *Irradiance Rigs*, section 3.1), its
-//! error against the exact, horizon-clipped irradiance at every vertex, and what the core
-//! spends on it per frame.
-
-use std::time::{Duration, Instant};
+//! error against the exact, horizon-clipped irradiance at every vertex. What the core spends
+//! on it per frame is the runtime's to measure (`model::runtime::rig_frame_cost`).
 
 use aprt_core::{
-    DEFAULT_BAND, IrradianceRig, Light, MAX_COEFFS, Model, Placement, PoseWeights, Rgb,
-    RigLitWeights, clamped_cosine, irradiance_sh, light_strength,
+    DEFAULT_BAND, IrradianceRig, Light, MAX_COEFFS, Placement, PointLight, Rgb, irradiance_sh,
+    light_strength,
 };
+use rayon::prelude::*;
 use serde::Serialize;
 
-use super::kind_name;
-use super::rig_fit::{FittedRig, GREY_PER_IRRADIANCE, GreyError, rig_vectors};
-use crate::model::export::{Precision, encode_model_with_rig};
-use crate::model::{LinearModel, VertexBasis};
+use super::fit::{FittedRig, GreyError, directions, rig_vectors};
+use crate::lighting::GREY_PER_IRRADIANCE;
+use crate::lighting::kind_name;
 use crate::rig::mesh::Mesh;
 
+/// Distances of the error table, in radii of the character from its centre: from just outside
+/// the bounding sphere to where every rig is within a fraction of a grey level for a light of
+/// unit strength.
+const TABLE_DISTANCES: usize = 24;
+const TABLE_NEAREST: f64 = 1.05;
+const TABLE_FARTHEST: f64 = 64.0;
+/// Vertices the table's error is measured at, at most (every k-th vertex).
+const TABLE_VERTICES: usize = 4096;
 /// What to evaluate a rig for.
 #[derive(Clone, Copy, Debug)]
 pub struct RigSettings {
@@ -57,19 +63,6 @@ pub struct LightPath {
     pub transition_distance: f32,
 }
 
-/// Microseconds per frame in aprt-core, median of repeated frames.
-#[derive(Clone, Copy, Debug, Default, Serialize)]
-pub struct FrameCost {
-    /// The lights projected at the rig's samples and mapped to its SH vectors.
-    pub rig_vectors: f64,
-    /// The vectors pushed through the transfer and every vertex shaded.
-    pub shade: f64,
-    /// The lights' per-vertex shares, through each vertex's transfer.
-    pub analytic: f64,
-    /// All three together.
-    pub total: f64,
-}
-
 /// A rig under a set of lights on one mesh.
 #[derive(Clone, Debug, Serialize)]
 pub struct RigEvaluation {
@@ -97,8 +90,13 @@ pub struct RigEvaluation {
     /// Every light per vertex through SH, against the exact irradiance: the truncation floor
     /// no choice of rig can go below.
     pub error_grey_per_vertex: GreyError,
-    /// aprt-core's cost per frame for the rig's share.
-    pub us_per_frame: FrameCost,
+}
+
+impl RigEvaluation {
+    /// Each light's share carried by the rig, in order (what its cost is measured with).
+    pub fn shares(&self) -> Vec<f32> {
+        self.lights.iter().map(|l| l.rig_share).collect()
+    }
 }
 
 /// Each light's share carried by the rig, in order.
@@ -225,6 +223,48 @@ pub fn rig_errors(
     })
 }
 
+impl FittedRig {
+    /// The error table of section 3.1: for unit-strength point lights at
+    /// `TABLE_DISTANCES` (24) distances (in radii) around the character, in 26 directions, the
+    /// worst grey-level difference over the vertices of `mesh` (root frame) between the rig's
+    /// irradiance and the per-vertex SH irradiance at `order`. An error is the core's refusal
+    /// of the rig or of a light, never an empty or partial table.
+    pub fn tabulate(&mut self, mesh: &Mesh, order: usize) -> Result<(), aprt_core::Error> {
+        self.table.clear();
+        let bytes = self.bytes();
+        let rig = IrradianceRig::parse(&bytes)?;
+        let step = mesh.positions.len().div_ceil(TABLE_VERTICES).max(1);
+        let vertices: Vec<usize> = (0..mesh.positions.len()).step_by(step).collect();
+        let ratio = (TABLE_FARTHEST / TABLE_NEAREST).powf(1.0 / (TABLE_DISTANCES - 1) as f64);
+        let table = (0..TABLE_DISTANCES)
+            .into_par_iter()
+            .map(|i| {
+                let d = TABLE_NEAREST * ratio.powi(i as i32);
+                let mut worst = 0.0f64;
+                for dir in directions() {
+                    let at = std::array::from_fn(|k| self.centre[k] + d * self.radius * dir[k]);
+                    let light = Light::Point(PointLight {
+                        position: at.map(|x| x as f32),
+                        intensity: [1.0; 3],
+                    });
+                    let errors = rig_errors(
+                        &rig,
+                        mesh,
+                        vertices.iter().copied(),
+                        &[light],
+                        &[1.0],
+                        order,
+                    )?;
+                    worst = worst.max(errors.rig_vs_per_vertex.max);
+                }
+                Ok([d, worst])
+            })
+            .collect::<Result<Vec<[f64; 2]>, aprt_core::Error>>()?;
+        self.table = table;
+        Ok(())
+    }
+}
+
 /// Evaluates a fitted rig under `lights` on `mesh` (in the rig's root frame); an error names
 /// the light the core refused.
 pub fn evaluate_rig(
@@ -275,124 +315,13 @@ pub fn evaluate_rig(
         error_grey: errors.chosen,
         error_grey_all_rig: errors.all_rig,
         error_grey_per_vertex: errors.per_vertex,
-        us_per_frame: frame_cost(&bytes, mesh, lights, &share, order),
     })
-}
-
-/// A world-frame model whose vertex `j` has the transfer of an unoccluded point of normal
-/// `normals[j]`, the clamped cosine (one pose entry, no pose dimensions): what the core shades
-/// a static mesh with, so a bare mesh's rig is timed on the core's own per-frame path.
-pub fn static_model(normals: &[[f32; 3]], order: usize) -> LinearModel {
-    let (n2, v) = (order * order, normals.len());
-    let mut weights = vec![0.0f64; n2 * v];
-    let mut t = [0.0f32; MAX_COEFFS];
-    for (j, n) in normals.iter().enumerate() {
-        if clamped_cosine(order, *n, &mut t[..n2]).is_ok() {
-            for c in 0..n2 {
-                weights[c * v + j] = f64::from(t[c]);
-            }
-        }
-    }
-    LinearModel {
-        order,
-        vertices: v,
-        pose_len: 1,
-        pose_mean: vec![0.0],
-        pose_projection: Vec::new(),
-        weights,
-        basis: VertexBasis::Identity,
-        alpha: 0.0,
-        bones: None,
-        angle_names: vec!["static".into()],
-        bounds: None,
-        cosines: Vec::new(),
-        proxies: None,
-    }
-}
-
-/// Median microseconds of `f` over repeated calls within about a tenth of a second.
-fn median_us(mut f: impl FnMut()) -> f64 {
-    let mut times = Vec::new();
-    let start = Instant::now();
-    while times.len() < 5 || (start.elapsed() < Duration::from_millis(100) && times.len() < 1000) {
-        let t = Instant::now();
-        f();
-        times.push(t.elapsed().as_secs_f64() * 1e6);
-    }
-    times.sort_by(f64::total_cmp);
-    times[times.len() / 2]
-}
-
-/// The core's cost per frame of `lights` on `mesh`, each split by its rig share: the rig's
-/// vectors, the rig-lit shading, and the per-vertex shares.
-fn frame_cost(
-    rig_bytes: &[u8],
-    mesh: &Mesh,
-    lights: &[Light],
-    share: &[f32],
-    order: usize,
-) -> FrameCost {
-    let in_rig: Vec<Light> = lights
-        .iter()
-        .zip(share)
-        .map(|(l, &s)| l.scaled(s))
-        .collect();
-    let rest: Vec<f32> = share.iter().map(|s| 1.0 - s).collect();
-    let Ok(blob) = encode_model_with_rig(
-        &static_model(&mesh.normals, order),
-        Precision::F32,
-        Some(rig_bytes),
-    ) else {
-        return FrameCost::default();
-    };
-    let Ok(model) = Model::parse(&blob) else {
-        return FrameCost::default();
-    };
-    let Some(rig) = model.irradiance_rig() else {
-        return FrameCost::default();
-    };
-    let mut pose = PoseWeights::new();
-    if model.set_pose(&[0.0], &mut pose).is_err() {
-        return FrameCost::default();
-    }
-    let mut vectors = Vec::new();
-    let rig_vectors_us = median_us(|| {
-        vectors = rig_vectors(&rig, &in_rig, order, &Placement::IDENTITY).unwrap_or_default();
-    });
-    let mut buffer = vec![0.0f32; model.info().rig_lit_weights_len(rig.vectors())];
-    let mut shading = vec![[0.0f32; 3]; mesh.vertex_count()];
-    let shade_us = median_us(|| {
-        let mut lit = RigLitWeights::new(&mut buffer);
-        let lit_ok = model.light_rig(&pose, &vectors, &[], &mut lit).is_ok();
-        if lit_ok {
-            let _ = model.shade_rig(
-                &lit,
-                &rig,
-                &Placement::IDENTITY,
-                &mesh.positions,
-                0,
-                &mut shading,
-            );
-        }
-    });
-    let analytic_us = match rest.iter().any(|&w| w > 0.0) {
-        true => median_us(|| {
-            let _ = model.shade_lights(&pose, &[], lights, &rest, &mesh.positions, 0, &mut shading);
-        }),
-        false => 0.0,
-    };
-    FrameCost {
-        rig_vectors: rig_vectors_us,
-        shade: shade_us,
-        analytic: analytic_us,
-        total: rig_vectors_us + shade_us + analytic_us,
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lighting::fit_rig;
+    use crate::irradiance_rig::fit_rig;
     use crate::rig::Rig;
     use crate::rig::character::Character;
     use aprt_core::PointLight;
@@ -406,7 +335,7 @@ mod tests {
         let mesh = human.bind_mesh();
         let mut fitted = fit_rig("gradient".parse().unwrap(), &[mesh], None);
         let settings = RigSettings::default();
-        fitted.tabulate(mesh, settings.order);
+        fitted.tabulate(mesh, settings.order).unwrap();
         let bytes = fitted.bytes();
         let rig = IrradianceRig::parse(&bytes).unwrap();
         let which: Vec<usize> = (0..mesh.vertex_count()).step_by(37).collect();
@@ -465,5 +394,21 @@ mod tests {
         // The table is the worst of 26 directions at 24 distances; a light between them may
         // cost a little more than the target.
         assert!(worst <= 2.0 * target, "the rig added {worst} grey levels");
+    }
+
+    #[test]
+    fn error_table_falls_with_distance() {
+        let human = Character::builtin();
+        let mesh = human.bind_mesh();
+        let mut fitted = fit_rig("gradient".parse().unwrap(), &[mesh], None);
+        fitted.tabulate(mesh, 3).unwrap();
+        assert_eq!(fitted.table.len(), TABLE_DISTANCES);
+        let (near, far) = (fitted.table[0][1], fitted.table[TABLE_DISTANCES - 1][1]);
+        assert!(near > 10.0 * far && far >= 0.0, "{near} → {far}");
+        // The core reads the same table and bisects it for a transition distance.
+        let bytes = fitted.bytes();
+        let rig = IrradianceRig::parse(&bytes).unwrap();
+        let t = rig.transition_distance(1.0, 1.0);
+        assert!(t > 0.0 && rig.error_at(t / rig.radius()) <= 1.0 + 1e-3);
     }
 }

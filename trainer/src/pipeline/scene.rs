@@ -1,5 +1,5 @@
 //! `aprt train --scene`: plan the scene, train what it needs through
-//! [`crate::model::train::train`], and measure what the plan saved against the full
+//! [`crate::pipeline::train::train`], and measure what the plan saved against the full
 //! simulation (shadows, every coefficient the runtime holds, the scene's rays and bounces) on
 //! a few of the same poses, in the same run.
 
@@ -9,21 +9,21 @@ use std::time::Instant;
 use anyhow::Result;
 use aprt_core::{MAX_ORDER, Rgb};
 
-use super::lighting::SceneLighting;
-use super::rig_choice::{CANDIDATES, RigDecision, choose_rig};
-use super::{BakePlan, plan_bake};
 use crate::bake::checkpoint::OnExisting;
 use crate::bake::shard::Shard;
 use crate::bake::{BakeSettings, bake_poses};
-use crate::io::scene::{Choice, Scene};
 use crate::io::source::Poses;
 use crate::model::fit::FitOptions;
 use crate::model::precision::PrecisionChoice;
-use crate::model::train::{
-    Outcome, ShardBaked, StageSeconds, TrainSettings, fitting_surfaces, train,
+use crate::pipeline::train::{
+    Outcome, RunSeconds, ShardBaked, TrainSettings, fitting_surfaces, train,
 };
 use crate::progress::{Reporter, Silent};
 use crate::rig::mesh::Mesh;
+use crate::scene::file::{Choice, Scene};
+use crate::scene::irradiance_rig_choice::{CANDIDATES, RigDecision, choose_rig};
+use crate::scene::lighting::SceneLighting;
+use crate::scene::{BakePlan, plan_bake};
 
 /// Poses the full simulation is timed on, at most.
 pub const FULL_SIMULATION_POSES: usize = 3;
@@ -58,7 +58,7 @@ pub struct SceneTrainReport {
     /// Wall-clock seconds of the whole command, planning included.
     pub seconds: f64,
     /// Seconds by stage.
-    pub stages: StageSeconds,
+    pub stages: RunSeconds,
     /// The full simulation, timed on a few poses of the same run.
     pub full_simulation: FullSimulation,
     /// Model bytes.

@@ -9,16 +9,16 @@ use anyhow::{Context, Result, bail};
 use aprt_core::{Light, Rgb};
 use image::{Rgb as Pixel, RgbImage, imageops};
 
-use super::atlas::{Atlas, UvLayout, sample_bilinear};
-use super::bake::{texel_positions, uv_layout};
-use super::codec::{MAGIC, ShlmFile};
-use super::model::predict_maps;
-use super::sample::at_vertices;
 use crate::bake::{BakeSettings, bake_pose};
+use crate::lighting::luminance;
+use crate::lightmap::bake::{texel_positions, uv_layout};
+use crate::lightmap::codec::{MAGIC, ShlmFile};
+use crate::lightmap::model::predict_maps;
+use crate::lightmap::sample::at_vertices;
 use crate::report::figures::{PICTURE_VIEW, upright};
 use crate::report::render::{Colormap, render_scalar, render_with, save_png_atomic, side_by_side};
-use crate::report::rig_frame::luminance;
 use crate::rig::mesh::Mesh;
+use crate::rig::uv::{Atlas, UvLayout, sample_bilinear};
 use crate::rig::{Clip, Rig};
 
 /// Texels composed per call into aprt-core: the fixed buffer an engine would stream through.

@@ -1,4 +1,4 @@
-//! `aprt shlm`: SH light maps. Bake a clip into a compressed light-map sequence, read it back
+//! `aprt lightmap`: SH light maps. Bake a clip into a compressed light-map sequence, read it back
 //! at the vertices (comparable with `aprt simulate`), inspect it, compose it under lights, and
 //! train the pose-driven light-map model.
 
@@ -20,41 +20,41 @@ use crate::lightmap::bake::{
     CheckpointSettings, bake_light_map_shard, bake_light_maps, check_atlas,
 };
 use crate::lightmap::codec::{CodecSettings, ShlmFile, encode};
-use crate::lightmap::compose::{ComposeSource, save_preview};
 use crate::lightmap::model::{LightMapTraining, predict_maps, train_light_maps};
 use crate::lightmap::sample::maps_at_vertices;
 use crate::lightmap::summary::summarize;
+use crate::report::lightmap_preview::{ComposeSource, save_preview};
 
-/// `aprt shlm`.
+/// `aprt lightmap`.
 #[derive(Debug, Args)]
-pub struct ShlmArgs {
+pub struct LightmapArgs {
     /// What to do.
     #[command(subcommand)]
-    pub command: ShlmCommand,
+    pub command: LightmapCommand,
 }
 
-/// The `aprt shlm` commands.
+/// The `aprt lightmap` commands.
 #[derive(Debug, Subcommand)]
-pub enum ShlmCommand {
+pub enum LightmapCommand {
     /// Bake every frame of a clip into SH light maps on the character's UV atlas and write the
     /// compressed sequence.
-    Bake(ShlmBakeArgs),
+    Bake(LightmapBakeArgs),
     /// Sample a sequence (or a light-map model) at every vertex's UV into a (frames,
     /// vertices, n²) float32 .npy, comparable with `aprt simulate`.
-    Eval(ShlmEvalArgs),
+    Eval(LightmapEvalArgs),
     /// Print a sequence's dimensions, sizes and decode time.
-    Inspect(ShlmInspectArgs),
+    Inspect(LightmapInspectArgs),
     /// Compose a frame's light map under a lights file and write it as a PNG.
-    Compose(ShlmComposeArgs),
+    Compose(LightmapComposeArgs),
     /// Bake a clip's light maps and fit the pose-driven light-map model to them.
-    Train(ShlmTrainArgs),
+    Train(LightmapTrainArgs),
     /// Regenerate the light-map comparison on the real glTF characters (docs/results/lightmaps).
-    Study(ShlmStudyArgs),
+    Study(LightmapStudyArgs),
 }
 
-/// `aprt shlm study`.
+/// `aprt lightmap study`.
 #[derive(Debug, Args)]
-pub struct ShlmStudyArgs {
+pub struct LightmapStudyArgs {
     /// Output directory (README.md and the previews).
     #[arg(long)]
     pub out: PathBuf,
@@ -84,9 +84,9 @@ pub struct AtlasArgs {
     pub resume: bool,
 }
 
-/// `aprt shlm bake`.
+/// `aprt lightmap bake`.
 #[derive(Debug, Args)]
-pub struct ShlmBakeArgs {
+pub struct LightmapBakeArgs {
     /// The character and its clip.
     #[command(flatten)]
     pub source: SourceArgs,
@@ -106,10 +106,10 @@ pub struct ShlmBakeArgs {
     pub shard: Option<Shard>,
 }
 
-/// `aprt shlm eval`.
+/// `aprt lightmap eval`.
 #[derive(Debug, Args)]
-pub struct ShlmEvalArgs {
-    /// The sequence (.shlm), or a light-map model (.aprt from `aprt shlm train`).
+pub struct LightmapEvalArgs {
+    /// The sequence (.shlm), or a light-map model (.aprt from `aprt lightmap train`).
     pub input: PathBuf,
     /// The character and the clip: for a sequence, the clip it was baked from.
     #[command(flatten)]
@@ -123,9 +123,9 @@ pub struct ShlmEvalArgs {
     pub against: Option<PathBuf>,
 }
 
-/// `aprt shlm inspect`.
+/// `aprt lightmap inspect`.
 #[derive(Debug, Args)]
-pub struct ShlmInspectArgs {
+pub struct LightmapInspectArgs {
     /// The sequence (.shlm).
     pub input: PathBuf,
     /// Print JSON instead of text.
@@ -133,10 +133,10 @@ pub struct ShlmInspectArgs {
     pub json: bool,
 }
 
-/// `aprt shlm compose`.
+/// `aprt lightmap compose`.
 #[derive(Debug, Args)]
-pub struct ShlmComposeArgs {
-    /// The sequence (.shlm), or a light-map model (.aprt from `aprt shlm train`).
+pub struct LightmapComposeArgs {
+    /// The sequence (.shlm), or a light-map model (.aprt from `aprt lightmap train`).
     pub input: PathBuf,
     /// The character and clip: needed for a model (the pose), optional for a sequence (adds
     /// the character rendered with the light map beside its per-vertex ray-traced shading).
@@ -156,9 +156,9 @@ pub struct ShlmComposeArgs {
     pub rays: usize,
 }
 
-/// `aprt shlm train`.
+/// `aprt lightmap train`.
 #[derive(Debug, Args)]
-pub struct ShlmTrainArgs {
+pub struct LightmapTrainArgs {
     /// The character and its training clips.
     #[command(flatten)]
     pub source: SourceArgs,
@@ -176,15 +176,15 @@ pub struct ShlmTrainArgs {
     pub output: PathBuf,
 }
 
-/// Runs `aprt shlm`.
-pub fn run(args: &ShlmArgs) -> Result<()> {
+/// Runs `aprt lightmap`.
+pub fn run(args: &LightmapArgs) -> Result<()> {
     match &args.command {
-        ShlmCommand::Bake(args) => bake(args),
-        ShlmCommand::Eval(args) => eval(args),
-        ShlmCommand::Inspect(args) => inspect(args),
-        ShlmCommand::Compose(args) => compose(args),
-        ShlmCommand::Train(args) => train(args),
-        ShlmCommand::Study(args) => study(args),
+        LightmapCommand::Bake(args) => bake(args),
+        LightmapCommand::Eval(args) => eval(args),
+        LightmapCommand::Inspect(args) => inspect(args),
+        LightmapCommand::Compose(args) => compose(args),
+        LightmapCommand::Train(args) => train(args),
+        LightmapCommand::Study(args) => study(args),
     }
 }
 
@@ -231,7 +231,7 @@ fn prepare(
     Ok((checkpoint.path, settings))
 }
 
-fn bake(args: &ShlmBakeArgs) -> Result<()> {
+fn bake(args: &LightmapBakeArgs) -> Result<()> {
     let (checkpoint, settings) = prepare(&args.atlas, &args.output, &args.source, &args.bake)?;
     let (rig, clip) = args.source.rig(&Terminal)?;
     let what = "the character";
@@ -309,7 +309,7 @@ fn maps_of(
     predict_maps(bytes, &name, rig, clip)
 }
 
-fn eval(args: &ShlmEvalArgs) -> Result<()> {
+fn eval(args: &LightmapEvalArgs) -> Result<()> {
     let mut inputs = vec![Input::new(&args.input, "the light maps")];
     inputs.extend(args.source.inputs());
     if let Some(truth) = &args.against {
@@ -370,7 +370,7 @@ fn unravel(mut i: usize, shape: &[usize]) -> Vec<usize> {
     index
 }
 
-fn inspect(args: &ShlmInspectArgs) -> Result<()> {
+fn inspect(args: &LightmapInspectArgs) -> Result<()> {
     check(&[], &[Input::new(&args.input, "the sequence")])?;
     let bytes = read_file(&args.input, InputKind::LightMap)?;
     let summary =
@@ -402,7 +402,7 @@ fn inspect(args: &ShlmInspectArgs) -> Result<()> {
     Ok(())
 }
 
-fn compose(args: &ShlmComposeArgs) -> Result<()> {
+fn compose(args: &LightmapComposeArgs) -> Result<()> {
     let mut inputs = vec![
         Input::new(&args.input, "the light maps"),
         Input::new(&args.lights, "the lights file"),
@@ -434,7 +434,7 @@ fn compose(args: &ShlmComposeArgs) -> Result<()> {
     Ok(())
 }
 
-fn train(args: &ShlmTrainArgs) -> Result<()> {
+fn train(args: &LightmapTrainArgs) -> Result<()> {
     let (checkpoint, settings) = prepare(&args.atlas, &args.output, &args.source, &args.bake)?;
     let fit = args.fit.options()?;
     let (rig, clips, _) = args.source.load(&[], &Terminal)?;
@@ -474,7 +474,7 @@ fn train(args: &ShlmTrainArgs) -> Result<()> {
     Ok(())
 }
 
-fn study(args: &ShlmStudyArgs) -> Result<()> {
+fn study(args: &LightmapStudyArgs) -> Result<()> {
     let assets = args
         .assets
         .clone()

@@ -20,7 +20,7 @@
 //! rays = 256               # directions per vertex
 //! order = "auto"           # or 1..=6; auto: the lowest order that meets error_target
 //! error_target = 1.0       # 8-bit grey levels of shading error
-//! rig = "auto"             # "none", a rig kind ("gradient", "lattice:2x2x2", …) or auto
+//! irradiance_rig = "auto"  # "none", a rig kind ("gradient", "lattice:2x2x2", …) or auto
 //! precision = "auto"       # f32 | f16 | i8 | auto
 //! frame = "bone"           # bone | world: the frame the model learns transfer in
 //!
@@ -46,8 +46,9 @@ use serde::Deserialize;
 use crate::input::{InputKind, read_input_text};
 use crate::io::outputs::gltf_inputs;
 use crate::io::source::{BuiltinCharacter, ClipSpec, parse_frames};
+use crate::irradiance_rig::RigKind;
 use crate::lighting::lights_file::check_light_count;
-use crate::lighting::{RigKind, finite_f32s, light_from_table};
+use crate::lighting::{finite_f32s, light_from_table};
 use crate::model::ModelFrame;
 use crate::model::export::Precision;
 
@@ -326,7 +327,9 @@ struct RawEffects {
     rays: Option<i64>,
     order: Option<Word>,
     error_target: Option<f64>,
-    rig: Option<String>,
+    /// `rig` was its name before the irradiance rig had one of its own; still read.
+    #[serde(alias = "rig")]
+    irradiance_rig: Option<String>,
     precision: Option<String>,
     frame: Option<String>,
 }
@@ -365,7 +368,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
         message,
     };
     let raw: RawScene =
-        toml::from_str(text).map_err(|e| fail("TOML", crate::io::toml_problem(text, &e)))?;
+        toml::from_str(text).map_err(|e| fail("TOML", crate::text::toml_problem(text, &e)))?;
     let base = path.parent().unwrap_or(Path::new(""));
     let absolute = std::cell::RefCell::new(Vec::new());
     let resolve = |p: &str| {
@@ -384,7 +387,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
                 "[source] up",
                 format!(
                     "{:?}: expected \"y\" or \"z\" (the character's up axis)",
-                    crate::io::excerpt(other)
+                    crate::text::excerpt(other)
                 ),
             ));
         }
@@ -623,10 +626,10 @@ fn effects(raw: &RawEffects) -> Result<Effects, (&'static str, String)> {
     if let Some(r) = raw.rays {
         e.rays = usize::try_from(r)
             .ok()
-            .filter(|&r| (1..=crate::bake::MAX_RAYS).contains(&r))
+            .filter(|&r| (1..=crate::limits::MAX_RAYS).contains(&r))
             .ok_or((
                 "rays",
-                format!("{r}: expected 1 to {}", crate::bake::MAX_RAYS),
+                format!("{r}: expected 1 to {}", crate::limits::MAX_RAYS),
             ))?;
     }
     e.order = match &raw.order {
@@ -666,10 +669,13 @@ fn effects(raw: &RawEffects) -> Result<Effects, (&'static str, String)> {
         }
         e.error_target = t32;
     }
-    e.rig = match raw.rig.as_deref() {
+    e.rig = match raw.irradiance_rig.as_deref() {
         None | Some("auto") => RigChoice::Auto,
         Some("none") => RigChoice::None,
-        Some(kind) => RigChoice::Kind(kind.parse().map_err(|err| ("rig", format!("{err}")))?),
+        Some(kind) => RigChoice::Kind(
+            kind.parse()
+                .map_err(|err| ("irradiance_rig", format!("{err}")))?,
+        ),
     };
     e.precision = match raw.precision.as_deref() {
         None | Some("auto") => Choice::Auto,
@@ -797,6 +803,7 @@ mod tests {
 
     #[test]
     fn fixed_choices_read() {
+        // `rig`, the irradiance rig's key before it was `irradiance_rig`, still reads.
         let text = format!(
             "[source]\nbuiltin = \"creature\"\ntrain = [\"training\"]\n[effects]\nshadows = false\norder = 3\nrig = \"gradient\"\nprecision = \"f16\"\nframe = \"world\"\n{LIGHT}"
         );
@@ -868,8 +875,8 @@ mod tests {
                 "positive",
             ),
             (
-                format!("{base}[effects]\nrig = \"blob\"\n{LIGHT}"),
-                "[effects] rig",
+                format!("{base}[effects]\nirradiance_rig = \"blob\"\n{LIGHT}"),
+                "[effects] irradiance_rig",
                 "blob",
             ),
             (

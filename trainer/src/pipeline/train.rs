@@ -12,7 +12,7 @@ use aprt_core::{
 };
 use nalgebra::DMatrix;
 
-use crate::bake::budget::{BudgetError, MAX_FRAMES, Workload};
+use crate::bake::budget::{BudgetError, Workload};
 pub use crate::bake::checkpoint::ShardBaked;
 use crate::bake::checkpoint::{Checkpoint, OnExisting, Vertices};
 use crate::bake::clip::{BakedClip, pose_all};
@@ -20,22 +20,24 @@ use crate::bake::shard::Shard;
 use crate::bake::{BakeError, BakeSettings};
 use crate::io::atomic::write_atomic;
 use crate::io::source::{Poses, clip_names, joined};
-use crate::lighting::rig_fit::{FIT_POSES, fitting_meshes};
-use crate::lighting::{RigKind, fit_rig};
+use crate::irradiance_rig::fit::{FIT_POSES, fitting_meshes};
+use crate::irradiance_rig::{RigKind, fit_rig};
+use crate::limits::MAX_FRAMES;
 use crate::model::export::{ExportError, Precision, check_alpha};
 use crate::model::fit::{
     Alpha, Anchor, Choice, CoefDims, Dims, Fit, FitInput, FitOptions, FitReport, HeldOutKind,
     LOCALITY_RADIUS, Local, PriorKind, Validation, fit, fit_input, rest_distance_sentence,
 };
+use crate::model::locality::locality;
 use crate::model::occluders::{
     DEFAULT_CULL, OccluderChoice, Occluders, rig_section, with_occlusion,
 };
 use crate::model::precision::{PrecisionChoice, encode_chosen};
 use crate::model::runtime::{BlobInfo, describe};
-use crate::model::{BoneFrames, LinearModel, ModelFrame};
+use crate::model::{LinearModel, ModelFrame};
 use crate::progress::Reporter;
+use crate::rig::bone_frames::BoneFrames;
 use crate::rig::bone_frames::{FrameChange, change_frames, dominant_bones};
-use crate::rig::locality::locality;
 use crate::rig::mesh::Mesh;
 use crate::rig::pose_layout::PoseLayout;
 use crate::rig::pose_sampler::sampled_clip;
@@ -545,12 +547,12 @@ pub struct Trained {
     /// Poses baked (training, validation and the rest pose), resumed ones included.
     pub baked_poses: usize,
     /// Seconds spent baking (with posing) and fitting (with the rig and encoding).
-    pub seconds: StageSeconds,
+    pub seconds: RunSeconds,
 }
 
 /// Wall-clock seconds of the stages of [`train`].
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
-pub struct StageSeconds {
+pub struct RunSeconds {
     /// Posing and baking every pose, through the checkpoint.
     pub bake: f64,
     /// Fitting the model and the irradiance rig, choosing the precision, writing the blob.
@@ -635,7 +637,7 @@ pub fn train(
         info: describe(&chosen.blob)?,
         precision: (chosen.precision, chosen.reason),
         baked_poses: outcome.baked,
-        seconds: StageSeconds {
+        seconds: RunSeconds {
             bake: outcome.bake_s,
             fit: total - outcome.bake_s,
         },
@@ -834,7 +836,9 @@ fn fit_irradiance_rig(kind: RigKind, poses: &Poses, order: usize) -> Result<Vec<
     let meshes = fitting_surfaces(poses)?;
     let refs: Vec<&Mesh> = meshes.iter().collect();
     let mut fitted = fit_rig(kind, &refs, None);
-    fitted.tabulate(&meshes[0], order);
+    fitted
+        .tabulate(&meshes[0], order)
+        .context("tabulating the irradiance rig's error")?;
     Ok(fitted.bytes())
 }
 

@@ -6,12 +6,10 @@
 //! of the bind pose and of its training poses, all in that frame: one matrix serves every
 //! pose, and the samples cover where the surface goes, not only where it rests.
 
-use aprt_core::{AxisKind, IrradianceRig, Light, Placement, PointLight, Rgb, RigLayout, RigShape};
+use aprt_core::{AxisKind, IrradianceRig, Light, Placement, Rgb, RigLayout, RigShape};
 use nalgebra::DMatrix;
-use rayon::prelude::*;
 
-use super::evaluate::rig_errors;
-use super::rig_kind::RigKind;
+use super::kind::RigKind;
 use super::surface_samples::surface_samples;
 use crate::rig::mesh::Mesh;
 use crate::rig::{Clip, Rig, RigError};
@@ -28,17 +26,6 @@ const SAMPLE_SEED: u64 = 0x51A2_7E11_9D0C_4B3F;
 /// against the 1e-14 ridge that nodes no sample reaches take their neighbours' lighting
 /// instead of 0.
 const SMOOTHNESS: f64 = 1e-8;
-/// Distances of the error table, in radii of the character from its centre: from just outside
-/// the bounding sphere to where every rig is within a fraction of a grey level for a light of
-/// unit strength.
-const TABLE_DISTANCES: usize = 24;
-const TABLE_NEAREST: f64 = 1.05;
-const TABLE_FARTHEST: f64 = 64.0;
-/// Vertices the table's error is measured at, at most (every k-th vertex).
-const TABLE_VERTICES: usize = 4096;
-/// Grey levels per unit of irradiance: the radiance a white Lambertian surface reflects,
-/// `E / π`, on an 8-bit display where radiance 1 is white.
-pub const GREY_PER_IRRADIANCE: f64 = 255.0 / std::f64::consts::PI;
 
 /// A rig fitted to a character, ready to be written ([`FittedRig::bytes`]) into a model blob or
 /// evaluated on its own.
@@ -77,59 +64,15 @@ impl FittedRig {
             matrix: &matrix,
         };
         let mut bytes = vec![0u8; layout.len()];
-        // The buffer is the layout's own length.
-        let _ = layout.write(&mut bytes);
+        layout
+            .write(&mut bytes)
+            .expect("the buffer is the layout's own length");
         bytes
-    }
-
-    /// The error table of section 3.1: for unit-strength point lights at
-    /// `TABLE_DISTANCES` (24) distances (in radii) around the character, in 26 directions, the
-    /// worst grey-level difference over the vertices of `mesh` (root frame) between the rig's
-    /// irradiance and the per-vertex SH evaluation of the same light at `order`. That is the
-    /// error moving a light into the rig costs; the SH truncation both paths share is not
-    /// counted (see `aprt rig`, which reports both against the exact closed form).
-    pub fn tabulate(&mut self, mesh: &Mesh, order: usize) {
-        self.table.clear();
-        let bytes = self.bytes();
-        let Ok(rig) = IrradianceRig::parse(&bytes) else {
-            return;
-        };
-        let step = mesh.positions.len().div_ceil(TABLE_VERTICES).max(1);
-        let vertices: Vec<usize> = (0..mesh.positions.len()).step_by(step).collect();
-        let ratio = (TABLE_FARTHEST / TABLE_NEAREST).powf(1.0 / (TABLE_DISTANCES - 1) as f64);
-        let table: Vec<[f64; 2]> = (0..TABLE_DISTANCES)
-            .into_par_iter()
-            .map(|i| {
-                let d = TABLE_NEAREST * ratio.powi(i as i32);
-                let worst = directions()
-                    .iter()
-                    .map(|dir| {
-                        let at = std::array::from_fn(|k| self.centre[k] + d * self.radius * dir[k]);
-                        let light = Light::Point(PointLight {
-                            position: at.map(|x| x as f32),
-                            intensity: [1.0; 3],
-                        });
-                        // A point light outside the bounding sphere is always valid.
-                        rig_errors(
-                            &rig,
-                            mesh,
-                            vertices.iter().copied(),
-                            &[light],
-                            &[1.0],
-                            order,
-                        )
-                        .map_or(f64::INFINITY, |e| e.rig_vs_per_vertex.max)
-                    })
-                    .fold(0.0, f64::max);
-                [d, worst]
-            })
-            .collect();
-        self.table = table;
     }
 }
 
 /// The 26 directions to the faces, edges and corners of a cube, normalised.
-fn directions() -> Vec<[f64; 3]> {
+pub(super) fn directions() -> Vec<[f64; 3]> {
     let mut out = Vec::new();
     for x in -1..=1 {
         for y in -1..=1 {
@@ -225,9 +168,16 @@ pub fn fit_rig(kind: RigKind, meshes: &[&Mesh], samples: Option<usize>) -> Fitte
         return rig; // the paper's centroid rig: one probe at the centre
     }
     let n = samples.unwrap_or((SAMPLES_PER_VECTOR * k).max(MIN_SAMPLES));
-    let points = surface_samples(meshes, n, SAMPLE_SEED);
+    let mut points = surface_samples(meshes, n, SAMPLE_SEED);
     if points.is_empty() {
-        return rig;
+        // No triangle has area (a point cloud, or a flattened mesh): the vertices are the
+        // surface. Returning the centroid's one-probe matrix here would give a rig whose
+        // matrix does not match its kind's vectors, which the core refuses to read.
+        points = meshes
+            .iter()
+            .flat_map(|m| &m.positions)
+            .map(|p| p.map(f64::from))
+            .collect();
     }
     let phi = design_matrix(kind.shape, &points, centre, half);
     rig.matrix = least_squares(&phi, &smoothness(kind.shape));
@@ -405,19 +355,26 @@ mod tests {
         }
     }
 
+    /// A mesh without triangles (nothing to sample by area) is sampled at its vertices: every
+    /// kind gives a rig the core reads, with one matrix row per vector.
     #[test]
-    fn error_table_falls_with_distance() {
-        let human = Character::builtin();
-        let mesh = human.bind_mesh();
-        let mut fitted = fit_rig("gradient".parse().unwrap(), &[mesh], None);
-        fitted.tabulate(mesh, 3);
-        assert_eq!(fitted.table.len(), TABLE_DISTANCES);
-        let (near, far) = (fitted.table[0][1], fitted.table[TABLE_DISTANCES - 1][1]);
-        assert!(near > 10.0 * far && far >= 0.0, "{near} → {far}");
-        // The core reads the same table and bisects it for a transition distance.
-        let bytes = fitted.bytes();
-        let rig = IrradianceRig::parse(&bytes).unwrap();
-        let t = rig.transition_distance(1.0, 1.0);
-        assert!(t > 0.0 && rig.error_at(t / rig.radius()) <= 1.0 + 1e-3);
+    fn a_mesh_without_triangles_still_fits_a_readable_rig() {
+        let positions: Vec<[f32; 3]> = (0..24)
+            .map(|i| {
+                let a = i as f32 * std::f32::consts::TAU / 24.0;
+                [a.cos(), a.sin(), 0.1 * (i % 3) as f32]
+            })
+            .collect();
+        let mesh = Mesh {
+            normals: positions.clone(),
+            positions,
+            triangles: Vec::new(),
+        };
+        for kind in ["constant", "gradient", "lattice:2x2x2"] {
+            let fitted = fit_rig(kind.parse().unwrap(), &[&mesh], None);
+            let bytes = fitted.bytes();
+            let rig = IrradianceRig::parse(&bytes).unwrap_or_else(|e| panic!("{kind}: {e}"));
+            assert_eq!(rig.samples(), mesh.vertex_count(), "{kind}");
+        }
     }
 }

@@ -4,7 +4,7 @@
 use aprt_core::{Light, SphereLight};
 use serde::Serialize;
 
-use crate::lighting::RigKind;
+use crate::irradiance_rig::RigKind;
 
 /// A rig of the study: its kind as `--rig` spells it and what the paper calls it.
 #[derive(Clone, Debug, Serialize)]

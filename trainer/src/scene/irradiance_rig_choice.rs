@@ -8,10 +8,11 @@
 use anyhow::{Context, Result};
 use aprt_core::Light;
 
-use crate::io::scene::RigChoice;
-use crate::lighting::{RigKind, RigSettings, evaluate_rig, fit_rig};
+use crate::irradiance_rig::{RigKind, RigSettings, evaluate_rig, fit_rig};
+use crate::model::runtime::rig_frame_cost;
 use crate::progress::StepProgress;
 use crate::rig::mesh::Mesh;
+use crate::scene::file::RigChoice;
 
 /// The kinds tried, cheapest first.
 pub const CANDIDATES: [&str; 4] = ["constant", "gradient", "lattice:2x2x2", "lattice:3x3x3"];
@@ -76,7 +77,9 @@ pub fn choose_rig(
         ));
         let kind: RigKind = name.parse()?;
         let mut fitted = fit_rig(kind, &refs, None);
-        fitted.tabulate(&meshes[0], order);
+        fitted
+            .tabulate(&meshes[0], order)
+            .with_context(|| format!("tabulating a {name} rig"))?;
         let eval = evaluate_rig(&fitted, &meshes[0], lights, &settings)
             .with_context(|| format!("evaluating a {name} rig"))?;
         let analytic = eval.lights.iter().filter(|l| l.rig_share < 1.0).count();
@@ -89,7 +92,9 @@ pub fn choose_rig(
                 ),
             ));
         }
-        tried.push((kind, eval.us_per_frame.total, analytic, eval.error_grey.max));
+        let cost = rig_frame_cost(&fitted, &meshes[0], lights, &eval.shares(), order)
+            .with_context(|| format!("timing a {name} rig"))?;
+        tried.push((kind, cost.total, analytic, eval.error_grey.max));
     }
     // Candidates are in order of SH vectors, and min_by_key keeps the first of equals.
     let (kind, us, analytic, max) = tried

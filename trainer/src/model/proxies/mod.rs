@@ -108,7 +108,7 @@ use std::collections::BTreeSet;
 use glam::DVec3;
 use nalgebra::{Matrix3, SymmetricEigen};
 
-use crate::model::BoneFrames;
+use crate::rig::bone_frames::BoneFrames;
 use crate::rig::mesh::Mesh;
 use cover::Surface;
 use solid::{Solid, box_points};

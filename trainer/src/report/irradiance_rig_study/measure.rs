@@ -7,8 +7,9 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::setup::{DISTANCES, Direction, LASH_FRAME, NOVEL_FRAMES, RigChoice, normalised_light};
-use crate::lighting::rig_fit::fitting_meshes;
-use crate::lighting::{FittedRig, GreyError, RigSettings, evaluate_rig, fit_rig, rig_errors};
+use crate::irradiance_rig::fit::fitting_meshes;
+use crate::irradiance_rig::{FittedRig, GreyError, RigSettings, evaluate_rig, fit_rig, rig_errors};
+use crate::model::runtime::rig_frame_cost;
 use crate::rig::creature::Creature;
 use crate::rig::mesh::Mesh;
 use crate::rig::{Rig, RigError};
@@ -107,6 +108,8 @@ pub struct Measured {
     pub radius: f64,
     /// Vertices of the creature.
     pub vertices: usize,
+    /// Training poses the rigs are fitted over, beside the bind pose.
+    pub training_poses: usize,
     /// Every k-th vertex evaluated.
     pub vertex_step: usize,
     /// The light directions.
@@ -192,7 +195,9 @@ fn fit_all(settings: &StudySettings, meshes: &[&Mesh], order: Option<usize>) -> 
         .map(|choice| {
             let mut fitted = fit_rig(choice.parsed(), meshes, None);
             if let Some(order) = order {
-                fitted.tabulate(meshes[0], order);
+                fitted
+                    .tabulate(meshes[0], order)
+                    .expect("the core reads the study's rigs");
             }
             fitted
         })
@@ -244,6 +249,7 @@ pub fn measure(poses: &Poses, settings: &StudySettings) -> Measured {
     let floor = |range: std::ops::Range<usize>| done[range].iter().map(|c| c.1.clone()).collect();
     Measured {
         order: settings.order,
+        training_poses: poses.fitting.len() - 1,
         centre,
         radius,
         vertices: bind.vertex_count(),
@@ -269,9 +275,12 @@ fn timed(fitted: &FittedRig, poses: &Poses, settings: &StudySettings) -> f64 {
         order: settings.order,
         ..RigSettings::default()
     };
-    let cost = evaluate_rig(fitted, &poses.lash, &[light], &rig_settings)
+    let lights = [light];
+    let shares = evaluate_rig(fitted, &poses.lash, &lights, &rig_settings)
         .expect("the study's lights are valid")
-        .us_per_frame;
+        .shares();
+    let cost = rig_frame_cost(fitted, &poses.lash, &lights, &shares, settings.order)
+        .expect("the core times the study's rigs");
     // The rig's own cost, whatever share of the light the target leaves per vertex.
     cost.rig_vectors + cost.shade
 }

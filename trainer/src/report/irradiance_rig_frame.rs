@@ -9,8 +9,9 @@ use aprt_core::{DEFAULT_BAND, DirectionalLight, Light, MAX_COEFFS, PointLight, R
 use glam::Vec3;
 
 use crate::bake::clip::BakedClip;
-use crate::lighting::rig_fit::GREY_PER_IRRADIANCE;
-use crate::lighting::{GreyError, kind_name};
+use crate::irradiance_rig::GreyError;
+use crate::lighting::GREY_PER_IRRADIANCE;
+use crate::lighting::{kind_name, luminance};
 use crate::model::occluders::skinning_of;
 use crate::model::runtime::predict_rig_shading;
 use crate::report::figures::{ErrorPanel, save_panels, upright};
@@ -51,11 +52,6 @@ pub fn demo_lights(mesh: &crate::rig::mesh::Mesh) -> Vec<Light> {
             irradiance: [0.25, 0.25, 0.25],
         }),
     ]
-}
-
-/// Rec. 709 luminance: how an RGB shading is shown in grey.
-pub(crate) fn luminance(c: Rgb) -> f32 {
-    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
 }
 
 /// Writes ray-traced transfer lit per vertex | the model with its rig | 4× error, for frame
