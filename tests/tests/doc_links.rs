@@ -127,10 +127,9 @@ fn targets(text: &str) -> Vec<(usize, String)> {
             && let Some((label, target)) = rest.split_once("]:")
             && !label.is_empty()
             && !label.contains(']')
+            && let Some(target) = target.split_whitespace().next()
         {
-            if let Some(target) = target.split_whitespace().next() {
-                out.push((n + 1, target.trim_matches(['<', '>']).to_owned()));
-            }
+            out.push((n + 1, target.trim_matches(['<', '>']).to_owned()));
         }
     }
     out
