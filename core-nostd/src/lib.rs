@@ -102,3 +102,7 @@ pub mod format {
 #[cfg(doctest)]
 #[doc = include_str!("../../README.md")]
 struct ReadmeDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../../docs/guide/core-api.md")]
+struct GuideCoreApiDoctests;

@@ -6,7 +6,7 @@
 //! the clip (a crouch that folds the mesh onto itself casts more occluded rays than a stand).
 //! Which frames a shard takes is the only thing sharding decides: each frame is baked exactly
 //! as a single run bakes it, so the merged checkpoint holds the same bits (see
-//! `docs/bake-farm.md`).
+//! `docs/guide/bake-farms.md`).
 
 use std::fmt;
 use std::str::FromStr;

@@ -58,7 +58,7 @@ pub struct ReportArgs {
     pub stride: u64,
 }
 
-/// `aprt rig-study`.
+/// `aprt irradiance-rig-study`.
 #[derive(Debug, Args)]
 pub struct RigStudyArgs {
     /// Output directory for README.md, results.json and the PNG figures.
@@ -268,12 +268,12 @@ pub struct TrainArgs {
     pub resume: bool,
     /// Fit an irradiance rig of this kind (constant, gradient, lattice:NXxNYxNZ,
     /// mixed:x=KIND,y=KIND,z=KIND) to the character's bind and training poses and store it in
-    /// the model, so an engine lights it from a handful of SH vectors (see `aprt rig`).
+    /// the model, so an engine lights it from a handful of SH vectors (see `aprt irradiance-rig`).
     #[arg(long)]
     pub rig: Option<crate::irradiance_rig::RigKind>,
     /// Bake only shard I of N (frames f with f % N == I, 0-based) into the checkpoint and
     /// stop; when every shard is done, the same command with --resume instead fits the model
-    /// (see docs/bake-farm.md).
+    /// (see docs/guide/bake-farms.md).
     #[arg(long, value_name = "I/N")]
     pub shard: Option<crate::bake::shard::Shard>,
     /// Add N training poses, each a random training frame with 1 to 3 random joints re-drawn
@@ -374,7 +374,7 @@ pub struct IrradianceArgs {
     pub json: bool,
 }
 
-/// `aprt rig`.
+/// `aprt irradiance-rig`.
 #[derive(Debug, Args)]
 pub struct RigArgs {
     /// A static mesh (OBJ); or name a character with the source flags instead: the rig is

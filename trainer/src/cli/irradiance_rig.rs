@@ -1,4 +1,4 @@
-//! `aprt rig`: fit an irradiance rig to a mesh or a character and report, for a lights file,
+//! `aprt irradiance-rig`: fit an irradiance rig to a mesh or a character and report, for a lights file,
 //! each light's path, the error against exact evaluation and the core's cost per frame.
 
 use anyhow::{Context, Result, bail};
@@ -59,7 +59,7 @@ fn check_flags(args: &RigArgs) -> Result<()> {
     Ok(())
 }
 
-/// Runs `aprt rig`.
+/// Runs `aprt irradiance-rig`.
 pub fn run(args: &RigArgs) -> Result<()> {
     let mut inputs = args.source.inputs();
     inputs.push(Input::new(&args.lights, "the lights file"));
@@ -105,7 +105,7 @@ pub fn run(args: &RigArgs) -> Result<()> {
     Ok(())
 }
 
-/// What `aprt rig` reports: the rig's evaluation and, beside it, what it costs the core.
+/// What `aprt irradiance-rig` reports: the rig's evaluation and, beside it, what it costs the core.
 #[derive(serde::Serialize)]
 struct RigReport {
     #[serde(flatten)]

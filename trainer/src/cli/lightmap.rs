@@ -101,7 +101,7 @@ pub struct LightmapBakeArgs {
     pub output: PathBuf,
     /// Bake only shard I of N (frames f with f % N == I, 0-based) into the checkpoint and
     /// stop; when every shard is done, the same command with --resume instead writes the
-    /// sequence (see docs/bake-farm.md).
+    /// sequence (see docs/guide/bake-farms.md).
     #[arg(long, value_name = "I/N")]
     pub shard: Option<Shard>,
 }
@@ -246,7 +246,7 @@ fn bake(args: &LightmapBakeArgs) -> Result<()> {
             (&checkpoint, shard),
             &Terminal,
         ))?;
-        shard_done(&baked, "aprt shlm bake");
+        shard_done(&baked, "aprt lightmap bake");
         return Ok(());
     }
     let baked = args.source.in_origin(bake_light_maps(

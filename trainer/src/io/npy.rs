@@ -1,6 +1,6 @@
 //! NumPy `.npy` (format 1.0) for little-endian float32 arrays: the writer, so results load
 //! with `numpy.load` without any aprt code, and a reader of exactly what it writes, so one
-//! command's output can be measured against another's (`aprt shlm eval --against`).
+//! command's output can be measured against another's (`aprt lightmap eval --against`).
 
 /// Encodes a C-order float32 array of the given shape as `.npy` bytes.
 pub fn encode_f32(shape: &[usize], data: &[f32]) -> Vec<u8> {

@@ -8,7 +8,7 @@ use crate::rig::Rig;
 use crate::rig::uv::sample_bilinear;
 
 /// Every map of `maps` (`resolution`² texels × `n2`) read at every vertex of `rig`'s bind mesh
-/// ([`at_vertices`] at the UVs of its layout): what `aprt shlm eval` writes.
+/// ([`at_vertices`] at the UVs of its layout): what `aprt lightmap eval` writes.
 pub fn maps_at_vertices(
     rig: &dyn Rig,
     maps: &[Vec<f32>],

@@ -1,4 +1,4 @@
-//! What `aprt shlm inspect` reports about a light-map sequence file, decode time included.
+//! What `aprt lightmap inspect` reports about a light-map sequence file, decode time included.
 
 use std::time::Instant;
 
@@ -7,7 +7,7 @@ use serde::Serialize;
 
 use super::codec::ShlmFile;
 
-/// A sequence file's dimensions, sizes and decode cost (the JSON of `aprt shlm inspect`).
+/// A sequence file's dimensions, sizes and decode cost (the JSON of `aprt lightmap inspect`).
 #[derive(Debug, Clone, Serialize)]
 pub struct Summary {
     /// Frames stored.

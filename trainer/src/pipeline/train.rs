@@ -202,7 +202,7 @@ pub struct TrainSettings {
     pub irradiance_rig: Option<RigKind>,
     /// Bake only this shard's share of the frames into the checkpoint and stop: a bake farm's
     /// machines each bake one shard, and a final run without it fits the model from the
-    /// merged checkpoint (`docs/bake-farm.md`). A shard always joins a checkpoint of the same
+    /// merged checkpoint (`docs/guide/bake-farms.md`). A shard always joins a checkpoint of the same
     /// inputs and settings, whatever `existing` says, since its fellow shards share it.
     pub shard: Option<Shard>,
     /// `--sample-poses`: training poses sampled within the range each pose entry takes over

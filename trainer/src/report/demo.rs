@@ -307,6 +307,11 @@ fn save_pictures(
         &out.join("baselines.png"),
         mesh,
         &[&truth, &mean, &nearest],
+        &[
+            "ground truth (ray-traced)",
+            "mean training transfer",
+            "nearest training pose",
+        ],
         ErrorPanel::Omitted,
     )
 }

@@ -106,6 +106,7 @@ pub fn save_rig_frame(
         path,
         &upright(mesh, Vec3::Z),
         &[&truth, &model],
+        &["ray-traced, lights per vertex", "model: rig + near light"],
         ErrorPanel::Shown,
     )?;
     let centre = aprt_core::Model::parse(blob)?

@@ -1,7 +1,7 @@
 //! Composing light maps under lights (`SHLM = Σ_i L_i · SHLM_i`, through aprt-core, each
-//! texel lit at its bind-pose position) and the preview `aprt shlm compose` writes: the light
+//! texel lit at its bind-pose position) and the preview `aprt lightmap compose` writes: the light
 //! map, and with the character the frame rendered with it beside its per-vertex ray-traced
-//! shading and their error.
+//! shading and their error, each panel titled and the error map's colour bar under them.
 
 use std::path::Path;
 
@@ -15,8 +15,8 @@ use crate::lightmap::bake::{texel_positions, uv_layout};
 use crate::lightmap::codec::{MAGIC, ShlmFile};
 use crate::lightmap::model::predict_maps;
 use crate::lightmap::sample::at_vertices;
-use crate::report::figures::{PICTURE_VIEW, upright};
-use crate::report::render::{Colormap, render_scalar, render_with, save_png_atomic, side_by_side};
+use crate::report::figures::{FOUR_X_ERROR, PICTURE_VIEW, captioned, upright};
+use crate::report::render::{Colormap, render_scalar, render_with, save_png_atomic};
 use crate::rig::mesh::Mesh;
 use crate::rig::uv::{Atlas, UvLayout, sample_bilinear};
 use crate::rig::{Clip, Rig};
@@ -249,13 +249,18 @@ pub fn save_preview(path: &Path, source: &ComposeSource<'_>, lights: &[Light]) -
     let lit = light_map(&maps, lights)?;
     let mut panels = vec![map_image(&lit, maps.resolution)];
     let mut line = format!("light map, {r}x{r} texels", r = maps.resolution);
+    let map_title = format!("light map ({r}x{r} texels)", r = maps.resolution);
+    let mut titles = vec![map_title.as_str()];
+    let mut key = None;
     if let Some(character) = source.character {
         let (more, mean, max) = character_panels(character, source, &maps, &lit, lights)?;
         panels.extend(more);
         line.push_str(&format!(
             " | rendered with it | per-vertex ray-traced | 4x error (at the vertices {mean:.2} grey levels mean, {max:.1} max)"
         ));
+        titles.extend(["rendered with it", "per-vertex ray-traced", "4× error"]);
+        key = Some(FOUR_X_ERROR);
     }
-    save_png_atomic(path, &side_by_side(&panels))?;
+    save_png_atomic(path, &captioned(&panels, &titles, key)?)?;
     Ok(line)
 }

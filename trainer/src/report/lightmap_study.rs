@@ -1,4 +1,4 @@
-//! The light-map comparison (`aprt shlm study`, docs/results/lightmaps): on the real glTF
+//! The light-map comparison (`aprt lightmap study`, docs/results/lightmaps): on the real glTF
 //! characters, SH light maps stored as a compressed sequence, the pose-driven light-map model
 //! and the per-vertex pose model, on the same clips — bytes, bake and fit time, decode or
 //! evaluation time per frame, error at the vertices on the training clip and on a novel one
@@ -291,7 +291,7 @@ fn section(case: &LightMapCase, baked: &BakedMaps, rows: &[Row]) -> String {
 }
 
 /// How closely a stored sequence reproduces per-vertex ray-traced transfer on the clip it was
-/// baked from (what `aprt shlm eval` against `aprt simulate` measures).
+/// baked from (what `aprt lightmap eval` against `aprt simulate` measures).
 pub struct Fidelity {
     /// The clip.
     pub clip: String,
@@ -474,7 +474,7 @@ pub fn run(
         )?);
     }
     let doc = format!(
-        "# SH light maps against the per-vertex pose model\n\nRegenerate with `{command}`. SH order {}, {} rays per texel and per vertex, atlas {resolution}x{resolution}. Errors are relative transfer errors ‖pred − truth‖ / ‖truth‖ at the vertices against per-vertex ray-traced transfer (`aprt simulate`), over all frames, vertices and coefficients; a light map is read at each vertex's UV bilinearly (`aprt shlm eval`). Times are one run on this machine; decode and evaluation on one core.\n\n## Fidelity of the stored sequence\n\n| character | clip | frames | error, f32 maps | error, compressed | bytes | f32 bytes | ratio | decode ms/frame | bake s |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n{fidelity_rows}\n{sections}",
+        "# SH light maps against the per-vertex pose model\n\nRegenerate with `{command}`. SH order {}, {} rays per texel and per vertex, atlas {resolution}x{resolution}. Errors are relative transfer errors ‖pred − truth‖ / ‖truth‖ at the vertices against per-vertex ray-traced transfer (`aprt simulate`), over all frames, vertices and coefficients; a light map is read at each vertex's UV bilinearly (`aprt lightmap eval`). Times are one run on this machine; decode and evaluation on one core.\n\n## Fidelity of the stored sequence\n\n| character | clip | frames | error, f32 maps | error, compressed | bytes | f32 bytes | ratio | decode ms/frame | bake s |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n{fidelity_rows}\n{sections}",
         bake.order, bake.rays,
     );
     let path = out.join("README.md");

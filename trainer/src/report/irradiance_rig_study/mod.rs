@@ -1,4 +1,4 @@
-//! `aprt rig-study`: the irradiance-rig results study on the built-in creature (*Irradiance
+//! `aprt irradiance-rig-study`: the irradiance-rig results study on the built-in creature (*Irradiance
 //! Rigs*, Figures 1 and 5): each rig's error against exact evaluation for normalised sphere
 //! lights near, mid and far, the paper's claim that a six-vector mixed rig is comparable to a
 //! 64-vector lattice, renders, and how a fit over the bind and training poses holds on novel

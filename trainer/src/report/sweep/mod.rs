@@ -453,11 +453,11 @@ fn not_swept(scene: &Scene) -> Vec<String> {
         out.push("bounces: the scene asks for none, so there is nothing cheaper to try".into());
     }
     out.push(
-        "irradiance-rig kinds: compared for the scene's lights by `aprt rig` and `aprt train --scene` (rig = \"auto\"), not in this sweep"
+        "irradiance-rig kinds: compared for the scene's lights by `aprt irradiance-rig` and `aprt train --scene` (irradiance_rig = \"auto\"), not in this sweep"
             .into(),
     );
     out.push(
-        "light-map representations: measured by `aprt shlm study` (docs/results/lightmaps), not in this sweep".into(),
+        "light-map representations: measured by `aprt lightmap study` (docs/results/lightmaps), not in this sweep".into(),
     );
     out
 }
