@@ -174,6 +174,11 @@ fn malformed_lights_files_are_refused() {
             &["light 2 (point)", "missing key `intensity`"],
         ),
         ("wrong-kind", &["light 1 (kind?)", "unknown kind \"spot\""]),
+        // Cut at the line break, so the refusal stays one line.
+        (
+            "crash-kind-newline",
+            &["light 1 (kind?)", "unknown kind \"directi…\""],
+        ),
         ("nan", &["light 1 (sphere)", "`radiance` holds NaN"]),
         ("negative-radius", &["light 1 (sphere)", "`radius` is -0.1"]),
         (

@@ -104,10 +104,10 @@ fn parse_header(header: &str) -> Result<Vec<usize>, String> {
             "descr" => &mut descr,
             "fortran_order" => &mut fortran,
             "shape" => &mut shape,
-            other => return Err(format!("unknown key '{other}'")),
+            other => return Err(format!("unknown key '{}'", quoted(other))),
         };
         if slot.replace(value).is_some() {
-            return Err(format!("key '{key}' given twice"));
+            return Err(format!("key '{}' given twice", quoted(&key)));
         }
         if !p.eat(',') {
             p.expect('}')?;
@@ -121,7 +121,8 @@ fn parse_header(header: &str) -> Result<Vec<usize>, String> {
         Some(HeaderValue::Text(d)) if d == "<f4" => {}
         Some(HeaderValue::Text(d)) => {
             return Err(format!(
-                "'descr' is '{d}': only '<f4' (little-endian float32) is read"
+                "'descr' is '{}': only '<f4' (little-endian float32) is read",
+                quoted(&d)
             ));
         }
         Some(_) => return Err("'descr' is not a string".into()),
@@ -140,6 +141,14 @@ fn parse_header(header: &str) -> Result<Vec<usize>, String> {
         Some(_) => Err("'shape' is not a tuple of sizes".into()),
         None => Err("missing key 'shape'".into()),
     }
+}
+
+/// A string of the header as an error quotes it: control characters escaped, so the message
+/// stays on one line (a key `'desc\n'` printed two), and at most an [`excerpt`] of it.
+///
+/// [`excerpt`]: crate::io::excerpt
+fn quoted(text: &str) -> String {
+    crate::io::excerpt(&text.escape_debug().to_string())
 }
 
 /// The unread part of a header, with the few tokens a NumPy header dictionary has.
@@ -289,6 +298,9 @@ mod tests {
             ("False", "True", "'fortran_order' is True"),
             ("'descr': '<f4', ", "", "missing key 'descr'"),
             ("'shape'", "'shapf'", "unknown key 'shapf'"),
+            // Quoted on one line: the CLI prints one line per error.
+            ("'shape'", "'sh\nap'", "unknown key 'sh\\nap'"),
+            ("'<f4'", "'<\r4'", "'descr' is '<\\r4'"),
             ("'descr'", "'shape'", "key 'shape' given twice"),
             ("(3, 2)", "(3, x)", "expected a size"),
             ("{", "[", "expected '{'"),

@@ -80,8 +80,8 @@ pub enum EnvMapError {
     #[error(
         "{}: a {width}x{height} environment map needs {} to decode ({width} × {height} texels, {ENV_TEXEL_BYTES} bytes each); one run holds at most {}: give a smaller map",
         path.display(),
-        budget::bytes(*width as u64 * *height as u64 * ENV_TEXEL_BYTES),
-        budget::bytes(MAX_BYTES)
+        budget::bytes(decode_bytes(*width, *height)),
+        budget::bytes(*limit)
     )]
     TooLarge {
         /// The file.
@@ -90,6 +90,8 @@ pub enum EnvMapError {
         width: u32,
         /// Its height, from the header.
         height: u32,
+        /// The bytes the decode may hold ([`MAX_BYTES`] for a file).
+        limit: u64,
     },
     /// The image has no texels.
     #[error("{}: the image is {width}x{height}, with no texels", origin(file))]
@@ -221,22 +223,24 @@ pub fn read_environment(path: &Path, order: usize) -> Result<Vec<[f32; 3]>, EnvM
 /// Decodes an equirectangular .hdr or .exr (by extension, case-insensitive) to linear RGB; an
 /// alpha channel is dropped. Texels are checked when the image is projected.
 pub fn read_equirect(path: &Path) -> Result<EnvironmentImage, EnvMapError> {
-    let extension = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    let (format, name) = match extension.as_deref() {
-        Some("hdr") => (ImageFormat::Hdr, "Radiance HDR"),
-        Some("exr") => (ImageFormat::OpenExr, "OpenEXR"),
-        _ => {
-            return Err(EnvMapError::UnknownExtension {
-                path: path.to_path_buf(),
-            });
-        }
-    };
+    // The extension is checked before the file is read, so a wrong name is said as such.
+    format_of(path)?;
     let bytes = read_input(path, InputKind::EnvironmentMap)?;
+    decode_equirect(path, &bytes, MAX_BYTES)
+}
+
+/// Decodes the bytes of an equirectangular .hdr or .exr to linear RGB, as [`read_equirect`]
+/// does with a file's: `path` picks the format by its extension and names the file in errors;
+/// a header claiming more than `max_bytes` to decode is refused before a texel is decoded, and
+/// the decoder allocates no more than that.
+pub fn decode_equirect(
+    path: &Path,
+    bytes: &[u8],
+    max_bytes: u64,
+) -> Result<EnvironmentImage, EnvMapError> {
+    let (format, name) = format_of(path)?;
     let exposure = match format {
-        ImageFormat::Hdr => hdr_exposure(path, &bytes)?,
+        ImageFormat::Hdr => hdr_exposure(path, bytes)?,
         _ => 1.0,
     };
     let decode_error = |source| EnvMapError::Decode {
@@ -245,21 +249,22 @@ pub fn read_equirect(path: &Path) -> Result<EnvironmentImage, EnvMapError> {
         source,
     };
     // The size is read from the header and checked before a texel is decoded.
-    let (width, height) = ImageReader::with_format(Cursor::new(&bytes), format)
+    let (width, height) = ImageReader::with_format(Cursor::new(bytes), format)
         .into_dimensions()
         .map_err(decode_error)?;
-    if u64::from(width) * u64::from(height) * ENV_TEXEL_BYTES > MAX_BYTES {
+    if decode_bytes(width, height) > max_bytes {
         return Err(EnvMapError::TooLarge {
             path: path.to_path_buf(),
             width,
             height,
+            limit: max_bytes,
         });
     }
-    let mut reader = ImageReader::with_format(Cursor::new(&bytes), format);
+    let mut reader = ImageReader::with_format(Cursor::new(bytes), format);
     // The decoder's own default (512 MiB) would refuse maps the check above allows, without
     // their size.
     let mut limits = image::Limits::default();
-    limits.max_alloc = Some(MAX_BYTES);
+    limits.max_alloc = Some(max_bytes);
     reader.limits(limits);
     let decoded = reader.decode().map_err(decode_error)?.into_rgb32f();
     Ok(EnvironmentImage {
@@ -271,6 +276,28 @@ pub fn read_equirect(path: &Path) -> Result<EnvironmentImage, EnvMapError> {
             .map(|p| p.0.map(|v| v / exposure))
             .collect(),
     })
+}
+
+/// Bytes a `width × height` map holds while it is decoded, saturating: the header's sizes are
+/// u32, and two above about 6.8·10⁸ give more than a u64 holds (an OpenEXR display window of
+/// 867188627 × 690896807 the `env_map` fuzz target wrote), which used to wrap around.
+fn decode_bytes(width: u32, height: u32) -> u64 {
+    (u64::from(width) * u64::from(height)).saturating_mul(ENV_TEXEL_BYTES)
+}
+
+/// The image format `path`'s extension names (case-insensitive), and its name for errors.
+fn format_of(path: &Path) -> Result<(ImageFormat, &'static str), EnvMapError> {
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match extension.as_deref() {
+        Some("hdr") => Ok((ImageFormat::Hdr, "Radiance HDR")),
+        Some("exr") => Ok((ImageFormat::OpenExr, "OpenEXR")),
+        _ => Err(EnvMapError::UnknownExtension {
+            path: path.to_path_buf(),
+        }),
+    }
 }
 
 /// The exposure a Radiance file's texels were scaled by when written: the product of its

@@ -197,8 +197,10 @@ pub fn light_from_table(table: &toml::Table) -> Result<Light, (String, String)> 
             })
         }
         other => {
+            // Quoted and cut to its first line: `"directi\nal"` printed two lines.
             return Err(unknown_kind(&format!(
-                "unknown kind \"{other}\" (expected \"sphere\", \"point\" or \"directional\")"
+                "unknown kind {:?} (expected \"sphere\", \"point\" or \"directional\")",
+                crate::io::excerpt(other)
             )));
         }
     };

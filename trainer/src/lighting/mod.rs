@@ -11,7 +11,8 @@ use aprt_core::{Light, LightError, MAX_COEFFS, Rgb, Window, apply_window, irradi
 use serde::Serialize;
 
 pub use env_map::{
-    EnvMapError, EnvironmentImage, project_equirect, read_environment, read_equirect,
+    EnvMapError, EnvironmentImage, decode_equirect, project_equirect, read_environment,
+    read_equirect,
 };
 pub use lights_file::{LightsFileError, finite_f32s, light_from_table, parse_lights, read_lights};
 

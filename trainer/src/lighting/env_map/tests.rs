@@ -387,6 +387,36 @@ fn a_truncated_hdr_is_a_decode_error_naming_the_file() {
     assert!(err.to_string().contains("cut.hdr"), "{err}");
 }
 
+/// An OpenEXR header whose display window is 700000001 × 700000001 texels is refused for its
+/// size, by the file's budget and by a small one given with the bytes: its byte count (× 40)
+/// overflowed a u64 (found by the `env_map` fuzz target).
+#[test]
+fn a_map_too_large_to_count_in_bytes_is_refused_for_its_size() {
+    let mut bytes = Vec::new();
+    image_of(&rgbe_exact_map(8, 4), 8, 4)
+        .write_with_encoder(OpenExrEncoder::new(std::io::Cursor::new(&mut bytes)))
+        .unwrap();
+    let name = b"displayWindow\0box2i\0";
+    let at = bytes.windows(name.len()).position(|w| w == name).unwrap() + name.len() + 4;
+    let side: i32 = 700_000_000;
+    bytes[at..at + 16]
+        .copy_from_slice(&[[0; 4], [0; 4], side.to_le_bytes(), side.to_le_bytes()].concat());
+    for limit in [MAX_BYTES, 1 << 20] {
+        let err = decode_equirect(Path::new("huge.exr"), &bytes, limit).unwrap_err();
+        let side = side as u32 + 1;
+        assert!(
+            matches!(err, EnvMapError::TooLarge { width, height, limit: l, .. }
+                if (width, height, l) == (side, side, limit)),
+            "{err:?}"
+        );
+        assert!(
+            err.to_string()
+                .starts_with("huge.exr: a 700000001x700000001"),
+            "{err}"
+        );
+    }
+}
+
 #[test]
 fn unknown_extensions_and_missing_files_are_refused() {
     let dir = tempfile::tempdir().unwrap();
