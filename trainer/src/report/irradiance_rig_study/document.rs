@@ -181,11 +181,7 @@ fn findings(m: &Measured) -> String {
         let (mx, lt) = (added_at(m, MIXED_6, 2), added_at(m, LATTICE_64, 2));
         let (lm, lx) = (added_at(m, MIXED_6 + 2, 1), added_at(m, LATTICE_64 + 2, 1));
         let (pm, pl) = (added_at(m, MIXED_6, 1), added_at(m, LATTICE_64, 1));
-        let beats = if g.0 < c.0 {
-            "beats"
-        } else {
-            "does not beat"
-        };
+        let beats = if g.0 < c.0 { "beats" } else { "does not beat" };
         let (verdict, falls) = if mx.0 > lt.0 {
             ("is not comparable to", "adds more than")
         } else {
