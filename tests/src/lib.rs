@@ -4,6 +4,7 @@
 
 pub mod decode;
 pub mod edit;
+pub mod golden;
 pub mod harness;
 pub mod loaders;
 pub mod quadrature;

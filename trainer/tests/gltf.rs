@@ -6,7 +6,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use aprt_trainer::{GltfRig, Mesh, Rig, View, lambert, render_scalar};
+use aprt_trainer::{GltfRig, Mesh, Rig};
 use glam::Vec3;
 
 fn gltf(dir: &Path, file: &str) -> PathBuf {
@@ -156,49 +156,6 @@ fn clip_frames_pose_plausibly_and_match_the_full_animation() {
                 "{file} {name}: {worst_non_rigid}"
             );
         }
-    }
-}
-
-/// Writes a posed frame of two characters to `/tmp` for looking at (`APRT_GLTF_PNG=1`): the
-/// check that limbs stay attached is visual, so this is opt-in and never asserts on pixels.
-#[test]
-fn render_posed_frames_on_request() {
-    if std::env::var_os("APRT_GLTF_PNG").is_none() {
-        return;
-    }
-    let Some(dir) = common::assets("render_posed_frames") else {
-        return;
-    };
-    for (file, clip, frame) in [
-        ("CesiumMan.gltf", "animation0", 15),
-        ("Fox.gltf", "Run", 10),
-    ] {
-        let rig = GltfRig::load(&gltf(&dir, file), 30.0).unwrap();
-        let up = rig.up();
-        // The renderer is z-up: rotate the rig's up onto +z.
-        let to_z = glam::Quat::from_rotation_arc(up, Vec3::Z);
-        let turn = |mut m: Mesh| {
-            for p in m.positions.iter_mut().chain(m.normals.iter_mut()) {
-                *p = (to_z * Vec3::from(*p)).to_array();
-            }
-            m
-        };
-        let mut panels = Vec::new();
-        let pose = &rig.clip(clip).unwrap().frames[frame];
-        for mesh in [rig.bind_mesh().clone(), rig.pose(pose).unwrap()] {
-            let mesh = turn(mesh);
-            for yaw in [0.0f32, 1.57] {
-                let view = View { yaw, pitch: 0.2 };
-                let shade = lambert(&mesh, Vec3::new(0.3, -1.0, 0.8));
-                panels.push(
-                    render_scalar(&mesh, &shade, view, 256, 256, aprt_trainer::Colormap::Grey)
-                        .unwrap(),
-                );
-            }
-        }
-        let out = PathBuf::from("/tmp").join(format!("aprt-gltf-{file}.png"));
-        aprt_trainer::save_png_atomic(&out, &aprt_trainer::side_by_side(&panels)).unwrap();
-        println!("wrote {}", out.display());
     }
 }
 

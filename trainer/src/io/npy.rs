@@ -146,9 +146,9 @@ fn parse_header(header: &str) -> Result<Vec<usize>, String> {
 /// A string of the header as an error quotes it: control characters escaped, so the message
 /// stays on one line (a key `'desc\n'` printed two), and at most an [`excerpt`] of it.
 ///
-/// [`excerpt`]: crate::io::excerpt
+/// [`excerpt`]: crate::text::excerpt
 fn quoted(text: &str) -> String {
-    crate::io::excerpt(&text.escape_debug().to_string())
+    crate::text::excerpt(&text.escape_debug().to_string())
 }
 
 /// The unread part of a header, with the few tokens a NumPy header dictionary has.

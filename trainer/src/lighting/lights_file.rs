@@ -200,7 +200,7 @@ pub fn light_from_table(table: &toml::Table) -> Result<Light, (String, String)> 
             // Quoted and cut to its first line: `"directi\nal"` printed two lines.
             return Err(unknown_kind(&format!(
                 "unknown kind {:?} (expected \"sphere\", \"point\" or \"directional\")",
-                crate::io::excerpt(other)
+                crate::text::excerpt(other)
             )));
         }
     };

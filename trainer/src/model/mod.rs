@@ -7,7 +7,9 @@
 //! vertex basis, or `t_jc = w^c_j` with the identity basis (the full linear model, `k_v = v`).
 //!
 //! [`fit`] learns it from poses and baked transfer, [`export`] quantises it into a blob, and
-//! [`runtime`] evaluates a written blob through `aprt-core`.
+//! [`runtime`] evaluates a written blob through `aprt-core`. [`proxies`] fits occluder spheres
+//! per bone to the parts of the bind mesh, for the runtime's shadows between parts, and
+//! [`locality`] finds which pose entries can shadow each vertex.
 
 pub mod export;
 pub mod features;

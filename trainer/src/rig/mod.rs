@@ -13,8 +13,8 @@
 //! - what a model needs of a rig: [`pose_layout`] (which pose entries it takes),
 //!   [`bone_frames`] (transfer in each vertex's bone frame) and [`transfer_rotation`]
 //!   (rotating each vertex's SH transfer);
-//! - [`proxies`]: occluder spheres per bone, fitted to the parts of the bind mesh, for the
-//!   runtime's shadows between parts.
+//! - [`uv`]: UV layouts per triangle corner, chart packing and the texel atlas a light map is
+//!   baked on.
 
 pub mod bone_frames;
 pub mod character;
