@@ -7,6 +7,7 @@ pub mod edit;
 pub mod harness;
 pub mod loaders;
 pub mod quadrature;
+pub mod readers;
 pub mod reference;
 pub mod samples;
 pub mod spec;
