@@ -8,6 +8,7 @@ pub mod golden;
 pub mod harness;
 pub mod loaders;
 pub mod quadrature;
+pub mod readers;
 pub mod reference;
 pub mod samples;
 pub mod spec;

@@ -1,6 +1,6 @@
-//! The fuzz seed corpus in `fuzz/corpus/`: its generator (ignored; run it after a format
-//! change, with `cargo test -p aprt-tests --release --test corpus -- --ignored`) and a stable
-//! test that every seed, crash reproducers included, passes its fuzz harness.
+//! The fuzz seed corpus in `fuzz/corpus/`: its generators (ignored; run them after a format
+//! change, with `cargo test -p aprt-tests --release --test corpus -- --ignored`) and stable
+//! tests that every seed, crash reproducers included, passes its fuzz harness.
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -9,7 +9,14 @@ use aprt_tests::edit::reseal;
 use aprt_tests::harness::{Probe, exercise};
 use aprt_tests::samples::sample_blobs;
 use aprt_tests::spec::{ModelSpec, round_trip};
-use aprt_tests::{loaders, noise};
+use aprt_tests::{loaders, noise, readers};
+use aprt_trainer::io::npy::encode_f32;
+use aprt_trainer::lightmap::codec::{
+    CodecKind, CodecSettings, Grouping, MapSequence, PlaneSettings, SignMode, encode,
+};
+use image::codecs::hdr::HdrEncoder;
+use image::codecs::openexr::OpenExrEncoder;
+use image::{Rgb32FImage, Rgba32FImage};
 
 fn corpus(target: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -65,11 +72,257 @@ fn write_fuzz_corpus() {
     }
 }
 
-/// The files of `fixtures/malformed/<dir>` ending in one of `extensions`, sorted: the seeds of
-/// the `gltf` and `bvh` targets, which the fuzzer reads from there (see README, Fuzzing).
+/// Scenes the fixtures do not cover: every source kind and key, SH and map environments,
+/// every light kind, overlapping clips, `confine`.
+const SCENES: [(&str, &str); 6] = [
+    (
+        "gltf",
+        "confine = false\n[source]\ngltf = \"Fox.gltf\"\nfps = 24.0\nup = \"y\"\ntrain = [\"Survey\"]\nvalidate = [\"Run\"]\ntest = [\"Walk\"]\n\
+         [effects]\nshadows = true\nbounces = 1\nalbedo = 0.5\nrays = 64\norder = 3\nerror_target = 0.5\nrig = \"lattice:2x2x2\"\nprecision = \"f16\"\nframe = \"world\"\n\
+         [budget]\nus_per_frame = 50.5\nbytes = 1_000_000\n\
+         [environment]\nhdr = \"studio.hdr\"\n\
+         [[light]]\nkind = \"sphere\"\nposition = [0.0, 1.2, 0.8]\nradius = 0.1\nradiance = [4.0, 3.5, 3.0]\n\
+         [[light]]\nkind = \"point\"\nposition = [1.0, 2.0, 0.0]\nintensity = [2.0, 2.0, 2.0]\n",
+    ),
+    (
+        "obj-seq",
+        "[source]\nobj_seq = \"poses\"\nangles = \"poses.csv\"\nup = \"z\"\n\
+         [effects]\nshadows = false\norder = \"auto\"\nrig = \"none\"\nprecision = \"i8\"\n\
+         [environment]\nexr = \"sky.exr\"\n",
+    ),
+    (
+        "bvh-ranges",
+        "[source]\nbvh = \"walk.bvh\"\ntrain = [\"0..240\", \"other.bvh\"]\nvalidate = [\"240..300\"]\ntest = [\"300..344\"]\n\
+         [effects]\nrig = \"gradient\"\norder = 6\n\
+         [environment]\nsh = [[1, 1, 1], [0, 0.5, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0.1, 0, 0]]\n",
+    ),
+    (
+        "bvh-overlap",
+        "[source]\nbvh = \"walk.bvh\"\ntrain = [\"0..240\"]\ntest = [\"200..344\"]\n\
+         [environment]\nsh = [[0.5, 0.5, 0.5]]\n",
+    ),
+    (
+        "confined",
+        "confine = true\n[source]\nbuiltin = \"creature\"\ntrain = [\"training\"]\n\
+         [environment]\nhdr = \"../outside.hdr\"\n",
+    ),
+    (
+        "lights-only",
+        "[source]\nbuiltin = \"human\"\ntrain = [\"training\"]\ntest = [\"walk\"]\n\
+         [[light]]\nkind = \"directional\"\ndirection = [0, 1, 0]\nirradiance = [1, 1, 1]\n",
+    ),
+];
+
+/// A `.npy` file with `dict` as its header dictionary (padded as NumPy pads it) and `data`.
+fn npy_with(dict: &str, data: &[u8]) -> Vec<u8> {
+    let unpadded = 10 + dict.len() + 1;
+    let header = format!(
+        "{dict}{}\n",
+        " ".repeat(unpadded.next_multiple_of(64) - unpadded)
+    );
+    let mut out = b"\x93NUMPY\x01\x00".to_vec();
+    out.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    out.extend_from_slice(header.as_bytes());
+    out.extend_from_slice(data);
+    out
+}
+
+/// A small light-map clip: `resolution²` texels, two in three filled, SH order 2, `frames`
+/// frames of smooth values of both signs that move from frame to frame.
+fn light_maps(resolution: usize, frames: usize, atlas: Option<u32>) -> MapSequence {
+    let n2 = 4;
+    let filled: Vec<bool> = (0..resolution * resolution).map(|t| t % 3 != 2).collect();
+    let positions = (0..filled.len())
+        .filter(|&t| filled[t])
+        .map(|t| {
+            [
+                (t % resolution) as f32 * 0.1,
+                (t / resolution) as f32 * 0.1,
+                0.5,
+            ]
+        })
+        .collect();
+    let frames = (0..frames)
+        .map(|f| {
+            (0..filled.len() * n2)
+                .map(|i| match filled[i / n2] {
+                    false => 0.0,
+                    true => {
+                        let phase = i as f32 * 0.37 + f as f32 * 0.2;
+                        phase.sin() * 0.4 + if i % n2 == 0 { 0.6 } else { 0.0 }
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    MapSequence {
+        resolution,
+        atlas,
+        order: 2,
+        filled,
+        positions,
+        frames,
+    }
+}
+
+/// An `Rgb32FImage` of smooth non-negative radiance with one bright texel.
+fn sky(width: u32, height: u32) -> Rgb32FImage {
+    Rgb32FImage::from_fn(width, height, |x, y| {
+        let v = 0.2 + (x as f32 * 0.7).sin().abs() * 0.5 + y as f32 / height as f32;
+        image::Rgb(if (x, y) == (1, 1) {
+            [8.0, 6.0, 4.0]
+        } else {
+            [v, v * 0.9, v * 0.8]
+        })
+    })
+}
+
+#[test]
+#[ignore = "writes fuzz/corpus; run by hand after a format change"]
+fn write_fuzz_corpus_of_the_readers() {
+    let write = |target: &str, name: &str, bytes: &[u8]| {
+        let dir = corpus(target);
+        fs::create_dir_all(&dir).unwrap();
+        fs::write(dir.join(format!("seed-{name}")), bytes).unwrap();
+    };
+    for (name, text) in SCENES {
+        write("scene", &format!("{name}.toml"), text.as_bytes());
+    }
+
+    let uniform = CodecSettings::default().planes;
+    let planes = |mantissa_bits, sign, grouping, spatial_delta| PlaneSettings {
+        mantissa_bits,
+        sign,
+        grouping,
+        spatial_delta,
+    };
+    let pca = |max_components| CodecKind::Pca {
+        target_error: 0.0,
+        max_components,
+    };
+    let shlm = [
+        ("pca-uniform", pca(3), uniform, Some(0xa7a5)),
+        ("frames-uniform", CodecKind::Frames, uniform, Some(1)),
+        (
+            "keyframes-uniform",
+            CodecKind::Keyframes { interval: 2 },
+            uniform,
+            Some(2),
+        ),
+        (
+            "frames-offset",
+            CodecKind::Frames,
+            planes(8, SignMode::OffsetScale, Grouping::Texel, false),
+            Some(3),
+        ),
+        (
+            "keyframes-sign-plane",
+            CodecKind::Keyframes { interval: 3 },
+            planes(6, SignMode::SignPlane, Grouping::Triples, true),
+            Some(4),
+        ),
+        (
+            "pca-band0-ratio",
+            pca(2),
+            planes(7, SignMode::Band0Ratio, Grouping::Texel, true),
+            Some(5),
+        ),
+        (
+            "v2-frames-sign-plane",
+            CodecKind::Frames,
+            planes(5, SignMode::SignPlane, Grouping::Texel, false),
+            None,
+        ),
+    ];
+    for (name, kind, planes, atlas) in shlm {
+        let settings = CodecSettings {
+            kind,
+            planes,
+            zstd_level: 3,
+        };
+        let bytes = encode(&light_maps(6, 4, atlas), &settings).unwrap();
+        write("shlm", &format!("{name}.shlm"), &bytes);
+    }
+
+    let mut rle = Vec::new();
+    sky(16, 8)
+        .write_with_encoder(HdrEncoder::new(&mut rle))
+        .unwrap();
+    write("env_map", "rle.hdr", &rle);
+    let mut flat = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\nEXPOSURE=2\n\n-Y 2 +X 4\n".to_vec();
+    for i in 0..8u8 {
+        flat.extend_from_slice(&[100 + i * 10, 90, 80 + i, 129]);
+    }
+    write("env_map", "flat-exposure.hdr", &flat);
+    let mut exr = Vec::new();
+    sky(8, 4)
+        .write_with_encoder(OpenExrEncoder::new(std::io::Cursor::new(&mut exr)))
+        .unwrap();
+    write("env_map", "rgb.exr", &exr);
+    let rgba = Rgba32FImage::from_fn(4, 2, |x, y| image::Rgba([x as f32, y as f32, 0.5, 1.0]));
+    let mut exr = Vec::new();
+    rgba.write_with_encoder(OpenExrEncoder::new(std::io::Cursor::new(&mut exr)))
+        .unwrap();
+    write("env_map", "rgba.exr", &exr);
+
+    let values = [
+        0.0,
+        -1.5,
+        2.0,
+        f32::MIN_POSITIVE,
+        1e-45,
+        f32::MAX,
+        f32::NAN,
+        f32::INFINITY,
+    ];
+    write("npy", "vector", &encode_f32(&[3], &values[..3]));
+    write("npy", "matrix", &encode_f32(&[2, 3], &values[2..]));
+    write("npy", "cube", &encode_f32(&[2, 2, 2], &values));
+    write("npy", "scalar", &encode_f32(&[], &values[1..2]));
+    write("npy", "empty", &encode_f32(&[4, 0], &[]));
+    let data: Vec<u8> = values.iter().flat_map(|x| x.to_le_bytes()).collect();
+    let dicts = [
+        (
+            "fortran",
+            "{'descr': '<f4', 'fortran_order': True, 'shape': (2, 4), }",
+        ),
+        (
+            "big-endian",
+            "{'descr': '>f4', 'fortran_order': False, 'shape': (8,), }",
+        ),
+        (
+            "float64",
+            "{'descr': '<f8', 'fortran_order': False, 'shape': (4,), }",
+        ),
+        (
+            "twice",
+            "{'descr': '<f4', 'descr': '<f4', 'fortran_order': False, 'shape': (8,), }",
+        ),
+        (
+            "unknown-key",
+            "{'descr': '<f4', 'fortran_order': False, 'shape': (8,), 'x': 1}",
+        ),
+        ("no-shape", "{\"descr\": \"<f4\", \"fortran_order\": False}"),
+        (
+            "short",
+            "{'descr': '<f4', 'fortran_order': False, 'shape': (9,), }",
+        ),
+        (
+            "overflow",
+            "{'descr': '<f4', 'fortran_order': False, 'shape': (4294967296, 4294967296), }",
+        ),
+    ];
+    for (name, dict) in dicts {
+        write("npy", name, &npy_with(dict, &data));
+    }
+}
+
+/// The files of `fixtures/<dir>` ending in one of `extensions`, sorted: the seeds of the
+/// `gltf`, `bvh`, `scene` and `lights` targets, which the fuzzer reads from there (see README,
+/// Fuzzing).
 fn fixtures(dir: &str, extensions: &[&str]) -> Vec<Vec<u8>> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../fixtures/malformed")
+        .join("../fixtures")
         .join(dir);
     let mut files: Vec<PathBuf> = fs::read_dir(dir)
         .unwrap()
@@ -122,7 +375,7 @@ fn round_trip_seeds_pass_the_harness() {
 
 #[test]
 fn gltf_seeds_pass_the_harness() {
-    let seeds = fixtures("gltf", &["gltf", "glb"]);
+    let seeds = fixtures("malformed/gltf", &["gltf", "glb"]);
     assert!(seeds.len() >= 30);
     let valid = seeds.iter().filter(|s| loaders::gltf(s).is_ok()).count();
     // ok.gltf, ok.glb, and no-animations.gltf (a rig without clips, which only the CLI
@@ -132,10 +385,57 @@ fn gltf_seeds_pass_the_harness() {
 
 #[test]
 fn bvh_seeds_pass_the_harness() {
-    let seeds = fixtures("bvh", &["bvh"]);
+    let seeds = fixtures("malformed/bvh", &["bvh"]);
     assert!(seeds.len() >= 6);
     assert!(seeds.iter().any(|s| loaders::bvh(s).is_ok()));
     for seed in &seeds {
         let _ = loaders::bvh(seed);
     }
+}
+
+/// How many of `seeds` `harness` accepts; every one passes its checks.
+fn accepted(seeds: &[Vec<u8>], harness: fn(&[u8]) -> Result<(), String>) -> usize {
+    seeds.iter().filter(|s| harness(s).is_ok()).count()
+}
+
+#[test]
+fn scene_seeds_pass_the_harness() {
+    let mut seeds = seeds("scene");
+    seeds.extend(fixtures("scenes", &["toml"]));
+    assert!(seeds.len() >= 11);
+    // All but the overlapping clips and the confined scene whose map lies outside.
+    assert_eq!(accepted(&seeds, readers::scene), seeds.len() - 2);
+}
+
+#[test]
+fn lights_seeds_pass_the_harness() {
+    let valid = fixtures("lights", &["toml"]);
+    assert!(valid.len() >= 4);
+    assert_eq!(accepted(&valid, readers::lights), valid.len());
+    let malformed = fixtures("malformed/lights", &["toml"]);
+    assert!(malformed.len() >= 6);
+    assert_eq!(accepted(&malformed, readers::lights), 0);
+}
+
+#[test]
+fn shlm_seeds_pass_the_harness() {
+    let seeds = seeds("shlm");
+    assert!(seeds.len() >= 7);
+    assert_eq!(accepted(&seeds, readers::shlm), seeds.len());
+}
+
+#[test]
+fn env_map_seeds_pass_the_harness() {
+    let seeds = seeds("env_map");
+    assert!(seeds.len() >= 5);
+    // All but the OpenEXR header whose size overflowed the budget's arithmetic.
+    assert_eq!(accepted(&seeds, readers::env_map), seeds.len() - 1);
+}
+
+#[test]
+fn npy_seeds_pass_the_harness() {
+    let seeds = seeds("npy");
+    assert!(seeds.len() >= 13);
+    // The five written by `encode_f32`; the hand-made headers are refused.
+    assert_eq!(accepted(&seeds, readers::npy), 5);
 }

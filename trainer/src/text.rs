@@ -17,6 +17,17 @@ pub fn excerpt(text: &str) -> String {
     }
 }
 
+/// `text` with its control characters (line breaks, tabs, escapes) written as Rust escapes
+/// (`\n`, `\u{1b}`): a name or message quoted from a file keeps an error on one line.
+pub fn escape_controls(text: &str) -> String {
+    text.chars()
+        .map(|c| match c.is_control() {
+            true => c.escape_default().to_string(),
+            false => c.to_string(),
+        })
+        .collect()
+}
+
 /// A TOML syntax or schema error as one line: where (line and column) and what, quoting at
 /// most an [`excerpt`] of the text rather than the whole offending line the parser shows.
 pub fn toml_problem(text: &str, e: &toml::de::Error) -> String {

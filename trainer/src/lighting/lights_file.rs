@@ -106,7 +106,8 @@ pub fn parse_lights(text: &str, path: &Path) -> Result<Vec<Light>, LightsFileErr
         .map_err(|e: toml::de::Error| syntax(crate::text::toml_problem(text, &e)))?;
     if let Some(key) = table.keys().find(|k| *k != "light") {
         return Err(syntax(format!(
-            "unknown key `{key}`: a lights file holds only [[light]] tables"
+            "unknown key `{}`: a lights file holds only [[light]] tables",
+            crate::text::excerpt(&crate::text::escape_controls(key))
         )));
     }
     let Some(lights) = table.get("light") else {
@@ -160,7 +161,10 @@ pub fn light_from_table(table: &toml::Table) -> Result<Light, (String, String)> 
     fields.remove("kind");
     let fields = toml::Value::Table(fields);
     let fail = |message: String| (kind.clone(), message);
-    let de = |e: toml::de::Error| fail(e.message().replace("field", "key"));
+    // Serde quotes the keys it does not know as written, line breaks included.
+    let de = |e: toml::de::Error| {
+        fail(crate::text::escape_controls(e.message()).replace("field", "key"))
+    };
     let light = match kind.as_str() {
         "sphere" => {
             let t: SphereTable = fields.try_into().map_err(de)?;
@@ -307,10 +311,21 @@ mod tests {
                 &["light 1 (kind?)", "missing key `kind`"],
             ),
             ("lights = 1\n".into(), &["unknown key `lights`"]),
+            // Keys and kinds holding a line break stay on the error's one line.
+            ("\"a\\nb\" = 1\n".into(), &["unknown key `a\\nb`"]),
+            (
+                format!("{sphere}radius = 1\nradiance = [1, 1, 1]\n\"r\\n\" = 2\n"),
+                &["light 1 (sphere)", "unknown key `r\\n`"],
+            ),
+            (
+                "[[light]]\nkind = \"spot\\nlight\"\n".into(),
+                &["light 1 (kind?)", "unknown kind \"spot…\""],
+            ),
             ("".into(), &["no [[light]] tables"]),
             ("[[light]\n".into(), &["l.toml", "line 1"]),
         ] {
             let e = err(&text);
+            assert!(!e.contains('\n'), "{e:?}");
             for f in fragments {
                 assert!(e.contains(f), "{f:?} missing from {e:?}");
             }

@@ -651,7 +651,11 @@ fn effects(raw: &RawEffects) -> Result<Effects, (&'static str, String)> {
         Some(Word::Other(v)) => {
             return Err((
                 "order",
-                format!("{v}: order must be an integer 1..={MAX_ORDER} or \"auto\""),
+                // An excerpt: a table or a string with a line break prints over lines.
+                format!(
+                    "{}: order must be an integer 1..={MAX_ORDER} or \"auto\"",
+                    crate::text::excerpt(&v.to_string())
+                ),
             ));
         }
     };
@@ -846,6 +850,11 @@ mod tests {
                 "order must be an integer 1..=6",
             ),
             (
+                format!("{base}[effects]\norder = {{ a = 1, b = \"x\\ny\" }}\n{LIGHT}"),
+                "[effects] order",
+                "{ a = 1, b = \"\"\"…: order must be an integer 1..=6",
+            ),
+            (
                 format!(
                     "[source]\nbuiltin = \"human\"\ntrain = [\"walk\"]\nvalidate = [\"walk\"]\n{LIGHT}"
                 ),
@@ -920,6 +929,7 @@ mod tests {
             let err = parse(&text).unwrap_err();
             let shown = err.to_string();
             assert!(shown.starts_with("scenes/fox.toml: "), "{shown}");
+            assert!(!shown.contains('\n'), "{shown:?}");
             assert!(err.item.contains(item), "{item}: {shown}");
             assert!(shown.contains(words), "{words}: {shown}");
         }

@@ -168,7 +168,7 @@ pub struct FitOptions {
     /// The pose features the model is linear in.
     pub features: Features,
     /// Whether occluder proxies shadow what the poses do not show (bone-frame models of
-    /// characters; `model::train::fit_clip` fits with and without them).
+    /// characters; `pipeline::train::fit_clip` fits with and without them).
     pub proxies: Occluders,
 }
 

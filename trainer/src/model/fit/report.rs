@@ -117,7 +117,7 @@ pub struct FitReport {
     pub rest_distance: Option<f64>,
     /// Time per stage.
     pub seconds: FitSeconds,
-    /// What the occluder proxies did, when they were tried (`model::train::fit_clip`).
+    /// What the occluder proxies did, when they were tried (`pipeline::train::fit_clip`).
     pub occluders: Option<OccluderChoice>,
 }
 

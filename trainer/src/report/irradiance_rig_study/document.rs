@@ -264,7 +264,7 @@ pub fn markdown(m: &Measured, claim: &[ClaimEntry], command: &str, seconds: f64)
          Lambertian surface there facing the light reflects radiance 1 (255 grey levels). Setting \
          `π r² L = (d − R)²` instead makes that irradiance 1, i.e. 81 grey levels: divide \
          every error here by π to get its numbers.\n\
-         - **Error**: `error_grey_all_rig` of `lighting::evaluate`: every light in the rig, \
+         - **Error**: `error_grey_all_rig` of `irradiance_rig::accuracy`: every light in the rig, \
          SH order {}, against the exact horizon-clipped unshadowed irradiance at every vertex, \
          in 8-bit grey levels (255 |E_rig − E_exact| / π). Each cell is **mean / max**: the \
          mean over directions of the mean over vertices and channels, then the worst over \
