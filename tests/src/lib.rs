@@ -217,3 +217,10 @@ pub fn axis_angle(axis: [f32; 3], angle: f32) -> [[f32; 3]; 3] {
         [t * x * z - s * y, t * y * z + s * x, t * z * z + c],
     ]
 }
+
+/// `fuzz/corpus/<target>`: the fuzz target's seeds, written by the `write_corpus` example.
+pub fn fuzz_corpus(target: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../fuzz/corpus")
+        .join(target)
+}

@@ -1,6 +1,6 @@
 //! Small valid blobs, one per kind of model (stored or identity basis, world or bone frame,
 //! f32, f16 or scaled bytes, angles or cosine features): the starting points of the mutation tests and the seeds of the fuzz corpus
-//! (`cargo test -p aprt-tests --test corpus -- --ignored` writes `fuzz/corpus/`).
+//! (`cargo run -p aprt-tests --release --example write_corpus` writes `fuzz/corpus/`).
 
 use aprt_core::{AxisKind, RigLayout, RigShape};
 use aprt_trainer::model::occluders::{BoneBound, ProxySection, Sphere};

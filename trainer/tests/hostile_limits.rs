@@ -5,9 +5,9 @@
 //! byte for byte unchanged. The big inputs are generated here; the small ones are in
 //! `fixtures/malformed/limits/` (see its README).
 //!
-//! The big-input cases also run the binary as a child whose peak memory and CPU time are read
-//! with `getrusage(RUSAGE_CHILDREN)`; each bound is stated next to its case, with the figures
-//! measured on this project's 2-core machine.
+//! The big-input cases also run the binary through `aprt-measure`, which reads its peak
+//! memory and CPU time with `getrusage(RUSAGE_CHILDREN)`; each bound is stated next to its
+//! case, with the figures measured on this project's 2-core machine.
 
 use std::path::{Path, PathBuf};
 
@@ -490,83 +490,6 @@ fn a_mannequin_reports_the_joints_it_drops() {
     );
 }
 
-/// Set by [`measured`] for the child it starts; see [`measure_child`].
-const MEASURE: &str = "APRT_LIMITS_MEASURE";
-
-/// Not a check of its own. In a child started by [`measured`] (with `$APRT_LIMITS_MEASURE`
-/// listing the arguments), runs `aprt` once and prints its peak resident memory and CPU time
-/// from `getrusage(RUSAGE_CHILDREN)`, which in that process counts that one child only, then
-/// its exit code and stderr.
-#[test]
-#[cfg(unix)]
-fn measure_child() {
-    use nix::sys::resource::{UsageWho, getrusage};
-    let Ok(args) = std::env::var(MEASURE) else {
-        return;
-    };
-    let args: Vec<&str> = args.split('\u{1f}').collect();
-    let out = aprt(&args);
-    let usage = getrusage(UsageWho::RUSAGE_CHILDREN).unwrap();
-    let seconds = |t: nix::sys::time::TimeVal| t.tv_sec() as f64 + t.tv_usec() as f64 * 1e-6;
-    // On a line of its own: libtest has already written "test measure_child ... ".
-    println!(
-        "\nmeasured max_rss_kb={} cpu_s={} code={}",
-        usage.max_rss(),
-        seconds(usage.user_time()) + seconds(usage.system_time()),
-        out.status.code().unwrap_or(-1)
-    );
-    for line in String::from_utf8_lossy(&out.stderr).lines() {
-        println!("stderr: {line}");
-    }
-}
-
-/// What one run of `aprt` used.
-#[derive(Debug)]
-struct Usage {
-    /// Peak resident memory, in MB.
-    rss_mb: f64,
-    /// User plus system CPU time, all threads, in seconds.
-    cpu_s: f64,
-    code: i32,
-    stderr: String,
-}
-
-/// Runs `aprt args` as the only child of a copy of this test binary and reads what it used.
-fn measured(args: &[String]) -> Usage {
-    let out = std::process::Command::new(std::env::current_exe().unwrap())
-        .args([
-            "measure_child",
-            "--exact",
-            "--nocapture",
-            "--test-threads=1",
-        ])
-        .env(MEASURE, args.join("\u{1f}"))
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    let line = stdout
-        .lines()
-        .find_map(|l| l.strip_prefix("measured "))
-        .unwrap_or_else(|| panic!("no measurement in\n{stdout}"));
-    let field = |name: &str| -> f64 {
-        line.split(' ')
-            .find_map(|kv| kv.strip_prefix(name)?.strip_prefix('='))
-            .unwrap()
-            .parse()
-            .unwrap()
-    };
-    let stderr: Vec<&str> = stdout
-        .lines()
-        .filter_map(|l| l.strip_prefix("stderr: "))
-        .collect();
-    Usage {
-        rss_mb: field("max_rss_kb") / 1024.0,
-        cpu_s: field("cpu_s"),
-        code: field("code") as i32,
-        stderr: stderr.join("\n"),
-    }
-}
-
 /// The big inputs are refused in bounded time and memory. Before the fix the 10,000-joint BVH
 /// (1.4 MB) built a mannequin of 10.8 GB or was killed at 24 GB, 250 joints baked for 98 s
 /// before the 512-entry limit refused them, and the two-second glTF clip at 100 000 fps never
@@ -629,7 +552,7 @@ fn big_inputs_are_refused_in_bounded_time_and_memory() {
         args.extend(extra);
         args.extend(["-o".into(), s(&out.join("m.aprt"))]);
         let before = std::fs::read(&input).unwrap();
-        let usage = measured(&args);
+        let usage = run::measured(&args, std::time::Duration::from_secs(60));
         eprintln!(
             "{}: {:.2} s CPU, {:.0} MB peak (bounds {cpu_s} s, {rss_mb} MB)",
             input.display(),

@@ -1,20 +1,16 @@
 //! Sizes that files and flags claim are checked before any work (issue 30); each case's own
-//! doc says what it claims and what it cost before. Each case runs the real `aprt` as the
-//! only child of a copy of this test binary, under a time limit, and reads its peak memory
-//! with `getrusage(RUSAGE_CHILDREN)`: a non-zero exit with one `aprt: ` line naming the file
+//! doc says what it claims and what it cost before. Each case runs the real `aprt` through
+//! `aprt-measure` (its only child, under a time limit), which reads its peak memory with
+//! `getrusage(RUSAGE_CHILDREN)`: a non-zero exit with one `aprt: ` line naming the file
 //! or flag and the numbers, no panic, under 1 GB, every input unchanged and nothing written.
 
 #![cfg(unix)]
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 mod run;
 
-/// The environment variable that makes [`measure_child`] run `aprt` (its arguments joined
-/// by U+001F).
-const MEASURE: &str = "APRT_SIZES_MEASURE";
 /// Longest a refusal may take: every case here is refused in well under a second.
 const TIMEOUT: Duration = Duration::from_secs(60);
 /// Most memory a refusal may use.
@@ -24,78 +20,18 @@ fn s(path: &Path) -> String {
     path.to_str().unwrap().to_owned()
 }
 
-/// Not a check of its own. In a child started by [`refused`], runs `aprt` once under
-/// [`TIMEOUT`] (killed past it) and prints its peak resident memory, whether it timed out,
-/// its exit code and its stderr.
-#[test]
-fn measure_child() {
-    use nix::sys::resource::{UsageWho, getrusage};
-    let Ok(args) = std::env::var(MEASURE) else {
-        return;
-    };
-    let mut child = Command::new(env!("CARGO_BIN_EXE_aprt"))
-        .args(args.split('\u{1f}'))
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let start = Instant::now();
-    let mut timed_out = false;
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > TIMEOUT {
-            child.kill().unwrap();
-            timed_out = true;
-        }
-        std::thread::sleep(Duration::from_millis(10));
-    }
-    let out = child.wait_with_output().unwrap();
-    let usage = getrusage(UsageWho::RUSAGE_CHILDREN).unwrap();
-    println!(
-        "\nmeasured max_rss_kb={} timed_out={timed_out} code={}",
-        usage.max_rss(),
-        out.status.code().unwrap_or(-1)
-    );
-    for line in String::from_utf8_lossy(&out.stderr).lines() {
-        println!("stderr: {line}");
-    }
-}
-
-/// Runs `aprt args` through [`measure_child`]; it must be refused within [`TIMEOUT`] and
+/// Runs `aprt args` through `aprt-measure`; it must be refused within [`TIMEOUT`] and
 /// [`MAX_MB`], with exactly one `aprt: ` line holding every fragment, no panic, every file of
 /// `inputs` unchanged and nothing in `out`. Returns the line.
 fn refused(args: &[String], inputs: &[&Path], out: &Path, fragments: &[&str]) -> String {
     let before: Vec<Vec<u8>> = inputs.iter().map(|p| std::fs::read(p).unwrap()).collect();
-    let result = Command::new(std::env::current_exe().unwrap())
-        .args([
-            "measure_child",
-            "--exact",
-            "--nocapture",
-            "--test-threads=1",
-        ])
-        .env(MEASURE, args.join("\u{1f}"))
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&result.stdout);
-    let line = stdout
-        .lines()
-        .find_map(|l| l.strip_prefix("measured "))
-        .unwrap_or_else(|| panic!("no measurement in\n{stdout}"));
-    let field = |name: &str| {
-        line.split(' ')
-            .find_map(|kv| kv.strip_prefix(name)?.strip_prefix('='))
-            .unwrap()
-            .to_owned()
-    };
-    let stderr: Vec<&str> = stdout
-        .lines()
-        .filter_map(|l| l.strip_prefix("stderr: "))
-        .collect();
-    let stderr = stderr.join("\n");
-    assert_eq!(field("timed_out"), "false", "{args:?} hung:\n{stderr}");
-    assert_ne!(field("code"), "0", "{args:?} succeeded:\n{stderr}");
-    let rss_mb = field("max_rss_kb").parse::<f64>().unwrap() / 1024.0;
+    let usage = run::measured(args, TIMEOUT);
+    let stderr = &usage.stderr;
+    assert!(!usage.timed_out, "{args:?} hung:\n{stderr}");
+    assert_ne!(usage.code, 0, "{args:?} succeeded:\n{stderr}");
+    let rss_mb = usage.rss_mb;
     assert!(rss_mb < MAX_MB, "{args:?} used {rss_mb:.0} MB:\n{stderr}");
-    let error = run::the_one_error(args, &stderr, fragments);
+    let error = run::the_one_error(args, stderr, fragments);
     for (path, bytes) in inputs.iter().zip(before) {
         assert!(
             std::fs::read(path).unwrap() == bytes,

@@ -425,6 +425,19 @@ fn confined_scenes_refuse_paths_outside_their_directory() {
         spelled,
     ));
     let model = d.join("m.aprt");
+    let train_confined = |file: &Path, said: &[&str]| {
+        refuse(
+            &[
+                "train",
+                "--scene",
+                path(file),
+                "--confine",
+                "-o",
+                path(&model),
+            ],
+            said,
+        )
+    };
     for (i, (source, key, named)) in cases.iter().enumerate() {
         let name = format!("confined{i}.toml");
         let file = inside.join(&name);
@@ -436,17 +449,7 @@ fn confined_scenes_refuse_paths_outside_their_directory() {
             named.as_str(),
             "outside the scene's directory",
         ];
-        refuse(
-            &[
-                "train",
-                "--scene",
-                path(&file),
-                "--confine",
-                "-o",
-                path(&model),
-            ],
-            &said,
-        );
+        train_confined(&file, &said);
         refuse(
             &[
                 "report",
@@ -470,17 +473,7 @@ fn confined_scenes_refuse_paths_outside_their_directory() {
     )
     .unwrap();
     let said = ["sky.toml", "[environment]", "../sky.hdr", "outside"];
-    refuse(
-        &[
-            "train",
-            "--scene",
-            path(&file),
-            "--confine",
-            "-o",
-            path(&model),
-        ],
-        &said,
-    );
+    train_confined(&file, &said);
     // A glTF inside the directory whose buffers climb out of it, or name a file: URI.
     std::fs::write(d.join("secret.bin"), [0u8; 4]).unwrap();
     let secret = path(&d.join("secret.bin")).to_owned();
@@ -499,15 +492,8 @@ fn confined_scenes_refuse_paths_outside_their_directory() {
         )
         .unwrap();
         let name = format!("leaky{i}.toml");
-        refuse(
-            &[
-                "train",
-                "--scene",
-                path(&file),
-                "--confine",
-                "-o",
-                path(&model),
-            ],
+        train_confined(
+            &file,
             &[
                 &name,
                 &format!("[source] gltf, a buffer of leaky{i}.gltf"),

@@ -124,3 +124,45 @@ pub fn tiny_character(dir: &Path, frames: usize) -> String {
     std::fs::write(&bvh, text).unwrap();
     bvh.to_str().unwrap().to_owned()
 }
+
+/// What one run of `aprt` used, as `aprt-measure` read it.
+#[derive(Debug)]
+pub struct Usage {
+    /// Peak resident memory, in MB.
+    pub rss_mb: f64,
+    /// User plus system CPU time, all threads, in seconds.
+    pub cpu_s: f64,
+    /// Whether it ran past its time limit and was killed.
+    pub timed_out: bool,
+    pub code: i32,
+    pub stderr: String,
+}
+
+/// Runs `aprt args` through `aprt-measure` (the only child of its own process, so that
+/// `getrusage` counts it alone), killed past `timeout`; returns what it used.
+pub fn measured(args: &[String], timeout: std::time::Duration) -> Usage {
+    let out = Command::new(env!("CARGO_BIN_EXE_aprt-measure"))
+        .arg(timeout.as_secs_f64().to_string())
+        .arg(env!("CARGO_BIN_EXE_aprt"))
+        .args(args)
+        .output()
+        .expect("run aprt-measure");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    let line = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("measured "))
+        .unwrap_or_else(|| panic!("{args:?}: no measurement in\n{stdout}\n{stderr}"));
+    let field = |name: &str| {
+        line.split(' ')
+            .find_map(|kv| kv.strip_prefix(name)?.strip_prefix('='))
+            .unwrap_or_else(|| panic!("no {name} in {line}"))
+    };
+    Usage {
+        rss_mb: field("max_rss_kb").parse::<f64>().unwrap() / 1024.0,
+        cpu_s: field("cpu_s").parse().unwrap(),
+        timed_out: field("timed_out") == "true",
+        code: field("code").parse().unwrap(),
+        stderr,
+    }
+}

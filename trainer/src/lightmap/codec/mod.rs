@@ -60,6 +60,7 @@ mod header;
 mod pca;
 mod sequence;
 pub mod shared_exp;
+pub mod synth;
 #[cfg(test)]
 mod tests;
 pub mod uniform;

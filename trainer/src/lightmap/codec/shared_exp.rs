@@ -14,7 +14,8 @@
 //! steps. Scaling by powers of two is exact in f64, so the bound holds with no rounding slack.
 //!
 //! Coefficients above band 0 are signed; [`SignMode`] holds three ways of keeping signs,
-//! measured by `compare` on the tests' synthetic clip (128², order 4, 40 frames):
+//! measured by `compare` on the synthetic clip (128², order 4, 40 frames; the `shlm_codecs`
+//! example prints its table):
 //!
 //! | sign mode | independent frames, m = 7 | PCA 1 %, m = 7 |
 //! | --- | --- | --- |

@@ -1,7 +1,7 @@
 //! Hostile `.shlm` bytes: truncations, flipped bytes, and headers declaring huge sizes with a
 //! valid checksum all give errors, never panics or huge allocations.
 
-use super::synth::clip;
+use crate::lightmap::codec::synth::clip;
 use crate::lightmap::codec::{CodecError, CodecKind, CodecSettings, ShlmFile, encode};
 
 /// A small file of each kind, then the uniform quantiser (sign mode 3) under each kind.

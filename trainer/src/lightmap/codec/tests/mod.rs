@@ -3,4 +3,3 @@
 mod hostile;
 mod quantiser;
 mod sequence;
-mod synth;

@@ -1,6 +1,7 @@
 //! Synthetic light-map clips: a smooth bent-normal field over two UV charts (a torso-like
 //! cylinder and a head-like cap), clamped-cosine transfer scaled by a smooth visibility in
-//! 0.3..1, swaying periodically like a walk, plus bake noise of about 1e-3.
+//! 0.3..1, swaying periodically like a walk, plus bake noise of about 1e-3: the codec's tests and
+//! the `shlm_codecs` example measure on it.
 
 use aprt_core::clamped_cosine;
 
