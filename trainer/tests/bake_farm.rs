@@ -9,7 +9,7 @@ use std::process::Output;
 
 use run::{aprt, refuse, succeed, tiny_character};
 
-mod run;
+use crate::run;
 
 /// Frames of the clip: with the rest pose (bone-frame models are anchored at it) the
 /// checkpoint holds one more.

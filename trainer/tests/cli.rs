@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use aprt_core::{Model, PoseWeights, StreamedModel};
 use run::{aprt, read_npy, refuse, succeed};
 
-mod run;
+use crate::run;
 
 /// `aprt train` on an OBJ sequence and an angles file, with extra model options.
 fn train(seq: &Path, angles: &Path, model: &Path, options: &[&str]) -> Vec<String> {

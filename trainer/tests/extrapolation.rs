@@ -3,7 +3,7 @@
 //! model falls back to, on every frame outside the training range and over each clip, and stay
 //! finite.
 
-mod common;
+use crate::common;
 
 use aprt_trainer::bake::clip::{bake_clip, bake_rest};
 use aprt_trainer::evaluate::relative_error;

@@ -2,7 +2,7 @@
 //! assets' README states them, the rest pose reproducing the stored mesh, clips that pose
 //! plausibly, and how far the rotation-only pose vector is from the file's full animation.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

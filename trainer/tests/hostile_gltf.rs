@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 
 use run::{refuse, succeed};
 
-mod run;
+use crate::run;
 
 fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures/malformed/gltf")

@@ -4,7 +4,7 @@
 //! a model blob, a BVH clip, an angles CSV and an OBJ mesh. Each is refused at once, naming
 //! the path, the kind of file and what is there instead; no command may hang.
 
-mod run;
+use crate::run;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};

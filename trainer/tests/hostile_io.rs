@@ -8,7 +8,7 @@
 //! naming the file and what is wrong, no output, temporary or checkpoint left, and every input
 //! byte for byte as it was. The fixtures are in `fixtures/malformed/io/`.
 
-mod run;
+use crate::run;
 
 use std::path::{Path, PathBuf};
 

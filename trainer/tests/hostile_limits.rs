@@ -13,8 +13,8 @@ use std::path::{Path, PathBuf};
 
 use run::{aprt, refuse, succeed};
 
-mod common;
-mod run;
+use crate::common;
+use crate::run;
 
 fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures/malformed")

@@ -9,7 +9,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-mod run;
+use crate::run;
 
 /// Longest a refusal may take: every case here is refused in well under a second.
 const TIMEOUT: Duration = Duration::from_secs(60);

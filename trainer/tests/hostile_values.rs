@@ -2,7 +2,7 @@
 //! `aprt` binary: each is now refused with one `aprt:` line naming the file, the item and what
 //! is wrong, before any work, with no panic and every input byte for byte as it was.
 
-mod run;
+use crate::run;
 
 use std::path::{Path, PathBuf};
 

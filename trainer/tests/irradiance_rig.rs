@@ -6,7 +6,7 @@ use std::path::Path;
 
 use run::{aprt, refuse, succeed};
 
-mod run;
+use crate::run;
 
 fn json(args: &[&str]) -> serde_json::Value {
     serde_json::from_slice(&succeed(args)).unwrap()

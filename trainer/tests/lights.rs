@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 use run::{refuse, succeed};
 
-mod run;
+use crate::run;
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -9,7 +9,7 @@
 use run::{aprt, succeed};
 use std::path::{Path, PathBuf};
 
-mod run;
+use crate::run;
 
 /// One malformed input, the command that reads it, and what its message must say.
 struct Case {

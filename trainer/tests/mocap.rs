@@ -1,6 +1,6 @@
 //! The BVH reader and mannequin on the real CMU motion capture in `shared/assets/bvh`.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;

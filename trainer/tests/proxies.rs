@@ -5,7 +5,7 @@
 use aprt_core::Model;
 use run::{aprt, read_npy, succeed};
 
-mod run;
+use crate::run;
 
 #[test]
 fn proxies_are_written_when_asked_and_evaluated_on_the_clip() {

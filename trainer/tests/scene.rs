@@ -6,7 +6,7 @@ use std::path::Path;
 
 use run::{aprt, refuse, succeed, tiny_character};
 
-mod run;
+use crate::run;
 
 /// Frames of the small character's clip: trained on the first 8, tested on the rest.
 const FRAMES: usize = 12;

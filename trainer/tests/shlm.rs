@@ -7,8 +7,8 @@ use std::path::Path;
 
 use run::{refuse, succeed};
 
-mod common;
-mod run;
+use crate::common;
+use crate::run;
 
 fn path(p: &Path) -> &str {
     p.to_str().unwrap()

@@ -6,8 +6,8 @@
 //!
 //! Everything is small (order 2, 16 rays, a few frames) so the file runs in seconds.
 
-mod common;
-mod run;
+use crate::common;
+use crate::run;
 
 use std::path::{Path, PathBuf};
 
