@@ -1,0 +1,227 @@
+//! The raw exports `web/aprt.js` calls, over fixed-size `static` buffers.
+//!
+//! Why unsafe, and why only here: a wasm module without an allocator shares memory with
+//! JavaScript through addresses of statics, which needs `#[unsafe(no_mangle)]` exports and
+//! mutable statics (an `UnsafeCell` behind a `Sync` wrapper). It is sound because wasm32
+//! runs one thread and JavaScript touches a buffer only between calls, never while a Rust
+//! reference to it lives: each export borrows what it needs for the call alone, and
+//! [`aprt_blob`] drops the session (the one long-lived borrow, of the blob) before handing
+//! the blob's address out for writing. On the host these functions are compiled but never
+//! called; the logic they wrap is [`Session`], which the tests cover.
+//!
+//! The calling sequence: `aprt_blob(len)` → write the blob there → `aprt_load(len)`; then
+//! every frame write `aprt_angles()` (pose_len f32), `aprt_bone_rotations()` (bones × 9
+//! f32, row-major) and `aprt_lighting()` (order² f32), optionally `aprt_add_directional`,
+//! then `aprt_shade()` and read `aprt_shading()` (vertices f32). A call that fails returns
+//! −1 and leaves its message at `aprt_error()` (`aprt_error_len()` bytes of UTF-8).
+#![allow(unsafe_code)]
+
+use core::cell::UnsafeCell;
+use core::fmt::Write;
+
+use aprt_core::{MAX_BONES, MAX_COEFFS, MAX_POSE_LEN, Rotation};
+
+use crate::session::{BLOB_CAPACITY, MAX_SHADED, Session, add_directional};
+
+/// A static JavaScript and Rust share; see the module documentation for why it is sound.
+struct Shared<T>(UnsafeCell<T>);
+
+// SAFETY: wasm32 has one thread, and on the host the exports are never called.
+unsafe impl<T> Sync for Shared<T> {}
+
+impl<T> Shared<T> {
+    const fn new(value: T) -> Self {
+        Shared(UnsafeCell::new(value))
+    }
+
+    fn ptr(&self) -> *mut T {
+        self.0.get()
+    }
+
+    /// The value, borrowed for one export.
+    ///
+    /// # Safety
+    /// No other reference to it may live while this one does (module documentation).
+    #[allow(clippy::mut_from_ref)]
+    unsafe fn get(&self) -> &mut T {
+        // SAFETY: the caller's promise.
+        unsafe { &mut *self.0.get() }
+    }
+}
+
+static BLOB: Shared<[u8; BLOB_CAPACITY]> = Shared::new([0; BLOB_CAPACITY]);
+static SESSION: Shared<Option<Session<'static>>> = Shared::new(None);
+static ANGLES: Shared<[f32; MAX_POSE_LEN]> = Shared::new([0.0; MAX_POSE_LEN]);
+static BONES: Shared<[Rotation; MAX_BONES]> = Shared::new([[[0.0; 3]; 3]; MAX_BONES]);
+static LIGHTING: Shared<[f32; MAX_COEFFS]> = Shared::new([0.0; MAX_COEFFS]);
+static SHADING: Shared<[f32; MAX_SHADED]> = Shared::new([0.0; MAX_SHADED]);
+static ERROR: Shared<Message> = Shared::new(Message {
+    bytes: [0; 256],
+    len: 0,
+});
+
+/// The last error's text, cut at 256 bytes.
+struct Message {
+    bytes: [u8; 256],
+    len: usize,
+}
+
+impl Write for Message {
+    fn write_str(&mut self, s: &str) -> core::fmt::Result {
+        let room = self.bytes.len() - self.len;
+        let mut take = s.len().min(room);
+        while !s.is_char_boundary(take) {
+            take -= 1;
+        }
+        self.bytes[self.len..self.len + take].copy_from_slice(&s.as_bytes()[..take]);
+        self.len += take;
+        Ok(())
+    }
+}
+
+/// Records `err` for [`aprt_error`] and returns −1.
+fn fail(err: impl core::fmt::Display) -> i32 {
+    // SAFETY: no other reference to ERROR lives during an export (module docs).
+    let message = unsafe { ERROR.get() };
+    message.len = 0;
+    let _ = write!(message, "{err}");
+    -1
+}
+
+/// The session, if a model is loaded.
+fn session() -> Option<&'static mut Session<'static>> {
+    // SAFETY: one export runs at a time and borrows the session for its duration only.
+    unsafe { SESSION.get().as_mut() }
+}
+
+/// Drops the loaded model and returns where JavaScript writes a blob of `len` bytes, or null
+/// when it is larger than the buffer.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_blob(len: usize) -> *mut u8 {
+    // SAFETY: dropping the session ends the only borrow of BLOB before it is written.
+    unsafe { *SESSION.ptr() = None };
+    if len > BLOB_CAPACITY {
+        fail(format_args!(
+            "the blob's {len} bytes exceed the page's {BLOB_CAPACITY}"
+        ));
+        return core::ptr::null_mut();
+    }
+    BLOB.ptr().cast()
+}
+
+/// Validates the `len` bytes written at [`aprt_blob`] and keeps the model: 0, or −1.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_load(len: usize) -> i32 {
+    // SAFETY: JavaScript has finished writing; until the next `aprt_blob` no one writes BLOB,
+    // so a shared 'static borrow of it holds.
+    let blob: &'static [u8] = unsafe { &BLOB.get()[..len.min(BLOB_CAPACITY)] };
+    match Session::open(blob) {
+        // SAFETY: no other reference to SESSION lives during an export.
+        Ok(session) => unsafe { *SESSION.ptr() = Some(session) },
+        Err(err) => return fail(err),
+    }
+    0
+}
+
+/// The loaded model's dimension picked by `pick`, 0 without a model.
+fn dimension(pick: fn(&aprt_core::ModelInfo) -> usize) -> usize {
+    session().map_or(0, |s| pick(s.info()))
+}
+
+/// The loaded model's vertices (0 without a model).
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_vertices() -> usize {
+    dimension(aprt_core::ModelInfo::vertices)
+}
+
+/// The loaded model's pose-vector length.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_pose_len() -> usize {
+    dimension(aprt_core::ModelInfo::pose_len)
+}
+
+/// The loaded model's bones (0 for a world-frame model).
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_bones() -> usize {
+    dimension(aprt_core::ModelInfo::bones)
+}
+
+/// The loaded model's SH order.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_order() -> usize {
+    dimension(aprt_core::ModelInfo::order)
+}
+
+/// Where JavaScript writes the pose vector.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_angles() -> *mut f32 {
+    ANGLES.ptr().cast()
+}
+
+/// Where JavaScript writes the bones' skinning rotations, 9 f32 each, row-major.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_bone_rotations() -> *mut f32 {
+    BONES.ptr().cast()
+}
+
+/// Where JavaScript writes the world SH lighting (order² f32).
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_lighting() -> *mut f32 {
+    LIGHTING.ptr().cast()
+}
+
+/// Where [`aprt_shade`] leaves one value per vertex.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_shading() -> *const f32 {
+    SHADING.ptr().cast()
+}
+
+/// Adds a directional light from (x, y, z) of `strength` to the lighting buffer: 0, or −1.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_add_directional(x: f32, y: f32, z: f32, strength: f32) -> i32 {
+    let Some(order) = session().map(|s| s.info().order()) else {
+        return fail("no model is loaded");
+    };
+    // SAFETY: no other reference to LIGHTING lives during an export.
+    let lighting = unsafe { LIGHTING.get() };
+    match add_directional(order, [x, y, z], strength, lighting) {
+        Ok(()) => 0,
+        Err(err) => fail(err),
+    }
+}
+
+/// One frame through the core: set_pose, light and shade of every vertex: 0, or −1.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_shade() -> i32 {
+    let Some(session) = session() else {
+        return fail("no model is loaded");
+    };
+    let info = *session.info();
+    // SAFETY: the buffers are distinct statics, none borrowed elsewhere during this export.
+    let (angles, bones, lighting, shading) = unsafe {
+        (
+            &ANGLES.get()[..info.pose_len()],
+            &BONES.get()[..info.bones()],
+            &LIGHTING.get()[..info.coeffs()],
+            SHADING.get(),
+        )
+    };
+    match session.shade(angles, lighting, bones, shading) {
+        Ok(()) => 0,
+        Err(err) => fail(err),
+    }
+}
+
+/// The last error's UTF-8 text.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_error() -> *const u8 {
+    // SAFETY: the address only; JavaScript reads it between calls.
+    unsafe { ERROR.get().bytes.as_ptr() }
+}
+
+/// The length of [`aprt_error`]'s text in bytes.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_error_len() -> usize {
+    // SAFETY: a plain read, no borrow outlives it.
+    unsafe { ERROR.get().len }
+}
