@@ -78,6 +78,9 @@ async function main() {
     return ((performance.now() - t0) * 1000) / n;
   };
 
+  /** The live mean of the last 120 frames' shade, in µs (cold caches, the GPU thread busy). */
+  page.liveShadeUs = () => shadeMean.value * 1000;
+
   let dragging = null;
   canvas.addEventListener('pointerdown', (e) => (dragging = { x: e.clientX, y: e.clientY }));
   window.addEventListener('pointerup', () => (dragging = null));
