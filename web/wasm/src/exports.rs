@@ -6,8 +6,8 @@
 //! runs one thread and JavaScript touches a buffer only between calls, never while a Rust
 //! reference to it lives: each export borrows what it needs for the call alone, and
 //! [`aprt_blob`] drops the session (the one long-lived borrow, of the blob) before handing
-//! the blob's address out for writing. On the host these functions are compiled but never
-//! called; the logic they wrap is [`Session`], which the tests cover.
+//! the blob's address out for writing. On the host one test drives the calling sequence as
+//! `web/aprt.js` does (tests run on threads, so no other test may touch the statics).
 //!
 //! The calling sequence: `aprt_blob(len)` → write the blob there → `aprt_load(len)`; then
 //! every frame write `aprt_angles()` (pose_len f32), `aprt_bone_rotations()` (bones × 9
@@ -26,7 +26,7 @@ use crate::session::{BLOB_CAPACITY, MAX_SHADED, Session, add_directional};
 /// A static JavaScript and Rust share; see the module documentation for why it is sound.
 struct Shared<T>(UnsafeCell<T>);
 
-// SAFETY: wasm32 has one thread, and on the host the exports are never called.
+// SAFETY: wasm32 has one thread; on the host only one test calls the exports.
 unsafe impl<T> Sync for Shared<T> {}
 
 impl<T> Shared<T> {
@@ -99,7 +99,7 @@ fn session() -> Option<&'static mut Session<'static>> {
 #[unsafe(no_mangle)]
 pub extern "C" fn aprt_blob(len: usize) -> *mut u8 {
     // SAFETY: dropping the session ends the only borrow of BLOB before it is written.
-    unsafe { *SESSION.ptr() = None };
+    unsafe { *SESSION.get() = None };
     if len > BLOB_CAPACITY {
         fail(format_args!(
             "the blob's {len} bytes exceed the page's {BLOB_CAPACITY}"
@@ -112,12 +112,16 @@ pub extern "C" fn aprt_blob(len: usize) -> *mut u8 {
 /// Validates the `len` bytes written at [`aprt_blob`] and keeps the model: 0, or −1.
 #[unsafe(no_mangle)]
 pub extern "C" fn aprt_load(len: usize) -> i32 {
+    // SAFETY: no other reference to SESSION lives during an export; dropping it ends the
+    // previous load's borrow of BLOB.
+    unsafe { *SESSION.get() = None };
     // SAFETY: JavaScript has finished writing; until the next `aprt_blob` no one writes BLOB,
-    // so a shared 'static borrow of it holds.
-    let blob: &'static [u8] = unsafe { &BLOB.get()[..len.min(BLOB_CAPACITY)] };
+    // so a shared 'static borrow of it holds (made from the pointer, never through `&mut`).
+    let blob: &'static [u8] =
+        unsafe { core::slice::from_raw_parts(BLOB.ptr().cast::<u8>(), len.min(BLOB_CAPACITY)) };
     match Session::open(blob) {
-        // SAFETY: no other reference to SESSION lives during an export.
-        Ok(session) => unsafe { *SESSION.ptr() = Some(session) },
+        // SAFETY: as above.
+        Ok(session) => unsafe { *SESSION.get() = Some(session) },
         Err(err) => return fail(err),
     }
     0
@@ -224,4 +228,70 @@ pub extern "C" fn aprt_error() -> *const u8 {
 pub extern "C" fn aprt_error_len() -> usize {
     // SAFETY: a plain read, no borrow outlives it.
     unsafe { ERROR.get().len }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::boxed::Box;
+    use std::vec;
+    use std::vec::Vec;
+
+    const BLOB: &[u8] = include_bytes!("../../../fixtures/golden/v1-bones.aprt");
+
+    fn error_text() -> std::string::String {
+        // SAFETY: the exports return the message's address and length.
+        let bytes = unsafe { core::slice::from_raw_parts(aprt_error(), aprt_error_len()) };
+        std::string::String::from_utf8(bytes.to_vec()).unwrap()
+    }
+
+    /// Copies `values` to an address an export handed out, as `web/aprt.js` does.
+    fn write(ptr: *mut f32, values: &[f32]) {
+        // SAFETY: every buffer holds at least what the model needs; no borrow is live.
+        unsafe { core::ptr::copy_nonoverlapping(values.as_ptr(), ptr, values.len()) };
+    }
+
+    /// The one test that calls the exports: `web/aprt.js`'s sequence, its errors, and the
+    /// shading equal to [`Session::shade`]'s.
+    #[test]
+    fn the_javascript_calling_sequence() {
+        assert_eq!(aprt_shade(), -1);
+        assert_eq!(error_text(), "no model is loaded");
+        assert!(aprt_blob(BLOB_CAPACITY + 1).is_null());
+        assert!(error_text().contains("exceed"), "{}", error_text());
+
+        let ptr = aprt_blob(BLOB.len());
+        // SAFETY: the buffer holds BLOB_CAPACITY bytes and nothing borrows it after aprt_blob.
+        unsafe { core::ptr::copy_nonoverlapping(BLOB.as_ptr(), ptr, BLOB.len()) };
+        assert_eq!(aprt_load(10), -1);
+        assert!(error_text().contains("truncated"), "{}", error_text());
+        assert_eq!(aprt_vertices(), 0);
+        assert_eq!(aprt_load(BLOB.len()), 0, "{}", error_text());
+
+        let mut session = Box::new(Session::open(BLOB).unwrap());
+        let info = *session.info();
+        assert_eq!(
+            [aprt_vertices(), aprt_pose_len(), aprt_bones(), aprt_order()],
+            [info.vertices(), info.pose_len(), info.bones(), info.order()]
+        );
+        let angles = vec![0.3; info.pose_len()];
+        let turn = [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]];
+        let bones: Vec<[[f32; 3]; 3]> = vec![turn; info.bones()];
+        let mut lighting = vec![0.2; info.coeffs()];
+        write(aprt_angles(), &angles);
+        write(aprt_bone_rotations(), bones.as_flattened().as_flattened());
+        write(aprt_lighting(), &lighting);
+        assert_eq!(aprt_add_directional(0.0, 0.0, 0.0, 1.0), -1);
+        assert_eq!(aprt_add_directional(1.0, 0.0, 1.0, 2.0), 0);
+        assert_eq!(aprt_shade(), 0, "{}", error_text());
+
+        add_directional(info.order(), [1.0, 0.0, 1.0], 2.0, &mut lighting).unwrap();
+        let mut expected = vec![0.0; info.vertices()];
+        session
+            .shade(&angles, &lighting, &bones, &mut expected)
+            .unwrap();
+        // SAFETY: aprt_shade wrote `vertices` values there; no borrow is live.
+        let shading = unsafe { core::slice::from_raw_parts(aprt_shading(), info.vertices()) };
+        assert_eq!(shading, &expected[..]);
+    }
 }
