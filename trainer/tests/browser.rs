@@ -11,6 +11,10 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use run::refuse;
+
+mod run;
+
 fn web() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../web")
 }
@@ -52,6 +56,35 @@ fn the_checked_in_web_export_is_current() {
             "web/data/{file} is stale: rerun aprt export-web web/data/model.aprt --builtin --clip wave --out web/data"
         );
     }
+    std::fs::remove_dir_all(out).unwrap();
+}
+
+/// `aprt export-web` refuses what the page could not play, with one line saying why, and
+/// never writes over its model.
+#[test]
+fn export_web_refuses_what_the_page_cannot_play() {
+    let out = scratch("refuse");
+    let (dir, model) = (out.to_str().unwrap(), web().join("data/model.aprt"));
+    let model = model.to_str().unwrap();
+    refuse(
+        &["export-web", model, "--out", dir],
+        &["--builtin", "--clip"],
+    );
+    let golden = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures/golden/v1-bones.aprt");
+    let args = [
+        "export-web",
+        golden.to_str().unwrap(),
+        "--builtin",
+        "--clip",
+        "wave",
+    ];
+    refuse(&[&args[..], &["--out", dir]].concat(), &["does not fit"]);
+    let data = web().join("data");
+    let args = ["export-web", model, "--builtin", "--clip", "wave", "--out"];
+    refuse(
+        &[&args[..], &[data.to_str().unwrap()]].concat(),
+        &["model.aprt"],
+    );
     std::fs::remove_dir_all(out).unwrap();
 }
 
