@@ -311,6 +311,19 @@ pub struct EvalArgs {
     pub npy: PathBuf,
 }
 
+/// `aprt export-web`.
+#[derive(Debug, Args)]
+pub struct ExportWebArgs {
+    /// The model.
+    pub model: PathBuf,
+    /// The clip the page plays: a clip of the model's character.
+    #[command(flatten)]
+    pub source: SourceArgs,
+    /// Output directory (manifest.json, clip.bin, model.aprt), for example web/data.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
 /// `aprt inspect`.
 #[derive(Debug, Args)]
 pub struct InspectArgs {

@@ -14,9 +14,9 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 
 pub use args::{
-    BakeArgs, DemoArgs, DeringArg, EnvArgs, EvalArgs, FitArgs, InspectArgs, IrradianceArgs,
-    LightArgs, LightCommand, PrecisionArg, ReportArgs, ResultsArgs, RigArgs, RigStudyArgs,
-    SimulateArgs, TrainArgs, TransferArgs,
+    BakeArgs, DemoArgs, DeringArg, EnvArgs, EvalArgs, ExportWebArgs, FitArgs, InspectArgs,
+    IrradianceArgs, LightArgs, LightCommand, PrecisionArg, ReportArgs, ResultsArgs, RigArgs,
+    RigStudyArgs, SimulateArgs, TrainArgs, TransferArgs,
 };
 pub use source::SourceArgs;
 pub use terminal::Terminal;
@@ -59,6 +59,9 @@ pub enum Command {
     /// Predict transfer through aprt-core into a (frames, vertices, n²) .npy, for a clip of the
     /// model's character or rows of joint angles.
     Eval(EvalArgs),
+    /// Write what the web page (web/) needs to play a clip through aprt-core in the browser:
+    /// the mesh, its skin, each frame's skinning, pose vector and bone rotations, and the blob.
+    ExportWeb(ExportWebArgs),
     /// Validate a model blob and print its header, dimensions and section sizes.
     Inspect(InspectArgs),
     /// Regenerate the results document on the real glTF characters and BVH motion capture.
@@ -110,6 +113,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Train(args) => train(&args),
         Command::Simulate(args) => simulate(&args),
         Command::Eval(args) => eval(&args),
+        Command::ExportWeb(args) => export_web(&args),
         Command::Inspect(args) => inspect(&args),
         Command::Results(args) => results(&args),
         Command::IrradianceRig(args) => irradiance_rig::run(&args),
@@ -287,6 +291,42 @@ fn eval(args: &EvalArgs) -> Result<()> {
         &[transfer.len(), info.vertices, info.order * info.order],
         &flat,
     )
+}
+
+fn export_web(args: &ExportWebArgs) -> Result<()> {
+    use crate::report::web::{WEB_FILES, web_export, write_web_export};
+    let mut inputs = vec![Input::new(&args.model, "the model")];
+    inputs.extend(args.source.inputs());
+    check(
+        &[Output::directory(&args.out, "--out", &WEB_FILES)],
+        &inputs,
+    )?;
+    let blob = read_file(&args.model, InputKind::Model)?;
+    let info = crate::model::runtime::describe(&blob)
+        .with_context(|| format!("{}: invalid model", args.model.display()))?;
+    if !args.source.names_rig() {
+        bail!("give the clip the page plays: a character (--builtin, --gltf, --bvh) and --clip");
+    }
+    if crate::model::runtime::proxies_section(&blob)?.is_some() {
+        bail!(
+            "{}: the page does not pose occluder proxies yet; train with --proxies none",
+            args.model.display()
+        );
+    }
+    let (rig, clip) = args.source.rig(&Terminal)?;
+    let (manifest, bin) = web_export(rig.as_ref(), &clip, &info)
+        .with_context(|| format!("exporting {} for the web", args.model.display()))?;
+    write_web_export(&args.out, &manifest, &bin, &blob)?;
+    eprintln!(
+        "wrote {}/{{{}}}: clip {}, {} frames, {} vertices, {} bytes of arrays",
+        args.out.display(),
+        WEB_FILES.join(", "),
+        manifest.clip,
+        manifest.frames,
+        manifest.vertices,
+        bin.len()
+    );
+    Ok(())
 }
 
 fn transfer(args: &TransferArgs) -> Result<()> {

@@ -14,3 +14,4 @@ pub mod plots;
 pub mod render;
 pub mod results;
 pub mod sweep;
+pub mod web;

@@ -1,0 +1,86 @@
+// The aprt core in the page: web/wasm compiled to a raw wasm32 module (no wasm-bindgen, no
+// allocator). The module keeps its buffers in statics and exports their addresses; this file
+// copies a frame's inputs in, calls `aprt_shade` and hands back a view of the shading.
+
+/** Loads `aprt-simd.wasm` when the browser validates it (or `choice` is 'simd'), else
+ *  `aprt-scalar.wasm`; `choice` 'scalar' forces the scalar build. */
+export async function loadCore(base, choice = 'auto') {
+  const bytesOf = async (name) => {
+    const response = await fetch(new URL(name, base));
+    if (!response.ok) throw new Error(`${name}: HTTP ${response.status}`);
+    return new Uint8Array(await response.arrayBuffer());
+  };
+  let bytes = null;
+  let flavour = 'scalar';
+  if (choice !== 'scalar') {
+    const simd = await bytesOf('aprt-simd.wasm');
+    if (WebAssembly.validate(simd)) {
+      bytes = simd;
+      flavour = 'simd';
+    } else if (choice === 'simd') {
+      throw new Error('this browser does not validate the SIMD build');
+    }
+  }
+  if (bytes === null) bytes = await bytesOf('aprt-scalar.wasm');
+  const { instance } = await WebAssembly.instantiate(bytes, {});
+  return new Core(instance.exports, flavour, bytes.length);
+}
+
+/** One loaded module and, after `load`, one model. */
+export class Core {
+  constructor(exports, flavour, wasmBytes) {
+    this.e = exports;
+    this.flavour = flavour;
+    this.wasmBytes = wasmBytes;
+    this.info = null;
+  }
+
+  /** The module's memory as floats at `ptr` (a new view each time: cheap, never stale). */
+  f32(ptr, len) {
+    return new Float32Array(this.e.memory.buffer, ptr, len);
+  }
+
+  /** The last error's text. */
+  error() {
+    const bytes = new Uint8Array(this.e.memory.buffer, this.e.aprt_error(), this.e.aprt_error_len());
+    return new Error(`aprt: ${new TextDecoder().decode(bytes)}`);
+  }
+
+  /** Validates a blob (Uint8Array) once and keeps it; reads the model's dimensions. */
+  load(blob) {
+    const ptr = this.e.aprt_blob(blob.length);
+    if (ptr === 0) throw this.error();
+    new Uint8Array(this.e.memory.buffer, ptr, blob.length).set(blob);
+    if (this.e.aprt_load(blob.length) !== 0) throw this.error();
+    this.info = {
+      vertices: this.e.aprt_vertices(),
+      poseLen: this.e.aprt_pose_len(),
+      bones: this.e.aprt_bones(),
+      order: this.e.aprt_order(),
+    };
+    this.info.coeffs = this.info.order * this.info.order;
+  }
+
+  /** The lighting: the SH `environment` plus a directional light from `dir` of `strength`. */
+  setLighting(environment, dir, strength) {
+    this.f32(this.e.aprt_lighting(), this.info.coeffs).set(environment);
+    if (this.e.aprt_add_directional(dir[0], dir[1], dir[2], strength) !== 0) throw this.error();
+  }
+
+  /** A copy of the lighting the next `shade` uses. */
+  lighting() {
+    return Float32Array.from(this.f32(this.e.aprt_lighting(), this.info.coeffs));
+  }
+
+  /** Writes a frame's pose vector and bone rotations (bones × 9, row-major). */
+  setPose(angles, rotations) {
+    this.f32(this.e.aprt_angles(), this.info.poseLen).set(angles);
+    this.f32(this.e.aprt_bone_rotations(), this.info.bones * 9).set(rotations);
+  }
+
+  /** One frame through the core (set_pose, light, shade); returns a view of the shading. */
+  shade() {
+    if (this.e.aprt_shade() !== 0) throw this.error();
+    return this.f32(this.e.aprt_shading(), this.info.vertices);
+  }
+}

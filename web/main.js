@@ -1,0 +1,120 @@
+// The page: plays the exported clip, shades every frame through the core (aprt.js) under an
+// SH environment plus the light the user drags, draws it (render.js) and shows the frame time
+// and the core's µs per frame. `window.aprtPage` exposes the state the browser test reads.
+
+import { loadCore } from './aprt.js';
+import { frameAt, loadClip, poseOf, skinFrame } from './clip.js';
+import { Renderer, camera } from './render.js';
+
+const params = new URLSearchParams(location.search);
+const startSeconds = Number(params.get('t') ?? 0);
+const frozen = params.get('freeze') === '1';
+const dataDir = new URL(params.get('data') ?? 'data/', location.href);
+
+/** The environment: a sky brighter above (z up) than below, order² SH coefficients. */
+function environment(order) {
+  const sh = new Float32Array(order * order);
+  sh[0] = 0.5; // l = 0
+  if (order > 1) sh[2] = 0.25; // l = 1, m = 0: z
+  return sh;
+}
+
+/** The dragged light's direction from azimuth and elevation (radians), z up. */
+function direction(azimuth, elevation) {
+  const c = Math.cos(elevation);
+  return [c * Math.cos(azimuth), c * Math.sin(azimuth), Math.sin(elevation)];
+}
+
+/** Running means of the last `size` samples. */
+class Mean {
+  constructor(size) {
+    this.samples = [];
+    this.size = size;
+  }
+  push(x) {
+    this.samples.push(x);
+    if (this.samples.length > this.size) this.samples.shift();
+  }
+  get value() {
+    return this.samples.reduce((a, b) => a + b, 0) / Math.max(1, this.samples.length);
+  }
+}
+
+async function main() {
+  const [core, clip] = await Promise.all([loadCore(location.href, params.get('wasm') ?? 'auto'), loadClip(dataDir)]);
+  core.load(clip.blob);
+  const m = clip.manifest;
+  const canvas = document.getElementById('view');
+  const renderer = new Renderer(canvas, clip.arrays.indices, m.vertices);
+  const cam = camera(clip.arrays.positions, m.up, canvas.width / canvas.height);
+  const positions = new Float32Array(m.vertices * 3);
+  const normals = new Float32Array(m.vertices * 3);
+  const light = { azimuth: -0.6, elevation: 0.8, strength: 2.5 };
+  const env = environment(core.info.order);
+  const shadeMean = new Mean(120);
+  const frameMean = new Mean(120);
+  const page = { ready: false, frame: -1, core, manifest: m, shading: null, lighting: null };
+  window.aprtPage = page;
+
+  /** One frame: pose and light the core, shade (timed alone), skin and draw. */
+  function render(f) {
+    const { angles, rotations } = poseOf(clip, f);
+    core.setPose(angles, rotations);
+    core.setLighting(env, direction(light.azimuth, light.elevation), light.strength);
+    const t0 = performance.now();
+    const shading = core.shade();
+    shadeMean.push(performance.now() - t0);
+    skinFrame(clip, f, positions, normals);
+    renderer.draw(cam, positions, normals, shading);
+    page.frame = f;
+    page.shading = Float32Array.from(shading);
+    page.lighting = core.lighting();
+  }
+
+  /** µs per `aprt_shade` over `n` calls of the current frame (the page's own timer is coarse). */
+  page.bench = (n) => {
+    const t0 = performance.now();
+    for (let i = 0; i < n; i++) core.shade();
+    return ((performance.now() - t0) * 1000) / n;
+  };
+
+  /** The live mean of the last 120 frames' shade, in µs (cold caches, the GPU thread busy). */
+  page.liveShadeUs = () => shadeMean.value * 1000;
+
+  let dragging = null;
+  canvas.addEventListener('pointerdown', (e) => (dragging = { x: e.clientX, y: e.clientY }));
+  window.addEventListener('pointerup', () => (dragging = null));
+  window.addEventListener('pointermove', (e) => {
+    if (!dragging) return;
+    light.azimuth -= (e.clientX - dragging.x) * 0.01;
+    light.elevation = Math.max(-1.5, Math.min(1.5, light.elevation + (e.clientY - dragging.y) * 0.01));
+    dragging = { x: e.clientX, y: e.clientY };
+    if (frozen) render(page.frame);
+  });
+
+  const stats = document.getElementById('stats');
+  const started = performance.now();
+  let last = started;
+  function tick(now) {
+    frameMean.push(now - last);
+    last = now;
+    const seconds = frozen ? startSeconds : startSeconds + (now - started) / 1000;
+    if (!frozen || page.frame < 0) render(frameAt(m, seconds));
+    stats.textContent = [
+      `clip ${m.clip}: frame ${page.frame + 1} of ${m.frames} at ${m.fps} fps`,
+      `${m.vertices} vertices, order ${core.info.order}, ${core.info.bones} bones`,
+      `wasm ${core.flavour}, ${core.wasmBytes} bytes`,
+      `frame time   ${frameMean.value.toFixed(2)} ms`,
+      `core shade   ${(shadeMean.value * 1000).toFixed(0)} µs per frame`,
+      `light az ${light.azimuth.toFixed(2)} el ${light.elevation.toFixed(2)}`,
+    ].join('\n');
+    page.ready = true;
+    requestAnimationFrame(tick);
+  }
+  requestAnimationFrame(tick);
+}
+
+main().catch((err) => {
+  document.getElementById('stats').textContent = `error: ${err.message}`;
+  window.aprtPage = { ready: false, error: err.message };
+});

@@ -1,0 +1,164 @@
+// The page in headless Chromium (the system's, through playwright-core; nothing downloaded):
+// for each wasm build it loads `?t=T&freeze=1`, reads the per-vertex shading back from the
+// module and compares it with `aprt eval` of the same frame under the page's lighting, times
+// the core's frame (batched, and live while the clip plays), and compares a screenshot of the canvas with reference.png (pixelmatch).
+//
+//   node browser-test.mjs --reference eval.npy [--t 1.25] [--bench 300] [--out DIR]
+//                         [--update-reference]
+//
+// eval.npy is `aprt eval web/data/model.aprt --builtin --clip wave --npy eval.npy`
+// (frames × vertices × n² world transfer); shading_j = Σ_c T[f, j, c] L_c.
+
+import { readFile, writeFile, mkdir } from 'node:fs/promises';
+import { dirname, join } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { parseArgs } from 'node:util';
+import { chromium } from 'playwright-core';
+import pixelmatch from 'pixelmatch';
+import { PNG } from 'pngjs';
+import { readNpy } from './npy.mjs';
+import { serve } from './serve.mjs';
+
+const here = dirname(fileURLToPath(import.meta.url));
+/** Largest |page − eval| over the vertices, relative to the largest |eval|. */
+const MAX_RELATIVE = 1e-5;
+/** pixelmatch's per-pixel threshold (YIQ distance, 0 to 1), and how many pixels may exceed it.
+ *  SwiftShader renders the same bits run to run (0 pixels here); measured on this page, at
+ *  0.02 the next frame of the clip flags 430 pixels and the light dragged 0.1 rad 7,099 (at
+ *  pixelmatch's default 0.1, 149 and 0: too blind to the shading). 100 pixels (0.03 % of the
+ *  canvas) catch both and leave room for another Chromium's edge rasterisation. */
+const PIXEL_THRESHOLD = 0.02;
+const MAX_DIFF_PIXELS = 100;
+/** SwiftShader's WebGL2 without a GPU, and no network or profile state. */
+const CHROMIUM_ARGS = [
+  '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',
+  '--disable-component-update', '--disable-sync', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+];
+
+const { values: opts } = parseArgs({
+  options: {
+    reference: { type: 'string' },
+    t: { type: 'string', default: '1.25' },
+    bench: { type: 'string', default: '300' },
+    out: { type: 'string' },
+    'update-reference': { type: 'boolean', default: false },
+  },
+});
+
+/** The shading `aprt eval` implies for frame `f` under `lighting`, in f64. */
+function evalShading(npy, f, lighting) {
+  const [frames, vertices, n2] = npy.shape;
+  if (f >= frames || n2 !== lighting.length) throw new Error(`eval.npy ${npy.shape} vs frame ${f}, n² ${lighting.length}`);
+  const out = new Float64Array(vertices);
+  for (let j = 0; j < vertices; j++) {
+    const row = (f * vertices + j) * n2;
+    for (let c = 0; c < n2; c++) out[j] += npy.data[row + c] * lighting[c];
+  }
+  return out;
+}
+
+/** Loads the page with one wasm build; returns what it computed and its timing. */
+async function runPage(browser, url, flavour) {
+  const page = await browser.newPage({ viewport: { width: 1100, height: 560 } });
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(e.message));
+  await page.goto(`${url}?t=${opts.t}&freeze=1&wasm=${flavour}`);
+  await page.waitForFunction(() => window.aprtPage?.ready || window.aprtPage?.error, null, { timeout: 60000 });
+  const state = await page.evaluate(() => {
+    const p = window.aprtPage;
+    if (p.error) return { error: p.error };
+    return { frame: p.frame, flavour: p.core.flavour, wasmBytes: p.core.wasmBytes, fps: p.manifest.fps,
+      shading: Array.from(p.shading), lighting: Array.from(p.lighting) };
+  });
+  if (state.error || errors.length) throw new Error(`page (${flavour}): ${state.error ?? errors.join('; ')}`);
+  // Median of 5 runs of `bench` calls each: the page's timer is coarse, a batch is not.
+  const runs = [];
+  for (let i = 0; i < 5; i++) runs.push(await page.evaluate((n) => window.aprtPage.bench(n), Number(opts.bench)));
+  state.shadeUs = runs.sort((a, b) => a - b)[2];
+  state.screenshot = await page.locator('#view').screenshot();
+  // The page as a user sees it: the clip playing, the shade timed every frame, with cold
+  // caches and the renderer busy; the mean of the last 120 frames after 3 s.
+  await page.goto(`${url}?wasm=${flavour}`);
+  await page.waitForFunction(() => window.aprtPage?.ready, null, { timeout: 60000 });
+  await page.waitForTimeout(3000);
+  state.liveUs = await page.evaluate(() => window.aprtPage.liveShadeUs());
+  await page.close();
+  return state;
+}
+
+/** `relativeTo(frame)` of the page's shading against `aprt eval` of `frame`. */
+function compareShading(state, npy, frame = state.frame) {
+  const expected = evalShading(npy, frame, state.lighting);
+  let worst = 0;
+  let scale = 0;
+  for (let j = 0; j < expected.length; j++) {
+    worst = Math.max(worst, Math.abs(state.shading[j] - expected[j]));
+    scale = Math.max(scale, Math.abs(expected[j]));
+  }
+  if (state.shading.length !== expected.length) throw new Error('vertex count differs from eval.npy');
+  return worst / scale;
+}
+
+async function compareImage(png, outDir) {
+  const referencePath = join(here, 'reference.png');
+  if (opts['update-reference']) {
+    await writeFile(referencePath, png);
+    return 0;
+  }
+  const actual = PNG.sync.read(png);
+  const expected = PNG.sync.read(await readFile(referencePath));
+  if (actual.width !== expected.width || actual.height !== expected.height) {
+    throw new Error(`screenshot ${actual.width}×${actual.height}, reference ${expected.width}×${expected.height}`);
+  }
+  const diff = new PNG({ width: actual.width, height: actual.height });
+  const pixels = pixelmatch(actual.data, expected.data, diff.data, actual.width, actual.height, { threshold: PIXEL_THRESHOLD });
+  if (outDir) {
+    await mkdir(outDir, { recursive: true });
+    await writeFile(join(outDir, 'screenshot.png'), png);
+    await writeFile(join(outDir, 'diff.png'), PNG.sync.write(diff));
+  }
+  return pixels;
+}
+
+async function main() {
+  if (!opts.reference) throw new Error('give --reference eval.npy (aprt eval of the exported clip)');
+  const npy = readNpy(new Uint8Array(await readFile(opts.reference)));
+  if (opts.out) await mkdir(opts.out, { recursive: true });
+  const server = await serve(dirname(here));
+  const browser = await chromium.launch({
+    executablePath: process.env.APRT_CHROMIUM ?? '/usr/bin/chromium', headless: true, args: CHROMIUM_ARGS });
+  const failures = [];
+  const results = {};
+  try {
+    for (const flavour of ['scalar', 'simd']) {
+      const state = await runPage(browser, server.url, flavour);
+      if (state.flavour !== flavour) failures.push(`asked for ${flavour}, the page loaded ${state.flavour}`);
+      const relative = compareShading(state, npy);
+      const expectedFrame = Math.floor(Number(opts.t) * state.fps + 1e-9) % npy.shape[0];
+      if (state.frame !== expectedFrame) failures.push(`${flavour}: frame ${state.frame}, expected ${expectedFrame}`);
+      if (!(relative <= MAX_RELATIVE)) failures.push(`${flavour}: shading differs from aprt eval by ${relative.toExponential(2)} relative`);
+      // Not a vacuous comparison: the next frame's shading is far outside the tolerance.
+      const neighbour = compareShading(state, npy, (state.frame + 1) % npy.shape[0]);
+      if (!(neighbour > 100 * MAX_RELATIVE)) failures.push(`${flavour}: the next frame is only ${neighbour} from this one`);
+      const pixels = await compareImage(state.screenshot, opts.out && join(opts.out, flavour));
+      if (pixels > MAX_DIFF_PIXELS) failures.push(`${flavour}: ${pixels} pixels differ from reference.png`);
+      results[flavour] = { frame: state.frame, wasm_bytes: state.wasmBytes, max_relative: relative,
+        shade_us: state.shadeUs, live_shade_us: state.liveUs, diff_pixels: pixels };
+      console.log(`${flavour}: frame ${state.frame}, ${state.wasmBytes} wasm bytes, shading vs aprt eval ` +
+        `${relative.toExponential(2)} relative (≤ ${MAX_RELATIVE}; the next frame ${neighbour.toExponential(2)}), ${state.shadeUs.toFixed(1)} µs per frame, ` +
+        `${state.liveUs.toFixed(0)} µs live, ` +
+        `${pixels} pixels differ from reference.png (≤ ${MAX_DIFF_PIXELS})`);
+    }
+  } finally {
+    await browser.close();
+    server.close();
+  }
+  console.log(`browser: ${JSON.stringify({ chromium: browser.version(), ...results })}`);
+  if (failures.length) throw new Error(failures.join('\n'));
+  console.log('browser test passed');
+}
+
+main().catch((err) => {
+  console.error(`browser test failed: ${err.message}`);
+  process.exit(1);
+});

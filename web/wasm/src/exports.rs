@@ -1,0 +1,297 @@
+//! The raw exports `web/aprt.js` calls, over fixed-size `static` buffers.
+//!
+//! Why unsafe, and why only here: a wasm module without an allocator shares memory with
+//! JavaScript through addresses of statics, which needs `#[unsafe(no_mangle)]` exports and
+//! mutable statics (an `UnsafeCell` behind a `Sync` wrapper). It is sound because wasm32
+//! runs one thread and JavaScript touches a buffer only between calls, never while a Rust
+//! reference to it lives: each export borrows what it needs for the call alone, and
+//! [`aprt_blob`] drops the session (the one long-lived borrow, of the blob) before handing
+//! the blob's address out for writing. On the host one test drives the calling sequence as
+//! `web/aprt.js` does (tests run on threads, so no other test may touch the statics).
+//!
+//! The calling sequence: `aprt_blob(len)` → write the blob there → `aprt_load(len)`; then
+//! every frame write `aprt_angles()` (pose_len f32), `aprt_bone_rotations()` (bones × 9
+//! f32, row-major) and `aprt_lighting()` (order² f32), optionally `aprt_add_directional`,
+//! then `aprt_shade()` and read `aprt_shading()` (vertices f32). A call that fails returns
+//! −1 and leaves its message at `aprt_error()` (`aprt_error_len()` bytes of UTF-8).
+#![allow(unsafe_code)]
+
+use core::cell::UnsafeCell;
+use core::fmt::Write;
+
+use aprt_core::{MAX_BONES, MAX_COEFFS, MAX_POSE_LEN, Rotation};
+
+use crate::session::{BLOB_CAPACITY, MAX_SHADED, Session, add_directional};
+
+/// A static JavaScript and Rust share; see the module documentation for why it is sound.
+struct Shared<T>(UnsafeCell<T>);
+
+// SAFETY: wasm32 has one thread; on the host only one test calls the exports.
+unsafe impl<T> Sync for Shared<T> {}
+
+impl<T> Shared<T> {
+    const fn new(value: T) -> Self {
+        Shared(UnsafeCell::new(value))
+    }
+
+    fn ptr(&self) -> *mut T {
+        self.0.get()
+    }
+
+    /// The value, borrowed for one export.
+    ///
+    /// # Safety
+    /// No other reference to it may live while this one does (module documentation).
+    #[allow(clippy::mut_from_ref)]
+    unsafe fn get(&self) -> &mut T {
+        // SAFETY: the caller's promise.
+        unsafe { &mut *self.0.get() }
+    }
+}
+
+static BLOB: Shared<[u8; BLOB_CAPACITY]> = Shared::new([0; BLOB_CAPACITY]);
+static SESSION: Shared<Option<Session<'static>>> = Shared::new(None);
+static ANGLES: Shared<[f32; MAX_POSE_LEN]> = Shared::new([0.0; MAX_POSE_LEN]);
+static BONES: Shared<[Rotation; MAX_BONES]> = Shared::new([[[0.0; 3]; 3]; MAX_BONES]);
+static LIGHTING: Shared<[f32; MAX_COEFFS]> = Shared::new([0.0; MAX_COEFFS]);
+static SHADING: Shared<[f32; MAX_SHADED]> = Shared::new([0.0; MAX_SHADED]);
+static ERROR: Shared<Message> = Shared::new(Message {
+    bytes: [0; 256],
+    len: 0,
+});
+
+/// The last error's text, cut at 256 bytes.
+struct Message {
+    bytes: [u8; 256],
+    len: usize,
+}
+
+impl Write for Message {
+    fn write_str(&mut self, s: &str) -> core::fmt::Result {
+        let room = self.bytes.len() - self.len;
+        let mut take = s.len().min(room);
+        while !s.is_char_boundary(take) {
+            take -= 1;
+        }
+        self.bytes[self.len..self.len + take].copy_from_slice(&s.as_bytes()[..take]);
+        self.len += take;
+        Ok(())
+    }
+}
+
+/// Records `err` for [`aprt_error`] and returns −1.
+fn fail(err: impl core::fmt::Display) -> i32 {
+    // SAFETY: no other reference to ERROR lives during an export (module docs).
+    let message = unsafe { ERROR.get() };
+    message.len = 0;
+    let _ = write!(message, "{err}");
+    -1
+}
+
+/// The session, if a model is loaded.
+fn session() -> Option<&'static mut Session<'static>> {
+    // SAFETY: one export runs at a time and borrows the session for its duration only.
+    unsafe { SESSION.get().as_mut() }
+}
+
+/// Drops the loaded model and returns where JavaScript writes a blob of `len` bytes, or null
+/// when it is larger than the buffer.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_blob(len: usize) -> *mut u8 {
+    // SAFETY: dropping the session ends the only borrow of BLOB before it is written.
+    unsafe { *SESSION.get() = None };
+    if len > BLOB_CAPACITY {
+        fail(format_args!(
+            "the blob's {len} bytes exceed the page's {BLOB_CAPACITY}"
+        ));
+        return core::ptr::null_mut();
+    }
+    BLOB.ptr().cast()
+}
+
+/// Validates the `len` bytes written at [`aprt_blob`] and keeps the model: 0, or −1.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_load(len: usize) -> i32 {
+    // SAFETY: no other reference to SESSION lives during an export; dropping it ends the
+    // previous load's borrow of BLOB.
+    unsafe { *SESSION.get() = None };
+    // SAFETY: JavaScript has finished writing; until the next `aprt_blob` no one writes BLOB,
+    // so a shared 'static borrow of it holds (made from the pointer, never through `&mut`).
+    let blob: &'static [u8] =
+        unsafe { core::slice::from_raw_parts(BLOB.ptr().cast::<u8>(), len.min(BLOB_CAPACITY)) };
+    match Session::open(blob) {
+        // SAFETY: as above.
+        Ok(session) => unsafe { *SESSION.get() = Some(session) },
+        Err(err) => return fail(err),
+    }
+    0
+}
+
+/// The loaded model's dimension picked by `pick`, 0 without a model.
+fn dimension(pick: fn(&aprt_core::ModelInfo) -> usize) -> usize {
+    session().map_or(0, |s| pick(s.info()))
+}
+
+/// The loaded model's vertices (0 without a model).
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_vertices() -> usize {
+    dimension(aprt_core::ModelInfo::vertices)
+}
+
+/// The loaded model's pose-vector length.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_pose_len() -> usize {
+    dimension(aprt_core::ModelInfo::pose_len)
+}
+
+/// The loaded model's bones (0 for a world-frame model).
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_bones() -> usize {
+    dimension(aprt_core::ModelInfo::bones)
+}
+
+/// The loaded model's SH order.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_order() -> usize {
+    dimension(aprt_core::ModelInfo::order)
+}
+
+/// Where JavaScript writes the pose vector.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_angles() -> *mut f32 {
+    ANGLES.ptr().cast()
+}
+
+/// Where JavaScript writes the bones' skinning rotations, 9 f32 each, row-major.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_bone_rotations() -> *mut f32 {
+    BONES.ptr().cast()
+}
+
+/// Where JavaScript writes the world SH lighting (order² f32).
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_lighting() -> *mut f32 {
+    LIGHTING.ptr().cast()
+}
+
+/// Where [`aprt_shade`] leaves one value per vertex.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_shading() -> *const f32 {
+    SHADING.ptr().cast()
+}
+
+/// Adds a directional light from (x, y, z) of `strength` to the lighting buffer: 0, or −1.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_add_directional(x: f32, y: f32, z: f32, strength: f32) -> i32 {
+    let Some(order) = session().map(|s| s.info().order()) else {
+        return fail("no model is loaded");
+    };
+    // SAFETY: no other reference to LIGHTING lives during an export.
+    let lighting = unsafe { LIGHTING.get() };
+    match add_directional(order, [x, y, z], strength, lighting) {
+        Ok(()) => 0,
+        Err(err) => fail(err),
+    }
+}
+
+/// One frame through the core: set_pose, light and shade of every vertex: 0, or −1.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_shade() -> i32 {
+    let Some(session) = session() else {
+        return fail("no model is loaded");
+    };
+    let info = *session.info();
+    // SAFETY: the buffers are distinct statics, none borrowed elsewhere during this export.
+    let (angles, bones, lighting, shading) = unsafe {
+        (
+            &ANGLES.get()[..info.pose_len()],
+            &BONES.get()[..info.bones()],
+            &LIGHTING.get()[..info.coeffs()],
+            SHADING.get(),
+        )
+    };
+    match session.shade(angles, lighting, bones, shading) {
+        Ok(()) => 0,
+        Err(err) => fail(err),
+    }
+}
+
+/// The last error's UTF-8 text.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_error() -> *const u8 {
+    // SAFETY: the address only; JavaScript reads it between calls.
+    unsafe { ERROR.get().bytes.as_ptr() }
+}
+
+/// The length of [`aprt_error`]'s text in bytes.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_error_len() -> usize {
+    // SAFETY: a plain read, no borrow outlives it.
+    unsafe { ERROR.get().len }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::boxed::Box;
+    use std::vec;
+    use std::vec::Vec;
+
+    const BLOB: &[u8] = include_bytes!("../../../fixtures/golden/v1-bones.aprt");
+
+    fn error_text() -> std::string::String {
+        // SAFETY: the exports return the message's address and length.
+        let bytes = unsafe { core::slice::from_raw_parts(aprt_error(), aprt_error_len()) };
+        std::string::String::from_utf8(bytes.to_vec()).unwrap()
+    }
+
+    /// Copies `values` to an address an export handed out, as `web/aprt.js` does.
+    fn write(ptr: *mut f32, values: &[f32]) {
+        // SAFETY: every buffer holds at least what the model needs; no borrow is live.
+        unsafe { core::ptr::copy_nonoverlapping(values.as_ptr(), ptr, values.len()) };
+    }
+
+    /// The one test that calls the exports: `web/aprt.js`'s sequence, its errors, and the
+    /// shading equal to [`Session::shade`]'s.
+    #[test]
+    fn the_javascript_calling_sequence() {
+        assert_eq!(aprt_shade(), -1);
+        assert_eq!(error_text(), "no model is loaded");
+        assert!(aprt_blob(BLOB_CAPACITY + 1).is_null());
+        assert!(error_text().contains("exceed"), "{}", error_text());
+
+        let ptr = aprt_blob(BLOB.len());
+        // SAFETY: the buffer holds BLOB_CAPACITY bytes and nothing borrows it after aprt_blob.
+        unsafe { core::ptr::copy_nonoverlapping(BLOB.as_ptr(), ptr, BLOB.len()) };
+        assert_eq!(aprt_load(10), -1);
+        assert!(error_text().contains("truncated"), "{}", error_text());
+        assert_eq!(aprt_vertices(), 0);
+        assert_eq!(aprt_load(BLOB.len()), 0, "{}", error_text());
+
+        let mut session = Box::new(Session::open(BLOB).unwrap());
+        let info = *session.info();
+        assert_eq!(
+            [aprt_vertices(), aprt_pose_len(), aprt_bones(), aprt_order()],
+            [info.vertices(), info.pose_len(), info.bones(), info.order()]
+        );
+        let angles = vec![0.3; info.pose_len()];
+        let turn = [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]];
+        let bones: Vec<[[f32; 3]; 3]> = vec![turn; info.bones()];
+        let mut lighting = vec![0.2; info.coeffs()];
+        write(aprt_angles(), &angles);
+        write(aprt_bone_rotations(), bones.as_flattened().as_flattened());
+        write(aprt_lighting(), &lighting);
+        assert_eq!(aprt_add_directional(0.0, 0.0, 0.0, 1.0), -1);
+        assert_eq!(aprt_add_directional(1.0, 0.0, 1.0, 2.0), 0);
+        assert_eq!(aprt_shade(), 0, "{}", error_text());
+
+        add_directional(info.order(), [1.0, 0.0, 1.0], 2.0, &mut lighting).unwrap();
+        let mut expected = vec![0.0; info.vertices()];
+        session
+            .shade(&angles, &lighting, &bones, &mut expected)
+            .unwrap();
+        // SAFETY: aprt_shade wrote `vertices` values there; no borrow is live.
+        let shading = unsafe { core::slice::from_raw_parts(aprt_shading(), info.vertices()) };
+        assert_eq!(shading, &expected[..]);
+    }
+}
