@@ -13,7 +13,7 @@ use std::process::Command;
 
 use run::refuse;
 
-mod run;
+use crate::run;
 
 fn web() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../web")

@@ -6,6 +6,7 @@ mod common;
 mod run;
 
 mod bake_farm;
+mod browser;
 mod cli;
 mod extrapolation;
 mod gltf;
