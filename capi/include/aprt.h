@@ -436,7 +436,7 @@ aprt_status aprt_model_get_info(const aprt_model *model,
                                 aprt_model_info *out);
 
 // Writes to `*index` the pose-vector entry named `name` (`name_len` bytes of UTF-8, no NUL
-// needed), to bind an engine's joints by name once. `APRT_STATUS_NO_SUCH_NAME` when the
+// needed), to bind an engine's joints by name once (`SIZE_MAX` on any failure). `APRT_STATUS_NO_SUCH_NAME` when the
 // model has no entry of that name (or records no names).
 aprt_status aprt_model_angle_index(const aprt_model *model,
                                    const uint8_t *name,

@@ -56,9 +56,10 @@ pub extern "C" fn aprt_lightmap_compose_lights(
     guard(|| {
         let maps = ffi_ptr::slice(maps, maps_len)?;
         let positions = ffi_ptr::triples(positions, texels)?;
-        let lights = Lights::read(lights, light_count)?;
+        let lights = ffi_ptr::slice(lights, light_count)?;
         let environment = ffi_ptr::triples(environment, env_coeffs)?;
         let out = ffi_ptr::triples_mut(out_rgb, texels)?;
+        let lights = Lights::convert(lights)?;
         let map = LightMap::new(order as usize)?;
         Ok(map.compose_lights(maps, positions, lights.as_slice(), environment, out)?)
     })

@@ -69,9 +69,9 @@ pub(crate) struct Lights {
 }
 
 impl Lights {
-    /// Converts `count` lights at `ptr`.
-    pub(crate) fn read(ptr: *const aprt_light, count: usize) -> Result<Lights, aprt_status> {
-        let given = ffi_ptr::slice(ptr, count)?;
+    /// Converts the caller's lights (after every pointer of the call is checked, so a NULL is
+    /// reported before a bad kind).
+    pub(crate) fn convert(given: &[aprt_light]) -> Result<Lights, aprt_status> {
         if given.len() > APRT_MAX_LIGHTS {
             return Err(aprt_status::TooManyLights);
         }
@@ -117,18 +117,21 @@ pub extern "C" fn aprt_shade_lights(
     count: usize,
 ) -> aprt_status {
     guard(|| {
-        let set = Lights::read(lights, light_count)?;
-        let light_set = LightSet {
-            bones: ffi_ptr::matrices(bones, bone_count)?,
-            lights: set.as_slice(),
-            weights: ffi_ptr::slice(weights, light_count)?,
-        };
+        let bones = ffi_ptr::matrices(bones, bone_count)?;
+        let lights = ffi_ptr::slice(lights, light_count)?;
+        let weights = ffi_ptr::slice(weights, light_count)?;
         let range = Range {
             positions: ffi_ptr::triples(positions, count)?,
             first,
             out: ffi_ptr::triples_mut(out_rgb, count)?,
         };
         let frame = ffi_ptr::handle(frame)?;
+        let set = Lights::convert(lights)?;
+        let light_set = LightSet {
+            bones,
+            lights: set.as_slice(),
+            weights,
+        };
         with_model(model, |m| {
             Ok(m.shade_lights(&frame.pose, &light_set, range)?)
         })
@@ -168,10 +171,10 @@ pub extern "C" fn aprt_light_radiance_sh(
     coeffs: usize,
 ) -> aprt_status {
     guard(|| {
-        let light = to_core(&ffi_ptr::read(light)?)?;
+        let light = ffi_ptr::read(light)?;
         let at = ffi_ptr::read(at.cast::<[f32; 3]>())?;
         let out = ffi_ptr::triples_mut(out_rgb, coeffs)?;
-        light
+        to_core(&light)?
             .add_radiance_sh(order as usize, at, out)
             .map_err(|_| aprt_status::BadLight)
     })

@@ -456,6 +456,7 @@ pub extern "C" fn aprt_model_get_info(
     out: *mut aprt_model_info,
 ) -> aprt_status {
     guard(|| {
+        ffi_ptr::write(out, aprt_model_info::default())?;
         let streamed = matches!(ffi_ptr::handle(model)?.kind, Kind::Streamed(_));
         let info = with_model(model, |m| Ok(describe(&m.info(), m.rig(), streamed)))?;
         ffi_ptr::write(out, info)
@@ -489,7 +490,7 @@ fn describe(info: &ModelInfo, rig: Option<IrradianceRig<'_>>, streamed: bool) ->
 }
 
 /// Writes to `*index` the pose-vector entry named `name` (`name_len` bytes of UTF-8, no NUL
-/// needed), to bind an engine's joints by name once. `APRT_STATUS_NO_SUCH_NAME` when the
+/// needed), to bind an engine's joints by name once (`SIZE_MAX` on any failure). `APRT_STATUS_NO_SUCH_NAME` when the
 /// model has no entry of that name (or records no names).
 #[unsafe(no_mangle)]
 pub extern "C" fn aprt_model_angle_index(
@@ -499,6 +500,7 @@ pub extern "C" fn aprt_model_angle_index(
     index: *mut usize,
 ) -> aprt_status {
     guard(|| {
+        ffi_ptr::write(index, usize::MAX)?;
         let name = ffi_ptr::slice(name, name_len)?;
         let name = std::str::from_utf8(name).map_err(|_| aprt_status::NoSuchName)?;
         let found = with_model(model, |m| Ok(m.angle_index(name)?))?;

@@ -54,10 +54,11 @@ pub extern "C" fn aprt_rig_vectors(
 ) -> aprt_status {
     guard(|| {
         let place = read_placement(placement)?;
-        let lights = Lights::read(lights, light_count)?;
+        let lights = ffi_ptr::slice(lights, light_count)?;
         let environment = ffi_ptr::triples(environment, env_coeffs)?;
         let out = ffi_ptr::triples_mut(out_rgb, out_count)?;
         with_model(model, |m| {
+            let lights = Lights::convert(lights)?;
             let rig = m.rig().ok_or(aprt_status::NoIrradianceRig)?;
             let order = m.info().order();
             Ok(rig.vectors_from_lights(order, &place, lights.as_slice(), environment, out)?)
@@ -80,9 +81,11 @@ pub extern "C" fn aprt_rig_share(
     share: *mut f32,
 ) -> aprt_status {
     guard(|| {
-        let light = to_core(&ffi_ptr::read(light)?)?;
+        ffi_ptr::write(share, 0.0)?;
+        let light = ffi_ptr::read(light)?;
         let place = read_placement(placement)?;
         let s = with_model(model, |m| {
+            let light = to_core(&light)?;
             let rig = m.rig().ok_or(aprt_status::NoIrradianceRig)?;
             Ok(rig.share_of(&light, &place, target, band))
         })?;
@@ -145,7 +148,9 @@ pub extern "C" fn aprt_shade_rig(
             out: ffi_ptr::triples_mut(out_rgb, count)?,
         };
         let frame = ffi_ptr::handle(frame)?;
-        let lit = frame.rig.as_ref().ok_or(aprt_status::WeightsNotSet)?;
-        with_model(model, |m| Ok(m.shade_rig(lit, &place, range)?))
+        with_model(model, |m| {
+            let lit = frame.rig.as_ref().ok_or(aprt_status::WeightsNotSet)?;
+            Ok(m.shade_rig(lit, &place, range)?)
+        })
     })
 }

@@ -333,3 +333,22 @@ pub(crate) fn guard(body: impl FnOnce() -> Result<(), aprt_status>) -> aprt_stat
         Err(_) => aprt_status::Panic,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_panic_becomes_a_status() {
+        assert_eq!(guard(|| panic!("a bug")), aprt_status::Panic);
+        assert_eq!(guard(|| Err(aprt_status::Busy)), aprt_status::Busy);
+        assert_eq!(guard(|| Ok(())), aprt_status::Ok);
+    }
+
+    #[test]
+    fn core_errors_map_to_their_statuses() {
+        assert_eq!(aprt_status::from(Error::BadMagic), aprt_status::BadMagic);
+        let small = Error::BufferTooSmall { needed: 3 };
+        assert_eq!(aprt_status::from(small), aprt_status::BufferTooSmall);
+    }
+}
