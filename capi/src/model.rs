@@ -3,8 +3,8 @@
 //! (`aprt_model_size()` bytes aligned to `aprt_model_align()`), hold no resources, and need no
 //! destroy call: the caller frees the storage when it is done.
 //!
-//! Every per-frame call goes through [`with_model`], which gives the two kinds one face
-//! ([`Eval`]), so the frame, light and rig modules never ask which kind they have.
+//! Every per-frame call goes through `with_model`, which gives the two kinds one face
+//! (`Eval`), so the frame, light and rig modules never ask which kind they have.
 // `#[unsafe(no_mangle)]` is the only unsafe here (exported names must be unique); every
 // unsafe operation lives in `ffi_ptr`, which `tests/unsafe_confined.rs` checks.
 #![allow(unsafe_code)]

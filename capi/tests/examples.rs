@@ -163,7 +163,8 @@ fn staticlib() -> PathBuf {
         .expect("libaprt_capi.a next to the test binary (cargo builds it with the tests)")
 }
 
-/// Whether `tool` runs; CI (`.ci/run`) checks for `cc` and `c++` loudly first.
+/// Whether `tool` runs; CI (`.ci/run`) checks for `cc` and `c++` loudly first and sets
+/// `APRT_REQUIRE_CC`, so there a missing compiler fails the test instead of skipping it.
 fn have(tool: &str) -> bool {
     Command::new(tool).arg("--version").output().is_ok()
 }
@@ -218,6 +219,8 @@ fn models(dir: &Path) -> Vec<PathBuf> {
 #[test]
 fn c_and_cpp_examples_match_rust_bit_for_bit() {
     if !have("cc") || !have("c++") {
+        let required = std::env::var_os("APRT_REQUIRE_CC").is_some();
+        assert!(!required, "APRT_REQUIRE_CC is set and cc or c++ is missing");
         println!("skipped: no system cc/c++ to build the examples with");
         return;
     }
