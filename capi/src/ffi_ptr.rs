@@ -123,6 +123,19 @@ pub(crate) fn write<T: Copy>(ptr: *mut T, value: T) -> Result<(), aprt_status> {
     Ok(())
 }
 
+/// Whether `storage` (`len` bytes) can hold a `T`: not NULL, aligned, large enough. Inits
+/// check it first, so a bad storage is reported before a bad blob.
+pub(crate) fn check_storage<T: Handle>(
+    storage: *mut c_void,
+    len: usize,
+) -> Result<(), aprt_status> {
+    check(storage.cast::<T>().cast_const(), 1)?;
+    match len < size_of::<T>() {
+        true => Err(aprt_status::StorageTooSmall),
+        false => Ok(()),
+    }
+}
+
 /// Moves `value` into the caller's `storage` (`len` bytes) and returns it as a handle pointer.
 /// Nothing is written when the storage is NULL, misaligned or too small.
 pub(crate) fn place<T: Handle>(
@@ -130,11 +143,8 @@ pub(crate) fn place<T: Handle>(
     len: usize,
     value: T,
 ) -> Result<*mut T, aprt_status> {
+    check_storage::<T>(storage, len)?;
     let ptr = storage.cast::<T>();
-    check(ptr.cast_const(), 1)?;
-    if len < size_of::<T>() {
-        return Err(aprt_status::StorageTooSmall);
-    }
     // SAFETY: non-NULL, aligned for T and at least size_of::<T>() bytes (checked); the caller
     // lends them to the handle. Handles need no drop, so overwriting an old one leaks nothing.
     unsafe { ptr.write(value) };

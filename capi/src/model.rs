@@ -359,6 +359,7 @@ pub extern "C" fn aprt_model_init(
 ) -> aprt_status {
     guard(|| {
         let blob = ffi_ptr::slice(blob, blob_len)?;
+        ffi_ptr::check_storage::<aprt_model>(storage, storage_len)?;
         ffi_ptr::write(out, std::ptr::null_mut())?;
         let model = Model::parse(blob)?;
         let handle = aprt_model {
@@ -393,6 +394,7 @@ pub extern "C" fn aprt_model_stream_init(
         let source = ffi_ptr::read(source)?;
         let read = source.read_at.ok_or(aprt_status::NullPointer)?;
         ffi_ptr::write(scratch_needed, 0)?;
+        ffi_ptr::check_storage::<aprt_model>(storage, storage_len)?;
         ffi_ptr::write(out, std::ptr::null_mut())?;
         let src = || CSource {
             read,

@@ -113,9 +113,10 @@ pub extern "C" fn aprt_light_rig(
     guard(|| {
         let vectors = ffi_ptr::triples(vectors_rgb, vector_count)?;
         let bones = ffi_ptr::matrices(bones, bone_count)?;
-        let buffer = ffi_ptr::slice_mut(buffer, buffer_len)?;
         let frame = ffi_ptr::handle_mut(frame)?;
+        // The frame lets go of the last buffer before this one (maybe the same) is lent.
         frame.rig = None;
+        let buffer = ffi_ptr::slice_mut(buffer, buffer_len)?;
         let mut lit = RigLitWeights::new(buffer);
         with_model(model, |m| {
             Ok(m.light_rig(&frame.pose, vectors, bones, &mut lit)?)

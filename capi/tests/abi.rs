@@ -365,6 +365,10 @@ fn bad_storage_and_handles_are_refused() {
         aprt_model_init(b, n, base.cast(), ms - 1, &mut handle),
         aprt_status::StorageTooSmall
     );
+    // The storage is checked before the blob: a bad storage is named even for junk bytes.
+    let junk = b"junk";
+    let status = aprt_model_init(junk.as_ptr(), 4, base.cast(), ms - 1, &mut handle);
+    assert_eq!(status, aprt_status::StorageTooSmall);
     let mut frame = null_mut();
     let mut small = storage(64);
     assert_eq!(
