@@ -1,7 +1,8 @@
 //! The C and C++ examples (`examples/shade.c`, `examples/shade.cpp`), built with the system
-//! `cc` and `c++` against the staticlib and run on the golden blobs and a model with an
-//! irradiance rig, print exactly what the same frame computed through `aprt_core` in Rust
-//! prints: every float's bits, so C, C++ and Rust agree to the last bit.
+//! `cc` and `c++` against the staticlib (and the C one against the cdylib) and run on the
+//! golden blobs and a model with an irradiance rig, print exactly what the same frame
+//! computed through `aprt_core` in Rust prints: every float's bits, so C, C++ and Rust agree
+//! to the last bit.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -169,20 +170,26 @@ fn have(tool: &str) -> bool {
     Command::new(tool).arg("--version").output().is_ok()
 }
 
-fn compile(tool: &str, std: &str, source: &str, exe: &Path) {
-    let status = Command::new(tool)
-        .args([
-            std,
-            "-O2",
-            "-Wall",
-            "-Wextra",
-            "-Werror",
-            "-ffp-contract=off",
-            "-I",
-        ])
-        .arg(repo().join("capi/include"))
-        .arg(repo().join("capi/examples").join(source))
-        .arg(staticlib())
+/// Builds `source` against the staticlib, or with `shared` against the cdylib beside it.
+fn compile(tool: &str, std: &str, source: &str, exe: &Path, shared: bool) {
+    let lib = staticlib();
+    let mut cmd = Command::new(tool);
+    cmd.args([
+        std,
+        "-O2",
+        "-Wall",
+        "-Wextra",
+        "-Werror",
+        "-ffp-contract=off",
+        "-I",
+    ])
+    .arg(repo().join("capi/include"))
+    .arg(repo().join("capi/examples").join(source));
+    match shared {
+        true => cmd.arg("-L").arg(lib.parent().unwrap()).arg("-laprt_capi"),
+        false => cmd.arg(&lib),
+    };
+    let status = cmd
         .args(["-lpthread", "-ldl", "-lm", "-o"])
         .arg(exe)
         .status()
@@ -191,7 +198,12 @@ fn compile(tool: &str, std: &str, source: &str, exe: &Path) {
 }
 
 fn run(exe: &Path, model: &Path) -> String {
-    let out = Command::new(exe).arg(model).output().unwrap();
+    let lib_dir = staticlib().parent().unwrap().to_path_buf();
+    let out = Command::new(exe)
+        .arg(model)
+        .env("LD_LIBRARY_PATH", lib_dir)
+        .output()
+        .unwrap();
     assert!(
         out.status.success(),
         "{} {} failed: {}",
@@ -226,14 +238,24 @@ fn c_and_cpp_examples_match_rust_bit_for_bit() {
     }
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("capi-examples");
     std::fs::create_dir_all(&dir).unwrap();
-    let (c, cpp) = (dir.join("shade_c"), dir.join("shade_cpp"));
-    compile("cc", "-std=c11", "shade.c", &c);
-    compile("c++", "-std=c++17", "shade.cpp", &cpp);
+    let (c, cpp, c_so) = (
+        dir.join("shade_c"),
+        dir.join("shade_cpp"),
+        dir.join("shade_c_so"),
+    );
+    compile("cc", "-std=c11", "shade.c", &c, false);
+    compile("c++", "-std=c++17", "shade.cpp", &cpp, false);
+    // The cdylib exports the same functions (on Linux, found through LD_LIBRARY_PATH).
+    let shared = cfg!(target_os = "linux");
+    if shared {
+        compile("cc", "-std=c11", "shade.c", &c_so, true);
+    }
     let mut rigs = 0;
     for model in models(&dir) {
         let want = expected(&std::fs::read(&model).unwrap());
         rigs += usize::from(want.contains("\nrig "));
-        for exe in [&c, &cpp] {
+        let exes = [&c, &cpp, &c_so];
+        for exe in &exes[..2 + usize::from(shared)] {
             let got = run(exe, &model);
             if got != want {
                 let first = got.lines().zip(want.lines()).find(|(g, w)| g != w);
