@@ -272,8 +272,8 @@ aprt_status aprt_frame_init(void *storage,
 
 // Sets the frame's pose from the pose vector `angles` (`angles_len` = `info.pose_len`
 // floats: each kept joint's rotation vector relative to its rest pose, see the core's
-// `Model::set_pose`). The frame's lighting is then stale: call `aprt_light_sh` (or
-// `aprt_light_rig`) again before shading.
+// `Model::set_pose`). The frame's lighting is then stale: call `aprt_light_sh` again before
+// `aprt_shade`; the rig weights are dropped (`aprt_light_rig` again before `aprt_shade_rig`).
 aprt_status aprt_set_pose(const aprt_model *model,
                           aprt_frame *frame,
                           const float *angles,
@@ -473,8 +473,8 @@ aprt_status aprt_rig_share(const aprt_model *model,
 // Pushes the rig's vectors (`vectors_rgb`, `vector_count` RGB triples from
 // `aprt_rig_vectors`) through the frame's pose, per colour channel, into `buffer`
 // (`buffer_len` ≥ `info.rig_lit_len` floats), which the frame keeps: `buffer` must stay
-// valid and untouched until the frame's last `aprt_shade_rig` (or its next
-// `aprt_light_rig`). `bones` as in `aprt_light_sh`.
+// valid and untouched until the frame's next `aprt_set_pose` or `aprt_light_rig` (or its
+// last use). `bones` as in `aprt_light_sh`.
 aprt_status aprt_light_rig(const aprt_model *model,
                            aprt_frame *frame,
                            const float *vectors_rgb,

@@ -67,8 +67,8 @@ pub extern "C" fn aprt_frame_init(
 
 /// Sets the frame's pose from the pose vector `angles` (`angles_len` = `info.pose_len`
 /// floats: each kept joint's rotation vector relative to its rest pose, see the core's
-/// `Model::set_pose`). The frame's lighting is then stale: call `aprt_light_sh` (or
-/// `aprt_light_rig`) again before shading.
+/// `Model::set_pose`). The frame's lighting is then stale: call `aprt_light_sh` again before
+/// `aprt_shade`; the rig weights are dropped (`aprt_light_rig` again before `aprt_shade_rig`).
 #[unsafe(no_mangle)]
 pub extern "C" fn aprt_set_pose(
     model: *const aprt_model,
@@ -79,6 +79,8 @@ pub extern "C" fn aprt_set_pose(
     guard(|| {
         let angles = ffi_ptr::slice(angles, angles_len)?;
         let frame = ffi_ptr::handle_mut(frame)?;
+        // Rig weights are of the old pose: drop them (and the buffer they borrow).
+        frame.rig = None;
         with_model(model, |m| Ok(m.set_pose(angles, &mut frame.pose)?))
     })
 }

@@ -96,8 +96,8 @@ pub extern "C" fn aprt_rig_share(
 /// Pushes the rig's vectors (`vectors_rgb`, `vector_count` RGB triples from
 /// `aprt_rig_vectors`) through the frame's pose, per colour channel, into `buffer`
 /// (`buffer_len` ≥ `info.rig_lit_len` floats), which the frame keeps: `buffer` must stay
-/// valid and untouched until the frame's last `aprt_shade_rig` (or its next
-/// `aprt_light_rig`). `bones` as in `aprt_light_sh`.
+/// valid and untouched until the frame's next `aprt_set_pose` or `aprt_light_rig` (or its
+/// last use). `bones` as in `aprt_light_sh`.
 #[allow(clippy::too_many_arguments)]
 #[unsafe(no_mangle)]
 pub extern "C" fn aprt_light_rig(

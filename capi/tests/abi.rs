@@ -528,3 +528,64 @@ fn a_reentrant_read_callback_gets_busy() {
     assert_eq!(aprt_set_pose(model, f.frame, angles.as_ptr(), 4), OK);
     assert_eq!(r.seen, Some(aprt_status::Busy));
 }
+
+#[test]
+fn a_new_pose_drops_the_rig_weights() {
+    let blob = rig_blob();
+    let f = fixture(&blob);
+    let mut info = aprt_model_info::default();
+    assert_eq!(aprt_model_get_info(f.model, &mut info), OK);
+    let (n, k) = (
+        info.vertices as usize,
+        (info.rig_vectors * info.coeffs) as usize,
+    );
+    let angles = vec![0.0f32; info.pose_len as usize];
+    let identity = [1.0f32, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+    let bones: Vec<f32> = identity
+        .iter()
+        .copied()
+        .cycle()
+        .take(9 * info.bones as usize)
+        .collect();
+    let (vectors, mut buffer) = (vec![0.5f32; 3 * k], vec![0.0f32; info.rig_lit_len]);
+    let (positions, mut rgb) = (vec![0.1f32; 3 * n], vec![0.0f32; 3 * n]);
+    let (b, nb) = (bones.as_ptr(), info.bones as usize);
+    let light_rig = |buffer: &mut [f32]| {
+        aprt_light_rig(
+            f.model,
+            f.frame,
+            vectors.as_ptr(),
+            k,
+            b,
+            nb,
+            buffer.as_mut_ptr(),
+            buffer.len(),
+        )
+    };
+    let shade_rig = |rgb: &mut [f32]| {
+        aprt_shade_rig(
+            f.model,
+            f.frame,
+            &PLACE,
+            positions.as_ptr(),
+            0,
+            rgb.as_mut_ptr(),
+            n,
+        )
+    };
+    assert_eq!(
+        aprt_set_pose(f.model, f.frame, angles.as_ptr(), angles.len()),
+        OK
+    );
+    assert_eq!(shade_rig(&mut rgb), aprt_status::WeightsNotSet);
+    assert_eq!(light_rig(&mut buffer), OK);
+    assert_eq!(shade_rig(&mut rgb), OK);
+    assert_eq!(
+        aprt_set_pose(f.model, f.frame, angles.as_ptr(), angles.len()),
+        OK
+    );
+    assert_eq!(shade_rig(&mut rgb), aprt_status::WeightsNotSet);
+    // A buffer too small is refused, and leaves no weights.
+    assert_eq!(light_rig(&mut buffer[..1]), aprt_status::WeightsTooSmall);
+    assert_eq!(shade_rig(&mut rgb), aprt_status::WeightsNotSet);
+}
