@@ -3,7 +3,7 @@
 //! initialised are refused, lights of unknown kind too, every status has a message, and a
 //! re-entrant read callback gets `BUSY`; valid inputs run a whole frame to `OK`.
 
-mod common;
+use crate::common;
 
 use std::ffi::{CStr, c_void};
 use std::ptr::{null, null_mut};

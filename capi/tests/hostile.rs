@@ -3,7 +3,7 @@
 //! truncation and single-bit flip of the golden blobs, resident and streamed; where a blob is
 //! accepted, a whole frame runs and every call returns a status, none of them a panic.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::ptr::null_mut;
