@@ -120,11 +120,7 @@ pub extern "C" fn aprt_shade_lights(
         let bones = ffi_ptr::matrices(bones, bone_count)?;
         let lights = ffi_ptr::slice(lights, light_count)?;
         let weights = ffi_ptr::slice(weights, light_count)?;
-        let range = Range {
-            positions: ffi_ptr::triples(positions, count)?,
-            first,
-            out: ffi_ptr::triples_mut(out_rgb, count)?,
-        };
+        let range = Range::from_c(positions, first, out_rgb, count)?;
         let frame = ffi_ptr::handle(frame)?;
         let set = Lights::convert(lights)?;
         let light_set = LightSet {

@@ -183,6 +183,22 @@ pub(crate) struct Range<'a> {
     pub out: &'a mut [[f32; 3]],
 }
 
+impl Range<'_> {
+    /// `count` positions and RGB outputs from C, the first being vertex `first`.
+    pub fn from_c(
+        positions: *const f32,
+        first: usize,
+        out_rgb: *mut f32,
+        count: usize,
+    ) -> Result<Self, aprt_status> {
+        Ok(Range {
+            positions: ffi_ptr::triples(positions, count)?,
+            first,
+            out: ffi_ptr::triples_mut(out_rgb, count)?,
+        })
+    }
+}
+
 impl Eval for Model<'static> {
     fn info(&self) -> ModelInfo {
         *Model::info(self)

@@ -143,11 +143,7 @@ pub extern "C" fn aprt_shade_rig(
 ) -> aprt_status {
     guard(|| {
         let place = read_placement(placement)?;
-        let range = Range {
-            positions: ffi_ptr::triples(positions, count)?,
-            first,
-            out: ffi_ptr::triples_mut(out_rgb, count)?,
-        };
+        let range = Range::from_c(positions, first, out_rgb, count)?;
         let frame = ffi_ptr::handle(frame)?;
         with_model(model, |m| {
             let lit = frame.rig.as_ref().ok_or(aprt_status::WeightsNotSet)?;

@@ -27,38 +27,36 @@ const HOSTILE: Probe = Probe {
     ..Probe::GENTLE
 };
 
-/// The seeds of the blob targets (`reader`, `round_trip`).
+/// Writes `bytes` as the seed `name` of `target`.
+fn write(target: &str, name: &str, bytes: &[u8]) {
+    let dir = fuzz_corpus(target);
+    fs::create_dir_all(&dir).unwrap();
+    fs::write(dir.join(format!("seed-{name}")), bytes).unwrap();
+}
+
+/// The seeds of the blob targets (`reader`, `round_trip`): a probe, then the bytes.
 fn write_blob_seeds() {
-    let reader = fuzz_corpus("reader");
-    fs::create_dir_all(&reader).unwrap();
+    let with = |probe: &Probe, bytes: &[u8]| [&probe.to_bytes()[..], bytes].concat();
     for (name, blob) in sample_blobs() {
-        let with = |probe: &Probe, bytes: &[u8]| [&probe.to_bytes()[..], bytes].concat();
-        fs::write(
-            reader.join(format!("seed-{name}")),
-            with(&Probe::GENTLE, &blob),
-        )
-        .unwrap();
-        fs::write(
-            reader.join(format!("seed-{name}-hostile")),
-            with(&HOSTILE, &blob),
-        )
-        .unwrap();
+        write("reader", name, &with(&Probe::GENTLE, &blob));
+        write("reader", &format!("{name}-hostile"), &with(&HOSTILE, &blob));
         let half = &blob[..blob.len() / 2];
-        fs::write(
-            reader.join(format!("seed-{name}-truncated")),
-            with(&Probe::GENTLE, half),
-        )
-        .unwrap();
+        write(
+            "reader",
+            &format!("{name}-truncated"),
+            &with(&Probe::GENTLE, half),
+        );
     }
-    let round_trip = fuzz_corpus("round_trip");
-    fs::create_dir_all(&round_trip).unwrap();
     for (seed, len) in [(1u64, 16usize), (2, 64), (3, 256), (4, 1024)] {
         let bytes: Vec<u8> = noise(seed, len)
             .iter()
             .map(|x| ((x + 1.0) * 128.0) as u8)
             .collect();
-        let data = [&Probe::GENTLE.to_bytes()[..], &bytes].concat();
-        fs::write(round_trip.join(format!("seed-noise-{len}")), data).unwrap();
+        write(
+            "round_trip",
+            &format!("noise-{len}"),
+            &with(&Probe::GENTLE, &bytes),
+        );
     }
 }
 
@@ -167,17 +165,16 @@ fn sky(width: u32, height: u32) -> Rgb32FImage {
     })
 }
 
-/// The seeds of the newer readers' targets (`scene`, `lights`, `shlm`, `env_map`, `npy`).
-fn write_reader_seeds() {
-    let write = |target: &str, name: &str, bytes: &[u8]| {
-        let dir = fuzz_corpus(target);
-        fs::create_dir_all(&dir).unwrap();
-        fs::write(dir.join(format!("seed-{name}")), bytes).unwrap();
-    };
+/// The `scene` seeds: [`SCENES`].
+fn write_scene_seeds() {
     for (name, text) in SCENES {
         write("scene", &format!("{name}.toml"), text.as_bytes());
     }
+}
 
+/// The `shlm` seeds: small clips of each codec kind under each quantiser, and a version-2 file
+/// (no atlas).
+fn write_shlm_seeds() {
     let uniform = CodecSettings::default().planes;
     let planes = |mantissa_bits, sign, grouping, spatial_delta| PlaneSettings {
         mantissa_bits,
@@ -232,7 +229,11 @@ fn write_reader_seeds() {
         let bytes = encode(&light_maps(6, 4, atlas), &settings).unwrap();
         write("shlm", &format!("{name}.shlm"), &bytes);
     }
+}
 
+/// The `env_map` seeds: a run-length and a flat Radiance file (with `EXPOSURE=`), an RGB and
+/// an RGBA OpenEXR.
+fn write_env_map_seeds() {
     let mut rle = Vec::new();
     sky(16, 8)
         .write_with_encoder(HdrEncoder::new(&mut rle))
@@ -253,7 +254,10 @@ fn write_reader_seeds() {
     rgba.write_with_encoder(OpenExrEncoder::new(std::io::Cursor::new(&mut exr)))
         .unwrap();
     write("env_map", "rgba.exr", &exr);
+}
 
+/// The `npy` seeds: the writer's arrays of 0 to 3 dimensions, and headers it refuses.
+fn write_npy_seeds() {
     let values = [
         0.0,
         -1.5,
@@ -308,6 +312,9 @@ fn write_reader_seeds() {
 
 fn main() {
     write_blob_seeds();
-    write_reader_seeds();
+    write_scene_seeds();
+    write_shlm_seeds();
+    write_env_map_seeds();
+    write_npy_seeds();
     println!("wrote the seeds of {}", fuzz_corpus("").display());
 }
