@@ -43,7 +43,10 @@
 //!
 //! The `format` feature adds `aprt_core::format`: the byte layout, for blob writers and tools.
 #![no_std]
-#![forbid(unsafe_code)]
+#![deny(unsafe_code)]
+
+#[cfg(test)]
+extern crate std;
 
 mod blob;
 mod eval;

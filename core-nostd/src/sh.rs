@@ -2,6 +2,7 @@
 //!
 //! The convention is stated once, on [`eval_basis`], where the crate's documentation shows it.
 
+use crate::blob::format::VERTEX_BLOCK;
 use crate::math;
 
 /// Highest supported SH order (bands `0..MAX_ORDER`).
@@ -207,6 +208,77 @@ fn basis_of<const N: usize>([x, y, z]: [f32; 3], out: &mut [f32]) {
             }
         }
         let (ncm, nsm) = (cm * x - sm * y, cm * y + sm * x);
+        cm = ncm;
+        sm = nsm;
+        pmm *= (2 * m + 1) as f32;
+    }
+}
+
+/// Eight lanes of [`VERTEX_BLOCK`] unit directions (`[axis][lane]`).
+pub(crate) type DirectionLanes = [[f32; VERTEX_BLOCK]; 3];
+
+/// [`eval_basis`] of eight unit directions at once, `out[c][lane]`: each lane goes through
+/// exactly the operations of the one-direction basis (so it gets the same bits), eight at a
+/// time, which the compiler vectorises. Per-vertex lights evaluate one basis per vertex and
+/// light; this is their inner loop.
+pub(crate) fn eval_basis_lanes(
+    order: usize,
+    dirs: DirectionLanes,
+    out: &mut [[f32; VERTEX_BLOCK]; MAX_COEFFS],
+) {
+    match order {
+        1 => basis_lanes::<1>(dirs, out),
+        2 => basis_lanes::<2>(dirs, out),
+        3 => basis_lanes::<3>(dirs, out),
+        4 => basis_lanes::<4>(dirs, out),
+        5 => basis_lanes::<5>(dirs, out),
+        _ => basis_lanes::<6>(dirs, out),
+    }
+}
+
+/// Eight lanes of `f(lane)`.
+#[inline(always)]
+fn lanes(f: impl Fn(usize) -> f32) -> [f32; VERTEX_BLOCK] {
+    core::array::from_fn(f)
+}
+
+/// [`basis_of`], lane by lane.
+#[inline(always)]
+fn basis_lanes<const N: usize>(
+    [x, y, z]: DirectionLanes,
+    out: &mut [[f32; VERTEX_BLOCK]; MAX_COEFFS],
+) {
+    let (mut cm, mut sm) = ([1.0f32; VERTEX_BLOCK], [0.0f32; VERTEX_BLOCK]);
+    let mut pmm = 1.0f32;
+    for m in 0..N {
+        let mut p_prev2 = [0.0f32; VERTEX_BLOCK];
+        let mut p_prev = [pmm; VERTEX_BLOCK];
+        for l in m..N {
+            let p = if l == m {
+                [pmm; VERTEX_BLOCK]
+            } else if l == m + 1 {
+                lanes(|i| (2 * m + 1) as f32 * z[i] * pmm)
+            } else {
+                let [a, b] = RECURRENCE[l][m];
+                lanes(|i| a * z[i] * p_prev[i] - b * p_prev2[i])
+            };
+            if l > m {
+                p_prev2 = p_prev;
+                p_prev = p;
+            }
+            let k = NORMS[l][m];
+            if m == 0 {
+                out[index(l, 0)] = lanes(|i| k * p[i]);
+            } else {
+                let k2 = lanes(|i| core::f32::consts::SQRT_2 * k * p[i]);
+                out[index(l, m as i32)] = lanes(|i| k2[i] * cm[i]);
+                out[index(l, -(m as i32))] = lanes(|i| k2[i] * sm[i]);
+            }
+        }
+        let (ncm, nsm) = (
+            lanes(|i| cm[i] * x[i] - sm[i] * y[i]),
+            lanes(|i| cm[i] * y[i] + sm[i] * x[i]),
+        );
         cm = ncm;
         sm = nsm;
         pmm *= (2 * m + 1) as f32;

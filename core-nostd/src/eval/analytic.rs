@@ -14,7 +14,7 @@ use crate::blob::format::{Frame, VERTEX_BLOCK};
 use crate::blob::{Error, Input, ModelInfo, Reader};
 use crate::light::Light;
 use crate::rotation::Rotation;
-use crate::sh::{MAX_COEFFS, MAX_ORDER, eval_basis};
+use crate::sh::{MAX_COEFFS, MAX_ORDER, eval_basis_lanes, normalise};
 
 /// `y_00 = 1 / (2√π)`: the only basis value of uniform radiance (inside a sphere light).
 const Y00: f32 = 0.282_094_8;
@@ -60,15 +60,21 @@ impl ModelInfo {
             // The transfer once per vertex, eight at a time, as `transfer` gives it.
             let t = &mut lanes[..VERTEX_BLOCK * n2];
             self.block_transfer(pose, bytes, t);
-            for j in v0.max(first)..(v0 + VERTEX_BLOCK).min(end) {
-                let lane = j - v0;
-                let rotation = match world {
+            let live = v0.max(first) - v0..(v0 + VERTEX_BLOCK).min(end) - v0;
+            let block = Block {
+                order,
+                t,
+                rotations: core::array::from_fn(|l| match world {
                     true => None,
-                    false => bones.get(lane_bones[lane]),
-                };
-                let tj = &t[lane * n2..(lane + 1) * n2];
-                let add = shade_vertex(order, tj, rotation, lights, weights, positions[j - first]);
-                for (o, a) in out[j - first].iter_mut().zip(add) {
+                    false => bones.get(lane_bones[l]),
+                }),
+                positions: core::array::from_fn(|l| {
+                    live.contains(&l).then(|| positions[v0 + l - first])
+                }),
+            };
+            let add = block.shade(lights, weights);
+            for l in live {
+                for (o, a) in out[v0 + l - first].iter_mut().zip(add[l]) {
                     *o += a as f32;
                 }
             }
@@ -76,69 +82,115 @@ impl ModelInfo {
     }
 }
 
-/// One vertex's shading under every light of non-zero weight, in f64 so that colours, weights
-/// and `1/d²` near f32's limits multiply without overflow (the result saturates to ±∞ only
-/// when converted back). A light whose bands fail at this vertex (the vertex is on a point
-/// light, or its offset to the light overflows f32) adds nothing: its radiance there has no
-/// finite SH projection.
-fn shade_vertex(
+/// One block's vertices under per-vertex lights: their transfer (vertex-major, n² each), bone
+/// rotations (`None`: world frame) and positions (`None`: not asked for).
+struct Block<'a> {
     order: usize,
-    t: &[f32],
-    rotation: Option<&Rotation>,
-    lights: &[Light],
-    weights: &[f32],
-    p: [f32; 3],
-) -> [f64; 3] {
-    let mut acc = [0.0f64; 3];
-    let mut y = [0.0f32; MAX_COEFFS];
-    for (light, &weight) in lights.iter().zip(weights) {
-        if weight == 0.0 {
-            continue;
-        }
-        let Ok((bands, dir)) = light.zonal_at(p) else {
-            continue;
-        };
-        let s = match dir {
-            // Inside a sphere light: uniform radiance, band 0 alone.
-            None => f64::from(bands[0]) * f64::from(Y00) * f64::from(t[0]),
-            Some(omega) => {
-                // ω_b = R_bᵀ ω: the direction in the vertex's bone frame.
-                let omega = match rotation {
-                    Some(r) => core::array::from_fn(|i| {
-                        r[0][i] * omega[0] + r[1][i] * omega[1] + r[2][i] * omega[2]
-                    }),
-                    None => omega,
-                };
-                if eval_basis(order, omega, &mut y).is_err() {
-                    continue;
-                }
-                band_sum(order, t, &y, &bands)
-            }
-        };
-        let scale = s * f64::from(weight);
-        for (a, c) in acc.iter_mut().zip(light.colour()) {
-            *a += scale * f64::from(c);
-        }
-    }
-    acc
+    t: &'a [f32],
+    rotations: [Option<&'a Rotation>; VERTEX_BLOCK],
+    positions: [Option<[f32; 3]>; VERTEX_BLOCK],
 }
 
-/// `Σ_l bands[l] Σ_m t_lm y_lm`: each band's dot product in f32, or in f64 when a transfer
-/// near f32's limit overflows it.
-fn band_sum(order: usize, t: &[f32], y: &[f32; MAX_COEFFS], bands: &[f32; MAX_ORDER]) -> f64 {
-    let mut s = 0.0f64;
-    for (l, &b) in bands.iter().enumerate().take(order) {
-        let (t, y) = (&t[l * l..(l + 1) * (l + 1)], &y[l * l..(l + 1) * (l + 1)]);
-        let p: f32 = t.iter().zip(y).map(|(a, b)| a * b).sum();
-        let p = match p.is_finite() {
-            true => f64::from(p),
-            false => t
-                .iter()
-                .zip(y)
-                .map(|(a, b)| f64::from(*a) * f64::from(*b))
-                .sum(),
-        };
-        s += f64::from(b) * p;
+impl Block<'_> {
+    /// Each vertex's shading under every light of non-zero weight, in f64 so that colours,
+    /// weights and `1/d²` near f32's limits multiply without overflow (the result saturates to
+    /// ±∞ only when converted back). A light whose bands fail at a vertex (the vertex is on a
+    /// point light, or its offset to the light overflows f32) adds nothing there: its radiance
+    /// has no finite SH projection.
+    fn shade(&self, lights: &[Light], weights: &[f32]) -> [[f64; 3]; VERTEX_BLOCK] {
+        let mut acc = [[0.0f64; 3]; VERTEX_BLOCK];
+        for (light, &weight) in lights.iter().zip(weights) {
+            if weight == 0.0 {
+                continue;
+            }
+            let seen = self.light(light);
+            for (a, s) in acc.iter_mut().zip(seen) {
+                let Some(s) = s else { continue };
+                let scale = s * f64::from(weight);
+                for (a, c) in a.iter_mut().zip(light.colour()) {
+                    *a += scale * f64::from(c);
+                }
+            }
+        }
+        acc
+    }
+
+    /// `Σ_l b_l Σ_m t_lm y_lm(R_bᵀ ω)` per vertex for one light (`None` where it fails): the
+    /// bands and directions vertex by vertex, then the eight bases at once.
+    fn light(&self, light: &Light) -> [Option<f64>; VERTEX_BLOCK] {
+        let n2 = self.t.len() / VERTEX_BLOCK;
+        let mut seen = [None; VERTEX_BLOCK];
+        let mut bands = [[0.0f32; MAX_ORDER]; VERTEX_BLOCK];
+        // Lanes without a direction keep +z and are not read.
+        let mut dirs = [
+            [0.0f32; VERTEX_BLOCK],
+            [0.0; VERTEX_BLOCK],
+            [1.0; VERTEX_BLOCK],
+        ];
+        let mut basis = [false; VERTEX_BLOCK];
+        for l in 0..VERTEX_BLOCK {
+            let Some(p) = self.positions[l] else { continue };
+            let Ok((b, dir)) = light.zonal_at(p) else {
+                continue;
+            };
+            let t = &self.t[l * n2..][..n2];
+            let Some(omega) = dir else {
+                // Inside a sphere light: uniform radiance, band 0 alone.
+                seen[l] = Some(f64::from(b[0]) * f64::from(Y00) * f64::from(t[0]));
+                continue;
+            };
+            // ω_b = R_bᵀ ω: the direction in the vertex's bone frame.
+            let omega = match self.rotations[l] {
+                Some(r) => core::array::from_fn(|i| {
+                    r[0][i] * omega[0] + r[1][i] * omega[1] + r[2][i] * omega[2]
+                }),
+                None => omega,
+            };
+            let Ok(unit) = normalise(omega) else { continue };
+            (bands[l], basis[l]) = (b, true);
+            for (axis, x) in dirs.iter_mut().zip(unit) {
+                axis[l] = x;
+            }
+        }
+        let mut y = [[0.0f32; VERTEX_BLOCK]; MAX_COEFFS];
+        eval_basis_lanes(self.order, dirs, &mut y);
+        let sums = band_sums(self.order, self.t, &y, &bands);
+        for l in (0..VERTEX_BLOCK).filter(|&l| basis[l]) {
+            seen[l] = Some(sums[l]);
+        }
+        seen
+    }
+}
+
+/// `Σ_l bands[lane][l] Σ_m t_lm y_lm` for the eight vertices of a block (`t` vertex-major,
+/// `y[c][lane]`): each band's dot product in f32, eight lanes at a time, or in f64 for a lane
+/// whose transfer near f32's limit overflows it.
+fn band_sums(
+    order: usize,
+    t: &[f32],
+    y: &[[f32; VERTEX_BLOCK]; MAX_COEFFS],
+    bands: &[[f32; MAX_ORDER]; VERTEX_BLOCK],
+) -> [f64; VERTEX_BLOCK] {
+    let n2 = t.len() / VERTEX_BLOCK;
+    let mut s = [0.0f64; VERTEX_BLOCK];
+    for (l, band) in (0..order).map(|l| (l, l * l..(l + 1) * (l + 1))) {
+        // Summed from −0.0 like `Iterator::sum`, as the f64 fallback below is.
+        let mut p = [-0.0f32; VERTEX_BLOCK];
+        for c in band.clone() {
+            for (lane, p) in p.iter_mut().enumerate() {
+                *p += t[lane * n2 + c] * y[c][lane];
+            }
+        }
+        for (lane, (s, p)) in s.iter_mut().zip(p).enumerate() {
+            let p = match p.is_finite() {
+                true => f64::from(p),
+                false => band
+                    .clone()
+                    .map(|c| f64::from(t[lane * n2 + c]) * f64::from(y[c][lane]))
+                    .sum(),
+            };
+            *s += f64::from(bands[lane][l]) * p;
+        }
     }
     s
 }

@@ -26,7 +26,7 @@ mod rig;
 mod weights;
 
 use kernels::{
-    Decode, IdentityWeights, RowRef, bone_lanes, dot, shade_bytes, transfer_identity,
+    BlockLayout, IdentityWeights, RowRef, bone_lanes, dot, shade_blocks, transfer_identity,
     transfer_stored,
 };
 pub(crate) use rig::check_positions;
@@ -34,7 +34,7 @@ use weights::check_capacity;
 pub use weights::{LitWeights, MAX_POSE_WEIGHTS, PoseWeights};
 pub(crate) use weights::{Stamp, check_stamp};
 
-use crate::blob::format::{Basis, Encoding, Frame, MAX_POSE_LEN, VERTEX_BLOCK};
+use crate::blob::format::{Basis, Encoding, Frame, MAX_COEF_DIMS, MAX_POSE_LEN, VERTEX_BLOCK};
 use crate::blob::{Error, Input, ModelInfo, Reader, Span};
 use crate::rotation::{Rotation, ShRotation, is_rotation};
 use crate::sh::MAX_COEFFS;
@@ -123,10 +123,24 @@ impl ModelInfo {
             let w = &mut pose.w[..n2 * kv];
             w.fill(0.0);
             let z = &pose.z;
-            // Row (c, i) of W holds W[c][i][0..k_v]; it adds z'_i W[c][i][k] to w[k][c].
+            // Row (c, i) of W holds W[c][i][0..k_v]. Coefficient c's rows come together, so
+            // their sum `Σ_i z'_i W[c][i][k]` builds up contiguous in `sum` (vector adds), and
+            // only the finished sums are written to w[k][c], a stride of n² apart.
+            let mut sum = [0.0f32; MAX_COEF_DIMS];
+            let sum = &mut sum[..kv];
             self.each_row(r, weights, kv, |ci, row| {
-                let (c, zi) = (ci / (ka + 1), z[ci % (ka + 1)]);
-                row.add_scaled(zi, w[c..].iter_mut().step_by(n2))
+                let (c, i) = (ci / (ka + 1), ci % (ka + 1));
+                if i == 0 {
+                    sum.fill(0.0);
+                }
+                row.add_scaled(z[i], sum.iter_mut());
+                if i == ka {
+                    w[c..]
+                        .iter_mut()
+                        .step_by(n2)
+                        .zip(&*sum)
+                        .for_each(|(w, s)| *w = *s);
+                }
             })?;
         }
         self.fold_row_scales(r, pose)?;
@@ -316,6 +330,33 @@ impl ModelInfo {
         }
     }
 
+    /// Where a block's bone lanes and rows are.
+    fn block_layout(&self) -> BlockLayout {
+        BlockLayout {
+            bytes: self.block_bytes(),
+            lead: self.lead_rows() * VERTEX_BLOCK * self.rows.encoding.size(),
+            last_bone: self.bones().max(1) - 1,
+        }
+    }
+
+    /// Streams the blocks holding vertices `first .. first + count` as runs of whole blocks:
+    /// `visit(first vertex of the run, its bytes)`.
+    fn each_run<R: Reader>(
+        &self,
+        r: &mut R,
+        first: usize,
+        count: usize,
+        mut visit: impl FnMut(usize, &[u8]),
+    ) -> Result<(), Error> {
+        let block_bytes = self.block_bytes();
+        let (b0, b1) = (first / VERTEX_BLOCK, (first + count).div_ceil(VERTEX_BLOCK));
+        let offset = self.rows.offset + (b0 as u64) * block_bytes as u64;
+        r.chunks(offset, block_bytes, b1 - b0, |i0, bytes| {
+            visit((b0 + i0) * VERTEX_BLOCK, bytes);
+            Ok(())
+        })
+    }
+
     /// Streams the blocks holding vertices `first .. first + count` to
     /// `visit(first vertex of the block, bone lanes, row bytes)`; the bone lanes are all 0 for
     /// world-frame models.
@@ -326,19 +367,14 @@ impl ModelInfo {
         count: usize,
         mut visit: impl FnMut(usize, [usize; VERTEX_BLOCK], &[u8]),
     ) -> Result<(), Error> {
-        let block_bytes = self.block_bytes();
+        let layout = self.block_layout();
         let encoding = self.rows.encoding;
-        let lead_bytes = self.lead_rows() * VERTEX_BLOCK * encoding.size();
-        let last_bone = self.bones().max(1) - 1;
-        let (b0, b1) = (first / VERTEX_BLOCK, (first + count).div_ceil(VERTEX_BLOCK));
-        let offset = self.rows.offset + (b0 as u64) * block_bytes as u64;
-        r.chunks(offset, block_bytes, b1 - b0, |i0, bytes| {
-            for (i, block) in bytes.chunks_exact(block_bytes).enumerate() {
-                let (lead, rows) = block.split_at(lead_bytes);
-                let bones = bone_lanes(encoding, lead, last_bone);
-                visit((b0 + i0 + i) * VERTEX_BLOCK, bones, rows);
+        self.each_run(r, first, count, |v0, bytes| {
+            for (i, block) in bytes.chunks_exact(layout.bytes).enumerate() {
+                let (lead, rows) = block.split_at(layout.lead);
+                let bones = bone_lanes(encoding, lead, layout.last_bone);
+                visit(v0 + i * VERTEX_BLOCK, bones, rows);
             }
-            Ok(())
         })
     }
 
@@ -369,16 +405,18 @@ impl ModelInfo {
         let width = self.row_width();
         let q = &lit.q[..self.lit_weights_len()];
         let encoding = self.rows.encoding;
-        let end = first + out.len();
-        self.each_block(r, first, out.len(), |v0, bones, bytes| {
-            let lanes = shade_bytes(encoding, bytes, q, width, bones);
-            let (lo, hi) = (v0.max(first), (v0 + VERTEX_BLOCK).min(end));
-            let dst = &mut out[lo - first..hi - first];
-            if let Ok(whole) = <&mut [f32; VERTEX_BLOCK]>::try_from(&mut *dst) {
-                *whole = lanes;
-            } else {
-                dst.copy_from_slice(&lanes[lo - v0..hi - v0]);
-            }
+        let (end, layout) = (first + out.len(), self.block_layout());
+        self.each_run(r, first, out.len(), |v0, bytes| {
+            shade_blocks(encoding, bytes, layout, q, width, |i, lanes| {
+                let v0 = v0 + i * VERTEX_BLOCK;
+                let (lo, hi) = (v0.max(first), (v0 + VERTEX_BLOCK).min(end));
+                let dst = &mut out[lo - first..hi - first];
+                if let Ok(whole) = <&mut [f32; VERTEX_BLOCK]>::try_from(&mut *dst) {
+                    *whole = lanes;
+                } else {
+                    dst.copy_from_slice(&lanes[lo - v0..hi - v0]);
+                }
+            })
         })
     }
 
@@ -390,24 +428,12 @@ impl ModelInfo {
         bytes: &[u8],
         t: &mut [f32],
     ) {
-        match self.rows.encoding {
-            Encoding::F32 => self.block_transfer_of(pose, bytes.as_chunks::<4>().0, t),
-            Encoding::F16 => self.block_transfer_of(pose, bytes.as_chunks::<2>().0, t),
-            Encoding::I8 => self.block_transfer_of(pose, bytes, t),
-        }
-    }
-
-    /// [`ModelInfo::block_transfer`] over one encoding's values.
-    #[inline(always)]
-    fn block_transfer_of<E: Decode, const P: usize>(
-        &self,
-        pose: &PoseWeights<P>,
-        block: &[E],
-        t: &mut [f32],
-    ) {
+        let encoding = self.rows.encoding;
         match self.basis {
-            Basis::Stored => transfer_stored(block, &pose.w[..self.pose_weights_len()], t),
-            Basis::Identity => transfer_identity(block, self.identity_weights(pose), t),
+            Basis::Stored => {
+                transfer_stored(encoding, bytes, &pose.w[..self.pose_weights_len()], t)
+            }
+            Basis::Identity => transfer_identity(encoding, bytes, self.identity_weights(pose), t),
         }
     }
 
