@@ -17,8 +17,8 @@ use obvhs::{
 };
 use std::time::Duration;
 
-use super::wide::Bvh4;
 pub(crate) use super::wide::TraversalStack;
+use super::wide::{Bvh4, PACKET, Packet, octant_of};
 
 /// Which acceleration structure answers the bake's ray queries.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -30,6 +30,10 @@ pub enum Accel {
     /// bit-identical transfer.
     #[default]
     Bvh4,
+    /// The [`Accel::Bvh4`] hierarchy walked by packets of up to eight shadow rays of one vertex
+    /// that point in similar directions (see the `wide::packet` module); closest-hit rays (the
+    /// bounce passes) still walk one at a time.
+    Bvh4Packet,
     /// obvhs' compressed 8-wide BVH (the previous default), kept selectable so the choice stays
     /// measurable: its 8-bit child boxes cost more to decompress than the extra node visits of
     /// the four-wide tree.
@@ -55,6 +59,8 @@ pub(crate) struct Hit {
 
 enum Structure {
     Wide(Bvh4),
+    /// The same tree, shadow rays walking it in packets.
+    WidePackets(Bvh4),
     Cw(CwBvh),
     Bvh2(Bvh2),
     /// Also used when no triangle has area: nothing to build a hierarchy over.
@@ -92,7 +98,7 @@ impl Tracer {
         }
         let mut build_time = Duration::ZERO;
         let (structure, order) = match accel {
-            Accel::Bvh4 => {
+            Accel::Bvh4 | Accel::Bvh4Packet => {
                 // One triangle per leaf: on the benchmark scene the default leaves of up to
                 // eight triangles cost 17–24% more traversal instructions (callgrind) for a
                 // build saving of 2% of the pose.
@@ -102,7 +108,13 @@ impl Tracer {
                 };
                 let bvh = build_bvh2_from_tris(&tris, params, &mut build_time);
                 reorder(&mut tris, &mut source, &bvh.primitive_indices);
-                (Structure::Wide(Bvh4::new(&bvh, &tris)), None)
+                let wide = Bvh4::new(&bvh, &tris);
+                let structure = if accel == Accel::Bvh4 {
+                    Structure::Wide(wide)
+                } else {
+                    Structure::WidePackets(wide)
+                };
+                (structure, None)
             }
             Accel::CwBvh => {
                 let bvh =
@@ -133,10 +145,58 @@ impl Tracer {
         let tris = &self.tris;
         let test = |r: &Ray, id: usize| tris[id].intersect(r);
         match &self.structure {
-            Structure::Wide(bvh) => bvh.occluded(tris, &ray, stack),
+            Structure::Wide(bvh) | Structure::WidePackets(bvh) => bvh.occluded(tris, &ray, stack),
             Structure::Cw(bvh) => !bvh.ray_traverse_miss(ray, test),
             Structure::Bvh2(bvh) => !bvh.ray_traverse_miss(ray, test),
             Structure::BruteForce => tris.iter().any(|t| t.intersect(&ray) < f32::INFINITY),
+        }
+    }
+
+    /// For every `i`, whether anything lies on the ray from `origin` along `dirs[i]` within
+    /// `[t_min, ∞)`, written to `blocked[i]`: what [`Tracer::occluded`] answers for
+    /// `ray(origin, dirs[i], t_min, ∞)`. `order` lists the indices of `dirs` so that neighbours
+    /// point in similar directions; with [`Accel::Bvh4Packet`] consecutive entries of one
+    /// direction octant share a packet, the other structures trace ray by ray.
+    pub fn occluded_from(
+        &self,
+        origin: Vec3A,
+        (dirs, order): (&[Vec3A], &[u32]),
+        t_min: f32,
+        blocked: &mut [bool],
+        stack: &mut TraversalStack,
+    ) {
+        let Structure::WidePackets(bvh) = &self.structure else {
+            for (b, &d) in blocked.iter_mut().zip(dirs) {
+                *b = self.occluded(ray(origin, d, t_min, f32::INFINITY), stack);
+            }
+            return;
+        };
+        // Rays waiting for a full packet, one bucket per octant.
+        let mut buckets = [[0u32; PACKET]; 8];
+        let mut counts = [0usize; 8];
+        let mut trace = |bucket: &[u32], stack: &mut TraversalStack| {
+            let packet_dirs: [Vec3A; PACKET] = std::array::from_fn(|r| {
+                dirs[bucket[r.min(bucket.len() - 1)] as usize] + Vec3A::ZERO
+            });
+            let packet = Packet::new(origin, &packet_dirs[..bucket.len()], t_min, f32::INFINITY);
+            let mask = bvh.occluded_packet(&self.tris, &packet, stack);
+            for (r, &i) in bucket.iter().enumerate() {
+                blocked[i as usize] = mask >> r & 1 != 0;
+            }
+        };
+        for &i in order {
+            let o = usize::from(octant_of(dirs[i as usize]));
+            buckets[o][counts[o]] = i;
+            counts[o] += 1;
+            if counts[o] == PACKET {
+                trace(&buckets[o], stack);
+                counts[o] = 0;
+            }
+        }
+        for (bucket, &count) in buckets.iter().zip(&counts) {
+            if count > 0 {
+                trace(&bucket[..count], stack);
+            }
         }
     }
 
@@ -146,7 +206,9 @@ impl Tracer {
         let test = |r: &Ray, id: usize| tris[id].intersect(r);
         let mut hit = RayHit::none();
         let found = match &self.structure {
-            Structure::Wide(bvh) => bvh.closest(tris, ray, &mut hit, stack),
+            Structure::Wide(bvh) | Structure::WidePackets(bvh) => {
+                bvh.closest(tris, ray, &mut hit, stack)
+            }
             Structure::Cw(bvh) => bvh.ray_traverse(ray, &mut hit, test),
             Structure::Bvh2(bvh) => bvh.ray_traverse(ray, &mut hit, test),
             Structure::BruteForce => {
@@ -223,7 +285,13 @@ mod tests {
     #[test]
     fn closest_hit_reports_source_triangle_barycentrics_and_facing() {
         let (p, t) = quad_scene();
-        for accel in [Accel::Bvh4, Accel::CwBvh, Accel::Bvh2, Accel::BruteForce] {
+        for accel in [
+            Accel::Bvh4,
+            Accel::Bvh4Packet,
+            Accel::CwBvh,
+            Accel::Bvh2,
+            Accel::BruteForce,
+        ] {
             let tracer = Tracer::new(&p, &t, accel);
             let mut stack = TraversalStack::default();
             let up = ray(Vec3A::new(0.75, 0.25, 0.0), Vec3A::Z, 0.0, f32::INFINITY);

@@ -10,6 +10,10 @@
 //! keeps its stack in the caller's [`TraversalStack`] (no array to zero per ray): together
 //! 8.25 → 6.74 G instructions per pose of the bake benchmark (callgrind).
 
+mod packet;
+
+pub(crate) use packet::{PACKET, Packet, octant_of};
+
 use glam::Vec3A;
 use obvhs::{
     aabb::Aabb,
@@ -121,7 +125,18 @@ impl Bvh4 {
     /// walk. Children are not sorted by entry distance: sorting cost more than the earlier hits
     /// saved (10–25% more traversal instructions on the benchmark scene).
     pub fn occluded(&self, tris: &[Triangle], ray: &Ray, stack: &mut TraversalStack) -> bool {
-        self.walk(&mut Slabs::new(ray), stack, |_, first, count| {
+        self.occluded_below(tris, ray, 0, &mut stack.single)
+    }
+
+    /// [`Bvh4::occluded`] within the subtree of node `root` only.
+    fn occluded_below(
+        &self,
+        tris: &[Triangle],
+        ray: &Ray,
+        root: u32,
+        stack: &mut Vec<u32>,
+    ) -> bool {
+        self.walk(&mut Slabs::new(ray), stack, root, |_, first, count| {
             (first..first + count).any(|k| tris[k as usize].intersect(ray) < ray.tmax)
         })
     }
@@ -137,40 +152,47 @@ impl Bvh4 {
         stack: &mut TraversalStack,
     ) -> bool {
         let mut shortened = ray;
-        self.walk(&mut Slabs::new(&ray), stack, |slabs, first, count| {
-            for k in first..first + count {
-                let t = tris[k as usize].intersect(&shortened);
-                if t < shortened.tmax {
-                    hit.t = t;
-                    hit.primitive_id = k;
-                    shortened.tmax = t;
-                    slabs.tmax = [t; 4];
+        self.walk(
+            &mut Slabs::new(&ray),
+            &mut stack.single,
+            0,
+            |slabs, first, count| {
+                for k in first..first + count {
+                    let t = tris[k as usize].intersect(&shortened);
+                    if t < shortened.tmax {
+                        hit.t = t;
+                        hit.primitive_id = k;
+                        shortened.tmax = t;
+                        slabs.tmax = [t; 4];
+                    }
                 }
-            }
-            false
-        });
+                false
+            },
+        );
         hit.t < ray.tmax
     }
 
-    /// Walks the hierarchy, calling `leaf(slabs, first, count)` on every leaf whose box `slabs`
-    /// enters (the callback may shorten `slabs`), until one returns true (which is returned).
+    /// Walks the subtree of node `root`, calling `leaf(slabs, first, count)` on every leaf whose
+    /// box `slabs` enters (the callback may shorten `slabs`), until one returns true (which is
+    /// returned).
     fn walk(
         &self,
         slabs: &mut Slabs,
-        stack: &mut TraversalStack,
+        stack: &mut Vec<u32>,
+        root: u32,
         leaf: impl FnMut(&mut Slabs, u32, u32) -> bool,
     ) -> bool {
         // One copy of the loop per octant of the ray direction, so which box plane a ray enters
         // through is known at compile time instead of selected at every node.
         match slabs.octant {
-            0 => self.walk_octant::<0>(slabs, stack, leaf),
-            1 => self.walk_octant::<1>(slabs, stack, leaf),
-            2 => self.walk_octant::<2>(slabs, stack, leaf),
-            3 => self.walk_octant::<3>(slabs, stack, leaf),
-            4 => self.walk_octant::<4>(slabs, stack, leaf),
-            5 => self.walk_octant::<5>(slabs, stack, leaf),
-            6 => self.walk_octant::<6>(slabs, stack, leaf),
-            _ => self.walk_octant::<7>(slabs, stack, leaf),
+            0 => self.walk_octant::<0>(slabs, stack, root, leaf),
+            1 => self.walk_octant::<1>(slabs, stack, root, leaf),
+            2 => self.walk_octant::<2>(slabs, stack, root, leaf),
+            3 => self.walk_octant::<3>(slabs, stack, root, leaf),
+            4 => self.walk_octant::<4>(slabs, stack, root, leaf),
+            5 => self.walk_octant::<5>(slabs, stack, root, leaf),
+            6 => self.walk_octant::<6>(slabs, stack, root, leaf),
+            _ => self.walk_octant::<7>(slabs, stack, root, leaf),
         }
     }
 
@@ -179,14 +201,14 @@ impl Bvh4 {
     fn walk_octant<const OCTANT: u8>(
         &self,
         slabs: &mut Slabs,
-        stack: &mut TraversalStack,
+        stack: &mut Vec<u32>,
+        root: u32,
         mut leaf: impl FnMut(&mut Slabs, u32, u32) -> bool,
     ) -> bool {
-        let stack = &mut stack.0;
         stack.clear();
         // The node to visit next: the last inner child a visit enters goes here, the others
         // wait on the stack.
-        let mut next = (!self.nodes.is_empty()).then_some(0);
+        let mut next = (!self.nodes.is_empty()).then_some(root);
         while let Some(id) = next.take().or_else(|| stack.pop()) {
             let node = &self.nodes[id as usize];
             let mut mask = slabs.enter::<OCTANT>(node);
@@ -222,7 +244,12 @@ fn set_lane(node: &mut Node, lane: usize, bounds: &Aabb, pad: Vec3A) {
 
 /// Nodes waiting to be visited, kept by the caller so one allocation serves all its rays.
 #[derive(Default)]
-pub(crate) struct TraversalStack(Vec<u32>);
+pub(crate) struct TraversalStack {
+    /// Node indices of a one-ray walk.
+    single: Vec<u32>,
+    /// Node indices of a packet walk, each with the mask of the packet's rays that entered it.
+    packet: Vec<(u32, u32)>,
+}
 
 /// A ray prepared for slab tests against four boxes at once.
 struct Slabs {
@@ -239,11 +266,13 @@ struct Slabs {
 impl Slabs {
     fn new(ray: &Ray) -> Self {
         let (o, d) = (ray.origin, ray.direction);
+        // The packet walk (`packet` module) computes the same `1/d` per ray: both must cull
+        // the same boxes.
         let inv = Vec3A::ONE / d;
         Slabs {
             origin: [[o.x; 4], [o.y; 4], [o.z; 4]],
             inv: [[inv.x; 4], [inv.y; 4], [inv.z; 4]],
-            octant: u8::from(d.x < 0.0) | u8::from(d.y < 0.0) << 1 | u8::from(d.z < 0.0) << 2,
+            octant: octant_of(d),
             tmin: [ray.tmin; 4],
             tmax: [ray.tmax; 4],
         }
