@@ -1,8 +1,9 @@
 //! Ray queries against one posed mesh: shadow (any-hit) and closest-hit with barycentrics.
 //!
 //! The default hierarchy is this crate's four-wide BVH (the `wide` module), built from obvhs'
-//! binary BVH; obvhs' own two hierarchies stay selectable so their speed can be measured on
-//! real scenes (see `benches/bake.rs`). A brute-force loop over every triangle is the reference
+//! binary BVH, whose shadow rays walk it in packets of one vertex's rays; the one-ray walk and
+//! obvhs' own two hierarchies stay selectable so their speed can be measured on real scenes
+//! (see `benches/bake.rs`). A brute-force loop over every triangle is the reference
 //! the hierarchies must agree with and the baseline the benchmark reports the speed-up against.
 //! All use the same ray–triangle test (obvhs' Möller–Trumbore), so on the same ray they take
 //! the same decision.
@@ -24,15 +25,21 @@ use super::wide::{Bvh4, PACKET, Packet, octant_of};
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Accel {
     /// A four-wide BVH with exact `f32` boxes collapsed from obvhs' binary BVH and traversed by
-    /// this crate (see the `wide` module). The default: on the 11.5k-vertex benchmark scene
-    /// (`benches/bake.rs`, 500 rays, order 6) it took 1.60 CPU seconds per pose against 2.73
-    /// for [`Accel::CwBvh`] and 2.57 for [`Accel::Bvh2`] in the same run, build included, with
+    /// this crate one ray at a time (see the `wide` module): the default until
+    /// [`Accel::Bvh4Packet`], kept selectable as the benchmark's "before". On the 11.5k-vertex
+    /// benchmark scene (`benches/bake.rs`, 500 rays, order 6) it took 1.60 CPU seconds per
+    /// pose against 2.73 for [`Accel::CwBvh`] and 2.57 for [`Accel::Bvh2`] in the same run,
+    /// build included, with bit-identical transfer.
+    Bvh4,
+    /// The [`Accel::Bvh4`] hierarchy, its shadow rays walking it in packets of up to 16 rays
+    /// of one vertex that point in similar directions (see the `wide::packet` module);
+    /// closest-hit rays (the bounce passes) still walk one at a time. The default: in
+    /// `cargo bench -p aprt-trainer --bench bake`, alternating five timed bakes with
+    /// [`Accel::Bvh4`] on 2 shared cores, it cast 1.36–1.39× the rays per second on the
+    /// benchmark scene (6.06 against 4.44 Mrays/s best in one run) and 1.28–1.36× on the demo's
+    /// bake of the built-in human (128 rays, order 6: 4.50 against 3.31 Mrays/s), with
     /// bit-identical transfer.
     #[default]
-    Bvh4,
-    /// The [`Accel::Bvh4`] hierarchy walked by packets of up to eight shadow rays of one vertex
-    /// that point in similar directions (see the `wide::packet` module); closest-hit rays (the
-    /// bounce passes) still walk one at a time.
     Bvh4Packet,
     /// obvhs' compressed 8-wide BVH (the previous default), kept selectable so the choice stays
     /// measurable: its 8-bit child boxes cost more to decompress than the extra node visits of
@@ -316,6 +323,71 @@ mod tests {
             );
             let away = ray(Vec3A::new(0.5, 0.5, 0.0), -Vec3A::Z, 0.0, f32::INFINITY);
             assert!(!tracer.occluded(away, &mut stack));
+        }
+    }
+
+    #[test]
+    fn packets_from_surface_points_agree_with_brute_force() {
+        // Two crossed quads, a box over them and zero-area triangles (collinear and a point),
+        // shot at from their vertices, an edge midpoint and a face point, in bundles big
+        // enough for full packets in every octant and partial ones.
+        let mut p = vec![
+            [-1.0, -1.0, 0.0],
+            [1.0, -1.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [-1.0, 1.0, 0.0],
+            [0.0, -1.0, -1.0],
+            [0.0, 1.0, -1.0],
+            [0.0, 1.0, 1.0],
+            [0.0, -1.0, 1.0],
+            [0.0, 0.0, 0.7],
+            [0.5, 0.5, 0.7],
+            [1.0, 1.0, 0.7],
+        ];
+        let mut t = vec![
+            [0, 1, 2],
+            [0, 2, 3],
+            [4, 5, 6],
+            [4, 6, 7],
+            [8, 9, 10],
+            [9, 9, 9],
+        ];
+        let lid = p.len() as u32;
+        p.extend([
+            [-0.3, -0.3, 0.4],
+            [0.6, -0.3, 0.4],
+            [0.6, 0.6, 0.4],
+            [-0.3, 0.6, 0.4],
+        ]);
+        t.extend([[lid, lid + 1, lid + 2], [lid, lid + 2, lid + 3]]);
+        let packets = Tracer::new(&p, &t, Accel::Bvh4Packet);
+        let brute = Tracer::new(&p, &t, Accel::BruteForce);
+        let pattern = crate::bake::directions::cosine_hammersley(300);
+        let order = crate::bake::directions::coherent_order(&pattern);
+        let mut stack = TraversalStack::default();
+        let (mut fast, mut slow) = (vec![false; 600], vec![false; 600]);
+        for origin in [
+            [1.0, 1.0, 0.0],
+            [0.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.3, -0.2, 0.0],
+            [0.6, 0.6, 0.4],
+        ] {
+            // Both hemispheres: the pattern and its mirror, with the order kept.
+            let dirs: Vec<Vec3A> = pattern
+                .iter()
+                .flat_map(|d| [d.as_vec3a(), glam::DVec3::new(d.y, d.z, -d.x).as_vec3a()])
+                .collect();
+            let order: Vec<u32> = order.iter().flat_map(|&i| [2 * i, 2 * i + 1]).collect();
+            let origin = Vec3A::from(origin);
+            packets.occluded_from(origin, (&dirs, &order), 1e-4, &mut fast, &mut stack);
+            brute.occluded_from(origin, (&dirs, &order), 1e-4, &mut slow, &mut stack);
+            assert_eq!(fast, slow, "from {origin:?}");
+            let blocked = fast.iter().filter(|&&b| b).count();
+            assert!(
+                blocked > 0 && blocked < 600,
+                "{blocked} of 600 blocked from {origin:?}"
+            );
         }
     }
 
