@@ -35,10 +35,10 @@ pub enum Accel {
     /// of one vertex that point in similar directions (see the `wide::packet` module);
     /// closest-hit rays (the bounce passes) still walk one at a time. The default: in
     /// `cargo bench -p aprt-trainer --bench bake`, alternating five timed bakes with
-    /// [`Accel::Bvh4`] on 2 shared cores, it cast 1.36–1.39× the rays per second on the
-    /// benchmark scene (6.06 against 4.44 Mrays/s best in one run) and 1.28–1.36× on the demo's
-    /// bake of the built-in human (128 rays, order 6: 4.50 against 3.31 Mrays/s), with
-    /// bit-identical transfer.
+    /// [`Accel::Bvh4`] on 2 shared cores, the median pair gave 1.38× the rays per second on the
+    /// benchmark scene (best bakes 6.62 against 4.49 Mrays/s) and 1.34× on the demo's bake of
+    /// the built-in human (128 rays, order 6, four poses: 6.76 against 4.97 Mrays/s), with
+    /// bit-identical transfer; earlier runs 1.36–1.39× and 1.28–1.31×.
     #[default]
     Bvh4Packet,
     /// obvhs' compressed 8-wide BVH (the previous default), kept selectable so the choice stays

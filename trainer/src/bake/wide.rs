@@ -11,9 +11,10 @@
 //! 8.25 → 6.74 G instructions per pose of the bake benchmark (callgrind).
 //!
 //! The bake's shadow rays walk it in packets of one vertex's rays (the `packet` module), which
-//! reuse the one-ray slab test as it is: 1.36–1.39× the rays per second of the one-ray walk on
-//! the benchmark scene and 1.28–1.36× on the demo's bake, alternating the two in
-//! `cargo bench -p aprt-trainer --bench bake` on 2 shared cores.
+//! reuse the one-ray slab test as it is: 1.38× the rays per second of the one-ray walk on the
+//! benchmark scene (6.62 against 4.49 Mrays/s) and 1.34× on the demo's bake (6.76 against
+//! 4.97), median of five alternating pairs in `cargo bench -p aprt-trainer --bench bake` on 2
+//! shared cores; earlier runs 1.36–1.39× and 1.28–1.31×.
 
 mod packet;
 
