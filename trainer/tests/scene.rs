@@ -234,6 +234,33 @@ fn train_scene_checks_the_budget_of_the_model_it_writes() {
     }
 }
 
+/// `aprt report` writes every setting with the rig `train --scene` stores for the scene and
+/// times it with the light that rig leaves per vertex: the recommended model it writes
+/// carries that rig.
+#[test]
+fn the_report_measures_every_setting_with_the_scenes_rig() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let file = near_light_scene(d, "near.toml", "1_000_000");
+    let (out, model) = (d.join("report"), d.join("best.aprt"));
+    succeed(&[
+        "report",
+        &file,
+        "--out",
+        path(&out),
+        "--stride",
+        "2",
+        "--write-model",
+        path(&model),
+    ]);
+    let report = json(&out.join("report.json"));
+    assert_eq!(report["irradiance_rig"]["kind"], "constant", "{report}");
+    let i = report["recommended"].as_u64().unwrap() as usize;
+    assert!(report["points"][i]["us_per_frame"].as_f64().unwrap() > 0.0);
+    let inspect = String::from_utf8(succeed(&["inspect", path(&model)])).unwrap();
+    assert!(inspect.contains("irradiance rig  constant"), "{inspect}");
+}
+
 /// A bad scene is refused before any work, naming the file and the item.
 #[test]
 fn bad_scenes_are_refused_naming_the_file_and_the_item() {

@@ -298,8 +298,7 @@ pub fn sweep(
         bind,
         target: e.error_target,
     };
-    // The rig's section at each order (its error table, which splits the lights, is per order).
-    let mut rig_sections: Vec<Option<Vec<u8>>> = vec![None; MAX_ORDER + 1];
+    let rig_sections = rig_sections(reference, candidates)?;
     let progress = reporter.step_progress(candidates.len() + 1);
     let mut points = Vec::new();
     let mut extra: Option<(Data, Baked)> = None;
@@ -325,25 +324,11 @@ pub fn sweep(
                 truncated(baked, candidate.order)
             }
         };
-        let section = match reference.irradiance_rig.0 {
-            Some(kind) => {
-                let cached = &mut rig_sections[candidate.order];
-                if cached.is_none() {
-                    *cached = Some(fit_irradiance_rig(
-                        kind,
-                        &reference.fitting,
-                        candidate.order,
-                    )?);
-                }
-                cached.as_deref()
-            }
-            None => None,
-        };
         let fit = Fit {
             rig,
             layout: &reference.layout,
             frame: e.frame,
-            irradiance_rig: section,
+            irradiance_rig: rig_sections[candidate.order].as_deref(),
         };
         points.extend(fit_and_measure(&fit, candidate, &data, scene, &truth)?);
     }
@@ -386,6 +371,21 @@ pub fn sweep(
         not_swept: not_swept(scene),
         seconds: started.elapsed().as_secs_f64(),
     })
+}
+
+/// The irradiance rig section the scene's model carries, at each order `candidates` fit (its
+/// error table, which splits the lights between rig and vertex, is per order), indexed by
+/// order; all `None` when the scene stores no rig.
+fn rig_sections(reference: &Reference, candidates: &[Candidate]) -> Result<Vec<Option<Vec<u8>>>> {
+    let mut sections = vec![None; MAX_ORDER + 1];
+    if let Some(kind) = reference.irradiance_rig.0 {
+        for order in candidates.iter().map(|c| c.order) {
+            if sections[order].is_none() {
+                sections[order] = Some(fit_irradiance_rig(kind, &reference.fitting, order)?);
+            }
+        }
+    }
+    Ok(sections)
 }
 
 /// Every `stride`-th frame of `clip`.
@@ -498,7 +498,7 @@ fn not_swept(scene: &Scene) -> Vec<String> {
         out.push("bounces: the scene asks for none, so there is nothing cheaper to try".into());
     }
     out.push(
-        "irradiance-rig kinds: compared for the scene's lights by `aprt irradiance-rig` and `aprt train --scene` (irradiance_rig = \"auto\"), not in this sweep"
+        "irradiance-rig kinds: every setting carries the rig `aprt train --scene` chooses for the scene and is timed with it; the kinds are compared for the scene's lights by `aprt irradiance-rig` and `aprt train --scene` (irradiance_rig = \"auto\"), not in this sweep"
             .into(),
     );
     out.push(
