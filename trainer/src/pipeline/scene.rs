@@ -197,7 +197,11 @@ pub fn train_scene(
         .with_context(|| format!("cannot read back {}", options.output.display()))?;
     let cost = frame_cost::us_per_frame(&blob, bind, lighting, scene.effects.error_target)
         .with_context(|| format!("timing {}", options.output.display()))?;
-    let budget = (scene.budget.us_per_frame).map(|budget| BudgetCheck { cost, budget });
+    let budget = (scene.budget.us_per_frame).map(|budget| BudgetCheck {
+        cost,
+        budget,
+        precision: trained.precision.0,
+    });
     Ok(SceneOutcome::Trained(Box::new(SceneTrainReport {
         scene: scene.path.clone(),
         model: options.output.to_owned(),

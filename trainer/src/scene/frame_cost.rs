@@ -6,6 +6,7 @@ use anyhow::{Context, Result};
 use aprt_core::{DEFAULT_BAND, Model, Rgb};
 
 use crate::irradiance_rig::fit::bounds;
+use crate::model::export::Precision;
 use crate::model::runtime::{CoreFrame, FrameInputs};
 use crate::rig::mesh::Mesh;
 use crate::scene::lighting::SceneLighting;
@@ -93,6 +94,8 @@ pub struct BudgetCheck {
     pub cost: FrameCost,
     /// The budget, µs per frame.
     pub budget: f64,
+    /// The precision the model was written in (i8 is not suggested to an i8 model).
+    pub precision: Precision,
 }
 
 impl BudgetCheck {
@@ -115,10 +118,11 @@ impl BudgetCheck {
         } else {
             format!("{:.0} % over", 100.0 * (over - 1.0))
         };
-        let mut changes = vec![
-            "a lower k_v (--coef-dims) or SH order ([effects] order)".to_owned(),
-            "precision i8 ([effects] precision = \"i8\")".to_owned(),
-        ];
+        let mut changes =
+            vec!["a lower k_v (--coef-dims) or SH order ([effects] order)".to_owned()];
+        if self.precision != Precision::I8 {
+            changes.push("precision i8 ([effects] precision = \"i8\")".to_owned());
+        }
         if cost.per_vertex_lights > 0 {
             changes.push(format!(
                 "fewer lights near the character, or farther ones that the rig carries ({} evaluated per vertex through its transfer)",
@@ -142,7 +146,7 @@ impl BudgetCheck {
 
 #[cfg(test)]
 mod tests {
-    use super::{BudgetCheck, FrameCost};
+    use super::{BudgetCheck, FrameCost, Precision};
 
     #[test]
     fn a_miss_says_by_how_much_and_what_to_change() {
@@ -152,7 +156,11 @@ mod tests {
             proxies,
             per_vertex_lights,
         };
-        let check = |cost, budget| BudgetCheck { cost, budget };
+        let check = |cost, budget| BudgetCheck {
+            cost,
+            budget,
+            precision: Precision::F16,
+        };
         let fits = check(cost(29.0, 1, false), 30.0);
         assert!(fits.within());
         assert_eq!(fits.miss_message(), None);
@@ -161,9 +169,17 @@ mod tests {
         assert!(text.contains("19.0x the budget"), "{text}");
         assert!(text.contains("1 evaluated per vertex"), "{text}");
         assert!(text.contains("--proxies none"), "{text}");
-        assert!(text.contains("aprt report"), "{text}");
+        assert!(
+            text.contains("aprt report") && text.contains("i8"),
+            "{text}"
+        );
         let close = check(cost(33.0, 0, false), 30.0).miss_message().unwrap();
         assert!(close.contains("10 % over"), "{close}");
         assert!(close.contains("fewer SH vectors") && !close.contains("proxies"));
+        let i8 = BudgetCheck {
+            precision: Precision::I8,
+            ..check(cost(33.0, 0, false), 30.0)
+        };
+        assert!(!i8.miss_message().unwrap().contains("i8"));
     }
 }
