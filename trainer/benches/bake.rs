@@ -1,11 +1,14 @@
 //! Bake throughput on an 11.5k-vertex occluding scene (the size of the paper's Master Pai):
 //! four subdivided icospheres resting on a subdivided ground plane, deterministic.
 //!
-//! Bakes one pose at 500 directions and SH order 6 on all cores with each hierarchy,
-//! then the same estimator with a brute-force ray–triangle loop on a vertex subset,
-//! extrapolated to the whole pose. Run with `cargo bench -p aprt-trainer --bench bake`.
+//! Bakes one pose at 500 directions and SH order 6 on all cores, alternating the one-ray BVH4
+//! walk (before) with the packet walk (after) and printing both rays per second and their
+//! ratio; then obvhs' hierarchies, and the same estimator with a brute-force ray–triangle loop
+//! on a vertex subset, extrapolated to the whole pose, whose transfer every hierarchy must
+//! equal bit for bit. Last, the same before/after on the demo's bake (the built-in human, four
+//! poses). Run with `cargo bench -p aprt-trainer --bench bake`.
 
-use aprt_trainer::{Accel, BakeSettings, Mesh, bake_pose_with, bake_vertices};
+use aprt_trainer::{Accel, BakeSettings, Character, Mesh, Rig, bake_pose_with, bake_vertices};
 use std::collections::HashMap;
 use std::time::Instant;
 
@@ -127,7 +130,6 @@ fn main() {
         shadows: true,
     };
     let v = mesh.vertex_count();
-    let rays = (v * settings.rays) as f64;
     println!(
         "scene: {v} vertices, {} triangles; {} rays per vertex, order {}; {} threads",
         mesh.triangles.len(),
@@ -135,82 +137,132 @@ fn main() {
         settings.order,
         rayon::current_num_threads()
     );
-    let threads = rayon::current_num_threads() as f64;
-    let mut reference = None;
-    let mut fast = (f64::NAN, f64::NAN);
-    for (name, accel) in [
-        ("BVH4", Accel::Bvh4),
-        ("CWBVH", Accel::CwBvh),
-        ("BVH2", Accel::Bvh2),
-    ] {
-        // One warm-up pose, then five timed ones: the best and the median (the machine is a
-        // shared VM whose speed drifts by ±10% between runs).
+    let reference = before_and_after("scene", std::slice::from_ref(&mesh), &settings, 5);
+    for (name, accel) in [("CWBVH", Accel::CwBvh), ("BVH2", Accel::Bvh2)] {
         let _ = bake_pose_with(&mesh, &settings, accel).expect("bake");
-        let (mut walls, mut cpus) = (Vec::new(), Vec::new());
-        for _ in 0..5 {
-            let (start, start_cpu) = (Instant::now(), cpu_seconds());
+        let mut walls = Vec::new();
+        for _ in 0..3 {
+            let start = Instant::now();
             let t = bake_pose_with(&mesh, &settings, accel).expect("bake");
             walls.push(start.elapsed().as_secs_f64());
-            cpus.push(cpu_seconds() - start_cpu);
-            reference.get_or_insert(t);
+            assert_eq!(t, reference, "{name} and BVH4 bakes differ");
         }
         let (wall, median) = best_and_median(&mut walls);
-        let (cpu, _) = best_and_median(&mut cpus);
         println!(
-            "{name:>6}: {wall:.3} s per pose wall (median {median:.3}), {:.2} Mrays/s; {cpu:.2} CPU s per pose = {:.3} s on idle cores (BVH build included)",
-            rays / wall / 1e6,
-            cpu / threads,
+            "{name:>6}: {wall:.3} s per pose wall (median {median:.3}), {:.2} Mrays/s",
+            (v * settings.rays) as f64 / wall / 1e6,
         );
-        if accel == Accel::default() {
-            fast = (wall, cpu);
-        }
     }
     let subset = 2000..2064;
-    let (start, start_cpu) = (Instant::now(), cpu_seconds());
+    let start = Instant::now();
     let naive = bake_vertices(&mesh, &settings, Accel::BruteForce, subset.clone()).expect("bake");
-    let scale = v as f64 / subset.len() as f64;
-    let wall = start.elapsed().as_secs_f64() * scale;
-    let cpu = (cpu_seconds() - start_cpu) * scale;
+    let wall = start.elapsed().as_secs_f64() * v as f64 / subset.len() as f64;
     println!(
-        " naive: {wall:.1} s per pose wall, {:.4} Mrays/s; {cpu:.1} CPU s per pose = {:.1} s on idle cores (extrapolated from vertices {subset:?})",
-        rays / wall / 1e6,
-        cpu / threads,
+        " naive: {wall:.1} s per pose wall, {:.4} Mrays/s (extrapolated from vertices {subset:?})",
+        (v * settings.rays) as f64 / wall / 1e6,
     );
-    println!(
-        " ratio: BVH4 is {:.0}x faster than naive (wall), {:.0}x (CPU)",
-        wall / fast.0,
-        cpu / fast.1
-    );
-    let reference = reference.expect("baked");
     assert_eq!(
         naive[..],
         reference[subset.start * 36..subset.end * 36],
         "naive and BVH bakes differ"
     );
+    demo_bake();
+}
+
+/// The demo's own bake (`aprt demo`): the built-in human at the built-in scene's 128 rays and
+/// the reference's SH order 6, four frames of its training clip.
+fn demo_bake() {
+    let human = Character::builtin();
+    let clip = human.clip("training").expect("the built-in training clip");
+    let step = (clip.frames.len() / 4).max(1);
+    let meshes: Vec<Mesh> = clip
+        .frames
+        .iter()
+        .step_by(step)
+        .take(4)
+        .map(|pose| human.pose(pose).expect("pose"))
+        .collect();
+    let settings = BakeSettings {
+        order: 6,
+        rays: 128,
+        bounces: 0,
+        albedo: 0.0,
+        shadows: true,
+    };
+    println!(
+        "demo: built-in human, {} vertices, {} triangles; {} poses of \"training\", {} rays, order {}",
+        meshes[0].vertex_count(),
+        meshes[0].triangles.len(),
+        meshes.len(),
+        settings.rays,
+        settings.order
+    );
+    before_and_after("demo", &meshes, &settings, 5);
+}
+
+/// Bakes `meshes` with the old default hierarchy walk (`before`, [`Accel::Bvh4`]) and the
+/// packet walk (`after`, [`Accel::Bvh4Packet`]), alternating the two `reps` times after one
+/// warm-up each so that drift of the shared machine's speed hits both alike; prints the rays
+/// per second of each (best and median) and their ratio, checks that both bake the same bits,
+/// and returns the first mesh's transfer.
+fn before_and_after(
+    label: &str,
+    meshes: &[Mesh],
+    settings: &BakeSettings,
+    reps: usize,
+) -> Vec<f32> {
+    let rays: usize = meshes
+        .iter()
+        .map(|m| m.vertex_count() * settings.rays)
+        .sum();
+    let accels = [
+        ("before (BVH4, one ray at a time)", Accel::Bvh4),
+        ("after (BVH4, packets)", Accel::Bvh4Packet),
+    ];
+    let bake = |accel| -> Vec<Vec<f32>> {
+        meshes
+            .iter()
+            .map(|m| bake_pose_with(m, settings, accel).expect("bake"))
+            .collect()
+    };
+    let reference = bake(Accel::Bvh4);
+    assert_eq!(
+        reference,
+        bake(Accel::Bvh4Packet),
+        "{label}: packet and one-ray bakes differ"
+    );
+    let mut walls = [Vec::new(), Vec::new()];
+    let mut ratios = Vec::new();
+    for _ in 0..reps {
+        for (k, &(_, accel)) in accels.iter().enumerate() {
+            let start = Instant::now();
+            let _ = bake(accel);
+            walls[k].push(start.elapsed().as_secs_f64());
+        }
+        let last = |k: usize| walls[k][walls[k].len() - 1];
+        ratios.push(last(0) / last(1));
+    }
+    let mut best = [0.0; 2];
+    for (k, (name, _)) in accels.iter().enumerate() {
+        let (wall, median) = best_and_median(&mut walls[k]);
+        best[k] = wall;
+        println!(
+            "{label}: {name:>33}: {:.3} s wall best (median {median:.3}), {:.2} Mrays/s best ({:.2} median)",
+            wall,
+            rays as f64 / wall / 1e6,
+            rays as f64 / median / 1e6,
+        );
+    }
+    let (_, median_ratio) = best_and_median(&mut ratios);
+    println!(
+        "{label}: after/before rays per second: {:.2}x (best against best), {median_ratio:.2}x (median of {reps} alternating pairs)",
+        best[0] / best[1]
+    );
+    reference.into_iter().next().expect("one mesh at least")
 }
 
 /// The smallest and the median of `samples`.
 fn best_and_median(samples: &mut [f64]) -> (f64, f64) {
     samples.sort_by(f64::total_cmp);
     (samples[0], samples[samples.len() / 2])
-}
-
-/// User + system CPU time of this process from `/proc/self/stat` (Linux; NaN elsewhere). On
-/// a machine shared with other jobs wall time overstates the cost; CPU time divided by the
-/// thread count is what the bake would take on idle cores.
-fn cpu_seconds() -> f64 {
-    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
-        return f64::NAN;
-    };
-    // Fields after the parenthesised command name; utime and stime are fields 14 and 15.
-    let after = stat.rsplit(')').next().unwrap_or("");
-    let fields: Vec<&str> = after.split_whitespace().collect();
-    let ticks = |i: usize| {
-        fields
-            .get(i)
-            .and_then(|f| f.parse::<f64>().ok())
-            .unwrap_or(f64::NAN)
-    };
-    // Field 14 is the 12th after the name (which is field 2, followed by state, field 3).
-    (ticks(11) + ticks(12)) / 100.0
 }

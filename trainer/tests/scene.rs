@@ -1,6 +1,7 @@
 //! Scenes through the real binary: `aprt train --scene` computes only what the scene calls for
-//! and says so in `--report`; `aprt report` sweeps the knobs, marks the fronts and recommends
-//! the most accurate setting within the budget; bad scenes are refused naming the item.
+//! and says so in `--report`, with what the model costs a frame against the scene's budget;
+//! `aprt report` sweeps the knobs, marks the fronts and recommends the cheapest of the most
+//! accurate settings within the budget; bad scenes are refused naming the item.
 
 use std::path::Path;
 
@@ -67,6 +68,9 @@ fn a_shadowless_scene_casts_no_rays_and_reports_what_it_skipped() {
         assert!(off.get(key).is_some() && on.get(key).is_some(), "{key}");
     }
     assert_eq!(off["rays_cast"], 0);
+    // No `[budget] us_per_frame`: the cost is measured, and there is no budget to fit.
+    assert!(off["us_per_frame"].as_f64().unwrap() > 0.0, "{off}");
+    assert!(off["within_budget"].is_null(), "{off}");
     assert_eq!(off["bounce_passes"], 0);
     let skipped = off["skipped"].to_string();
     assert!(skipped.contains("visibility rays"), "{skipped}");
@@ -87,7 +91,8 @@ fn a_shadowless_scene_casts_no_rays_and_reports_what_it_skipped() {
 }
 
 /// The sweep writes its files, every point has the documented keys, the fronts are
-/// undominated, and the recommendation is the most accurate point within `--budget-us`.
+/// undominated, and the recommendation is the cheapest of the points within `--budget-us`
+/// whose error ties the lowest there (within max(0.05 grey levels, 1 %)).
 #[test]
 fn the_report_recommends_the_most_accurate_point_within_the_budget() {
     let dir = tempfile::tempdir().unwrap();
@@ -130,8 +135,12 @@ fn the_report_recommends_the_most_accurate_point_within_the_budget() {
     let cost = |p: &serde_json::Value| p["us_per_frame"].as_f64().unwrap();
     let i = report["recommended"].as_u64().unwrap() as usize;
     assert!(cost(&points[i]) <= budget);
-    for p in points.iter().filter(|p| cost(p) <= budget) {
-        assert!(error(&points[i]) <= error(p));
+    let fits = || points.iter().filter(|p| cost(p) <= budget);
+    let lowest = fits().map(error).fold(f64::INFINITY, f64::min);
+    let tie = lowest + 0.05f64.max(0.01 * lowest);
+    assert!(error(&points[i]) <= tie);
+    for p in fits().filter(|p| error(p) <= tie) {
+        assert!(cost(&points[i]) <= cost(p));
     }
     for (a, p) in points.iter().enumerate() {
         let dominated = points.iter().any(|q| {
@@ -155,6 +164,101 @@ fn the_report_recommends_the_most_accurate_point_within_the_budget() {
         points[i]["bytes"].as_u64().unwrap()
     );
     succeed(&["inspect", path(&model)]);
+}
+
+/// The small character's scene with a strong point light beside its spine, which no rig of
+/// the scene carries (it is evaluated per vertex), and `[budget] us_per_frame = budget`.
+fn near_light_scene(dir: &Path, name: &str, budget: &str) -> String {
+    let file = scene(
+        dir,
+        name,
+        "shadows = false\nirradiance_rig = \"constant\"\n",
+    );
+    let mut text = std::fs::read_to_string(&file).unwrap();
+    text += &format!(
+        "[[light]]\nkind = \"point\"\nposition = [6.0, 8.0, 0.0]\nintensity = [100.0, 100.0, 100.0]\n\
+         [budget]\nus_per_frame = {budget}\n"
+    );
+    std::fs::write(&file, text).unwrap();
+    file
+}
+
+/// `train --scene` times the model it wrote through aprt-core with the scene's rig and the
+/// light it leaves per vertex, and checks `[budget]`: a budget no model meets (0.001 µs) is
+/// missed, said plainly with what to change, and `within_budget` is false; one every model
+/// meets (a second a frame) is met. Neither depends on the machine's speed.
+#[test]
+fn train_scene_checks_the_budget_of_the_model_it_writes() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for (budget, fits) in [("0.001", false), ("1_000_000", true)] {
+        let file = near_light_scene(d, &format!("near-{fits}.toml"), budget);
+        let (model, report) = (
+            d.join(format!("{fits}.aprt")),
+            d.join(format!("{fits}.json")),
+        );
+        let out = aprt(&[
+            "train",
+            "--scene",
+            &file,
+            "-o",
+            path(&model),
+            "--report",
+            path(&report),
+        ]);
+        let said = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{said}");
+        let json = json(&report);
+        let us = json["us_per_frame"].as_f64().unwrap();
+        assert!(us > 0.0 && us < 1e6, "{json}");
+        assert_eq!(json["within_budget"].as_bool(), Some(fits), "{json}");
+        assert_eq!(json["rig"]["kind"], "constant", "{json}");
+        let miss = said.lines().find(|l| l.starts_with("over budget"));
+        if fits {
+            assert!(miss.is_none(), "{said}");
+            assert!(said.contains("within the scene's [budget]"), "{said}");
+        } else {
+            let miss = miss.unwrap_or_else(|| panic!("no miss message:\n{said}"));
+            for part in [
+                &format!("{us:.1} µs a frame"),
+                "us_per_frame = 0.001",
+                "x the budget",
+                "k_v",
+                "i8",
+                "1 evaluated per vertex",
+                "aprt report",
+            ] {
+                assert!(miss.contains(part), "{part:?} not in {miss}");
+            }
+        }
+    }
+}
+
+/// `aprt report` writes every setting with the rig `train --scene` stores for the scene and
+/// times it with the light that rig leaves per vertex: the recommended model it writes
+/// carries that rig.
+#[test]
+fn the_report_measures_every_setting_with_the_scenes_rig() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let file = near_light_scene(d, "near.toml", "1_000_000");
+    let (out, model) = (d.join("report"), d.join("best.aprt"));
+    succeed(&[
+        "report",
+        &file,
+        "--out",
+        path(&out),
+        "--stride",
+        "2",
+        "--write-model",
+        path(&model),
+    ]);
+    let report = json(&out.join("report.json"));
+    assert_eq!(report["irradiance_rig"]["kind"], "constant", "{report}");
+    let i = report["recommended"].as_u64().unwrap() as usize;
+    assert!(report["points"][i]["us_per_frame"].as_f64().unwrap() > 0.0);
+    let inspect = String::from_utf8(succeed(&["inspect", path(&model)])).unwrap();
+    assert!(inspect.contains("irradiance rig  constant"), "{inspect}");
 }
 
 /// A bad scene is refused before any work, naming the file and the item.

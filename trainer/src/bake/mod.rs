@@ -391,6 +391,8 @@ struct Prepared<'a> {
     pattern: Vec<DVec3>,
     /// `y_c` of every pattern direction in the local frame, `n2` values per direction.
     local_basis: Vec<f64>,
+    /// The pattern's indices with similar directions next to each other, for packets.
+    coherent: Vec<u32>,
     /// Takes each vertex's local-frame sum to world space.
     to_world: ShRotation,
     offset: f64,
@@ -443,6 +445,7 @@ impl<'a> Prepared<'a> {
             n2: coeff_count(settings.order),
             normals: usable_normals(mesh),
             local_basis: local_basis(settings.order, &pattern)?,
+            coherent: directions::coherent_order(&pattern),
             to_world: ShRotation::new(settings.order).map_err(BakeError::Basis)?,
             pattern,
             offset: ORIGIN_OFFSET * diagonal,
@@ -505,7 +508,6 @@ impl<'a> Prepared<'a> {
         let scale = std::f64::consts::PI / self.settings.rays as f64;
         let work =
             |scratch: &mut Scratch, j: usize, t: &mut [f64], vertex_hits: Option<&mut Vec<Hit>>| {
-                let Scratch { dirs, stack } = scratch;
                 let p = DVec3::from(points.positions[j].map(f64::from));
                 let n = points.normals[j];
                 let origin = (p + n * self.offset).as_vec3a();
@@ -514,22 +516,13 @@ impl<'a> Prepared<'a> {
                     PatternRotation::Shared => directions::vertex_rotation(0),
                 };
                 let frame = directions::vertex_frame(n, angle);
-                directions::place_pattern(&self.pattern, &frame, dirs);
-                let mut vertex_hits = vertex_hits;
-                for (d, basis) in dirs.iter().zip(self.local_basis.chunks_exact(n2)) {
-                    let ray = tracer::ray(origin, d.as_vec3a(), self.t_min, f32::INFINITY);
-                    let blocked = match vertex_hits.as_deref_mut() {
-                        Some(list) => match tracer.closest(ray, stack) {
-                            Some(hit) => {
-                                if hit.front_facing {
-                                    list.push(hit);
-                                }
-                                true
-                            }
-                            None => false,
-                        },
-                        None => tracer.occluded(ray, stack),
-                    };
+                directions::place_pattern(&self.pattern, &frame, &mut scratch.dirs);
+                self.visibility(tracer, origin, scratch, vertex_hits);
+                for (&blocked, basis) in scratch
+                    .blocked
+                    .iter()
+                    .zip(self.local_basis.chunks_exact(n2))
+                {
                     if !blocked {
                         for (acc, &y) in t.iter_mut().zip(basis) {
                             *acc += y;
@@ -550,6 +543,8 @@ impl<'a> Prepared<'a> {
             };
         let init = || Scratch {
             dirs: Vec::with_capacity(self.settings.rays),
+            rays: Vec::with_capacity(self.settings.rays),
+            blocked: Vec::with_capacity(self.settings.rays),
             stack: TraversalStack::default(),
         };
         let start = vertices.start;
@@ -564,6 +559,40 @@ impl<'a> Prepared<'a> {
                 .try_for_each_init(init, |s, (i, t)| work(s, start + i, t, None))?;
         }
         Ok((out, hits))
+    }
+
+    /// Fills `scratch.blocked` with whether each of `scratch.dirs` from `origin` is blocked,
+    /// and with `vertex_hits`, records the front-facing hits of the blocked ones (closest-hit
+    /// rays, one at a time); otherwise shadow rays go to the tracer all together, so a
+    /// packet-walking tracer can group them.
+    fn visibility(
+        &self,
+        tracer: &Tracer,
+        origin: glam::Vec3A,
+        scratch: &mut Scratch,
+        vertex_hits: Option<&mut Vec<Hit>>,
+    ) {
+        let Scratch {
+            dirs,
+            rays,
+            blocked,
+            stack,
+        } = scratch;
+        rays.clear();
+        rays.extend(dirs.iter().map(|d| d.as_vec3a()));
+        blocked.clear();
+        blocked.resize(rays.len(), false);
+        let Some(list) = vertex_hits else {
+            tracer.occluded_from(origin, (rays, &self.coherent), self.t_min, blocked, stack);
+            return;
+        };
+        for (b, &d) in blocked.iter_mut().zip(rays.iter()) {
+            let hit = tracer.closest(tracer::ray(origin, d, self.t_min, f32::INFINITY), stack);
+            if let Some(hit) = hit.filter(|h| h.front_facing) {
+                list.push(hit);
+            }
+            *b = hit.is_some();
+        }
     }
 
     /// Adds `B` bounces to the whole-mesh direct transfer, each interpolating the previous
@@ -636,6 +665,10 @@ pub enum PatternRotation {
 struct Scratch {
     /// The vertex's ray directions in world space.
     dirs: Vec<DVec3>,
+    /// The same directions in the `f32` the rays are cast with.
+    rays: Vec<glam::Vec3A>,
+    /// Whether each ray is blocked.
+    blocked: Vec<bool>,
     stack: TraversalStack,
 }
 

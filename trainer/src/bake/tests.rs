@@ -435,6 +435,7 @@ fn ray_structures_agree_bit_for_bit() {
     }]);
     let s = settings(3, 128);
     let bvh = bake_pose_with(&mesh, &s, Accel::Bvh4).unwrap();
+    assert_eq!(bvh, bake_pose_with(&mesh, &s, Accel::Bvh4Packet).unwrap());
     assert_eq!(bvh, bake_pose_with(&mesh, &s, Accel::CwBvh).unwrap());
     assert_eq!(bvh, bake_pose_with(&mesh, &s, Accel::Bvh2).unwrap());
     assert_eq!(bvh, bake_pose_with(&mesh, &s, Accel::BruteForce).unwrap());
@@ -628,7 +629,12 @@ fn vertex_inside_a_closed_cube_has_exactly_zero_transfer() {
     let inside = mesh.vertex_count();
     mesh.positions.push([0.1, -0.2, 0.3]);
     mesh.normals.push([0.3, 0.4, 0.5]);
-    for accel in [Accel::CwBvh, Accel::Bvh2, Accel::BruteForce] {
+    for accel in [
+        Accel::Bvh4Packet,
+        Accel::CwBvh,
+        Accel::Bvh2,
+        Accel::BruteForce,
+    ] {
         for bounces in [0, 2] {
             let s = BakeSettings {
                 bounces,

@@ -573,6 +573,18 @@ fn print_scene_report(report: &SceneTrainReport, json: Option<&Path>) -> Result<
         report.stages.bake,
         report.stages.fit
     );
+    match (&report.over_budget, report.within_budget) {
+        (Some(miss), _) => eprintln!("{miss}"),
+        (None, fits) => eprintln!(
+            "the model costs {:.1} µs a frame through aprt-core (the scene's lighting, rig and per-vertex lights included){}",
+            report.us_per_frame,
+            if fits == Some(true) {
+                ", within the scene's [budget] us_per_frame"
+            } else {
+                ""
+            }
+        ),
+    }
     if full.poses_timed == 0 {
         eprintln!(
             "the scene needs the full simulation ({}): nothing saved",

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use aprt_core::{MAX_ORDER, Rgb};
 
 use crate::bake::checkpoint::OnExisting;
@@ -21,6 +21,7 @@ use crate::pipeline::train::{
 use crate::progress::{Reporter, Silent};
 use crate::rig::mesh::Mesh;
 use crate::scene::file::{Choice, Scene};
+use crate::scene::frame_cost::{self, BudgetCheck};
 use crate::scene::irradiance_rig_choice::{CANDIDATES, RigDecision, choose_rig};
 use crate::scene::lighting::SceneLighting;
 use crate::scene::{BakePlan, plan_bake};
@@ -63,6 +64,16 @@ pub struct SceneTrainReport {
     pub full_simulation: FullSimulation,
     /// Model bytes.
     pub bytes: usize,
+    /// The written model's median µs a frame through aprt-core, as
+    /// [`crate::scene::frame_cost::us_per_frame`] times it: the pose, the scene's lighting
+    /// under its rig (or at the centre without one), every vertex shaded, and the lights the
+    /// rig leaves to each vertex.
+    pub us_per_frame: f64,
+    /// Whether that fits the scene's `[budget] us_per_frame` (`null` without one).
+    pub within_budget: Option<bool>,
+    /// What to say when it does not: by how much, and what to change.
+    #[serde(skip)]
+    pub over_budget: Option<String>,
 }
 
 /// The full simulation's cost, measured on [`FULL_SIMULATION_POSES`] poses and scaled to all.
@@ -182,6 +193,15 @@ pub fn train_scene(
         None => skipped.push(format!("irradiance rig: {}", rig.reason)),
     }
     computed.push(format!("precision {}", trained.precision.1));
+    let blob = std::fs::read(options.output)
+        .with_context(|| format!("cannot read back {}", options.output.display()))?;
+    let cost = frame_cost::us_per_frame(&blob, bind, lighting, scene.effects.error_target)
+        .with_context(|| format!("timing {}", options.output.display()))?;
+    let budget = (scene.budget.us_per_frame).map(|budget| BudgetCheck {
+        cost,
+        budget,
+        precision: trained.precision.0,
+    });
     Ok(SceneOutcome::Trained(Box::new(SceneTrainReport {
         scene: scene.path.clone(),
         model: options.output.to_owned(),
@@ -199,6 +219,9 @@ pub fn train_scene(
         stages: trained.seconds,
         full_simulation: full,
         bytes: trained.info.bytes,
+        us_per_frame: cost.us,
+        within_budget: budget.map(|b| b.within()),
+        over_budget: budget.and_then(|b| b.miss_message()),
     })))
 }
 

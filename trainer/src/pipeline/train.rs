@@ -584,7 +584,10 @@ pub fn train(
     }
     let started = Instant::now();
     let rig_section = match &settings.irradiance_rig {
-        Some(kind) => Some(fit_irradiance_rig(*kind, &poses, settings.bake.order)?),
+        Some(kind) => {
+            let meshes = fitting_surfaces(&poses)?;
+            Some(fit_irradiance_rig(*kind, &meshes, settings.bake.order)?)
+        }
         None => None,
     };
     let outcome = match poses {
@@ -829,11 +832,10 @@ fn bake_shard(
     Ok(checkpoint.bake_shard(&meshes, &Vertices, shard, name, reporter)?)
 }
 
-/// The bytes of an irradiance rig of `kind` fitted to the poses' surfaces (a character's bind
-/// pose and training poses in its root frame; up to [`FIT_POSES`] of the meshes read from
-/// files), its error table computed at `order` on the first of them.
-fn fit_irradiance_rig(kind: RigKind, poses: &Poses, order: usize) -> Result<Vec<u8>> {
-    let meshes = fitting_surfaces(poses)?;
+/// The bytes of an irradiance rig of `kind` fitted to `meshes` ([`fitting_surfaces`]: a
+/// character's bind pose and training poses in its root frame; up to [`FIT_POSES`] of the
+/// meshes read from files), its error table computed at `order` on the first of them.
+pub fn fit_irradiance_rig(kind: RigKind, meshes: &[Mesh], order: usize) -> Result<Vec<u8>> {
     let refs: Vec<&Mesh> = meshes.iter().collect();
     let mut fitted = fit_rig(kind, &refs, None);
     fitted
@@ -851,12 +853,16 @@ pub fn fitting_surfaces(poses: &Poses) -> Result<Vec<Mesh>> {
             let step = meshes.len().div_ceil(FIT_POSES).max(1);
             meshes.iter().step_by(step).cloned().collect()
         }
-        Poses::Rig { rig, clips, .. } => {
-            let clip = joined(clips.clone());
-            fitting_meshes(rig.as_ref(), &clip)
-                .with_context(|| format!("posing clip {} to fit the irradiance rig", clip.name))?
-        }
+        Poses::Rig { rig, clips, .. } => rig_fitting_surfaces(rig.as_ref(), clips)?,
     })
+}
+
+/// [`fitting_surfaces`] of a character trained on `clips`: its bind pose and up to
+/// [`FIT_POSES`] frames spread over the clips joined.
+pub fn rig_fitting_surfaces(rig: &dyn Rig, clips: &[Clip]) -> Result<Vec<Mesh>> {
+    let clip = joined(clips.to_vec());
+    fitting_meshes(rig, &clip)
+        .with_context(|| format!("posing clip {} to fit the irradiance rig", clip.name))
 }
 
 /// Every frame of the training clips, in order.

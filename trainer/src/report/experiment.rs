@@ -549,7 +549,6 @@ pub(crate) fn time_core(
     let mut pose = Box::new(PoseWeights::new());
     let mut lit = Box::new(LitWeights::new());
     let mut shading = vec![0.0f32; info.vertices()];
-    let mut transfer = vec![0.0f32; info.vertices() * info.coeffs()];
     let mut result = Ok(());
     let shade = median_seconds(|| {
         result = result
@@ -557,11 +556,7 @@ pub(crate) fn time_core(
             .and(model.light(&pose, lighting, rotations, &mut lit))
             .and(model.shade(&lit, 0, &mut shading));
     });
-    let full = median_seconds(|| {
-        result = result
-            .and(model.set_pose(&a, &mut pose))
-            .and(model.transfer(&pose, 0, &mut transfer));
-    });
+    let full_us = transfer_us(blob, angles)?;
     let proxies = match geometry.filter(|_| info.has_proxies()) {
         Some((joints, mesh)) => {
             let skinning: Vec<_> = joints.iter().map(skinning_of).collect();
@@ -583,7 +578,25 @@ pub(crate) fn time_core(
         None => None,
     };
     result?;
-    Ok((shade * 1e6, full * 1e6, proxies))
+    Ok((shade * 1e6, full_us, proxies))
+}
+
+/// Median µs through aprt-core of one pose's full per-vertex transfer (what an engine that
+/// lights on the GPU asks the core for each frame).
+pub(crate) fn transfer_us(blob: &[u8], angles: &[f64]) -> Result<f64> {
+    let model = Model::parse(blob)?;
+    let info = model.info();
+    let a: Vec<f32> = angles.iter().map(|&x| x as f32).collect();
+    let mut pose = Box::new(PoseWeights::new());
+    let mut transfer = vec![0.0f32; info.vertices() * info.coeffs()];
+    let mut result = Ok(());
+    let full = median_seconds(|| {
+        result = result
+            .and(model.set_pose(&a, &mut pose))
+            .and(model.transfer(&pose, 0, &mut transfer));
+    });
+    result?;
+    Ok(full * 1e6)
 }
 
 /// Multiply-adds per frame for RGB shading of every vertex.

@@ -109,7 +109,7 @@ pub fn choose_rig(
     Ok(decision(
         Some(kind),
         format!(
-            "a {kind} rig: the fewest lights left per vertex ({analytic}) of the rigs tried, with the fewest SH vectors among those ({}; measured µs per frame through aprt-core), worst error {max:.2} grey levels, {us:.0} µs a frame",
+            "a {kind} rig: the fewest lights left per vertex ({analytic}) of the rigs tried, with the fewest SH vectors among those ({}; µs a frame through aprt-core on the bind pose's unreduced transfer, not the model's, which is timed once written), worst error {max:.2} grey levels, {us:.0} µs a frame on that transfer",
             others.join(", ")
         ),
     ))

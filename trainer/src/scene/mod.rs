@@ -6,6 +6,7 @@
 //! computed and what was skipped.
 
 pub mod file;
+pub mod frame_cost;
 pub mod irradiance_rig_choice;
 pub mod lighting;
 pub mod order;

@@ -6,6 +6,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 
+use super::pareto::{TIE_FRACTION, TIE_GREY};
 use super::{Point, SweepReport};
 use crate::io::atomic::write_atomic;
 use crate::report::plots::{Axes, Series, line_plot, line_plot_svg};
@@ -128,8 +129,10 @@ pub fn markdown(report: &SweepReport, command: &str) -> String {
     );
     let _ = writeln!(
         s,
-        "**Error** is the RMS shading error on the test clips in 8-bit grey levels (a white Lambertian surface under the scene's lighting projected at the character's centre, radiance 1 = white), against the ground truth at order 6; the transfer error is the paper's relative error ‖pred − truth‖/‖truth‖ over every coefficient of the truth. **µs** is one frame through aprt-core on one core (pose, lighting, shading every vertex), median of 31.\n"
+        "**Error** is the RMS shading error on the test clips in 8-bit grey levels (a white Lambertian surface under the scene's lighting projected at the character's centre, radiance 1 = white), against the ground truth at order 6; the transfer error is the paper's relative error ‖pred − truth‖/‖truth‖ over every coefficient of the truth. **µs** is one frame through aprt-core on one core, median over a tenth of a second, as `aprt train --scene` measures the model it writes: the pose, the scene's lighting through the irradiance rig every setting carries ({}) or projected at the centre without one, every vertex shaded, the lights the rig leaves to each vertex, and the occluder proxies of a model that has them. **Transfer µs** is the full per-vertex transfer instead.\n",
+        report.irradiance_rig.kind.as_deref().unwrap_or("none")
     );
+    let _ = writeln!(s, "Irradiance rig: {}.\n", report.irradiance_rig.reason);
     let _ = writeln!(s, "![error against µs per frame]({}.png)\n", TIME_PLOT);
     let _ = writeln!(s, "![error against bytes]({}.png)\n", BYTES_PLOT);
     let budget = match report.budget {
@@ -148,8 +151,12 @@ pub fn markdown(report: &SweepReport, command: &str) -> String {
             let p = &report.points[i];
             let _ = writeln!(
                 s,
-                "**Recommended** within {budget}: **{}**, {:.2} grey levels RMS, {:.1} µs per frame, {} bytes.\n",
-                p.setting.label, p.error, p.us_per_frame, p.bytes
+                "**Recommended** within {budget}: **{}**, {:.2} grey levels RMS, {:.1} µs per frame, {} bytes. Settings within the budget whose error is within max({TIE_GREY} grey levels, {:.0} % of the lowest) of the lowest there tie, and the cheapest of them in µs is recommended.\n",
+                p.setting.label,
+                p.error,
+                p.us_per_frame,
+                p.bytes,
+                100.0 * TIE_FRACTION
             );
         }
         None => {

@@ -1,14 +1,17 @@
 //! Measuring one blob against ground truth on the test clips: the paper's relative transfer
 //! error (section 6), the shading error in 8-bit grey levels under the scene's lighting, and
-//! the per-frame cost through aprt-core on one core.
+//! the per-frame cost through aprt-core on one core under the scene's lighting
+//! ([`frame_cost::us_per_frame`], the figure `aprt train --scene` quotes).
 
 use anyhow::{Result, bail};
 
 use crate::bake::clip::BakedClip;
 use crate::lighting::GREY_PER_IRRADIANCE;
-use crate::model::ModelFrame;
 use crate::model::predict::predict_world;
-use crate::report::experiment::{megaops, time_core};
+use crate::report::experiment::{megaops, transfer_us};
+use crate::rig::mesh::Mesh;
+use crate::scene::frame_cost;
+use crate::scene::lighting::SceneLighting;
 
 /// The ground truth a blob is measured against.
 pub struct Truth<'a> {
@@ -18,6 +21,12 @@ pub struct Truth<'a> {
     pub lighting: &'a [f32],
     /// Coefficients per vertex of the truth.
     pub n2: usize,
+    /// The scene's lighting, which each frame is timed under.
+    pub scene: &'a SceneLighting,
+    /// The character's bind pose, which each frame is timed on.
+    pub bind: &'a Mesh,
+    /// The rig's error target, grey levels: what splits each light between rig and vertex.
+    pub target: f32,
 }
 
 /// What one blob measured.
@@ -30,7 +39,9 @@ pub struct Measured {
     /// `‖pred − truth‖ / ‖truth‖` over every frame, vertex and coefficient of the truth (the
     /// bands a model leaves out count as error).
     pub transfer_error: f64,
-    /// µs per frame to pose, light and shade every vertex.
+    /// µs per frame through aprt-core as `train --scene` measures it: pose, light under the
+    /// scene's rig (or at the centre), shade every vertex, the lights left per vertex, and
+    /// the occluder proxies of a model that has them.
     pub us_per_frame: f64,
     /// µs per frame for the full per-vertex transfer.
     pub transfer_us: f64,
@@ -55,9 +66,8 @@ impl Measured {
     }
 }
 
-/// Measures `blob` (a model learned in `frame`) on `truth`; refuses a figure that is not
-/// finite, naming it.
-pub fn measure(blob: &[u8], frame: ModelFrame, truth: &Truth<'_>) -> Result<Measured> {
+/// Measures `blob` on `truth`; refuses a figure that is not finite, naming it.
+pub fn measure(blob: &[u8], truth: &Truth<'_>) -> Result<Measured> {
     let info = *aprt_core::Model::parse(blob)?.info();
     let m2 = info.coeffs();
     let lighting = &truth.lighting[..m2];
@@ -85,22 +95,8 @@ pub fn measure(blob: &[u8], frame: ModelFrame, truth: &Truth<'_>) -> Result<Meas
             }
         }
     }
-    let timing = &truth.tests[0];
-    let rotations = if frame == ModelFrame::Bone {
-        timing.core_rotations(0)
-    } else {
-        Vec::new()
-    };
-    // A model with occluder proxies pays for them every frame: they count in its time.
-    let geometry = (&timing.joints[0][..], &timing.meshes[0]);
-    let (shade_us, transfer_us, proxies_us) = time_core(
-        blob,
-        &timing.angles[0],
-        &rotations,
-        lighting,
-        Some(geometry),
-    )?;
-    let us_per_frame = shade_us + proxies_us.unwrap_or(0.0);
+    let us_per_frame = frame_cost::us_per_frame(blob, truth.bind, truth.scene, truth.target)?.us;
+    let transfer_us = transfer_us(blob, &truth.tests[0].angles[0])?;
     let measured = Measured {
         grey_rms: (grey2 / count.max(1) as f64).sqrt(),
         grey_max,

@@ -1,8 +1,12 @@
 //! `aprt report`: what accuracy costs in time. Bakes a scene's clips once at the reference
 //! settings (the scene's effects at SH order 6), then fits and measures a model for each
 //! setting of the accuracy knobs (SH order, k_a, k_v, precision f32/f16/i8, rays, bounces) on the
-//! scene's test clips, marks the Pareto-optimal settings, and recommends the most accurate
-//! one inside the budget.
+//! scene's test clips, marks the Pareto-optimal settings, and recommends the cheapest of the
+//! most accurate ones inside the budget ([`pareto::recommend`]). Each setting's µs a frame is
+//! what `aprt train --scene` quotes for the model it writes
+//! ([`crate::scene::frame_cost::us_per_frame`]): the model carries the rig the scene would
+//! choose, and is timed under the scene's lighting with the lights that rig leaves to each
+//! vertex.
 
 pub mod document;
 pub mod measure;
@@ -16,16 +20,19 @@ use aprt_core::MAX_ORDER;
 
 use crate::bake::BakeSettings;
 use crate::bake::clip::{BakedClip, bake_clip, bake_rest};
+use crate::irradiance_rig::RigKind;
 use crate::lighting::luminance;
 use crate::model::ModelFrame;
-use crate::model::export::{Precision, encode_model};
+use crate::model::export::{Precision, encode_model_with_rig};
 use crate::model::fit::{CoefDims, Dims, FitOptions};
 use crate::model::occluders::Occluders;
-use crate::pipeline::train::{ClipSet, fit_clip};
+use crate::pipeline::train::{ClipSet, fit_clip, fit_irradiance_rig, rig_fitting_surfaces};
 use crate::progress::{Reporter, Silent};
+use crate::rig::mesh::Mesh;
 use crate::rig::pose_layout::PoseLayout;
 use crate::rig::{Clip, Rig};
 use crate::scene::file::Scene;
+use crate::scene::irradiance_rig_choice::{CANDIDATES, RigDecision, choose_rig};
 use crate::scene::lighting::SceneLighting;
 use crate::scene::{BakePlan, plan_bake};
 use measure::{Measured, Truth, measure};
@@ -85,7 +92,9 @@ pub struct Point {
     pub setting: Setting,
     /// RMS shading error on the test clips, 8-bit grey levels.
     pub error: f64,
-    /// µs per frame through aprt-core, one core: pose, light, shade every vertex.
+    /// µs per frame through aprt-core, one core, as `aprt train --scene` measures the model it
+    /// writes: pose, the scene's lighting under its rig, every vertex shaded, the lights the
+    /// rig leaves to each vertex.
     pub us_per_frame: f64,
     /// Bytes of the model.
     pub bytes: usize,
@@ -119,8 +128,12 @@ pub struct SweepReport {
     pub scene_order: (usize, String),
     /// The settings, in sweep order.
     pub points: Vec<Point>,
-    /// Index into `points` of the most accurate setting within the budget.
+    /// Index into `points` of the recommended setting: the cheapest of those within the
+    /// budget whose error ties the lowest ([`pareto::recommend`]).
     pub recommended: Option<usize>,
+    /// The irradiance rig every setting carries and is timed with, as `train --scene`
+    /// chooses it for this scene.
+    pub irradiance_rig: RigDecision,
     /// The budget the recommendation was chosen within.
     pub budget: (Option<f64>, Option<u64>),
     /// The named presets, indices into `points`.
@@ -180,6 +193,10 @@ pub struct Reference {
     pub settings: BakeSettings,
     /// Every `stride`-th frame of every clip was baked.
     pub stride: usize,
+    /// The irradiance rig `train --scene` would store for this scene, and why.
+    pub irradiance_rig: (Option<RigKind>, RigDecision),
+    /// The surfaces that rig is fitted over (the bind pose first).
+    pub fitting: Vec<Mesh>,
 }
 
 /// Bakes `clips` (every `stride`-th frame) at the scene's effects and SH order 6, under
@@ -211,6 +228,14 @@ pub fn bake_reference(
         "baking the reference (SH order {MAX_ORDER}, {} rays) on 1 frame in {stride}",
         settings.rays
     ));
+    let fitting = rig_fitting_surfaces(rig, clips.train)?;
+    let progress = reporter.step_progress(CANDIDATES.len());
+    let e = &scene.effects;
+    let lights = &lighting.lights;
+    let order = plan.order.order;
+    let irradiance_rig = choose_rig(e.rig, lights, &fitting, order, e.error_target, &*progress)?;
+    progress.finish();
+    reporter.note(&format!("rig: {}", irradiance_rig.1.reason));
     let base = bake_set(rig, &layout, &train, &validation, &settings)?;
     let tests = clips
         .tests
@@ -226,6 +251,8 @@ pub fn bake_reference(
         lighting,
         settings,
         stride,
+        irradiance_rig,
+        fitting,
     })
 }
 
@@ -267,7 +294,11 @@ pub fn sweep(
         tests: &reference.tests,
         lighting: &lum,
         n2: MAX_ORDER * MAX_ORDER,
+        scene: &reference.lighting,
+        bind,
+        target: e.error_target,
     };
+    let rig_sections = rig_sections(reference, candidates)?;
     let progress = reporter.step_progress(candidates.len() + 1);
     let mut points = Vec::new();
     let mut extra: Option<(Data, Baked)> = None;
@@ -293,15 +324,13 @@ pub fn sweep(
                 truncated(baked, candidate.order)
             }
         };
-        points.extend(fit_and_measure(
+        let fit = Fit {
             rig,
-            &reference.layout,
-            candidate,
-            &data,
-            e.frame,
-            scene,
-            &truth,
-        )?);
+            layout: &reference.layout,
+            frame: e.frame,
+            irradiance_rig: rig_sections[candidate.order].as_deref(),
+        };
+        points.extend(fit_and_measure(&fit, candidate, &data, scene, &truth)?);
     }
     progress.step("the Pareto fronts");
     mark_fronts(&mut points);
@@ -337,10 +366,26 @@ pub fn sweep(
         presets: presets(&costs),
         points,
         recommended,
+        irradiance_rig: reference.irradiance_rig.1.clone(),
         budget: (budget_us, budget_bytes),
         not_swept: not_swept(scene),
         seconds: started.elapsed().as_secs_f64(),
     })
+}
+
+/// The irradiance rig section the scene's model carries, at each order `candidates` fit (its
+/// error table, which splits the lights between rig and vertex, is per order), indexed by
+/// order; all `None` when the scene stores no rig.
+fn rig_sections(reference: &Reference, candidates: &[Candidate]) -> Result<Vec<Option<Vec<u8>>>> {
+    let mut sections = vec![None; MAX_ORDER + 1];
+    if let Some(kind) = reference.irradiance_rig.0 {
+        for order in candidates.iter().map(|c| c.order) {
+            if sections[order].is_none() {
+                sections[order] = Some(fit_irradiance_rig(kind, &reference.fitting, order)?);
+            }
+        }
+    }
+    Ok(sections)
 }
 
 /// Every `stride`-th frame of `clip`.
@@ -453,7 +498,7 @@ fn not_swept(scene: &Scene) -> Vec<String> {
         out.push("bounces: the scene asks for none, so there is nothing cheaper to try".into());
     }
     out.push(
-        "irradiance-rig kinds: compared for the scene's lights by `aprt irradiance-rig` and `aprt train --scene` (irradiance_rig = \"auto\"), not in this sweep"
+        "irradiance-rig kinds: every setting carries the rig `aprt train --scene` chooses for the scene and is timed with it; the kinds are compared for the scene's lights by `aprt irradiance-rig` and `aprt train --scene` (irradiance_rig = \"auto\"), not in this sweep"
             .into(),
     );
     out.push(
@@ -512,16 +557,28 @@ pub fn truncated(baked: &Baked, order: usize) -> Baked {
     }
 }
 
-/// Fits `candidate` on `data` and measures it at every precision.
+/// What every candidate of a sweep is fitted for and written with.
+struct Fit<'a> {
+    /// The character.
+    rig: &'a dyn Rig,
+    /// Its pose layout.
+    layout: &'a PoseLayout,
+    /// The frame the model learns transfer in.
+    frame: ModelFrame,
+    /// The irradiance rig section the scene's model carries, at the candidate's order.
+    irradiance_rig: Option<&'a [u8]>,
+}
+
+/// Fits `candidate` on `data` and measures it at every precision, written with the scene's
+/// irradiance rig as `train --scene` writes it.
 fn fit_and_measure(
-    rig: &dyn Rig,
-    layout: &PoseLayout,
+    fit: &Fit<'_>,
     candidate: &Candidate,
     data: &Baked,
-    frame: ModelFrame,
     scene: &Scene,
     truth: &Truth<'_>,
 ) -> Result<Vec<Point>> {
+    let (rig, layout, frame) = (fit.rig, fit.layout, fit.frame);
     let options = FitOptions {
         pose_dims: candidate.pose_dims,
         coef_dims: candidate.coef_dims,
@@ -540,9 +597,9 @@ fn fit_and_measure(
     let model = &fitted.model;
     let mut points = Vec::new();
     for precision in [Precision::F32, Precision::F16, Precision::I8] {
-        let blob = encode_model(model, precision)
+        let blob = encode_model_with_rig(model, precision, fit.irradiance_rig)
             .with_context(|| format!("writing {} in {}", candidate.label, precision.name()))?;
-        let measured = measure(&blob, frame, truth)
+        let measured = measure(&blob, truth)
             .with_context(|| format!("measuring {}, {}", candidate.label, precision.name()))?;
         let info = *aprt_core::Model::parse(&blob)?.info();
         points.push(Point {

@@ -1,5 +1,5 @@
-//! The Pareto front of measured settings, the recommendation inside a budget, and the named
-//! presets read off the front.
+//! The Pareto front of measured settings, the recommendation inside a budget (near-ties in
+//! error go to the cheaper setting), and the named presets read off the front.
 
 /// One measured setting, as the front sees it: lower is better on every axis.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -26,14 +26,32 @@ pub fn front(points: &[Cost], axis: impl Fn(&Cost) -> f64) -> Vec<bool> {
         .collect()
 }
 
-/// The most accurate point within the budgets (`None`: no limit), the faster of equally
-/// accurate ones; `None` when no point fits.
+/// Errors this close to the lowest are ties, in grey levels: a twentieth of an 8-bit level
+/// is far below what a viewer sees and within the sweep's own noise between runs.
+pub const TIE_GREY: f64 = 0.05;
+
+/// Errors within this fraction of the lowest are ties too, where 1 % of it is more than
+/// [`TIE_GREY`].
+pub const TIE_FRACTION: f64 = 0.01;
+
+/// The recommendation within the budgets (`None`: no limit): among the points that fit, the
+/// lowest error `e` is found; every point whose error is within `max(TIE_GREY, TIE_FRACTION ·
+/// e)` of it ties, and the cheapest of the ties in µs a frame is chosen (the more accurate
+/// of equally cheap ones), so a negligible gain in error never costs twice the time. `None`
+/// when no point fits.
 pub fn recommend(points: &[Cost], us: Option<f64>, bytes: Option<f64>) -> Option<usize> {
+    let fits = |p: &&Cost| us.is_none_or(|b| p.us <= b) && bytes.is_none_or(|b| p.bytes <= b);
+    let best = points
+        .iter()
+        .filter(fits)
+        .map(|p| p.error)
+        .min_by(f64::total_cmp)?;
+    let tie = best + TIE_GREY.max(TIE_FRACTION * best);
     points
         .iter()
         .enumerate()
-        .filter(|(_, p)| us.is_none_or(|b| p.us <= b) && bytes.is_none_or(|b| p.bytes <= b))
-        .min_by(|(_, a), (_, b)| a.error.total_cmp(&b.error).then(a.us.total_cmp(&b.us)))
+        .filter(|(_, p)| fits(p) && p.error <= tie)
+        .min_by(|(_, a), (_, b)| a.us.total_cmp(&b.us).then(a.error.total_cmp(&b.error)))
         .map(|(i, _)| i)
 }
 
@@ -124,6 +142,33 @@ mod tests {
         assert_eq!(recommend(&points, Some(20.0), None), Some(3));
         assert_eq!(recommend(&points, Some(20.0), Some(20.0)), None);
         assert_eq!(recommend(&points, Some(5.0), None), None);
+        assert_eq!(recommend(&[], None, None), None);
+        assert_eq!(recommend(&[], Some(1.0), Some(1.0)), None);
+    }
+
+    /// The case: an f32 model 0.03 grey levels better than an i8 one at twice its
+    /// time. The gain is a tie, so the cheaper one is recommended; a gain past the tolerance
+    /// is not a tie.
+    #[test]
+    fn a_near_tie_that_costs_twice_the_time_loses_to_the_cheaper_point() {
+        let f32 = cost(2.00, 60.0, 40.0);
+        let i8 = cost(2.03, 30.0, 10.0);
+        assert_eq!(recommend(&[f32, i8], None, None), Some(1));
+        assert_eq!(recommend(&[i8, f32], None, None), Some(0));
+        // 0.06 grey levels is more than max(0.05, 1 % of 2.0): not a tie.
+        let worse = cost(2.06, 30.0, 10.0);
+        assert_eq!(recommend(&[f32, worse], None, None), Some(0));
+        // At large errors the tolerance is 1 %: 0.9 on 100 ties, 1.1 does not.
+        let big = cost(100.0, 60.0, 1.0);
+        let (near, far) = (cost(100.9, 30.0, 1.0), cost(101.1, 30.0, 1.0));
+        assert_eq!(recommend(&[big, near], None, None), Some(1));
+        assert_eq!(recommend(&[big, far], None, None), Some(0));
+        // A tie outside the budget is no candidate: the lowest error is found among the
+        // points that fit, and the ties are taken among those.
+        assert_eq!(recommend(&[f32, i8], Some(50.0), None), Some(1));
+        assert_eq!(recommend(&[f32, i8], None, Some(5.0)), None);
+        let slow = cost(2.01, 90.0, 1.0);
+        assert_eq!(recommend(&[f32, slow], Some(80.0), None), Some(0));
     }
 
     #[test]
