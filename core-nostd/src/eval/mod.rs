@@ -20,7 +20,7 @@
 mod analytic;
 mod bounds;
 mod features;
-mod kernels;
+pub(crate) mod kernels;
 mod occlude;
 mod rig;
 mod weights;

@@ -152,3 +152,58 @@ fn identity_rows<E: Decode>(xc: &[[E; VERTEX_BLOCK]], z: &[f32]) -> [f32; VERTEX
     }
     core::array::from_fn(|l| even[l] + odd[l])
 }
+
+/// One texel of an SH light map, `Σ_c l_c t_c` in RGB: one accumulator per colour, the
+/// coefficients in ascending order, `acc += l_c · t_c`. The reference every composition
+/// kernel reproduces bit for bit, and the kernels' tail.
+#[inline(always)]
+pub(crate) fn texel(t: &[f32], l: &[[f32; 3]]) -> [f32; 3] {
+    let mut acc = [0.0f32; 3];
+    for (&x, lc) in t.iter().zip(l) {
+        for (a, c) in acc.iter_mut().zip(lc) {
+            *a += c * x;
+        }
+    }
+    acc
+}
+
+/// Texel-major maps of n² = `N2` coefficients composed under one lighting `l`, eight texels
+/// at a time: each block's coefficient c, read across its eight texels (a transposition, which
+/// the constant stride lets the compiler do in registers), multiplies the broadcast `l_c` in
+/// eight lanes, so each lane performs [`texel`]'s multiplies and adds in its order. The
+/// remaining `out.len() mod 8` texels go through [`texel`].
+///
+/// On x86-64 with SSE2 only (`mulps`/`addps`, the transposition in `movss`/`shufps`/
+/// `unpcklps`) this composes a 512 × 512 map 1.40× (order 3) and 1.49× (order 6) as fast as
+/// one texel at a time, checks included (`cargo bench -p aprt-tests --bench lightmap` with the
+/// AVX kernels switched off, one run); the transposition, not the arithmetic, is its cost.
+#[inline(always)]
+pub(crate) fn compose<const N2: usize>(maps: &[f32], l: &[[f32; 3]; N2], out: &mut [[f32; 3]]) {
+    let texels = maps.as_chunks::<N2>().0;
+    let (blocks, tail) = texels.as_chunks::<VERTEX_BLOCK>();
+    let (out_blocks, out_tail) = out.as_chunks_mut::<VERTEX_BLOCK>();
+    for (block, o) in blocks.iter().zip(out_blocks) {
+        *o = compose_block(block, l);
+    }
+    for (t, o) in tail.iter().zip(out_tail) {
+        *o = texel(t, l);
+    }
+}
+
+/// Eight texels: `out[lane] = Σ_c l_c block[lane][c]`, lane-wise as [`texel`].
+#[inline(always)]
+fn compose_block<const N2: usize>(
+    block: &[[f32; N2]; VERTEX_BLOCK],
+    l: &[[f32; 3]; N2],
+) -> [[f32; 3]; VERTEX_BLOCK] {
+    let mut acc = [[0.0f32; VERTEX_BLOCK]; 3];
+    for (c, lc) in l.iter().enumerate() {
+        let column: [f32; VERTEX_BLOCK] = core::array::from_fn(|lane| block[lane][c]);
+        for (a, x) in acc.iter_mut().zip(lc) {
+            for lane in 0..VERTEX_BLOCK {
+                a[lane] += x * column[lane];
+            }
+        }
+    }
+    core::array::from_fn(|lane| [acc[0][lane], acc[1][lane], acc[2][lane]])
+}
