@@ -2,8 +2,9 @@
 //! model's per-vertex rows), on a model the size of the paper's Master Pai PCA(8,22): 11.5k
 //! vertices, 54 angles, order 6, at each storage precision. The memcpy and every step run in
 //! interleaved batches (`interleaved_seconds`), and each ratio is the median of per-round
-//! ratios, so the machine's drift cancels. One core.
-//! `cargo bench -p aprt-tests --bench eval`.
+//! ratios, so the machine's drift cancels. A last table times each precision's shading against
+//! the f32 shading of the same model, interleaved the same way: what the precision knob buys.
+//! One core. `cargo bench -p aprt-tests --bench eval`.
 
 use std::hint::black_box;
 use std::time::Duration;
@@ -103,13 +104,7 @@ fn main() {
         "model / step", "row bytes", "µs/frame", "frames/s", "× memcpy"
     );
     for case in &CASES {
-        let bones = case.4;
-        let rotations: Vec<[[f32; 3]; 3]> = (0..bones)
-            .map(|b| {
-                let (s, c) = (0.1 * b as f32).sin_cos();
-                [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
-            })
-            .collect();
+        let rotations = bone_rotations(case.4);
         let blob = encode_model(&model(case), case.3).unwrap();
         let m = Model::parse(&blob).unwrap();
         let rows = rows(&blob);
@@ -176,4 +171,58 @@ fn main() {
             );
         }
     }
+    println!(
+        "\n{:<42} {:>11} {:>11}",
+        "shade against f32's", "µs/frame", "× f32"
+    );
+    // (f32, f16, i8) in the world frame; (f32, i8) in 30 bone frames; (f32, f16, i8) unreduced.
+    for group in [&CASES[0..3], &CASES[4..6], &CASES[6..9]] {
+        precisions(group, budget, &angles, &light);
+    }
+}
+
+/// Shading of `cases` (one model in several precisions, f32 first) interleaved in one run,
+/// each against the first.
+fn precisions(cases: &[Case], budget: Duration, angles: &[f32], light: &[f32]) {
+    let blobs: Vec<Vec<u8>> = cases
+        .iter()
+        .map(|c| encode_model(&model(c), c.3).unwrap())
+        .collect();
+    let rotations = bone_rotations(cases[0].4);
+    let mut steps: Vec<Box<dyn FnMut() + '_>> = blobs
+        .iter()
+        .map(|blob| {
+            let m = Model::parse(blob).unwrap();
+            let (mut pose, mut lit) = (Box::new(PoseWeights::new()), Box::new(LitWeights::new()));
+            let mut shading = vec![0.0f32; VERTICES];
+            let rotations = &rotations;
+            Box::new(move || {
+                m.set_pose(black_box(angles), &mut pose).unwrap();
+                m.light(&pose, black_box(light), rotations, &mut lit)
+                    .unwrap();
+                m.shade(&lit, 0, &mut shading).unwrap();
+                black_box(&shading);
+            }) as Box<dyn FnMut()>
+        })
+        .collect();
+    let mut refs: Vec<&mut dyn FnMut()> = steps.iter_mut().map(|s| &mut **s as _).collect();
+    let times = interleaved_seconds(budget, ROUNDS, &mut refs);
+    for (case, t) in cases.iter().zip(&times) {
+        println!(
+            "{:<42} {:>11.1} {:>10.2}x",
+            case.0,
+            median_ratio(t, &[1e-6; ROUNDS]),
+            median_ratio(t, &times[0])
+        );
+    }
+}
+
+/// `bones` rotations about z, a tenth of a radian apart.
+fn bone_rotations(bones: usize) -> Vec<[[f32; 3]; 3]> {
+    (0..bones)
+        .map(|b| {
+            let (s, c) = (0.1 * b as f32).sin_cos();
+            [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
+        })
+        .collect()
 }

@@ -9,21 +9,10 @@
 //! vectorised over coefficients, so it needs no transposition.
 //!
 //! Measured (`cargo bench -p aprt-tests --bench eval`, PCA(8,22), 11,500 vertices, order 6,
-//! on an AVX-512 machine): f32 shading 0.91× a memcpy of its bytes and full transfer 11.7×,
-//! against 2.04× and 40.4× before these kernels (issue 33); f16 and i8 shading 0.82×
-//! and 0.77× the f32 time (rows that fit in L2 are bound by the multiply–adds, which every
-//! encoding pays; see docs/results/performance.md).
-//!
-//! Why `unsafe`, and what keeps it sound:
-//! - A function compiled for AVX2 may only run on a CPU that has it. [`Avx2`] is a token that
-//!   exists only after `cpuid` found AVX2 and F16C and `xgetbv` found the operating system
-//!   saving the 256-bit registers (or the build enables both features); every kernel is reached
-//!   through its methods, so calling the `#[target_feature]` functions is sound.
-//! - `xgetbv` is an instruction the standard library would wrap (`is_x86_feature_detected!`),
-//!   but the core has no standard library.
-//! - Loads and stores through raw pointers read or write exactly one row of a slice of the
-//!   right length (`&[E; 8]`, or a masked tail whose enabled lanes are inside the slice).
-//! - Reinterpreting a 32-byte register as `[f32; 8]` is a plain bit copy of equal sizes.
+//! on an AVX-512 machine): f32 shading 0.82× a memcpy of its bytes and full transfer 10.4×,
+//! against 2.04× and 40.4× before these kernels (issue 33). f16 and i8 shading cost 1.07× and
+//! 1.05× the f32 time, interleaved: rows that fit in cache are bound by the multiply–adds,
+//! which every encoding pays, plus a conversion (see docs/results/performance.md).
 #![allow(unsafe_code)]
 
 use core::arch::x86_64::{
