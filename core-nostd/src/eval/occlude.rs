@@ -4,8 +4,9 @@
 
 use super::first_non_finite;
 use super::rig::check_positions;
+use crate::blob::format::VERTEX_BLOCK;
 use crate::blob::{Error, Input, ModelInfo, Reader};
-use crate::proxies::{ProxyFrame, vertex_occlusion};
+use crate::proxies::{ProxyFrame, block_occlusion};
 use crate::rotation::Rotation;
 use crate::sh::MAX_COEFFS;
 
@@ -48,24 +49,35 @@ impl ModelInfo {
         mut visit: impl FnMut(usize, &[f32]),
     ) -> Result<(), Error> {
         let (end, n2) = (first + count, self.coeffs());
-        let mut d = [0.0f32; MAX_COEFFS];
+        let mut d = [[0.0f32; MAX_COEFFS]; VERTEX_BLOCK];
         self.each_block(r, first, count, |v0, bones, _| {
             let (lo, hi) = (v0.max(first), (v0 + bones.len()).min(end));
-            let lanes = &bones[lo - v0..hi - v0];
-            let block = frame.block_mask(lanes, &positions[lo - first..hi - first]);
+            let block =
+                frame.block_mask(&bones[lo - v0..hi - v0], &positions[lo - first..hi - first]);
             if block == 0 {
                 return;
             }
+            // Lanes outside the range keep an empty mask.
+            let (mut masks, mut vertices) = (
+                [0u64; VERTEX_BLOCK],
+                [([0.0f32; 3], [0.0f32; 3]); VERTEX_BLOCK],
+            );
+            let mut lane_rotations = [None; VERTEX_BLOCK];
             for j in lo..hi {
-                let (i, bone) = (j - first, bones[j - v0]);
-                let mask = frame.candidates.get(bone).copied().unwrap_or(0) & block;
-                if mask == 0 {
-                    continue;
-                }
-                let rotation = rotations.and_then(|r| r.get(bone));
-                let vertex = (positions[i], normals[i]);
-                if vertex_occlusion(frame, self.order, mask, vertex, rotation, &mut d) {
-                    visit(i, &d[..n2]);
+                let (l, i, bone) = (j - v0, j - first, bones[j - v0]);
+                masks[l] = frame.candidates.get(bone).copied().unwrap_or(0) & block;
+                vertices[l] = (positions[i], normals[i]);
+                lane_rotations[l] = rotations.and_then(|r| r.get(bone));
+            }
+            if masks == [0; VERTEX_BLOCK] {
+                return;
+            }
+            let reached =
+                block_occlusion(frame, self.order, masks, vertices, lane_rotations, &mut d);
+            for j in lo..hi {
+                let l = j - v0;
+                if reached & (1 << l) != 0 {
+                    visit(j - first, &d[l][..n2]);
                 }
             }
         })

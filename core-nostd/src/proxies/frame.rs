@@ -53,6 +53,12 @@ impl ProxyFrame {
         self.candidates.get(bone).map_or(0, |m| m.count_ones())
     }
 
+    /// Proxy `i`: its centre, radius and squared reach.
+    #[inline(always)]
+    pub(crate) fn sphere(&self, i: usize) -> ([f32; 3], f32, f32) {
+        (self.centres[i], self.radii[i], self.reach2[i])
+    }
+
     /// The proxies that may reach a block of vertices of bones `bones` at `positions`: those
     /// of the bones' masks whose reach meets the block's box. One test per proxy and block
     /// spares the vertices of a block every proxy that cannot touch any of them.

@@ -29,7 +29,7 @@ mod occlusion;
 mod section;
 
 pub use frame::{ProxyFrame, ProxySet, Skinning};
-pub(crate) use occlusion::vertex_occlusion;
+pub(crate) use occlusion::block_occlusion;
 pub use section::MAX_PROXIES;
 pub(crate) use section::ProxyCheck;
 #[cfg(feature = "format")]
