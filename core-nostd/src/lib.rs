@@ -45,9 +45,6 @@
 #![no_std]
 #![deny(unsafe_code)]
 
-#[cfg(test)]
-extern crate std;
-
 mod blob;
 mod eval;
 mod irradiance_rig;

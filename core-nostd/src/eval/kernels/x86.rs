@@ -71,12 +71,6 @@ impl Avx2 {
         Avx2 { avx512: false }
     }
 
-    /// Whether shading runs in AVX-512 registers.
-    #[cfg(test)]
-    pub(crate) fn has_avx512(self) -> bool {
-        self.avx512
-    }
-
     /// [`super::shade_bytes`] in AVX2, for eight lanes of one bone, whose weights are `q`.
     #[inline(always)]
     pub(crate) fn shade_one_bone(self, encoding: Encoding, bytes: &[u8], q: &[f32]) -> [f32; 8] {
