@@ -55,6 +55,8 @@ mod model;
 mod proxies;
 mod rotation;
 mod sh;
+#[cfg(test)]
+mod test_values;
 
 pub use blob::format::{
     Basis, Encoding, Frame, MAX_BONES, MAX_COEF_DIMS, MAX_LIT, MAX_POSE_DIMS, MAX_POSE_LEN,

@@ -332,22 +332,11 @@ mod tests {
     use crate::proxies::ProxyFrame;
     use crate::rotation::Rotation;
     use crate::sh::MAX_COEFFS;
+    use crate::test_values::weight;
 
-    /// Numbers in [-1, 1) from a fixed linear congruential sequence.
-    struct Noise(u64);
-
-    impl Noise {
-        fn next(&mut self) -> f32 {
-            self.0 = self
-                .0
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            ((self.0 >> 40) as f32 / (1u64 << 23) as f32) - 1.0
-        }
-
-        fn vec(&mut self, scale: f32) -> [f32; 3] {
-            [0, 1, 2].map(|_| scale * self.next())
-        }
+    /// Three values of the shared test sequence from `i`, times `scale`.
+    fn vec(i: usize, scale: f32) -> [f32; 3] {
+        [0, 1, 2].map(|k| scale * weight(i + k))
     }
 
     /// A rotation about z by `angle`.
@@ -361,12 +350,17 @@ mod tests {
     /// sphere, lanes without proxies, and bone rotations or none.
     #[test]
     fn blocks_give_each_vertex_its_own_bits() {
-        let mut noise = Noise(7);
+        // A fresh stretch of the test sequence for each value drawn.
+        let mut next = 0;
+        let mut draw = |scale: f32| {
+            next += 3;
+            vec(next, scale)
+        };
         let mut frame = ProxyFrame::new();
         frame.cull = 0.05;
         for i in 0..24 {
-            frame.centres[i] = noise.vec(1.0);
-            frame.radii[i] = 0.05 + 0.2 * (noise.next() + 1.0);
+            frame.centres[i] = draw(1.2);
+            frame.radii[i] = 0.05 + 0.25 * (draw(1.0)[0] + 0.85);
             frame.reach2[i] = frame.radii[i] * frame.radii[i] / frame.cull;
         }
         let rotations = [turn(0.3), turn(-1.2)];
@@ -376,17 +370,17 @@ mod tests {
                 let masks: [u64; VERTEX_BLOCK] = core::array::from_fn(|l| match (block + l) % 5 {
                     0 => 0,
                     1 => (1 << 24) - 1,
-                    _ => (noise.next().to_bits() as u64) & ((1 << 24) - 1),
+                    _ => (draw(1.0)[0].to_bits() as u64) & ((1 << 24) - 1),
                 });
                 let vertices: [([f32; 3], [f32; 3]); VERTEX_BLOCK] = core::array::from_fn(|l| {
                     let position = match l {
                         3 => frame.centres[block % 24], // inside a sphere
-                        _ => noise.vec(1.2),
+                        _ => draw(1.4),
                     };
                     let normal = if (block + l) % 7 == 0 {
                         [0.0; 3]
                     } else {
-                        noise.vec(1.0)
+                        draw(1.0)
                     };
                     (position, normal)
                 });

@@ -318,6 +318,7 @@ mod tests {
     use super::*;
     use crate::blob::format::{MAX_BONES, MAX_COEF_DIMS};
     use crate::sh::MAX_COEFFS;
+    use crate::test_values::weight;
 
     #[test]
     fn f16_decode_matches_half_for_every_finite_value() {
@@ -353,13 +354,6 @@ mod tests {
 
     fn sample(i: usize) -> f32 {
         ((i * 7919 % 211) as f32 - 105.0) / 64.0
-    }
-
-    /// Weights with full 24-bit mantissas, so that every product rounds and summing in
-    /// another order gives other bits.
-    fn weight(i: usize) -> f32 {
-        let x = (i as f64 * 0.618_033_988_749_895).fract();
-        ((x - 0.5) * 1.7) as f32
     }
 
     /// The same values in each encoding as stored bytes: f32, f16, and scaled bytes (whose
