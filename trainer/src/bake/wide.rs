@@ -344,6 +344,16 @@ mod tests {
     use obvhs::{BvhBuildParams, bvh2::builder::build_bvh2_from_tris};
     use std::time::Duration;
 
+    /// The six axis directions, along which box slabs and triangle planes are exactly hit.
+    const AXES: [Vec3A; 6] = [
+        Vec3A::X,
+        Vec3A::NEG_X,
+        Vec3A::Y,
+        Vec3A::NEG_Y,
+        Vec3A::Z,
+        Vec3A::NEG_Z,
+    ];
+
     /// Builds over `tris` (reordered to leaf order, as the tracer does).
     fn build(tris: &[Triangle]) -> (Bvh4, Vec<Triangle>) {
         let params = BvhBuildParams {
@@ -387,23 +397,18 @@ mod tests {
         });
         let (bvh, tris) = build(&tris);
         let mut stack = TraversalStack::default();
-        let dirs = [
-            Vec3A::X,
-            -Vec3A::X,
-            Vec3A::Y,
-            -Vec3A::Y,
-            Vec3A::Z,
-            -Vec3A::Z,
-            Vec3A::new(1.0, 1.0, -1.0).normalize(),
-            Vec3A::new(-1.0, 0.0, -1e-9).normalize(),
-        ]
-        .into_iter()
-        // Every octant of directions, each with its own copy of the walk.
-        .chain((0..8).map(|octant| {
-            let sign = |bit: u32| if octant >> bit & 1 == 1 { -1.0 } else { 1.0 };
-            Vec3A::new(sign(0) * 0.3, sign(1) * 0.5, sign(2) * 0.8).normalize()
-        }))
-        .collect::<Vec<_>>();
+        let dirs = AXES
+            .into_iter()
+            .chain([
+                Vec3A::new(1.0, 1.0, -1.0).normalize(),
+                Vec3A::new(-1.0, 0.0, -1e-9).normalize(),
+            ])
+            // Every octant of directions, each with its own copy of the walk.
+            .chain((0..8).map(|octant| {
+                let sign = |bit: u32| if octant >> bit & 1 == 1 { -1.0 } else { 1.0 };
+                Vec3A::new(sign(0) * 0.3, sign(1) * 0.5, sign(2) * 0.8).normalize()
+            }))
+            .collect::<Vec<_>>();
         let mut hits = 0;
         for ox in [-1.0, 0.0, 0.5, 1.0, 2.0, 3.5, 4.0] {
             for oy in [0.0, 1.0, 2.5, 4.0] {
@@ -525,14 +530,7 @@ mod tests {
                 [d, v(d.x, d.y, -d.z)]
             })
             .collect();
-        dirs.extend([
-            Vec3A::X,
-            -Vec3A::X,
-            Vec3A::Y,
-            -Vec3A::Y,
-            Vec3A::Z,
-            -Vec3A::Z,
-        ]);
+        dirs.extend(AXES);
         dirs.extend(
             [
                 v(1.0, 1.0, 0.0),

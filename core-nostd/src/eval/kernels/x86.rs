@@ -356,15 +356,15 @@ impl<'a> Run<'a> {
         if lead.is_empty() {
             return (Some(&self.q[..self.width]), rows);
         }
-        let first = &lead[..lead.len().min(E::ENCODING.size())];
         // Compared as fixed-size values: slices of a run-time length compile to `memcmp`
         // calls, a third of a frame of a bone-frame model with short rows.
-        let shared = match first.len() {
-            4 => all_equal(lead.as_chunks::<4>().0),
-            2 => all_equal(lead.as_chunks::<2>().0),
-            _ => all_equal(lead.as_chunks::<1>().0),
+        let shared = match E::ENCODING {
+            Encoding::F32 => all_equal(lead.as_chunks::<4>().0),
+            Encoding::F16 => all_equal(lead.as_chunks::<2>().0),
+            Encoding::I8 => all_equal(lead.as_chunks::<1>().0),
         };
         let q = shared.then(|| {
+            let first = &lead[..E::ENCODING.size()];
             let bone = bone_lanes(E::ENCODING, first, self.layout.last_bone)[0];
             &self.q[bone * self.width..][..self.width]
         });
