@@ -234,8 +234,9 @@ pub struct TrainArgs {
     /// directory (symlinks followed), for scenes from users (also the scene key `confine`).
     #[arg(long, requires = "scene")]
     pub confine: bool,
-    /// With --scene: write what was computed and skipped, and what the full simulation would
-    /// have cost, as JSON (keys rays_cast, bounce_passes, sh_order, skipped, seconds, …).
+    /// With --scene: write what was computed and skipped, what the full simulation would have
+    /// cost, and the model's µs a frame against the scene's [budget], as JSON (keys rays_cast,
+    /// bounce_passes, sh_order, skipped, seconds, us_per_frame, within_budget, …).
     #[arg(long, requires = "scene")]
     pub report: Option<PathBuf>,
     /// The training poses.

@@ -74,8 +74,9 @@ pub enum Command {
     /// spelled `rig`, its earlier name).
     #[command(alias = "rig")]
     IrradianceRig(RigArgs),
-    /// Sweep a scene's accuracy knobs and report error against µs per frame and bytes, the
-    /// Pareto-optimal settings and the most accurate one within a budget.
+    /// Sweep a scene's accuracy knobs and report error against µs per frame (as the scene
+    /// ships each model) and bytes, the Pareto-optimal settings, and the cheapest of the most
+    /// accurate within a budget (errors within 0.05 grey levels or 1 % tie).
     Report(ReportArgs),
     /// Regenerate the irradiance-rig study on the built-in creature (docs/rigs; also spelled
     /// `rig-study`, its earlier name).
