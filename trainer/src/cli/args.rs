@@ -235,7 +235,7 @@ pub struct TrainArgs {
     #[arg(long, requires = "scene")]
     pub confine: bool,
     /// With --scene: write what was computed and skipped, what the full simulation would have
-    /// cost, and the model's µs a frame against the scene's [budget], as JSON (keys rays_cast,
+    /// cost, and the model's µs a frame against the scene's `[budget]`, as JSON (keys rays_cast,
     /// bounce_passes, sh_order, skipped, seconds, us_per_frame, within_budget, …).
     #[arg(long, requires = "scene")]
     pub report: Option<PathBuf>,
