@@ -149,6 +149,7 @@ fn light_maps(resolution: usize, frames: usize, atlas: Option<u32>) -> MapSequen
         order: 2,
         filled,
         positions,
+        layout: None,
         frames,
     }
 }

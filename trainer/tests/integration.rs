@@ -18,6 +18,7 @@ mod hostile_sizes;
 mod hostile_values;
 mod irradiance_rig;
 mod layering;
+mod lightmap_uvs;
 mod lights;
 mod malformed;
 mod mocap;

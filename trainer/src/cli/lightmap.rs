@@ -20,10 +20,13 @@ use crate::lightmap::bake::{
     CheckpointSettings, bake_light_map_shard, bake_light_maps, check_atlas,
 };
 use crate::lightmap::codec::{CodecSettings, ShlmFile, encode};
+use crate::lightmap::layout::{AtlasSpec, LightMapUvs, stored_or_texture};
 use crate::lightmap::model::{LightMapTraining, predict_maps, train_light_maps};
 use crate::lightmap::sample::maps_at_vertices;
 use crate::lightmap::summary::summarize;
 use crate::report::lightmap_preview::{ComposeSource, save_preview};
+use crate::rig::uv::UvLayout;
+use crate::rig::uv::generate::{DEFAULT_HARD_ANGLE_DEG, DEFAULT_MARGIN_TEXELS};
 
 /// `aprt lightmap`.
 #[derive(Debug, Args)]
@@ -82,6 +85,47 @@ pub struct AtlasArgs {
     /// Continue an interrupted bake from its checkpoint (same inputs and bake settings).
     #[arg(long)]
     pub resume: bool,
+    /// Which UVs the light map lies on. `generate` (the default: it measures better on the
+    /// Fox and on CesiumMan, docs/results/lightmaps) makes a light-map atlas for the bind
+    /// mesh: charts cut at hard edges (split shading normals, or faces folding by more than
+    /// --hard-angle), flattened with low distortion (LSCM + ARAP) and packed at uniform texel
+    /// density with --margin; the .shlm (or the model's texel atlas) stores it. `texture` uses
+    /// the character's texture UVs (glTF TEXCOORD_0, OBJ vt), laid out for painting.
+    #[arg(long, value_enum, default_value_t = UvArg::Generate)]
+    pub uv: UvArg,
+    /// With --uv generate: faces whose normals are more than this many degrees apart are
+    /// never in one chart (Unity's "Generate Lightmap UVs" default).
+    #[arg(long, default_value_t = DEFAULT_HARD_ANGLE_DEG, value_name = "DEGREES")]
+    pub hard_angle: f32,
+    /// With --uv generate: empty texels around each chart (charts are twice this apart); the
+    /// default keeps each chart's two gutter rings apart from its neighbours'.
+    #[arg(long, default_value_t = DEFAULT_MARGIN_TEXELS, value_name = "TEXELS")]
+    pub margin: u32,
+}
+
+/// `--uv`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum UvArg {
+    /// A light-map atlas generated for the bind mesh.
+    Generate,
+    /// The character's texture UVs.
+    Texture,
+}
+
+impl AtlasArgs {
+    /// The atlas the flags name.
+    pub fn spec(&self) -> AtlasSpec {
+        AtlasSpec {
+            resolution: self.resolution,
+            uvs: match self.uv {
+                UvArg::Texture => LightMapUvs::Texture,
+                UvArg::Generate => LightMapUvs::Generate {
+                    hard_angle_deg: self.hard_angle,
+                    margin_texels: self.margin,
+                },
+            },
+        }
+    }
 }
 
 /// `aprt lightmap bake`.
@@ -235,13 +279,12 @@ fn bake(args: &LightmapBakeArgs) -> Result<()> {
     let (checkpoint, settings) = prepare(&args.atlas, &args.output, &args.source, &args.bake)?;
     let (rig, clip) = args.source.rig(&Terminal)?;
     let what = "the character";
-    let resolution = args.atlas.resolution;
     if let Some(shard) = args.shard {
         let baked = args.source.in_origin(bake_light_map_shard(
             rig.as_ref(),
             what,
             &clip,
-            resolution,
+            args.atlas.spec(),
             &settings,
             (&checkpoint, shard),
             &Terminal,
@@ -253,7 +296,7 @@ fn bake(args: &LightmapBakeArgs) -> Result<()> {
         rig.as_ref(),
         what,
         &clip,
-        resolution,
+        args.atlas.spec(),
         &settings,
         &CheckpointSettings {
             dir: &checkpoint,
@@ -281,14 +324,14 @@ fn bake(args: &LightmapBakeArgs) -> Result<()> {
     Ok(())
 }
 
-/// A sequence's or a model's maps of every frame of the source's clip: (resolution, order,
-/// maps).
+/// A sequence's or a model's maps of every frame of the source's clip, and the layout they
+/// lie on: (resolution, order, maps, layout).
 fn maps_of(
     input: &std::path::Path,
     bytes: &[u8],
     rig: &dyn crate::rig::Rig,
     clip: &crate::rig::Clip,
-) -> Result<(usize, usize, Vec<Vec<f32>>)> {
+) -> Result<(usize, usize, Vec<Vec<f32>>, UvLayout)> {
     let name = input.display().to_string();
     if bytes.starts_with(crate::lightmap::codec::MAGIC) {
         check_atlas(&name, bytes, rig, &Terminal)?;
@@ -304,9 +347,11 @@ fn maps_of(
         let maps = file
             .decode_all()
             .with_context(|| format!("{name}: decoding"))?;
-        return Ok((file.resolution(), file.order(), maps));
+        let layout = stored_or_texture(file.layout(), rig, &name)?;
+        return Ok((file.resolution(), file.order(), maps, layout));
     }
-    predict_maps(bytes, &name, rig, clip)
+    let (r, order, maps) = predict_maps(bytes, &name, rig, clip)?;
+    Ok((r, order, maps, stored_or_texture(None, rig, &name)?))
 }
 
 fn eval(args: &LightmapEvalArgs) -> Result<()> {
@@ -320,9 +365,9 @@ fn eval(args: &LightmapEvalArgs) -> Result<()> {
     let truth = args.against.as_deref().map(read_truth).transpose()?;
     let bytes = read_file(&args.input, InputKind::LightMap)?;
     let (rig, clip) = args.source.rig(&Terminal)?;
-    let (r, order, maps) = maps_of(&args.input, &bytes, rig.as_ref(), &clip)?;
+    let (r, order, maps, layout) = maps_of(&args.input, &bytes, rig.as_ref(), &clip)?;
     let n2 = order * order;
-    let flat: Vec<f32> = maps_at_vertices(rig.as_ref(), &maps, r, n2)?.concat();
+    let flat: Vec<f32> = maps_at_vertices(rig.as_ref(), &layout, &maps, r, n2).concat();
     let shape = [maps.len(), rig.bind_mesh().vertex_count(), n2];
     if let (Some(path), Some((truth_shape, _))) = (&args.against, &truth)
         && truth_shape != &shape
@@ -440,7 +485,7 @@ fn train(args: &LightmapTrainArgs) -> Result<()> {
     let (rig, clips, _) = args.source.load(&[], &Terminal)?;
     let what = "the character";
     let training = LightMapTraining {
-        resolution: args.atlas.resolution,
+        atlas: args.atlas.spec(),
         bake: settings,
         fit: &fit,
         precision: PrecisionArg::into(args.fit.precision),
@@ -496,7 +541,13 @@ fn study(args: &LightmapStudyArgs) -> Result<()> {
     let path = crate::report::lightmap_study::run(
         &assets,
         &args.out,
-        args.resolution,
+        AtlasSpec {
+            resolution: args.resolution,
+            uvs: LightMapUvs::Generate {
+                hard_angle_deg: DEFAULT_HARD_ANGLE_DEG,
+                margin_texels: DEFAULT_MARGIN_TEXELS,
+            },
+        },
         &bake,
         &command,
         &Terminal,

@@ -8,7 +8,8 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 
-use super::codec::{MapSequence, atlas_fingerprint};
+use super::codec::{MapSequence, atlas_record};
+use super::layout::{AtlasSpec, layout_for, texture_layout};
 use crate::bake::budget::Workload;
 use crate::bake::checkpoint::{BakeTarget, Checkpoint, OnExisting, ShardBaked};
 use crate::bake::clip::pose_all;
@@ -81,32 +82,35 @@ pub struct BakedMaps {
     pub sequence: MapSequence,
     /// The atlas the maps were baked on.
     pub atlas: Atlas,
+    /// Its UV layout (also in `sequence.layout` when generated).
+    pub layout: UvLayout,
     /// Wall-clock seconds of the bake (resumed frames cost nothing).
     pub seconds: f64,
 }
 
-/// The rig's UV layout, or the error that says the character has none.
-pub fn uv_layout<'r>(rig: &'r dyn Rig, what: &str) -> Result<&'r UvLayout> {
-    match rig.uv_layout() {
-        Some(layout) => Ok(layout),
-        None => bail!(
-            "{what} has no texture coordinates (glTF TEXCOORD_0, OBJ vt): an SH light map needs a UV atlas"
-        ),
-    }
-}
-
 /// Refuses a sequence file (`bytes`, called `name`) baked on other UVs than `rig`'s: its maps
-/// would be sampled at the wrong texels without any other sign. A file older than the
+/// would be sampled at the wrong texels without any other sign. A file that stores its own
+/// light-map UVs must have as many triangles as the character. A file older than the
 /// fingerprint (version 1 or 2) is read unchecked, with a note to `reporter` saying so.
 pub fn check_atlas(name: &str, bytes: &[u8], rig: &dyn Rig, reporter: &dyn Reporter) -> Result<()> {
-    let recorded = atlas_fingerprint(bytes).with_context(|| format!("{name}: invalid sequence"))?;
+    let (recorded, stored_triangles) =
+        atlas_record(bytes).with_context(|| format!("{name}: invalid sequence"))?;
+    let triangles = rig.bind_mesh().triangles.len();
+    if stored_triangles > 0 {
+        if stored_triangles != triangles {
+            bail!(
+                "{name} stores light-map UVs for {stored_triangles} triangles, the character has {triangles}: give the character the light map was baked from"
+            );
+        }
+        return Ok(());
+    }
     let Some(recorded) = recorded else {
         reporter.note(&format!(
             "note: {name} is a .shlm older than version 3 and records no atlas fingerprint: whether it was baked on this character's UVs is not checked"
         ));
         return Ok(());
     };
-    let ours = uv_layout(rig, "the character")?.fingerprint();
+    let ours = texture_layout(rig, "the character")?.fingerprint();
     if recorded != ours {
         bail!(
             "{name} was baked on UVs of atlas fingerprint {recorded:08x}, the character's UVs are {ours:08x}: give the character the light map was baked from"
@@ -115,45 +119,53 @@ pub fn check_atlas(name: &str, bytes: &[u8], rig: &dyn Rig, reporter: &dyn Repor
     Ok(())
 }
 
-/// Bakes every frame of `clip` of `rig` at the texels of an atlas of `resolution`² on the
-/// rig's UV layout, through the checkpoint `checkpoint` (removed once every frame is baked).
-/// Overlapping texels (mirrored or overlapping UVs take the mean) are reported to `reporter`.
+/// Bakes every frame of `clip` of `rig` at the texels of the atlas `spec` names (its
+/// resolution and UVs), through the checkpoint `checkpoint` (removed once every frame is
+/// baked). Overlapping texels (mirrored or overlapping UVs take the mean) are reported to
+/// `reporter`.
 pub fn bake_light_maps(
     rig: &dyn Rig,
     what: &str,
     clip: &Clip,
-    resolution: usize,
+    spec: AtlasSpec,
     settings: &BakeSettings,
     checkpoint: &CheckpointSettings<'_>,
     reporter: &dyn Reporter,
 ) -> Result<BakedMaps> {
-    let (layout, atlas, meshes) =
-        atlas_and_meshes(rig, what, clip, (resolution, settings), reporter)?;
-    let target = Texels::new(&atlas, layout);
+    let baking = atlas_and_meshes(rig, what, clip, (spec, settings), reporter)?;
+    let target = Texels::new(&baking.atlas, &baking.layout);
     let mut store = Checkpoint::open_at(
         checkpoint.dir,
         checkpoint.existing,
         settings,
-        &meshes,
+        &baking.meshes,
         &target,
     )?;
     let start = Instant::now();
-    let values = store.bake_at(&meshes, &target, frame_name(clip), reporter)?;
+    let values = store.bake_at(&baking.meshes, &target, frame_name(clip), reporter)?;
     let seconds = start.elapsed().as_secs_f64();
     let n2 = settings.order * settings.order;
+    let Baking {
+        layout,
+        stored,
+        atlas,
+        ..
+    } = baking;
     let frames = values.iter().map(|v| atlas.gather(v, n2)).collect();
     let sequence = MapSequence {
-        resolution,
+        resolution: spec.resolution,
         atlas: Some(layout.fingerprint()),
         order: settings.order,
         filled: atlas.filled(),
         positions: texel_positions(&atlas, rig.bind_mesh()),
+        layout: stored.then(|| layout.clone()),
         frames,
     };
     store.remove()?;
     Ok(BakedMaps {
         sequence,
         atlas,
+        layout,
         seconds,
     })
 }
@@ -166,32 +178,42 @@ pub fn bake_light_map_shard(
     rig: &dyn Rig,
     what: &str,
     clip: &Clip,
-    resolution: usize,
+    spec: AtlasSpec,
     settings: &BakeSettings,
     (dir, shard): (&Path, Shard),
     reporter: &dyn Reporter,
 ) -> Result<ShardBaked> {
-    let (layout, atlas, meshes) =
-        atlas_and_meshes(rig, what, clip, (resolution, settings), reporter)?;
-    let target = Texels::new(&atlas, layout);
-    let mut store = Checkpoint::open_at(dir, OnExisting::Resume, settings, &meshes, &target)?;
-    Ok(store.bake_shard(&meshes, &target, shard, frame_name(clip), reporter)?)
+    let baking = atlas_and_meshes(rig, what, clip, (spec, settings), reporter)?;
+    let target = Texels::new(&baking.atlas, &baking.layout);
+    let mut store =
+        Checkpoint::open_at(dir, OnExisting::Resume, settings, &baking.meshes, &target)?;
+    Ok(store.bake_shard(&baking.meshes, &target, shard, frame_name(clip), reporter)?)
 }
 
-/// What a light-map bake of `clip` works on: the rig's UV layout, its atlas of
-/// `resolution`² texels (overlapping texels reported to `reporter`), and the posed meshes.
-/// The bake is estimated against the run's budget ([`crate::bake::budget`]) as `train` and
-/// `simulate` are: first with every texel of the atlas filled, before the atlas itself is
-/// rasterised (an 8192² atlas alone is gigabytes), then with the samples it really has, before
-/// any frame is posed.
-fn atlas_and_meshes<'r>(
-    rig: &'r dyn Rig,
+/// What a light-map bake works on.
+struct Baking {
+    /// The UV layout, and whether the sequence stores it (generated UVs).
+    layout: UvLayout,
+    stored: bool,
+    /// The layout rasterised.
+    atlas: Atlas,
+    /// The clip's posed meshes.
+    meshes: Vec<Mesh>,
+}
+
+/// What a light-map bake of `clip` works on: the UV layout `spec` names, its atlas
+/// (overlapping texels reported to `reporter`), and the posed meshes. The bake is estimated
+/// against the run's budget ([`crate::bake::budget`]) as `train` and `simulate` are: first
+/// with every texel of the atlas filled, before the atlas itself is rasterised (an 8192² atlas
+/// alone is gigabytes), then with the samples it really has, before any frame is posed.
+fn atlas_and_meshes(
+    rig: &dyn Rig,
     what: &str,
     clip: &Clip,
-    (resolution, settings): (usize, &BakeSettings),
+    (spec, settings): (AtlasSpec, &BakeSettings),
     reporter: &dyn Reporter,
-) -> Result<(&'r UvLayout, Atlas, Vec<Mesh>)> {
-    let layout = uv_layout(rig, what)?;
+) -> Result<Baking> {
+    let resolution = spec.resolution;
     // The baked values, the maps gathered from them and the encoder's copy.
     let copies = 3;
     let frames = clip.frames.len();
@@ -199,7 +221,8 @@ fn atlas_and_meshes<'r>(
     let estimate = format!("clip {} at --resolution {resolution}", clip.name);
     work(resolution.saturating_mul(resolution))
         .check(&format!("{estimate} (every texel filled)"))?;
-    let atlas = Atlas::build(layout, &rig.bind_mesh().triangles, resolution)
+    let (layout, stored) = layout_for(rig, what, spec.uvs, resolution)?;
+    let atlas = Atlas::build(&layout, &rig.bind_mesh().triangles, resolution)
         .with_context(|| format!("{what}: building the {resolution}x{resolution} UV atlas"))?;
     work(atlas.samples().len()).check(&estimate)?;
     let overlapping = atlas.overlapping_texels();
@@ -209,7 +232,12 @@ fn atlas_and_meshes<'r>(
         ));
     }
     let meshes = pose_all(rig, &clip.name, &clip.frames)?;
-    Ok((layout, atlas, meshes))
+    Ok(Baking {
+        layout,
+        stored,
+        atlas,
+        meshes,
+    })
 }
 
 /// How frame `f` of `clip` is named in errors.

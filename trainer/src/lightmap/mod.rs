@@ -5,6 +5,7 @@
 
 pub mod bake;
 pub mod codec;
+pub mod layout;
 pub mod model;
 pub mod sample;
 pub mod summary;

@@ -9,6 +9,7 @@ use nalgebra::DMatrix;
 
 use super::bake::{BakedMaps, CheckpointSettings, bake_light_maps};
 use super::codec::MapSequence;
+use super::layout::AtlasSpec;
 use crate::bake::BakeSettings;
 use crate::io::source::joined;
 use crate::model::export::{Extras, Precision, encode_model_with};
@@ -20,8 +21,8 @@ use crate::rig::{Clip, Rig};
 
 /// What a pose-driven light-map model is trained with.
 pub struct LightMapTraining<'a> {
-    /// Atlas width and height in texels.
-    pub resolution: usize,
+    /// The atlas the maps are baked on.
+    pub atlas: AtlasSpec,
     /// How each frame's texels are baked.
     pub bake: BakeSettings,
     /// The model's shape and regularisation.
@@ -88,7 +89,7 @@ pub fn train_light_maps(
         rig,
         what,
         &clip,
-        training.resolution,
+        training.atlas,
         &training.bake,
         &training.checkpoint,
         reporter,
@@ -105,7 +106,7 @@ pub fn train_light_maps(
         training.precision,
         &Extras {
             irradiance_rig: None,
-            texel_atlas: Some((training.resolution as u32, &rows)),
+            texel_atlas: Some((training.atlas.resolution as u32, &rows)),
         },
     )?;
     Ok(TrainedLightMaps {
@@ -172,6 +173,7 @@ mod tests {
             order: 1,
             filled: filled.clone(),
             positions: vec![[0.0; 3]; 4],
+            layout: None,
             frames: vec![frame.clone()],
         };
         let (rows, transfers) = filled_rows(&sequence);

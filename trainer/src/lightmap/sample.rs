@@ -1,26 +1,24 @@
 //! Reading a light map back at the mesh's vertices, so it compares with per-vertex transfer
 //! (`aprt simulate`) value for value.
 
-use anyhow::Result;
-
-use super::bake::uv_layout;
 use crate::rig::Rig;
-use crate::rig::uv::sample_bilinear;
+use crate::rig::uv::{UvLayout, sample_bilinear};
 
-/// Every map of `maps` (`resolution`² texels × `n2`) read at every vertex of `rig`'s bind mesh
-/// ([`at_vertices`] at the UVs of its layout): what `aprt lightmap eval` writes.
+/// Every map of `maps` (`resolution`² texels × `n2`, laid out by `layout`) read at every
+/// vertex of `rig`'s bind mesh ([`at_vertices`] at the vertex's UVs in `layout`): what
+/// `aprt lightmap eval` writes.
 pub fn maps_at_vertices(
     rig: &dyn Rig,
+    layout: &UvLayout,
     maps: &[Vec<f32>],
     resolution: usize,
     n2: usize,
-) -> Result<Vec<Vec<f32>>> {
+) -> Vec<Vec<f32>> {
     let bind = rig.bind_mesh();
-    let uvs = uv_layout(rig, "the character")?.vertex_uvs(&bind.triangles, bind.vertex_count());
-    Ok(maps
-        .iter()
+    let uvs = layout.vertex_uvs(&bind.triangles, bind.vertex_count());
+    maps.iter()
         .map(|m| at_vertices(m, resolution, n2, &uvs))
-        .collect())
+        .collect()
 }
 
 /// Each vertex's transfer from the map (`resolution`² texels, `n2` values each, texel-major):

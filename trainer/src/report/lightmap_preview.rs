@@ -11,8 +11,9 @@ use image::{Rgb as Pixel, RgbImage, imageops};
 
 use crate::bake::{BakeSettings, bake_pose};
 use crate::lighting::luminance;
-use crate::lightmap::bake::{texel_positions, uv_layout};
+use crate::lightmap::bake::texel_positions;
 use crate::lightmap::codec::{MAGIC, ShlmFile};
+use crate::lightmap::layout::stored_or_texture;
 use crate::lightmap::model::predict_maps;
 use crate::lightmap::sample::at_vertices;
 use crate::report::figures::{FOUR_X_ERROR, PICTURE_VIEW, captioned, upright};
@@ -48,6 +49,8 @@ struct FrameMaps {
     positions: Vec<[f32; 3]>,
     /// `resolution² × n²`, texel-major.
     map: Vec<f32>,
+    /// The light-map UVs the input stores; `None`: the character's texture UVs.
+    layout: Option<UvLayout>,
 }
 
 /// Frame `frame` of a sequence file.
@@ -65,6 +68,7 @@ fn sequence_frame(name: &str, bytes: &[u8], frame: usize) -> Result<FrameMaps> {
         filled: file.filled(),
         positions: file.positions().to_vec(),
         map,
+        layout: file.layout().cloned(),
     })
 }
 
@@ -90,14 +94,15 @@ fn model_frame(
     };
     let (r, order, mut maps) = predict_maps(bytes, name, rig, &one)?;
     let map = maps.pop().unwrap_or_default();
-    let layout = uv_layout(rig, name)?;
-    let atlas = Atlas::build(layout, &rig.bind_mesh().triangles, r)?;
+    let layout = stored_or_texture(None, rig, name)?;
+    let atlas = Atlas::build(&layout, &rig.bind_mesh().triangles, r)?;
     Ok(FrameMaps {
         resolution: r,
         order,
         filled: atlas.filled(),
         positions: texel_positions(&atlas, rig.bind_mesh()),
         map,
+        layout: None,
     })
 }
 
@@ -191,7 +196,7 @@ fn character_panels(
             clip.frames.len()
         );
     };
-    let layout: &UvLayout = uv_layout(rig, source.name)?;
+    let layout = stored_or_texture(maps.layout.as_ref(), rig, source.name)?;
     let bind = rig.bind_mesh();
     let posed = rig.pose(pose)?;
     let shown = upright(&posed, rig.up());

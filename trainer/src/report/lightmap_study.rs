@@ -16,6 +16,7 @@ use crate::bake::checkpoint::OnExisting;
 use crate::bake::clip::{BakedClip, bake_clip};
 use crate::lightmap::bake::{BakedMaps, CheckpointSettings, bake_light_maps};
 use crate::lightmap::codec::{CodecSettings, ShlmFile, encode};
+use crate::lightmap::layout::AtlasSpec;
 use crate::lightmap::model::{filled_rows, to_map};
 use crate::lightmap::sample::maps_at_vertices;
 use crate::model::ModelFrame;
@@ -107,7 +108,7 @@ fn sequence_rows(
             decode_ms,
         ),
     ] {
-        let at = maps_at_vertices(case.rig.as_ref(), maps, seq.resolution, n2)?;
+        let at = maps_at_vertices(case.rig.as_ref(), &baked.layout, maps, seq.resolution, n2);
         let novel: Vec<Vec<f32>> = nearest.iter().map(|&k| at[k].clone()).collect();
         rows.push(Row {
             method,
@@ -169,11 +170,11 @@ fn light_map_model_row(
         fit_s: Some(fit_s),
         ms_per_frame: ms,
         train_error: relative_error(
-            &maps_at_vertices(rig, &train_maps, seq.resolution, n2)?,
+            &maps_at_vertices(rig, &baked.layout, &train_maps, seq.resolution, n2),
             &train.transfer,
         ),
         test_error: relative_error(
-            &maps_at_vertices(rig, &test_maps, seq.resolution, n2)?,
+            &maps_at_vertices(rig, &baked.layout, &test_maps, seq.resolution, n2),
             &test.transfer,
         ),
     })
@@ -223,7 +224,7 @@ fn vertex_model_row(
 /// Measures one case and returns its markdown section.
 pub fn run_case(
     case: &LightMapCase,
-    resolution: usize,
+    spec: AtlasSpec,
     bake: &BakeSettings,
     scratch: &Path,
     reporter: &dyn Reporter,
@@ -241,7 +242,7 @@ pub fn run_case(
         rig,
         &case.title,
         &case.train,
-        resolution,
+        spec,
         bake,
         &checkpoint,
         reporter,
@@ -314,7 +315,7 @@ pub struct Fidelity {
 pub fn fidelity(
     case: &LightMapCase,
     clip: &Clip,
-    resolution: usize,
+    spec: AtlasSpec,
     bake: &BakeSettings,
     scratch: &Path,
     reporter: &dyn Reporter,
@@ -326,15 +327,7 @@ pub fn fidelity(
         dir: &scratch.join("fidelity.bake"),
         existing: OnExisting::Refuse,
     };
-    let baked = bake_light_maps(
-        rig,
-        &case.title,
-        clip,
-        resolution,
-        bake,
-        &checkpoint,
-        reporter,
-    )?;
+    let baked = bake_light_maps(rig, &case.title, clip, spec, bake, &checkpoint, reporter)?;
     let seq = &baked.sequence;
     let n2 = seq.order * seq.order;
     let bytes = encode(seq, &CodecSettings::default())?;
@@ -345,11 +338,11 @@ pub fn fidelity(
         clip: clip.name.clone(),
         frames: clip.frames.len(),
         atlas_error: relative_error(
-            &maps_at_vertices(rig, &seq.frames, seq.resolution, n2)?,
+            &maps_at_vertices(rig, &baked.layout, &seq.frames, seq.resolution, n2),
             &truth,
         ),
         error: relative_error(
-            &maps_at_vertices(rig, &decoded, seq.resolution, n2)?,
+            &maps_at_vertices(rig, &baked.layout, &decoded, seq.resolution, n2),
             &truth,
         ),
         bytes: (bytes.len(), file.raw_bytes()),
@@ -427,7 +420,7 @@ pub fn cases(assets: &Path) -> Result<Vec<(LightMapCase, Clip)>> {
 pub fn run(
     assets: &Path,
     out: &Path,
-    resolution: usize,
+    spec: AtlasSpec,
     bake: &BakeSettings,
     command: &str,
     reporter: &dyn Reporter,
@@ -438,7 +431,7 @@ pub fn run(
     let mut sections = String::new();
     for (case, clip) in cases(assets)? {
         reporter.note(&format!("{}: fidelity on {}", case.title, clip.name));
-        let f = fidelity(&case, &clip, resolution, bake, scratch.path(), reporter)?;
+        let f = fidelity(&case, &clip, spec, bake, scratch.path(), reporter)?;
         let _ = writeln!(
             fidelity_rows,
             "| {} | `{}` | {} | {:.2}% | {:.2}% | {} | {} | {:.1}:1 | {:.2} ({:.1}x a copy) | {:.1} |",
@@ -455,24 +448,19 @@ pub fn run(
             f.bake_s,
         );
         reporter.note(&format!("{}: comparison", case.title));
-        sections.push_str(&run_case(
-            &case,
-            resolution,
-            bake,
-            scratch.path(),
-            reporter,
-        )?);
+        sections.push_str(&run_case(&case, spec, bake, scratch.path(), reporter)?);
         sections.push('\n');
         sections.push_str(&preview(
             &case,
             &clip,
-            resolution,
+            spec,
             bake,
             out,
             scratch.path(),
             reporter,
         )?);
     }
+    let resolution = spec.resolution;
     let doc = format!(
         "# SH light maps against the per-vertex pose model\n\nRegenerate with `{command}`. SH order {}, {} rays per texel and per vertex, atlas {resolution}x{resolution}. Errors are relative transfer errors ‖pred − truth‖ / ‖truth‖ at the vertices against per-vertex ray-traced transfer (`aprt simulate`), over all frames, vertices and coefficients; a light map is read at each vertex's UV bilinearly (`aprt lightmap eval`). Times are one run on this machine; decode and evaluation on one core.\n\n## Fidelity of the stored sequence\n\n| character | clip | frames | error, f32 maps | error, compressed | bytes | f32 bytes | ratio | decode ms/frame | bake s |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n{fidelity_rows}\n{sections}",
         bake.order, bake.rays,
@@ -489,7 +477,7 @@ pub fn run(
 fn preview(
     case: &LightMapCase,
     clip: &Clip,
-    resolution: usize,
+    spec: AtlasSpec,
     bake: &BakeSettings,
     out: &Path,
     scratch: &Path,
@@ -507,15 +495,7 @@ fn preview(
         existing: OnExisting::Refuse,
     };
     let rig = case.rig.as_ref();
-    let baked = bake_light_maps(
-        rig,
-        &case.title,
-        &one,
-        resolution,
-        bake,
-        &checkpoint,
-        reporter,
-    )?;
+    let baked = bake_light_maps(rig, &case.title, &one, spec, bake, &checkpoint, reporter)?;
     let bytes = encode(&baked.sequence, &CodecSettings::default())?;
     let id: String = case
         .title

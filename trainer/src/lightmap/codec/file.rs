@@ -4,12 +4,15 @@
 use std::ops::Range;
 
 use super::CodecError;
+use super::MapSequence;
 use super::entropy::{compress, decompress_chunk, decompress_exact};
 use super::header::{Header, StoredKind};
 use super::shared_exp::{Grouping, SignMode, decode_planes_on};
 use super::uniform::{self, Grid};
+use super::uvs::{read_uvs, write_uvs};
 use crate::bake::budget::bytes as show_bytes;
 use crate::limits::MAX_BYTES;
+use crate::rig::uv::UvLayout;
 
 /// Whether frame `f` of `frames` is stored under keyframe interval `interval`: every
 /// `interval`-th frame, and the last, so every in-between has a keyframe on each side.
@@ -17,21 +20,23 @@ pub fn is_keyframe(f: usize, interval: usize, frames: usize) -> bool {
     f.is_multiple_of(interval) || f + 1 == frames
 }
 
-/// Writes header, mask, positions, shared section, offset table, chunks and CRC.
+/// Writes header, mask, positions, shared section, light-map UVs, offset table, chunks and
+/// CRC, for the sequence `seq` (its mask, positions and UVs).
 pub fn assemble(
     mut header: Header,
-    filled: &[bool],
-    positions: &[[f32; 3]],
+    seq: &MapSequence,
     shared: &[Vec<u8>],
     chunks: &[Vec<u8>],
     level: i32,
 ) -> Result<Vec<u8>, CodecError> {
+    let filled = &seq.filled;
     let mut mask = vec![0u8; filled.len().div_ceil(8)];
     for t in (0..filled.len()).filter(|&t| filled[t]) {
         mask[t / 8] |= 1 << (t % 8);
     }
     let mask = compress(&mask, level)?;
-    let points: Vec<u8> = positions
+    let points: Vec<u8> = seq
+        .positions
         .iter()
         .flatten()
         .flat_map(|x| x.to_le_bytes())
@@ -47,10 +52,20 @@ pub fn assemble(
             .iter()
             .for_each(|b| shared_section.extend_from_slice(b));
     }
-    header.sections = [mask.len(), points.len(), shared_section.len()];
+    let uvs = match &seq.layout {
+        Some(layout) if header.atlas == Some(layout.fingerprint()) => write_uvs(layout, level)?,
+        Some(_) => {
+            return Err(CodecError::Input(
+                "the light-map UVs are not the ones the atlas fingerprint names".into(),
+            ));
+        }
+        None => Vec::new(),
+    };
+    header.uv_triangles = seq.layout.as_ref().map_or(0, |l| l.corners.len());
+    header.sections = [mask.len(), points.len(), shared_section.len(), uvs.len()];
     let mut out = Vec::new();
     header.write(&mut out)?;
-    for section in [&mask, &points, &shared_section] {
+    for section in [&mask, &points, &shared_section, &uvs] {
         out.extend_from_slice(section);
     }
     let mut offset = 0u64;
@@ -69,10 +84,12 @@ fn u32_len(len: usize) -> Result<u32, CodecError> {
     u32::try_from(len).map_err(|_| CodecError::Input(format!("section of {len} bytes")))
 }
 
-/// The atlas fingerprint a `.shlm` file's header records (`None` before version 3), read
-/// without parsing the rest: for the readers that pair a file with a character.
-pub fn atlas_fingerprint(bytes: &[u8]) -> Result<Option<u32>, CodecError> {
-    Ok(Header::read(bytes)?.atlas)
+/// The atlas fingerprint a `.shlm` file's header records (`None` before version 3), and the
+/// triangles of the light-map UVs it stores (0: the character's texture UVs), read without
+/// parsing the rest: for the readers that pair a file with a character.
+pub fn atlas_record(bytes: &[u8]) -> Result<(Option<u32>, usize), CodecError> {
+    let header = Header::read(bytes)?;
+    Ok((header.atlas, header.uv_triangles))
 }
 
 /// A parsed `.shlm` file over its bytes. [`ShlmFile::parse`] validates the header, the
@@ -87,6 +104,8 @@ pub struct ShlmFile<'a> {
     /// Their neighbours on the grid (sign mode 3 only; empty otherwise).
     grid: Grid,
     positions: Vec<[f32; 3]>,
+    /// The light-map UVs the maps were baked on, when not the character's texture UVs.
+    layout: Option<UvLayout>,
     /// PCA: the quantised mean, then the components (`T · n²` each); empty otherwise.
     basis: Vec<Vec<f32>>,
     /// PCA under sign mode 3: the components as their steps and integers instead (half the
@@ -102,9 +121,9 @@ impl<'a> ShlmFile<'a> {
     /// no allocation exceeds what the header's limits allow.
     pub fn parse(bytes: &'a [u8]) -> Result<Self, CodecError> {
         let header = Header::read(bytes)?;
-        let [mask_len, points_len, shared_len] = header.sections;
+        let [mask_len, points_len, shared_len, uvs_len] = header.sections;
         let table_len = (header.frames + 1) * 8;
-        let sections = [mask_len, points_len, shared_len, table_len, 4];
+        let sections = [mask_len, points_len, shared_len, uvs_len, table_len, 4];
         let needed = sections
             .iter()
             .try_fold(header.header_len(), |a, &b| a.checked_add(b));
@@ -129,7 +148,8 @@ impl<'a> ShlmFile<'a> {
         let mask_at = header.header_len();
         let points_at = mask_at + mask_len;
         let shared_at = points_at + points_len;
-        let table = shared_at + shared_len;
+        let uvs_at = shared_at + shared_len;
+        let table = uvs_at + uvs_len;
         let texels = read_mask(&bytes[mask_at..points_at], &header)?;
         let grid = match header.planes.sign {
             SignMode::Uniform => Grid::new(&texels, header.resolution),
@@ -141,13 +161,19 @@ impl<'a> ShlmFile<'a> {
             texels,
             grid,
             positions: read_positions(&bytes[points_at..shared_at], header.texels)?,
+            layout: match (header.uv_triangles, header.atlas) {
+                (0, _) | (_, None) => None,
+                (triangles, Some(fingerprint)) => {
+                    Some(read_uvs(&bytes[uvs_at..table], triangles, fingerprint)?)
+                }
+            },
             basis: Vec::new(),
             int_basis: Vec::new(),
             table,
             chunk_area: table + table_len..len - 4,
         };
         file.check_table()?;
-        (file.basis, file.int_basis) = file.read_basis(&bytes[shared_at..table])?;
+        (file.basis, file.int_basis) = file.read_basis(&bytes[shared_at..uvs_at])?;
         file.check_chunks()?;
         Ok(file)
     }
@@ -177,6 +203,12 @@ impl<'a> ShlmFile<'a> {
     /// The bind-pose point of each filled texel, in texel order.
     pub fn positions(&self) -> &[[f32; 3]] {
         &self.positions
+    }
+
+    /// The light-map UVs the maps were baked on (`--uv generate`); `None` when they lie on
+    /// the character's texture UVs.
+    pub fn layout(&self) -> Option<&UvLayout> {
+        self.layout.as_ref()
     }
 
     /// `frames × R² × n² × 4`: the raw f32 maps of the whole clip, the ratio's denominator.
@@ -494,8 +526,9 @@ fn zstd_can_hold(what: &str, len: usize, expected: usize) -> Result<(), CodecErr
 
 /// The mask, positions and PCA sections against the bytes the header says they decompress to.
 fn check_compressed_sizes(h: &Header) -> Result<(), CodecError> {
-    let [mask, points, shared] = h.sections;
+    let [mask, points, shared, uvs] = h.sections;
     let r2 = h.resolution * h.resolution;
+    zstd_can_hold("light-map UVs", uvs, h.uv_triangles * 24)?;
     zstd_can_hold("filled mask", mask, r2.div_ceil(8))?;
     zstd_can_hold("positions section", points, h.texels * 12)?;
     if let StoredKind::Pca { components } = h.kind {

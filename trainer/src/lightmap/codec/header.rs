@@ -1,6 +1,6 @@
-//! The fixed 56-byte header of a `.shlm` file (52 before version 3): dimensions, codec
-//! parameters, section sizes, the atlas fingerprint, and the limits every reader enforces
-//! before trusting them.
+//! The fixed 64-byte header of a `.shlm` file (56 in version 3, 52 before): dimensions, codec
+//! parameters, section sizes, the atlas fingerprint, the light-map UVs' triangle count, and
+//! the limits every reader enforces before trusting them.
 
 use super::shared_exp::{Grouping, PlaneSettings, SignMode};
 use super::{CodecError, CodecKind};
@@ -9,14 +9,20 @@ use crate::limits::MAX_BYTES;
 
 /// The file's first eight bytes.
 pub const MAGIC: &[u8; 8] = b"APRTSHLM";
-/// The layout version this module writes and reads: 3 records the atlas fingerprint.
-pub const VERSION: u32 = 3;
+/// The layout version this module writes: 3 records the atlas fingerprint, 4 the light-map
+/// UVs the maps were baked on when they are not the character's texture UVs.
+pub const VERSION: u32 = 4;
+/// The version with the atlas fingerprint but no light-map UVs.
+const FINGERPRINTED: u32 = 3;
 /// The version of a header without the atlas fingerprint.
 const UNFINGERPRINTED: u32 = 2;
 /// The oldest layout version this module reads (version 1 lacks sign mode 3).
 pub const MIN_VERSION: u32 = 1;
-/// Header bytes before version 3; version 3 adds the 4-byte atlas fingerprint.
+/// Header bytes before version 3; version 3 adds the 4-byte atlas fingerprint, version 4 the
+/// light-map UVs' triangle count and section bytes.
 const OLD_HEADER_LEN: usize = 52;
+/// Most triangles of stored light-map UVs: ten million, far beyond a character.
+pub const MAX_UV_TRIANGLES: usize = 10_000_000;
 /// Largest resolution `R`.
 pub const MAX_RESOLUTION: usize = 8192;
 /// Largest SH order `n`.
@@ -56,11 +62,16 @@ pub struct Header {
     pub kind: StoredKind,
     /// The quantiser.
     pub planes: PlaneSettings,
-    /// Section sizes: mask, positions, shared.
-    pub sections: [usize; 3],
+    /// Section sizes: mask, positions, shared, light-map UVs (0 before version 4).
+    pub sections: [usize; 4],
     /// The fingerprint of the UV atlas the maps were baked on; `None` in (and written as) a
     /// version-2 header.
     pub atlas: Option<u32>,
+    /// Triangles of the stored light-map UVs: 0 when the maps lie on the character's own
+    /// texture UVs (and before version 4).
+    pub uv_triangles: usize,
+    /// The layout version read, or to write: 2 without an atlas fingerprint, else 4 (3 read).
+    pub version: u32,
 }
 
 impl Header {
@@ -71,7 +82,20 @@ impl Header {
 
     /// Header bytes: where the mask section starts.
     pub fn header_len(&self) -> usize {
-        OLD_HEADER_LEN + if self.atlas.is_some() { 4 } else { 0 }
+        match self.version {
+            VERSION => OLD_HEADER_LEN + 12,
+            FINGERPRINTED => OLD_HEADER_LEN + 4,
+            _ => OLD_HEADER_LEN,
+        }
+    }
+
+    /// The version a header with (or without) an atlas fingerprint is written as.
+    pub fn version_for(atlas: Option<u32>) -> u32 {
+        if atlas.is_some() {
+            VERSION
+        } else {
+            UNFINGERPRINTED
+        }
     }
 
     /// Bytes a reader holds at once: two decoded frames of `R² · n²` f32 (`inspect` times a
@@ -90,10 +114,11 @@ impl Header {
             .saturating_add(plane_sets.saturating_mul(t * n2 * 4))
             .saturating_add(t * (8 + 12 + 12))
             .saturating_add(r2.div_ceil(8))
+            .saturating_add(self.uv_triangles as u64 * 24 * 2)
     }
 
-    /// Appends the header's bytes (version 3 with an atlas fingerprint, 2 without); fails if a
-    /// field does not fit its `u32`.
+    /// Appends the header's bytes (version 4 with an atlas fingerprint, 2 without); fails if a
+    /// field does not fit its `u32`, or the version is one this module only reads.
     pub fn write(&self, out: &mut Vec<u8>) -> Result<(), CodecError> {
         let u32_of = |v: usize, what: &str| {
             u32::try_from(v).map_err(|_| CodecError::Input(format!("{what} {v} exceeds u32")))
@@ -103,14 +128,15 @@ impl Header {
             StoredKind::Keyframes { interval } => (1, interval),
             StoredKind::Pca { components } => (2, components),
         };
+        if self.version != Header::version_for(self.atlas) {
+            return Err(CodecError::Input(format!(
+                "a version-{} header with atlas {:?}",
+                self.version, self.atlas
+            )));
+        }
         out.extend_from_slice(MAGIC);
-        let version = if self.atlas.is_some() {
-            VERSION
-        } else {
-            UNFINGERPRINTED
-        };
         for v in [
-            version as usize,
+            self.version as usize,
             self.resolution,
             self.order,
             self.frames,
@@ -135,11 +161,13 @@ impl Header {
         ]);
         out.extend_from_slice(&[0; 3]);
         out.extend_from_slice(&u32_of(param, "kind parameter")?.to_le_bytes());
-        for len in self.sections {
-            out.extend_from_slice(&u32_of(len, "section")?.to_le_bytes());
+        for len in &self.sections[..3] {
+            out.extend_from_slice(&u32_of(*len, "section")?.to_le_bytes());
         }
         if let Some(atlas) = self.atlas {
             out.extend_from_slice(&atlas.to_le_bytes());
+            out.extend_from_slice(&u32_of(self.uv_triangles, "UV triangles")?.to_le_bytes());
+            out.extend_from_slice(&u32_of(self.sections[3], "section")?.to_le_bytes());
         }
         Ok(())
     }
@@ -164,12 +192,21 @@ impl Header {
         if !(MIN_VERSION..=VERSION).contains(&version) || (version == 1 && bytes[29] == 3) {
             return Err(CodecError::Version(version));
         }
-        let atlas = match version {
-            VERSION if bytes.len() < OLD_HEADER_LEN + 4 => {
-                return Err(truncated(OLD_HEADER_LEN + 4));
-            }
-            VERSION => Some(word(OLD_HEADER_LEN)),
-            _ => None,
+        let extra = match version {
+            VERSION => 12,
+            FINGERPRINTED => 4,
+            _ => 0,
+        };
+        if bytes.len() < OLD_HEADER_LEN + extra {
+            return Err(truncated(OLD_HEADER_LEN + extra));
+        }
+        let atlas = (extra > 0).then(|| word(OLD_HEADER_LEN));
+        let (uv_triangles, uv_len) = match version {
+            VERSION => (
+                word(OLD_HEADER_LEN + 4) as usize,
+                word(OLD_HEADER_LEN + 8) as usize,
+            ),
+            _ => (0, 0),
         };
         let field = |at: usize| word(at) as usize;
         let bad = |m: String| Err(CodecError::Header(m));
@@ -188,6 +225,11 @@ impl Header {
         if texels > resolution * resolution {
             return bad(format!("{texels} filled texels in a {resolution}² map"));
         }
+        if uv_triangles > MAX_UV_TRIANGLES || (uv_triangles == 0) != (uv_len == 0) {
+            return bad(format!(
+                "{uv_triangles} triangles of light-map UVs in {uv_len} bytes (at most {MAX_UV_TRIANGLES}, both or neither zero)"
+            ));
+        }
         let planes = read_planes(&bytes[29..36])?;
         let param = field(36);
         let kind = match bytes[28] {
@@ -203,8 +245,10 @@ impl Header {
             texels,
             kind,
             planes,
-            sections: [field(40), field(44), field(48)],
+            sections: [field(40), field(44), field(48), uv_len],
             atlas,
+            uv_triangles,
+            version,
         };
         let needed = header.reader_bytes();
         if needed > MAX_BYTES {

@@ -64,10 +64,11 @@ pub mod synth;
 #[cfg(test)]
 mod tests;
 pub mod uniform;
+mod uvs;
 
 pub use compare::{CodecReport, compare};
 pub use error::CodecError;
-pub use file::{ShlmFile, atlas_fingerprint};
+pub use file::{ShlmFile, atlas_record};
 pub use header::MAGIC;
 pub use sequence::encode;
 pub use shared_exp::{Grouping, PlaneSettings, SignMode};
@@ -88,6 +89,9 @@ pub struct MapSequence {
     /// The bind-pose surface point of each filled texel, in texel order (stored in the file
     /// for lighting at runtime).
     pub positions: Vec<[f32; 3]>,
+    /// The light-map UVs the maps were baked on, stored in the file when they are not the
+    /// character's texture UVs (then `atlas` is their fingerprint).
+    pub layout: Option<crate::rig::uv::UvLayout>,
     /// Each frame's `R² · n²` coefficients, texel-major (`[texel * n2 + c]`), zero where
     /// `!filled`.
     pub frames: Vec<Vec<f32>>,

@@ -73,17 +73,12 @@ pub fn encode(seq: &MapSequence, settings: &CodecSettings) -> Result<Vec<u8>, Co
         texels: filled.len(),
         kind: stored_kind(&settings.kind, components),
         planes: settings.planes,
-        sections: [0; 3],
+        sections: [0; 4],
         atlas: seq.atlas,
+        uv_triangles: 0,
+        version: Header::version_for(seq.atlas),
     };
-    assemble(
-        header,
-        &seq.filled,
-        &seq.positions,
-        &shared,
-        &chunks,
-        settings.zstd_level,
-    )
+    assemble(header, seq, &shared, &chunks, settings.zstd_level)
 }
 
 /// What a temporal scheme produces: PCA's `k` (0 otherwise), the shared section's blobs, one

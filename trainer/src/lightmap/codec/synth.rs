@@ -83,6 +83,7 @@ pub fn clip(resolution: usize, order: usize, frames: usize, noise: f32) -> MapSe
         order,
         filled,
         positions,
+        layout: None,
         frames,
     }
 }

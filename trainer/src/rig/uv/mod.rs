@@ -30,6 +30,7 @@
 //! rings stay on its side of the gap (see [`GUTTER`]).
 
 mod dilate;
+pub mod generate;
 pub mod pack;
 mod raster;
 mod sample;

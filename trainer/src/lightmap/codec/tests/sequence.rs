@@ -2,8 +2,9 @@
 
 use crate::lightmap::codec::synth::clip;
 use crate::lightmap::codec::{
-    CodecKind, CodecSettings, MapSequence, ShlmFile, atlas_fingerprint, encode,
+    CodecKind, CodecSettings, MapSequence, ShlmFile, atlas_record, encode,
 };
+use crate::rig::uv::UvLayout;
 
 /// Every temporal scheme, with the default quantiser.
 fn kinds() -> Vec<CodecSettings> {
@@ -150,21 +151,84 @@ fn relative_error(seq: &MapSequence, decoded: &[Vec<f32>]) -> f64 {
     (e / n).sqrt()
 }
 
-/// A sequence with an atlas fingerprint is written as version 3 and decodes as the version-2
-/// file of the same maps does; the fingerprint is read back from the header alone.
+/// A sequence with an atlas fingerprint is written as version 4 and decodes as the version-2
+/// file of the same maps does; the fingerprint is read back from the header alone. The same
+/// file as version 3 (no light-map UV fields) still reads.
 #[test]
-fn the_atlas_fingerprint_is_a_version_3_header_field() {
+fn the_atlas_fingerprint_is_a_header_field_and_version_3_still_reads() {
     let mut seq = clip(16, 2, 4, 0.01);
     let old = encode(&seq, &CodecSettings::default()).unwrap();
     seq.atlas = Some(0x1234_5678);
     let new = encode(&seq, &CodecSettings::default()).unwrap();
-    assert_eq!((old[8], new[8]), (2, 3));
-    assert_eq!(new.len(), old.len() + 4);
-    assert_eq!(atlas_fingerprint(&old), Ok(None));
-    assert_eq!(atlas_fingerprint(&new), Ok(Some(0x1234_5678)));
-    let (old, new) = (
-        ShlmFile::parse(&old).unwrap(),
-        ShlmFile::parse(&new).unwrap(),
+    assert_eq!((old[8], new[8]), (2, 4));
+    assert_eq!(new.len(), old.len() + 12);
+    assert_eq!(atlas_record(&old), Ok((None, 0)));
+    assert_eq!(atlas_record(&new), Ok((Some(0x1234_5678), 0)));
+    let v3 = as_version_3(&new);
+    assert_eq!(atlas_record(&v3), Ok((Some(0x1234_5678), 0)));
+    let files = [&old, &new, &v3].map(|b| ShlmFile::parse(b).unwrap());
+    assert_eq!(decode_all(&files[0]), decode_all(&files[1]));
+    assert_eq!(decode_all(&files[0]), decode_all(&files[2]));
+    assert!(files.iter().all(|f| f.layout().is_none()));
+}
+
+/// A version-4 file without light-map UVs rewritten as version 3: the UV triangle count and
+/// section size (bytes 56..64) dropped, the checksum redone.
+fn as_version_3(v4: &[u8]) -> Vec<u8> {
+    assert_eq!(&v4[56..64], &[0; 8]);
+    let mut out = [&v4[..56], &v4[64..v4.len() - 4]].concat();
+    out[8..12].copy_from_slice(&3u32.to_le_bytes());
+    let crc = crc32fast::hash(&out);
+    out.extend_from_slice(&crc.to_le_bytes());
+    out
+}
+
+/// Generated light-map UVs travel in the file and come back bit for bit; a layout whose
+/// fingerprint is not the header's is refused when writing, and UVs outside `[0, 1]` or of
+/// another fingerprint when reading.
+#[test]
+fn light_map_uvs_round_trip_and_bad_ones_are_refused() {
+    let mut seq = clip(16, 2, 4, 0.01);
+    let layout = UvLayout {
+        corners: vec![
+            [[0.1, 0.2], [0.9, 0.2], [0.5, 0.8]],
+            [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+        ],
+    };
+    seq.layout = Some(layout.clone());
+    seq.atlas = Some(0);
+    assert!(encode(&seq, &CodecSettings::default()).is_err());
+    seq.atlas = Some(layout.fingerprint());
+    let bytes = encode(&seq, &CodecSettings::default()).unwrap();
+    assert_eq!(atlas_record(&bytes), Ok((seq.atlas, 2)));
+    let file = ShlmFile::parse(&bytes).unwrap();
+    assert_eq!(file.layout(), Some(&layout));
+    let plain = MapSequence {
+        layout: None,
+        ..seq.clone()
+    };
+    let plain = encode(&plain, &CodecSettings::default()).unwrap();
+    assert_eq!(
+        decode_all(&file),
+        decode_all(&ShlmFile::parse(&plain).unwrap())
     );
-    assert_eq!(decode_all(&old), decode_all(&new));
+    for (corners, atlas) in [
+        (vec![[[0.1, 0.2], [1.5, 0.2], [0.5, 0.8]]], None),
+        (vec![[[0.1, 0.2], [0.9, f32::NAN], [0.5, 0.8]]], None),
+        (layout.corners.clone(), Some(7)),
+    ] {
+        let bad = UvLayout { corners };
+        let mut seq = seq.clone();
+        seq.atlas = Some(bad.fingerprint());
+        seq.layout = Some(bad);
+        let mut bytes = encode(&seq, &CodecSettings::default()).unwrap();
+        if let Some(other) = atlas {
+            let body = bytes.len() - 4;
+            bytes[52..56].copy_from_slice(&u32::to_le_bytes(other));
+            let crc = crc32fast::hash(&bytes[..body]);
+            bytes[body..].copy_from_slice(&crc.to_le_bytes());
+        }
+        let err = ShlmFile::parse(&bytes).unwrap_err().to_string();
+        assert!(err.contains("light-map UVs"), "{err}");
+    }
 }
