@@ -121,6 +121,16 @@ impl<'a> TexelAtlas<'a> {
 
     /// Triangles of the mesh whose light-map UVs the atlas records, 0 when it records none
     /// (the trailer is optional).
+    ///
+    /// ```
+    /// use aprt_core::{Error, Model};
+    ///
+    /// let plain = Model::parse(include_bytes!("../../../fixtures/golden/v1-atlas.aprt"))?;
+    /// assert_eq!(plain.texel_atlas().map(|a| a.triangles()), Some(0));
+    /// let with_uvs = Model::parse(include_bytes!("../../../fixtures/golden/v1-atlas-uvs.aprt"))?;
+    /// assert_eq!(with_uvs.texel_atlas().map(|a| a.triangles()), Some(4));
+    /// # Ok::<(), Error>(())
+    /// ```
     pub fn triangles(&self) -> usize {
         self.corners.len()
     }
@@ -129,6 +139,28 @@ impl<'a> TexelAtlas<'a> {
     /// triangle and corner order: a second UV set, drawing the map on the mesh. u runs right
     /// and v down over the map, each in `[0, 1]`, texel `(x, y)` covering `[x/R, (x+1)/R] ×
     /// [y/R, (y+1)/R]`. [`Error::TriangleRange`] past the last triangle.
+    ///
+    /// ```
+    /// use aprt_core::{Error, Model};
+    ///
+    /// let model = Model::parse(include_bytes!("../../../fixtures/golden/v1-atlas-uvs.aprt"))?;
+    /// let atlas = model.texel_atlas().expect("a light-map model with its atlas");
+    /// // The second UV set of a vertex buffer of unshared corners, three per triangle.
+    /// let mut uv2 = Vec::new();
+    /// for t in 0..atlas.triangles() {
+    ///     uv2.extend(atlas.corner_uvs(t)?);
+    /// }
+    /// assert_eq!(uv2.len(), 3 * 4);
+    /// // Triangle 2's first corner lies in texel (5, 4) of the 8 × 8 map.
+    /// let r = atlas.resolution() as f32;
+    /// let [u, v] = uv2[6];
+    /// assert_eq!(((u * r) as u32, (v * r) as u32), (5, 4));
+    /// assert_eq!(
+    ///     atlas.corner_uvs(4),
+    ///     Err(Error::TriangleRange { triangle: 4, triangles: 4 })
+    /// );
+    /// # Ok::<(), Error>(())
+    /// ```
     pub fn corner_uvs(&self, triangle: usize) -> Result<[[f32; 2]; 3], Error> {
         let bytes = self.corners.get(triangle).ok_or(Error::TriangleRange {
             triangle,
@@ -249,7 +281,9 @@ impl AtlasCheck {
         let base = atlas_len(self.rows).unwrap_or(u64::MAX);
         let expected = match self.triangles {
             None => base,
-            Some(t) if t > MAX_ATLAS_TRIANGLES => return Err(AtlasFailure::Content),
+            Some(t) if !(1..=MAX_ATLAS_TRIANGLES).contains(&t) => {
+                return Err(AtlasFailure::Content);
+            }
             Some(t) => base.saturating_add(trailer_len(t)),
         };
         if self.seen as u64 != expected {
@@ -365,8 +399,9 @@ mod tests {
             })
         };
         let bad = Err(AtlasFailure::Content);
-        let cases: [(&str, usize, u32, usize, Checked); 12] = [
+        let cases: [(&str, usize, u32, usize, Checked); 13] = [
             ("no triangles", 4, 0, 20, bad),
+            ("no triangles, one's UVs", 4, 0, LEN - TRIANGLE_BYTES, bad),
             ("count past the limit", 4, MAX_ATLAS_TRIANGLES + 1, LEN, bad),
             ("count u32::MAX", 4, u32::MAX, LEN, bad),
             (

@@ -11,7 +11,7 @@ use super::bake::{BakedMaps, CheckpointSettings, bake_light_maps};
 use super::codec::MapSequence;
 use crate::bake::BakeSettings;
 use crate::io::source::joined;
-use crate::model::export::{Extras, Precision, encode_model_with};
+use crate::model::export::{Extras, Precision, TexelAtlasExtra, encode_model_with};
 use crate::model::fit::{FitOptions, FitReport, fit};
 use crate::model::runtime::{BlobInfo, describe};
 use crate::progress::Reporter;
@@ -105,7 +105,11 @@ pub fn train_light_maps(
         training.precision,
         &Extras {
             irradiance_rig: None,
-            texel_atlas: Some((training.resolution as u32, &rows)),
+            texel_atlas: Some(TexelAtlasExtra {
+                resolution: training.resolution as u32,
+                texels: &rows,
+                corner_uvs: None,
+            }),
         },
     )?;
     Ok(TrainedLightMaps {
