@@ -156,6 +156,8 @@ typedef enum {
   APRT_STATUS_WEIGHTS_FOR_OTHER_MODEL = 217,
   // The stream's read callback failed.
   APRT_STATUS_SOURCE = 218,
+  // The triangle is past the last one whose corner UVs the texel atlas records.
+  APRT_STATUS_TRIANGLE_RANGE = 219,
   // An error of a newer core than this table knows.
   APRT_STATUS_UNKNOWN = 999,
 } aprt_status;

@@ -129,6 +129,8 @@ pub enum aprt_status {
     WeightsForOtherModel = 217,
     /// The stream's read callback failed.
     Source = 218,
+    /// The triangle is past the last one whose corner UVs the texel atlas records.
+    TriangleRange = 219,
     /// An error of a newer core than this table knows.
     Unknown = 999,
 }
@@ -182,13 +184,14 @@ impl From<Error> for aprt_status {
             Error::WeightsNotSet => S::WeightsNotSet,
             Error::WeightsForOtherModel => S::WeightsForOtherModel,
             Error::Source => S::Source,
+            Error::TriangleRange { .. } => S::TriangleRange,
             _ => S::Unknown,
         }
     }
 }
 
 /// Every status, for the table of messages and the tests.
-pub const ALL: [aprt_status; 55] = {
+pub const ALL: [aprt_status; 56] = {
     use aprt_status as S;
     [
         S::Ok,
@@ -246,6 +249,7 @@ pub const ALL: [aprt_status; 55] = {
         S::WeightsNotSet,
         S::WeightsForOtherModel,
         S::Source,
+        S::TriangleRange,
     ]
 };
 
@@ -308,6 +312,7 @@ pub(crate) fn message(status: aprt_status) -> &'static CStr {
         S::WeightsNotSet => c"the frame's weights were not computed (call the step before)",
         S::WeightsForOtherModel => c"the frame's weights were computed for another model",
         S::Source => c"the read callback failed",
+        S::TriangleRange => c"the triangle is past the atlas's last",
         S::Unknown => c"an error this ABI version does not name",
     }
 }

@@ -63,8 +63,8 @@ pub use blob::format::{
     MAX_VERTICES, SectionKind, VERSION as FORMAT_VERSION, VERTEX_BLOCK,
 };
 pub use blob::{
-    AngleNames, BlobSource, Dim, Error, Input, MAX_ATLAS_RESOLUTION, ModelInfo, SourceError,
-    TexelAtlas,
+    AngleNames, BlobSource, Dim, Error, Input, MAX_ATLAS_RESOLUTION, MAX_ATLAS_TRIANGLES,
+    ModelInfo, SourceError, TexelAtlas,
 };
 pub use eval::{LitWeights, MAX_POSE_WEIGHTS, PoseWeights};
 pub use irradiance_rig::{

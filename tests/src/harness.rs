@@ -275,9 +275,10 @@ fn exercise_proxies(model: &Model, blob: &[u8], probe: &Probe, eval: &Evaluation
 }
 
 /// A model's texel atlas: the streamed reader reads the same atlas, through a buffer of
-/// exactly its size and refuses a smaller one; its indices are increasing and below R²;
-/// scattering the shading puts row `j` on texel `texel(j)`; the probe's row range and a map
-/// of the wrong size are refused with their errors, writing nothing.
+/// exactly its size and refuses a smaller one; its indices are increasing and below R², its
+/// corner UVs (if any) in `[0, 1]` and none past the last triangle; scattering the shading
+/// puts row `j` on texel `texel(j)`; the probe's row range and a map of the wrong size are
+/// refused with their errors, writing nothing.
 fn exercise_atlas(model: &Model, blob: &[u8], probe: &Probe, eval: &Evaluation) {
     let info = model.info();
     let mut least = vec![0u8; info.scratch_bytes()];
@@ -309,6 +310,18 @@ fn exercise_atlas(model: &Model, blob: &[u8], probe: &Probe, eval: &Evaluation) 
         Err(Error::VertexRange {
             first: rows,
             count: 1
+        })
+    );
+    let triangles = atlas.triangles();
+    for t in 0..triangles {
+        let uvs = atlas.corner_uvs(t).unwrap();
+        assert!(uvs.as_flattened().iter().all(|x| (0.0..=1.0).contains(x)));
+    }
+    assert_eq!(
+        atlas.corner_uvs(triangles),
+        Err(Error::TriangleRange {
+            triangle: triangles,
+            triangles
         })
     );
     let shaded: Vec<[f32; 3]> = eval.shading.iter().map(|&s| [s, -s, 1.0]).collect();

@@ -5,7 +5,7 @@
 use aprt_core::{AxisKind, RigLayout, RigShape};
 use aprt_trainer::model::occluders::{BoneBound, ProxySection, Sphere};
 use aprt_trainer::{
-    BoneFrames, Extras, LinearModel, Precision, encode_model, encode_model_with,
+    BoneFrames, Extras, LinearModel, Precision, TexelAtlasExtra, encode_model, encode_model_with,
     encode_model_with_rig,
 };
 
@@ -94,6 +94,14 @@ pub fn sample_rig() -> Vec<u8> {
 /// between them (the first and last texel included).
 pub const SAMPLE_ATLAS: (u32, [u32; 7]) = (5, [0, 3, 4, 11, 12, 20, 24]);
 
+/// The light-map UVs of [`SAMPLE_ATLAS`]'s mesh: three triangles' corners, on the map's
+/// edges and inside it.
+pub const SAMPLE_ATLAS_UVS: [[[f32; 2]; 3]; 3] = [
+    [[0.0, 0.0], [0.6, 0.0], [0.0, 0.6]],
+    [[0.6, 0.0], [0.6, 0.6], [0.0, 0.6]],
+    [[0.7, 0.5], [1.0, 0.9], [0.8, 1.0]],
+];
+
 /// A light-map model (its rows are texels) for [`SAMPLE_ATLAS`].
 pub fn sample_atlas_model() -> LinearModel {
     random_model(2, SAMPLE_ATLAS.1.len(), 2, 1, None)
@@ -128,11 +136,15 @@ pub fn sample_proxies(bones: usize) -> Vec<u8> {
 }
 
 /// `(name, blob)` of each sample, a bone-frame model carrying an irradiance rig, one carrying
-/// occluder proxies, and a light-map model carrying its texel atlas (last).
+/// occluder proxies, and a light-map model carrying its texel atlas with corner UVs (last).
 pub fn sample_blobs() -> Vec<(&'static str, Vec<u8>)> {
     let rigged = with_bones(random_model(2, 10, 3, 1, Some(2)), 2);
     let atlas = Extras {
-        texel_atlas: Some((SAMPLE_ATLAS.0, &SAMPLE_ATLAS.1)),
+        texel_atlas: Some(TexelAtlasExtra {
+            resolution: SAMPLE_ATLAS.0,
+            texels: &SAMPLE_ATLAS.1,
+            corner_uvs: Some(&SAMPLE_ATLAS_UVS),
+        }),
         ..Extras::default()
     };
     let occluded = LinearModel {

@@ -47,7 +47,8 @@ fn golden_blobs_read_as_written() {
         assert_eq!(stored.angle_names, model.angle_names, "{name}");
         let read = core.texel_atlas().map(|a| {
             let texels = (0..a.rows()).map(|j| a.texel(j).unwrap()).collect();
-            (a.resolution(), texels)
+            let uvs = (0..a.triangles()).map(|t| a.corner_uvs(t).unwrap());
+            (a.resolution(), texels, uvs.collect())
         });
         assert_eq!(read, *atlas, "{name}: texel atlas");
         assert_eq!(

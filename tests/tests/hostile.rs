@@ -766,3 +766,94 @@ fn damaged_occluder_proxies_are_refused() {
     let world = with_header(&blob, |h| h.frame = aprt_core::Frame::World);
     assert!(parse(&world).is_err());
 }
+
+/// The texel atlas's corner-UV trailer, damaged with every checksum recomputed: a count of
+/// 0, past the limit, one off or wrapping a 32-bit length back to the true one; a UV NaN,
+/// infinite or outside [0, 1]; a section cut short. Both readers refuse each with the same
+/// error, the streamed one through the model's least scratch. (The core's unit tests feed
+/// the streaming check every split of an atlas.)
+#[test]
+fn damaged_corner_uvs_are_refused() {
+    use aprt_core::{MAX_ATLAS_TRIANGLES, StreamedModel};
+    use aprt_tests::Streamed;
+    use aprt_tests::samples::{SAMPLE_ATLAS, SAMPLE_ATLAS_UVS};
+
+    let (_, blob) = sample_blobs()
+        .into_iter()
+        .find(|(name, _)| *name == "atlas-identity-f32")
+        .expect("the atlas sample");
+    let header = read_header(&blob).unwrap();
+    let index = header
+        .sections
+        .iter()
+        .position(|s| s.kind == SectionKind::TexelAtlas.tag())
+        .expect("the atlas section");
+    let (at, len) = (
+        header.sections[index].offset as usize,
+        header.sections[index].len as usize,
+    );
+    let least = parse(&blob).unwrap().scratch_bytes();
+    let both = |blob: &[u8]| {
+        let resident = parse(blob);
+        let mut scratch = vec![0u8; least];
+        let streamed = StreamedModel::open(Streamed::new(blob), &mut scratch).map(|m| *m.info());
+        assert_eq!(resident, streamed, "the readers disagree");
+        resident.map(|_| ())
+    };
+    assert_eq!(both(&blob), Ok(()));
+    // The rows end at 4 (1 + v): the count, then 24 bytes per triangle.
+    let trailer = 4 * (1 + SAMPLE_ATLAS.1.len());
+    let triangles = SAMPLE_ATLAS_UVS.len() as u32;
+    assert_eq!(len, trailer + 4 + 24 * triangles as usize);
+    let word = |offset: usize, value: [u8; 4]| {
+        let mut edited = blob.clone();
+        edited[at + offset..at + offset + 4].copy_from_slice(&value);
+        both(&reseal(&edited))
+    };
+    let u = |x: u32| x.to_le_bytes();
+    let f = |x: f32| x.to_le_bytes();
+    let uv = |t: usize, k: usize| trailer + 4 + 4 * k + 24 * t;
+    let bad = [
+        ("no triangles", trailer, u(0)),
+        ("count past the limit", trailer, u(MAX_ATLAS_TRIANGLES + 1)),
+        ("count u32::MAX", trailer, u(u32::MAX)),
+        (
+            "24 T wraps a u32 to the length",
+            trailer,
+            u(triangles + (1 << 29)),
+        ),
+        ("u NaN", uv(0, 0), f(f32::NAN)),
+        ("v infinite", uv(1, 3), f(f32::INFINITY)),
+        ("v below 0", uv(2, 5), f(-1e-7)),
+        ("u above 1", uv(2, 4), f(1.0000001)),
+    ];
+    for (what, offset, value) in bad {
+        assert_eq!(word(offset, value), Err(Error::BadTexelAtlas), "{what}");
+    }
+    assert_eq!(word(uv(2, 5), f(-0.0)), Ok(()), "-0 is in [0, 1]");
+    let length = |expected: usize, found: usize| {
+        Err(Error::SectionLength {
+            section: SectionKind::TexelAtlas,
+            expected: expected as u64,
+            found: found as u64,
+        })
+    };
+    for t in [triangles - 1, triangles + 1] {
+        let expected = trailer + 4 + 24 * t as usize;
+        assert_eq!(word(trailer, u(t)), length(expected, len), "count {t}");
+    }
+    // Cut short: by a UV, to a count and less than a triangle, to a part of the count.
+    for cut in [4, 24, len - trailer - 4, len - trailer - 1] {
+        let short = with_header(&blob, |h| h.sections[index].len -= cut as u64);
+        let expected = if cut < len - trailer - 4 {
+            len
+        } else {
+            trailer
+        };
+        assert_eq!(
+            both(&reseal(&short)),
+            length(expected, len - cut),
+            "cut {cut}"
+        );
+    }
+}

@@ -13,7 +13,7 @@ use aprt_core::{
     clamped_cosine, irradiance_sh,
 };
 use aprt_tests::edit::{reseal, with_header};
-use aprt_tests::samples::{SAMPLE_ATLAS, sample_blobs, sample_rig};
+use aprt_tests::samples::{SAMPLE_ATLAS, SAMPLE_ATLAS_UVS, sample_blobs, sample_rig};
 use aprt_tests::{Streamed, axis_angle, noise};
 use proptest::prelude::*;
 
@@ -411,8 +411,8 @@ fn hostile_inputs_are_refused_and_write_nothing() {
         .unwrap();
 }
 
-/// The sample light-map model's atlas round-trips through both readers and scatters each
-/// row to its texel.
+/// The sample light-map model's atlas, corner UVs included, round-trips through both readers
+/// and scatters each row to its texel.
 #[test]
 fn texel_atlas_round_trips() {
     let blob = atlas_blob();
@@ -426,8 +426,15 @@ fn texel_atlas_round_trips() {
     let mut scratch = vec![0u8; model.info().scratch_bytes()];
     let mut streamed = StreamedModel::open(Streamed::new(&blob), &mut scratch).unwrap();
     let mut buf = vec![0u8; model.info().texel_atlas_bytes()];
-    assert_eq!(buf.len(), 4 * (1 + texels.len()));
+    assert_eq!(
+        buf.len(),
+        4 * (1 + texels.len()) + 4 + 24 * SAMPLE_ATLAS_UVS.len()
+    );
     assert_eq!(streamed.texel_atlas(&mut buf).unwrap(), Some(atlas));
+    assert_eq!(atlas.triangles(), SAMPLE_ATLAS_UVS.len());
+    for (t, uvs) in SAMPLE_ATLAS_UVS.iter().enumerate() {
+        assert_eq!(atlas.corner_uvs(t), Ok(*uvs));
+    }
     // Rows 2.. scattered in two chunks.
     let rows: Vec<[f32; 3]> = (0..texels.len()).map(|j| [j as f32; 3]).collect();
     let mut map = vec![[-1.0f32; 3]; (r * r) as usize];
@@ -524,12 +531,18 @@ fn malformed_atlases_are_refused_at_open() {
             ),
             "{delta}: {result:?}"
         );
+        // Cut into the corner UVs, the trailer's count gives the length; cut to nothing, the
+        // length without a trailer.
+        let expected = match delta {
+            -4 => len,
+            _ => 4 * (1 + texels.len()),
+        };
         if delta < 0 {
             assert_eq!(
                 result,
                 Err(Error::SectionLength {
                     section: SectionKind::TexelAtlas,
-                    expected: len as u64,
+                    expected: expected as u64,
                     found: (len as i64 + delta) as u64
                 })
             );

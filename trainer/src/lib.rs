@@ -47,7 +47,8 @@ pub use bake::{
 };
 pub use io::obj::{LineError, ObjError, read_obj, read_obj_with_uvs};
 pub use model::export::{
-    ExportError, Extras, Precision, encode_model, encode_model_with, encode_model_with_rig,
+    ExportError, Extras, Precision, TexelAtlasExtra, encode_model, encode_model_with,
+    encode_model_with_rig,
 };
 pub use model::features::PoseFeatures;
 pub use model::fit::{Alpha, CoefDims, Dims, Fit, FitError, FitOptions, FitReport, fit};

@@ -155,8 +155,9 @@ pub enum Error {
     BadPoseFeatures,
     /// An irradiance rig's shape, counts, box, radius or error table is not valid.
     BadIrradianceRig,
-    /// The texel-atlas section has a resolution outside 1..=8192, or texel indices that are
-    /// not strictly increasing or not below the resolution squared.
+    /// The texel-atlas section has a resolution outside 1..=8192, texel indices that are not
+    /// strictly increasing or not below the resolution squared, or a corner-UV trailer whose
+    /// triangle count is out of range or whose UVs are not in `[0, 1]`.
     BadTexelAtlas,
     /// A call needs the model's irradiance rig and the model has none.
     NoIrradianceRig,
@@ -242,6 +243,13 @@ pub enum Error {
         /// Number of vertices requested.
         count: usize,
     },
+    /// The triangle is past the last one whose corner UVs the texel atlas records.
+    TriangleRange {
+        /// Triangle requested.
+        triangle: usize,
+        /// Triangles the atlas records.
+        triangles: usize,
+    },
     /// The pose or lighting weights hold nothing: they are new, or the call that was to fill
     /// them failed.
     WeightsNotSet,
@@ -315,7 +323,7 @@ impl core::fmt::Display for Error {
             ),
             Error::BadTexelAtlas => write!(
                 f,
-                "texel atlas needs a resolution in 1..=8192 and increasing texels below its square"
+                "texel atlas needs a resolution in 1..=8192, increasing texels below its square and corner UVs in [0, 1]"
             ),
             Error::NoIrradianceRig => write!(f, "the model has no irradiance rig"),
             Error::BadProxies => write!(
@@ -365,6 +373,13 @@ impl core::fmt::Display for Error {
             Error::VertexRange { first, count } => {
                 write!(f, "vertex range {first}..{first}+{count} is out of bounds")
             }
+            Error::TriangleRange {
+                triangle,
+                triangles,
+            } => write!(
+                f,
+                "triangle {triangle} is past the atlas's {triangles} triangles"
+            ),
             Error::WeightsNotSet => write!(f, "weights were not computed (or their call failed)"),
             Error::WeightsForOtherModel => write!(f, "weights were computed for another model"),
             Error::Source => write!(f, "blob source read failed"),

@@ -10,7 +10,7 @@ mod names;
 mod source;
 mod validate;
 
-pub use atlas::{MAX_ATLAS_RESOLUTION, TexelAtlas};
+pub use atlas::{MAX_ATLAS_RESOLUTION, MAX_ATLAS_TRIANGLES, TexelAtlas};
 pub use error::{Dim, Error, Input};
 #[cfg(feature = "format")]
 pub use header::read_header;

@@ -1,7 +1,7 @@
 //! Opening a model: decode the header, validate every dimension, offset and length, and
 //! verify every section's checksum and values once, so evaluation can trust the layout.
 
-use super::atlas::{AtlasCheck, atlas_len};
+use super::atlas::{AtlasCheck, AtlasFailure, atlas_len, trailer_len};
 use super::format::{
     Basis, Encoding, Frame, MAX_BONES, MAX_COEF_DIMS, MAX_LIT, MAX_POSE_DIMS, MAX_POSE_LEN,
     MAX_SECTIONS, MAX_VERTICES, SECTION_ALIGN, SectionEntry, SectionKind, VERTEX_BLOCK,
@@ -289,27 +289,32 @@ fn check_irradiance_rig<R: Reader>(r: &mut R, e: &SectionEntry) -> Result<Span, 
     })
 }
 
-/// The texel atlas: one `u32` texel per row after the resolution, checksummed and validated
-/// as it streams past ([`AtlasCheck`], which the resident `TexelAtlas::parse` runs too). A
-/// length that is not the row count's is a section-length error. Its encoding byte carries no
-/// meaning.
+/// The texel atlas: one `u32` texel per row after the resolution, then optionally the corner
+/// UVs, checksummed and validated as it streams past ([`AtlasCheck`], which the resident
+/// `TexelAtlas::parse` runs too). A length that is not the row count's, nor that plus a
+/// trailer's, is a section-length error. Its encoding byte carries no meaning.
 fn check_texel_atlas<R: Reader>(
     r: &mut R,
     e: &SectionEntry,
     vertices: usize,
 ) -> Result<Span, Error> {
     let section = SectionKind::TexelAtlas;
-    let expected = atlas_len(vertices).ok_or(Error::LengthOverflow)?;
-    if e.len != expected {
-        return Err(Error::SectionLength {
-            section,
-            expected,
-            found: e.len,
-        });
+    let base = atlas_len(vertices).ok_or(Error::LengthOverflow)?;
+    let wrong_length = |expected| Error::SectionLength {
+        section,
+        expected,
+        found: e.len,
+    };
+    // Refused before reading: too short for the rows, or for a trailer of one triangle.
+    if e.len != base && e.len < base.saturating_add(trailer_len(1)) {
+        return Err(wrong_length(base));
     }
-    let mut atlas = AtlasCheck::new();
+    let mut atlas = AtlasCheck::new(vertices);
     check_crc(r, e, |bytes| atlas.feed(bytes))?;
-    atlas.finish()?;
+    atlas.finish().map_err(|failure| match failure {
+        AtlasFailure::Content => Error::BadTexelAtlas,
+        AtlasFailure::Length { expected } => wrong_length(expected),
+    })?;
     Ok(Span {
         offset: e.offset,
         len: e.len,

@@ -12,7 +12,7 @@ use super::codec::MapSequence;
 use super::layout::AtlasSpec;
 use crate::bake::BakeSettings;
 use crate::io::source::joined;
-use crate::model::export::{Extras, Precision, encode_model_with};
+use crate::model::export::{Extras, Precision, TexelAtlasExtra, encode_model_with};
 use crate::model::fit::{FitOptions, FitReport, fit};
 use crate::model::runtime::{BlobInfo, describe};
 use crate::progress::Reporter;
@@ -106,7 +106,11 @@ pub fn train_light_maps(
         training.precision,
         &Extras {
             irradiance_rig: None,
-            texel_atlas: Some((training.atlas.resolution as u32, &rows)),
+            texel_atlas: Some(TexelAtlasExtra {
+                resolution: training.atlas.resolution as u32,
+                texels: &rows,
+                corner_uvs: sequence.layout.as_ref().map(|l| l.corners.as_slice()),
+            }),
         },
     )?;
     Ok(TrainedLightMaps {

@@ -5,8 +5,9 @@ use aprt_core::format::{
     padded_vertices,
 };
 use aprt_core::{
-    Basis, Encoding, FORMAT_VERSION, Frame, MAX_ATLAS_RESOLUTION, MAX_BONES, MAX_COEF_DIMS,
-    MAX_LIT, MAX_ORDER, MAX_POSE_DIMS, MAX_POSE_LEN, MAX_VERTICES, SectionKind, VERTEX_BLOCK,
+    Basis, Encoding, FORMAT_VERSION, Frame, MAX_ATLAS_RESOLUTION, MAX_ATLAS_TRIANGLES, MAX_BONES,
+    MAX_COEF_DIMS, MAX_LIT, MAX_ORDER, MAX_POSE_DIMS, MAX_POSE_LEN, MAX_VERTICES, SectionKind,
+    VERTEX_BLOCK,
 };
 
 use crate::model::{LinearModel, VertexBasis};
@@ -305,9 +306,21 @@ pub struct Extras<'a> {
     /// An irradiance rig's bytes (from [`aprt_core::RigLayout::write`]), written as the
     /// `IrradianceRig` section.
     pub irradiance_rig: Option<&'a [u8]>,
-    /// A light-map model's atlas: the resolution R and each row's texel index `y · R + x`
-    /// (strictly increasing, below R², one per row), written as the `TexelAtlas` section.
-    pub texel_atlas: Option<(u32, &'a [u32])>,
+    /// A light-map model's atlas, written as the `TexelAtlas` section.
+    pub texel_atlas: Option<TexelAtlasExtra<'a>>,
+}
+
+/// A light-map model's atlas as [`Extras`] carries it to the `TexelAtlas` section.
+#[derive(Clone, Copy, Debug)]
+pub struct TexelAtlasExtra<'a> {
+    /// The map's resolution R: it is R × R texels.
+    pub resolution: u32,
+    /// Each row's texel index `y · R + x`: one per row, strictly increasing, below R².
+    pub texels: &'a [u32],
+    /// The light-map UVs `[u, v]` of every triangle's three corners, in the mesh's triangle
+    /// order (u right, v down, each in `[0, 1]`), so an engine can draw the map: the
+    /// section's optional trailer. `None` records no UVs; `Some` holds at least one triangle.
+    pub corner_uvs: Option<&'a [[[f32; 2]; 3]]>,
 }
 
 /// Serialises `model` into a complete blob.
@@ -454,8 +467,8 @@ fn optional_sections(
             bytes: rig.to_vec(),
         });
     }
-    if let Some((resolution, texels)) = extras.texel_atlas {
-        table.push(texel_atlas_section(resolution, texels, v)?);
+    if let Some(atlas) = &extras.texel_atlas {
+        table.push(texel_atlas_section(atlas, v)?);
     }
     if let Some(proxies) = &model.proxies {
         let bones = model.bones.as_ref().map_or(0, |b| b.count);
@@ -534,12 +547,16 @@ fn angle_names_section(names: &[String], pose_len: usize) -> Result<SectionBytes
 
 /// The optional texel-atlas section, refusing what the reader would refuse: a resolution
 /// outside 1..=[`MAX_ATLAS_RESOLUTION`], a row count that is not the model's, indices that
-/// are not strictly increasing or not below R².
+/// are not strictly increasing or not below R², and corner UVs as [`corner_uv_bytes`] says.
 fn texel_atlas_section(
-    resolution: u32,
-    texels: &[u32],
+    atlas: &TexelAtlasExtra<'_>,
     rows: usize,
 ) -> Result<SectionBytes, ExportError> {
+    let TexelAtlasExtra {
+        resolution,
+        texels,
+        corner_uvs,
+    } = *atlas;
     let bad = |problem: String| Err(ExportError::TexelAtlas { problem });
     if !(1..=MAX_ATLAS_RESOLUTION).contains(&resolution) {
         return bad(format!(
@@ -564,16 +581,51 @@ fn texel_atlas_section(
             texels[row]
         ));
     }
-    let bytes = std::iter::once(resolution)
+    let mut bytes: Vec<u8> = std::iter::once(resolution)
         .chain(texels.iter().copied())
         .flat_map(u32::to_le_bytes)
         .collect();
+    if let Some(corners) = corner_uvs {
+        bytes.extend(corner_uv_bytes(corners)?);
+    }
     Ok(SectionBytes {
         tag: SectionKind::TexelAtlas.tag(),
         required: false,
         encoding: Encoding::F32,
         bytes,
     })
+}
+
+/// The texel atlas's trailer: the triangle count, 1..=[`MAX_ATLAS_TRIANGLES`], then every
+/// corner's UV, refused (naming the triangle and corner) unless within `[0, 1]`.
+fn corner_uv_bytes(corners: &[[[f32; 2]; 3]]) -> Result<Vec<u8>, ExportError> {
+    let count = u32::try_from(corners.len())
+        .ok()
+        .filter(|t| (1..=MAX_ATLAS_TRIANGLES).contains(t))
+        .ok_or_else(|| ExportError::TexelAtlas {
+            problem: format!(
+                "{} triangles of corner UVs is not in 1..={MAX_ATLAS_TRIANGLES}",
+                corners.len()
+            ),
+        })?;
+    for (triangle, uvs) in corners.iter().enumerate() {
+        if let Some(corner) = uvs
+            .iter()
+            .position(|uv| !uv.iter().all(|x| (0.0..=1.0).contains(x)))
+        {
+            return Err(ExportError::TexelAtlas {
+                problem: format!(
+                    "triangle {triangle}'s corner {corner} has UV {:?}, not in [0, 1]²",
+                    uvs[corner]
+                ),
+            });
+        }
+    }
+    let floats = corners.iter().flatten().flatten().map(|x| x.to_bits());
+    Ok(std::iter::once(count)
+        .chain(floats)
+        .flat_map(u32::to_le_bytes)
+        .collect())
 }
 
 /// Lays out preamble, header and aligned sections. The header holds the section offsets,
@@ -701,24 +753,45 @@ mod tests {
     #[test]
     fn texel_atlas_round_trips_and_refuses_what_the_reader_would() {
         let model = tiny(VertexBasis::Identity, 3);
-        let with = |resolution: u32, texels: &[u32]| {
+        let with = |resolution: u32, texels: &[u32], corner_uvs: Option<&[[[f32; 2]; 3]]>| {
             let extras = Extras {
-                texel_atlas: Some((resolution, texels)),
+                texel_atlas: Some(TexelAtlasExtra {
+                    resolution,
+                    texels,
+                    corner_uvs,
+                }),
                 ..Extras::default()
             };
             encode_model_with(&model, Precision::F32, &extras)
         };
-        let blob = with(4, &[1, 5, 15]).unwrap();
-        let parsed = aprt_core::Model::parse(&blob).unwrap();
-        let atlas = parsed.texel_atlas().unwrap();
-        assert_eq!((atlas.resolution(), atlas.rows()), (4, 3));
-        assert_eq!(atlas.texel(2), Ok(15));
-        let info = crate::model::runtime::describe(&blob).unwrap();
-        assert_eq!(
-            info.texel_atlas.map(|a| (a.resolution, a.rows)),
-            Some((4, 3))
-        );
-        assert!(info.to_string().contains("texel atlas     4 x 4: 3 rows"));
+        let corners = [
+            [[0.0, 0.0], [1.0, 0.0], [0.5, 1.0]],
+            [[0.125, 0.25], [0.375, 0.25], [0.25, 0.5]],
+        ];
+        for uvs in [None, Some(&corners[..])] {
+            let blob = with(4, &[1, 5, 15], uvs).unwrap();
+            let parsed = aprt_core::Model::parse(&blob).unwrap();
+            let atlas = parsed.texel_atlas().unwrap();
+            assert_eq!((atlas.resolution(), atlas.rows()), (4, 3));
+            assert_eq!(atlas.texel(2), Ok(15));
+            let read: Vec<_> = (0..atlas.triangles())
+                .map(|t| atlas.corner_uvs(t).unwrap())
+                .collect();
+            assert_eq!(read, uvs.unwrap_or_default());
+            let info = crate::model::runtime::describe(&blob).unwrap();
+            assert_eq!(
+                info.texel_atlas
+                    .map(|a| (a.resolution, a.rows, a.triangles)),
+                Some((4, 3, read.len()))
+            );
+            let line = info.to_string();
+            assert!(line.contains("texel atlas     4 x 4: 3 rows"), "{line}");
+            assert_eq!(
+                line.contains("corner UVs of 2 triangles"),
+                uvs.is_some(),
+                "{line}"
+            );
+        }
         for (resolution, texels) in [
             (0, &[0u32, 1, 2][..]),
             (MAX_ATLAS_RESOLUTION + 1, &[0, 1, 2]),
@@ -729,12 +802,29 @@ mod tests {
         ] {
             assert!(
                 matches!(
-                    with(resolution, texels),
+                    with(resolution, texels, None),
                     Err(ExportError::TexelAtlas { .. })
                 ),
                 "{resolution} {texels:?}"
             );
         }
+        // Corner UVs outside [0, 1]² or not finite, named by triangle and corner; none at all.
+        for (uv, corner) in [
+            ([f32::NAN, 0.5], 0),
+            ([0.5, -1e-7], 1),
+            ([1.0000001, 0.0], 2),
+            ([0.0, f32::INFINITY], 1),
+        ] {
+            let mut bad = corners;
+            bad[1][corner] = uv;
+            let err = with(4, &[1, 5, 15], Some(&bad)).unwrap_err().to_string();
+            assert!(
+                err.contains(&format!("triangle 1's corner {corner} has UV")),
+                "{err}"
+            );
+        }
+        let err = with(4, &[1, 5, 15], Some(&[])).unwrap_err().to_string();
+        assert!(err.contains("0 triangles of corner UVs"), "{err}");
     }
 
     #[test]

@@ -151,6 +151,8 @@ pub struct AtlasInfo {
     pub resolution: u32,
     /// Rows of the model, one texel each.
     pub rows: usize,
+    /// Triangles whose corner UVs the atlas records (0: none).
+    pub triangles: usize,
 }
 
 /// What `inspect` says of a model's irradiance rig.
@@ -230,6 +232,7 @@ pub fn describe(blob: &[u8]) -> Result<BlobInfo, aprt_core::Error> {
         texel_atlas: model.texel_atlas().map(|a| AtlasInfo {
             resolution: a.resolution(),
             rows: a.rows(),
+            triangles: a.triangles(),
         }),
     })
 }
@@ -287,12 +290,16 @@ impl std::fmt::Display for BlobInfo {
         }
         if let Some(atlas) = &self.texel_atlas {
             let r = u64::from(atlas.resolution);
-            writeln!(
+            write!(
                 f,
                 "  texel atlas     {r} x {r}: {} rows are texels ({:.1}% of the map)",
                 atlas.rows,
                 100.0 * atlas.rows as f64 / (r * r) as f64
             )?;
+            match atlas.triangles {
+                0 => writeln!(f)?,
+                t => writeln!(f, ", corner UVs of {t} triangles")?,
+            }
         }
         writeln!(f, "  sections:")?;
         for s in &self.sections {

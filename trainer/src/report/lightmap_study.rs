@@ -20,7 +20,7 @@ use crate::lightmap::layout::AtlasSpec;
 use crate::lightmap::model::{filled_rows, to_map};
 use crate::lightmap::sample::maps_at_vertices;
 use crate::model::ModelFrame;
-use crate::model::export::{Extras, Precision, encode_model, encode_model_with};
+use crate::model::export::{Extras, Precision, TexelAtlasExtra, encode_model, encode_model_with};
 use crate::model::fit::{FitOptions, fit};
 use crate::model::predict::predict_clip;
 use crate::model::runtime::{describe, predict_transfer};
@@ -147,7 +147,11 @@ fn light_map_model_row(
         Precision::F16,
         &Extras {
             irradiance_rig: None,
-            texel_atlas: Some((seq.resolution as u32, &rows)),
+            texel_atlas: Some(TexelAtlasExtra {
+                resolution: seq.resolution as u32,
+                texels: &rows,
+                corner_uvs: None,
+            }),
         },
     )?;
     let maps = |angles: &[Vec<f64>]| -> Result<(Vec<Vec<f32>>, f64)> {
