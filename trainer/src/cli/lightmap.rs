@@ -20,9 +20,10 @@ use crate::lightmap::bake::{
     CheckpointSettings, bake_light_map_shard, bake_light_maps, check_atlas,
 };
 use crate::lightmap::codec::{CodecSettings, ShlmFile, encode};
-use crate::lightmap::model::{LightMapTraining, predict_maps, train_light_maps};
+use crate::lightmap::model::{LightMapFit, LightMapTraining, predict_maps, train_light_maps};
 use crate::lightmap::sample::maps_at_vertices;
 use crate::lightmap::summary::summarize;
+use crate::model::ModelFrame;
 use crate::report::lightmap_preview::{ComposeSource, save_preview};
 
 /// `aprt lightmap`.
@@ -171,6 +172,11 @@ pub struct LightmapTrainArgs {
     /// Model shape.
     #[command(flatten)]
     pub fit: FitArgs,
+    /// Learn transfer in world space instead of each texel's bone frame (the bone that drives
+    /// its triangles most; bone frames generalise better; world frame needs no bone rotations
+    /// at runtime).
+    #[arg(long)]
+    pub world_frame: bool,
     /// Output model file.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -442,8 +448,15 @@ fn train(args: &LightmapTrainArgs) -> Result<()> {
     let training = LightMapTraining {
         resolution: args.atlas.resolution,
         bake: settings,
-        fit: &fit,
-        precision: PrecisionArg::into(args.fit.precision),
+        model: LightMapFit {
+            options: &fit,
+            precision: PrecisionArg::into(args.fit.precision),
+            frame: if args.world_frame {
+                ModelFrame::World
+            } else {
+                ModelFrame::Bone
+            },
+        },
         checkpoint: CheckpointSettings {
             dir: &checkpoint,
             existing: existing(&args.atlas),
@@ -460,10 +473,14 @@ fn train(args: &LightmapTrainArgs) -> Result<()> {
         .with_context(|| format!("cannot write {}", args.output.display()))?;
     let info = &trained.info;
     eprintln!(
-        "wrote {}: {} frames, {} texel rows, k_a {}, k_v {}, alpha {:.3e}, {} bytes (bake {:.1} s, fit {:.1} s)",
+        "wrote {}: {} frames, {} texel rows in {}, k_a {}, k_v {}, alpha {:.3e}, {} bytes (bake {:.1} s, fit {:.1} s)",
         args.output.display(),
         trained.frames,
         info.vertices,
+        match info.bones {
+            0 => "world space".to_owned(),
+            n => format!("the frames of {n} bones"),
+        },
         info.pose_dims,
         info.coef_dims,
         info.alpha,
