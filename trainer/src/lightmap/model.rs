@@ -287,6 +287,9 @@ mod tests {
             );
             let (_, _, trained) = predict_maps(&blob, "the model", &rig, &clip).unwrap();
             let (_, _, unseen) = predict_maps(&blob, "the model", &rig, &novel).unwrap();
+            if frame == ModelFrame::Bone {
+                shaded_by_the_core(&blob, &rig, &layout, &novel.frames[0], &truth[0]);
+            }
             errors.push((
                 relative(&trained, &baked.sequence.frames),
                 relative(&unseen, &truth),
@@ -295,6 +298,44 @@ mod tests {
         let (bone, world) = (errors[0], errors[1]);
         assert!(bone.0 < 1e-4 && bone.1 < 1e-4, "bone frames: {bone:?}");
         assert!(world.1 > 100.0 * bone.1, "world {world:?}, bone {bone:?}");
+    }
+
+    /// The core shades a bone-frame light-map model's rows as an engine does, with fixed
+    /// buffers and the bones' rotations (the lighting turned into each bone's frame): at
+    /// `pose` each row's shading is its texel's `truth` transfer under the lighting.
+    fn shaded_by_the_core(
+        blob: &[u8],
+        rig: &Character,
+        layout: &PoseLayout,
+        pose: &[f64],
+        truth: &[f32],
+    ) {
+        use aprt_core::{LitWeights, PoseWeights};
+        let core = aprt_core::Model::parse(blob).unwrap();
+        let angles: Vec<f32> = layout.reduce(pose).iter().map(|&a| a as f32).collect();
+        let rotations: Vec<[[f32; 3]; 3]> = bone_rotations(rig, pose)
+            .unwrap()
+            .into_iter()
+            .map(crate::rig::transfer_rotation::row_major)
+            .collect();
+        let n2 = core.info().coeffs();
+        let lighting: Vec<f32> = (0..n2).map(|c| 1.0 / (1.0 + c as f32)).collect();
+        let (mut weights, mut lit) = (PoseWeights::new(), LitWeights::new());
+        core.set_pose(&angles, &mut weights).unwrap();
+        core.light(&weights, &lighting, &rotations, &mut lit)
+            .unwrap();
+        let atlas = core.texel_atlas().unwrap();
+        let mut shading = vec![0.0f32; atlas.rows()];
+        core.shade(&lit, 0, &mut shading).unwrap();
+        for (row, s) in shading.iter().enumerate() {
+            let t = atlas.texel(row).unwrap() as usize;
+            let expected: f32 = truth[t * n2..][..n2]
+                .iter()
+                .zip(&lighting)
+                .map(|(a, b)| a * b)
+                .sum();
+            assert!((s - expected).abs() < 1e-3, "row {row}: {s} vs {expected}");
+        }
     }
 
     /// The rows of a sequence are its filled texels in texel order, and scattering a frame's
