@@ -21,9 +21,12 @@ use crate::lightmap::bake::{
 };
 use crate::lightmap::codec::{CodecSettings, ShlmFile, encode};
 use crate::lightmap::layout::{AtlasSpec, LightMapUvs, stored_or_texture};
-use crate::lightmap::model::{LightMapTraining, predict_maps, train_light_maps};
+use crate::lightmap::model::{
+    LightMapFit, LightMapTraining, model_layout, predict_maps, train_light_maps,
+};
 use crate::lightmap::sample::maps_at_vertices;
 use crate::lightmap::summary::summarize;
+use crate::model::ModelFrame;
 use crate::report::lightmap_preview::{ComposeSource, save_preview};
 use crate::rig::uv::UvLayout;
 use crate::rig::uv::generate::{DEFAULT_HARD_ANGLE_DEG, DEFAULT_MARGIN_TEXELS};
@@ -215,6 +218,11 @@ pub struct LightmapTrainArgs {
     /// Model shape.
     #[command(flatten)]
     pub fit: FitArgs,
+    /// Learn transfer in world space instead of each texel's bone frame (the bone that drives
+    /// its triangles most; bone frames generalise better; world frame needs no bone rotations
+    /// at runtime).
+    #[arg(long)]
+    pub world_frame: bool,
     /// Output model file.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -351,7 +359,13 @@ fn maps_of(
         return Ok((file.resolution(), file.order(), maps, layout));
     }
     let (r, order, maps) = predict_maps(bytes, &name, rig, clip)?;
-    Ok((r, order, maps, stored_or_texture(None, rig, &name)?))
+    let stored = model_layout(bytes, &name)?;
+    Ok((
+        r,
+        order,
+        maps,
+        stored_or_texture(stored.as_ref(), rig, &name)?,
+    ))
 }
 
 fn eval(args: &LightmapEvalArgs) -> Result<()> {
@@ -487,8 +501,15 @@ fn train(args: &LightmapTrainArgs) -> Result<()> {
     let training = LightMapTraining {
         atlas: args.atlas.spec(),
         bake: settings,
-        fit: &fit,
-        precision: PrecisionArg::into(args.fit.precision),
+        model: LightMapFit {
+            options: &fit,
+            precision: PrecisionArg::into(args.fit.precision),
+            frame: if args.world_frame {
+                ModelFrame::World
+            } else {
+                ModelFrame::Bone
+            },
+        },
         checkpoint: CheckpointSettings {
             dir: &checkpoint,
             existing: existing(&args.atlas),
@@ -505,10 +526,14 @@ fn train(args: &LightmapTrainArgs) -> Result<()> {
         .with_context(|| format!("cannot write {}", args.output.display()))?;
     let info = &trained.info;
     eprintln!(
-        "wrote {}: {} frames, {} texel rows, k_a {}, k_v {}, alpha {:.3e}, {} bytes (bake {:.1} s, fit {:.1} s)",
+        "wrote {}: {} frames, {} texel rows in {}, k_a {}, k_v {}, alpha {:.3e}, {} bytes (bake {:.1} s, fit {:.1} s)",
         args.output.display(),
         trained.frames,
         info.vertices,
+        match info.bones {
+            0 => "world space".to_owned(),
+            n => format!("the frames of {n} bones"),
+        },
         info.pose_dims,
         info.coef_dims,
         info.alpha,

@@ -14,7 +14,7 @@ use crate::lighting::luminance;
 use crate::lightmap::bake::texel_positions;
 use crate::lightmap::codec::{MAGIC, ShlmFile};
 use crate::lightmap::layout::stored_or_texture;
-use crate::lightmap::model::predict_maps;
+use crate::lightmap::model::{model_layout, predict_maps};
 use crate::lightmap::sample::at_vertices;
 use crate::report::figures::{FOUR_X_ERROR, PICTURE_VIEW, captioned, upright};
 use crate::report::render::{Colormap, render_scalar, render_with, save_png_atomic};
@@ -94,7 +94,8 @@ fn model_frame(
     };
     let (r, order, mut maps) = predict_maps(bytes, name, rig, &one)?;
     let map = maps.pop().unwrap_or_default();
-    let layout = stored_or_texture(None, rig, name)?;
+    let stored = model_layout(bytes, name)?;
+    let layout = stored_or_texture(stored.as_ref(), rig, name)?;
     let atlas = Atlas::build(&layout, &rig.bind_mesh().triangles, r)?;
     Ok(FrameMaps {
         resolution: r,
@@ -102,7 +103,7 @@ fn model_frame(
         filled: atlas.filled(),
         positions: texel_positions(&atlas, rig.bind_mesh()),
         map,
-        layout: None,
+        layout: stored,
     })
 }
 

@@ -1,6 +1,6 @@
 //! The light-map comparison (`aprt lightmap study`, docs/results/lightmaps): on the real glTF
 //! characters, SH light maps stored as a compressed sequence, the pose-driven light-map model
-//! and the per-vertex pose model, on the same clips — bytes, bake and fit time, decode or
+//! (world and bone frames) and the per-vertex pose model, on the same clips — bytes, bake and fit time, decode or
 //! evaluation time per frame, error at the vertices on the training clip and on a novel one
 //! (where the stored sequence can only fall back to its nearest frame).
 
@@ -9,7 +9,6 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use nalgebra::DMatrix;
 
 use crate::bake::BakeSettings;
 use crate::bake::checkpoint::OnExisting;
@@ -17,13 +16,13 @@ use crate::bake::clip::{BakedClip, bake_clip};
 use crate::lightmap::bake::{BakedMaps, CheckpointSettings, bake_light_maps};
 use crate::lightmap::codec::{CodecSettings, ShlmFile, encode};
 use crate::lightmap::layout::AtlasSpec;
-use crate::lightmap::model::{filled_rows, to_map};
+use crate::lightmap::model::{LightMapFit, fit_light_maps, predict_maps};
 use crate::lightmap::sample::maps_at_vertices;
 use crate::model::ModelFrame;
-use crate::model::export::{Extras, Precision, TexelAtlasExtra, encode_model, encode_model_with};
-use crate::model::fit::{FitOptions, fit};
+use crate::model::export::{Precision, encode_model};
+use crate::model::fit::FitOptions;
 use crate::model::predict::predict_clip;
-use crate::model::runtime::{describe, predict_transfer};
+use crate::model::runtime::describe;
 use crate::pipeline::train::{ClipSet, fit_clip};
 use crate::progress::Reporter;
 use crate::report::evaluate::{nearest_pose, relative_error};
@@ -123,64 +122,47 @@ fn sequence_rows(
     Ok(rows)
 }
 
-/// The pose-driven light-map model fitted to the training clip's maps, evaluated through
-/// aprt-core at both clips' poses and sampled at the vertices.
+/// The pose-driven light-map model fitted in `frame` to the training clip's maps, evaluated
+/// through aprt-core at both clips' poses and sampled at the vertices.
 fn light_map_model_row(
     case: &LightMapCase,
     layout: &PoseLayout,
     baked: &BakedMaps,
     truths: (&BakedClip, &BakedClip),
+    frame: ModelFrame,
 ) -> Result<Row> {
     let seq = &baked.sequence;
     let n2 = seq.order * seq.order;
-    let start = Instant::now();
-    let (rows, transfers) = filled_rows(seq);
-    let (train, test) = truths;
-    let a = DMatrix::from_fn(train.angles.len(), layout.names().len(), |i, j| {
-        train.angles[i][j]
-    });
-    let mut fitted = fit(&a, &transfers, seq.order, &FitOptions::default())?;
-    fitted.model.angle_names = layout.names().to_vec();
-    let fit_s = start.elapsed().as_secs_f64();
-    let blob = encode_model_with(
-        &fitted.model,
-        Precision::F16,
-        &Extras {
-            irradiance_rig: None,
-            texel_atlas: Some(TexelAtlasExtra {
-                resolution: seq.resolution as u32,
-                texels: &rows,
-                corner_uvs: None,
-            }),
-        },
-    )?;
-    let maps = |angles: &[Vec<f64>]| -> Result<(Vec<Vec<f32>>, f64)> {
-        let start = Instant::now();
-        let predicted = predict_transfer(&blob, angles)?;
-        let ms = start.elapsed().as_secs_f64() * 1e3 / angles.len().max(1) as f64;
-        let full = predicted
-            .iter()
-            .map(|values| to_map(values, &rows, seq.resolution, n2))
-            .collect();
-        Ok((full, ms))
-    };
-    let (train_maps, ms) = maps(&train.angles)?;
-    let (test_maps, _) = maps(&test.angles)?;
     let rig = case.rig.as_ref();
+    let model = LightMapFit {
+        options: &FitOptions::default(),
+        precision: Precision::F16,
+        frame,
+    };
+    let (blob, _, fit_s) = fit_light_maps(rig, layout, &case.train, baked, &model)?;
+    let at_vertices = |clip: &Clip| -> Result<(Vec<Vec<f32>>, f64)> {
+        let start = Instant::now();
+        let (_, _, maps) = predict_maps(&blob, "the light-map model", rig, clip)?;
+        let ms = start.elapsed().as_secs_f64() * 1e3 / clip.frames.len().max(1) as f64;
+        Ok((
+            maps_at_vertices(rig, &baked.layout, &maps, seq.resolution, n2),
+            ms,
+        ))
+    };
+    let (on_train, ms) = at_vertices(&case.train)?;
+    let (on_test, _) = at_vertices(&case.test)?;
+    let (train, test) = truths;
     Ok(Row {
-        method: "pose-driven light maps (texel rows, world frame)",
+        method: match frame {
+            ModelFrame::World => "pose-driven light maps (texel rows, world frame)",
+            ModelFrame::Bone => "pose-driven light maps (texel rows, bone frames)",
+        },
         bytes: blob.len(),
         bake_s: baked.seconds,
         fit_s: Some(fit_s),
         ms_per_frame: ms,
-        train_error: relative_error(
-            &maps_at_vertices(rig, &baked.layout, &train_maps, seq.resolution, n2),
-            &train.transfer,
-        ),
-        test_error: relative_error(
-            &maps_at_vertices(rig, &baked.layout, &test_maps, seq.resolution, n2),
-            &test.transfer,
-        ),
+        train_error: relative_error(&on_train, &train.transfer),
+        test_error: relative_error(&on_test, &test.transfer),
     })
 }
 
@@ -253,7 +235,9 @@ pub fn run_case(
     )?;
     let truths = (&train, &test);
     let mut rows = sequence_rows(case, &baked, truths)?;
-    rows.push(light_map_model_row(case, &layout, &baked, truths)?);
+    for frame in [ModelFrame::World, ModelFrame::Bone] {
+        rows.push(light_map_model_row(case, &layout, &baked, truths, frame)?);
+    }
     rows.push(vertex_model_row(
         case,
         &layout,
