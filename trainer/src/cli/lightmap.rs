@@ -566,13 +566,7 @@ fn study(args: &LightmapStudyArgs) -> Result<()> {
     let path = crate::report::lightmap_study::run(
         &assets,
         &args.out,
-        AtlasSpec {
-            resolution: args.resolution,
-            uvs: LightMapUvs::Generate {
-                hard_angle_deg: DEFAULT_HARD_ANGLE_DEG,
-                margin_texels: DEFAULT_MARGIN_TEXELS,
-            },
-        },
+        args.resolution,
         &bake,
         &command,
         &Terminal,

@@ -6,7 +6,9 @@ use anyhow::{Result, bail};
 
 use crate::rig::Rig;
 use crate::rig::uv::UvLayout;
-use crate::rig::uv::generate::{UnwrapSettings, generate_layout};
+use crate::rig::uv::generate::{
+    DEFAULT_HARD_ANGLE_DEG, DEFAULT_MARGIN_TEXELS, UnwrapSettings, generate_layout,
+};
 
 /// The UVs a light map is baked on.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -20,6 +22,14 @@ pub enum LightMapUvs {
         /// Empty texels around each chart.
         margin_texels: u32,
     },
+}
+
+impl LightMapUvs {
+    /// Generated UVs with the default hard angle and margin.
+    pub const DEFAULT_GENERATE: LightMapUvs = LightMapUvs::Generate {
+        hard_angle_deg: DEFAULT_HARD_ANGLE_DEG,
+        margin_texels: DEFAULT_MARGIN_TEXELS,
+    };
 }
 
 /// The atlas a light map is baked on: its size and which UVs.

@@ -15,7 +15,7 @@ use crate::bake::checkpoint::OnExisting;
 use crate::bake::clip::{BakedClip, bake_clip};
 use crate::lightmap::bake::{BakedMaps, CheckpointSettings, bake_light_maps};
 use crate::lightmap::codec::{CodecSettings, ShlmFile, encode};
-use crate::lightmap::layout::AtlasSpec;
+use crate::lightmap::layout::{AtlasSpec, LightMapUvs};
 use crate::lightmap::model::{LightMapFit, fit_light_maps, predict_maps};
 use crate::lightmap::sample::maps_at_vertices;
 use crate::model::ModelFrame;
@@ -403,12 +403,23 @@ pub fn cases(assets: &Path) -> Result<Vec<(LightMapCase, Clip)>> {
     ])
 }
 
-/// Runs the study and writes `out/README.md` and a preview per character; returns the
-/// document's path.
+/// The two atlases the study compares at `resolution`: the character's texture UVs and the
+/// generated light-map UVs (the default), with the names its tables and files use.
+fn atlases(resolution: usize) -> [(&'static str, AtlasSpec); 2] {
+    let at = |uvs| AtlasSpec { resolution, uvs };
+    [
+        ("texture", at(LightMapUvs::Texture)),
+        ("generated", at(LightMapUvs::DEFAULT_GENERATE)),
+    ]
+}
+
+/// Runs the study and writes `out/README.md` and previews per character; returns the
+/// document's path. The stored sequence is measured on both UV layouts (texture and generated); the
+/// models are compared on the generated one.
 pub fn run(
     assets: &Path,
     out: &Path,
-    spec: AtlasSpec,
+    resolution: usize,
     bake: &BakeSettings,
     command: &str,
     reporter: &dyn Reporter,
@@ -417,40 +428,37 @@ pub fn run(
     let scratch = tempfile::tempdir().context("cannot create a scratch directory")?;
     let mut fidelity_rows = String::new();
     let mut sections = String::new();
+    let [_, (_, generated)] = atlases(resolution);
     for (case, clip) in cases(assets)? {
-        reporter.note(&format!("{}: fidelity on {}", case.title, clip.name));
-        let f = fidelity(&case, &clip, spec, bake, scratch.path(), reporter)?;
-        let _ = writeln!(
-            fidelity_rows,
-            "| {} | `{}` | {} | {:.2}% | {:.2}% | {} | {} | {:.1}:1 | {:.2} ({:.1}x a copy) | {:.1} |",
-            case.title,
-            f.clip,
-            f.frames,
-            100.0 * f.atlas_error,
-            100.0 * f.error,
-            f.bytes.0,
-            f.bytes.1,
-            f.bytes.1 as f64 / f.bytes.0.max(1) as f64,
-            f.decode_ms.0,
-            f.decode_ms.0 / f.decode_ms.1.max(1e-9),
-            f.bake_s,
-        );
+        for (uvs, spec) in atlases(resolution) {
+            reporter.note(&format!(
+                "{}: fidelity on {}, {uvs} UVs",
+                case.title, clip.name
+            ));
+            let f = fidelity(&case, &clip, spec, bake, scratch.path(), reporter)?;
+            fidelity_rows.push_str(&fidelity_row(&case, uvs, &f));
+        }
         reporter.note(&format!("{}: comparison", case.title));
-        sections.push_str(&run_case(&case, spec, bake, scratch.path(), reporter)?);
+        sections.push_str(&run_case(&case, generated, bake, scratch.path(), reporter)?);
         sections.push('\n');
-        sections.push_str(&preview(
-            &case,
-            &clip,
-            spec,
-            bake,
-            out,
-            scratch.path(),
-            reporter,
-        )?);
+        for (uvs, spec) in atlases(resolution) {
+            let shown = Preview {
+                clip: &clip,
+                uvs,
+                spec,
+            };
+            sections.push_str(&preview(
+                &case,
+                &shown,
+                bake,
+                out,
+                scratch.path(),
+                reporter,
+            )?);
+        }
     }
-    let resolution = spec.resolution;
     let doc = format!(
-        "# SH light maps against the per-vertex pose model\n\nRegenerate with `{command}`. SH order {}, {} rays per texel and per vertex, atlas {resolution}x{resolution}. Errors are relative transfer errors ‖pred − truth‖ / ‖truth‖ at the vertices against per-vertex ray-traced transfer (`aprt simulate`), over all frames, vertices and coefficients; a light map is read at each vertex's UV bilinearly (`aprt lightmap eval`). Times are one run on this machine; decode and evaluation on one core.\n\n## Fidelity of the stored sequence\n\n| character | clip | frames | error, f32 maps | error, compressed | bytes | f32 bytes | ratio | decode ms/frame | bake s |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n{fidelity_rows}\n{sections}",
+        "# SH light maps against the per-vertex pose model\n\nRegenerate with `{command}`. SH order {}, {} rays per texel and per vertex, atlas {resolution}x{resolution}. Errors are relative transfer errors ‖pred − truth‖ / ‖truth‖ at the vertices against per-vertex ray-traced transfer (`aprt simulate`), over all frames, vertices and coefficients; a light map is read at each vertex's UV bilinearly (`aprt lightmap eval`). Texture UVs are the character's own (`--uv texture`); generated UVs are the light-map atlas `--uv generate` makes (the default: charts cut at hard edges, repacked at uniform density with a margin). Times are one run on this machine; decode and evaluation on one core.\n\n## Fidelity of the stored sequence\n\n| character | clip | UVs | frames | error, f32 maps | error, compressed | bytes | f32 bytes | ratio | decode ms/frame | bake s |\n|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n{fidelity_rows}\n{sections}",
         bake.order, bake.rays,
     );
     let path = out.join("README.md");
@@ -459,19 +467,44 @@ pub fn run(
     Ok(path)
 }
 
-/// Writes `out/<id>_lightmap.png`: the light map of the middle frame of `clip` under
+/// One row of the fidelity table.
+fn fidelity_row(case: &LightMapCase, uvs: &str, f: &Fidelity) -> String {
+    format!(
+        "| {} | `{}` | {uvs} | {} | {:.2}% | {:.2}% | {} | {} | {:.1}:1 | {:.2} ({:.1}x a copy) | {:.1} |\n",
+        case.title,
+        f.clip,
+        f.frames,
+        100.0 * f.atlas_error,
+        100.0 * f.error,
+        f.bytes.0,
+        f.bytes.1,
+        f.bytes.1 as f64 / f.bytes.0.max(1) as f64,
+        f.decode_ms.0,
+        f.decode_ms.0 / f.decode_ms.1.max(1e-9),
+        f.bake_s,
+    )
+}
+
+/// What a preview shows: the middle frame of `clip`, baked on `spec` (called `uvs`).
+struct Preview<'a> {
+    clip: &'a Clip,
+    uvs: &'a str,
+    spec: AtlasSpec,
+}
+
+/// Writes `out/<id>_lightmap_<uvs>.png`: the light map of the middle frame of the clip under
 /// [`preview_lights`], the character rendered with it, its per-vertex shading and the error;
 /// returns the markdown that shows it.
 fn preview(
     case: &LightMapCase,
-    clip: &Clip,
-    spec: AtlasSpec,
+    shown: &Preview<'_>,
     bake: &BakeSettings,
     out: &Path,
     scratch: &Path,
     reporter: &dyn Reporter,
 ) -> Result<String> {
     use crate::report::lightmap_preview::{ComposeSource, save_preview};
+    let clip = shown.clip;
     let frame = clip.frames.len() / 2;
     let one = Clip {
         name: format!("{} frame {frame}", clip.name),
@@ -483,7 +516,15 @@ fn preview(
         existing: OnExisting::Refuse,
     };
     let rig = case.rig.as_ref();
-    let baked = bake_light_maps(rig, &case.title, &one, spec, bake, &checkpoint, reporter)?;
+    let baked = bake_light_maps(
+        rig,
+        &case.title,
+        &one,
+        shown.spec,
+        bake,
+        &checkpoint,
+        reporter,
+    )?;
     let bytes = encode(&baked.sequence, &CodecSettings::default())?;
     let id: String = case
         .title
@@ -491,7 +532,7 @@ fn preview(
         .next()
         .unwrap_or("case")
         .to_lowercase();
-    let file = format!("{id}_lightmap.png");
+    let file = format!("{id}_lightmap_{}.png", shown.uvs);
     let source = ComposeSource {
         name: &case.title,
         bytes: &bytes,
@@ -501,8 +542,9 @@ fn preview(
     };
     let line = save_preview(&out.join(&file), &source, &preview_lights(rig.up()))?;
     Ok(format!(
-        "![{title} light map]({file})\n\n*{title}, `{}` frame {frame}: {line}.*\n\n",
+        "![{title} light map, {uvs} UVs]({file})\n\n*{title}, `{}` frame {frame}, {uvs} UVs: {line}.*\n\n",
         clip.name,
+        uvs = shown.uvs,
         title = case.title,
     ))
 }

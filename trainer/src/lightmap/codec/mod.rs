@@ -15,7 +15,7 @@
 //! | offset | size | field |
 //! | --- | --- | --- |
 //! | 0 | 8 | magic `APRTSHLM` |
-//! | 8 | 4 | version (3; versions 1 and 2 are read too: the same layout without the atlas fingerprint, and version 1 without sign mode 3) |
+//! | 8 | 4 | version (4; versions 1 to 3 are read too: version 3 without the light-map UV fields, 2 also without the atlas fingerprint, 1 also without sign mode 3) |
 //! | 12 | 4 | resolution `R` (1..=8192) |
 //! | 16 | 4 | SH order `n` (1..=6); `n2 = n²` |
 //! | 20 | 4 | frames `F` (1..=1 000 000) |
@@ -31,9 +31,12 @@
 //! | 44 | 4 | positions section bytes |
 //! | 48 | 4 | shared section bytes |
 //! | 52 | 4 | atlas fingerprint: CRC-32 of the UV layout's corners (`UvLayout::fingerprint`); absent before version 3, where the sections start at 52 |
-//! | 56 | … | mask: zstd of `⌈R²/8⌉` bytes, texel `t` at bit `t % 8` of byte `t / 8` |
+//! | 56 | 4 | light-map UV triangles `U` (≤ 10 000 000; 0: the maps lie on the character's texture UVs); absent before version 4 |
+//! | 60 | 4 | light-map UVs section bytes (0 exactly when `U` is); absent before version 4, where the sections start at 56 |
+//! | 64 | … | mask: zstd of `⌈R²/8⌉` bytes, texel `t` at bit `t % 8` of byte `t / 8` |
 //! | | … | positions: zstd of `T × 3` f32, bind-pose point of each filled texel in texel order |
 //! | | … | shared: PCA only: `u32` count (`k + 1`), `count` × `u32` lengths, then zstd plane sets of the mean and the `k` components |
+//! | | … | light-map UVs (`U > 0`): zstd of `U × 3` corners' `(u, v)` f32, each in `[0, 1]`, whose CRC-32 is the atlas fingerprint (`uvs.rs`) |
 //! | | `8(F+1)` | frame offset table: `u64` offsets into the chunk area, non-decreasing, last = its size |
 //! | | … | chunk area: frame `f`'s chunk is `[off[f], off[f+1])` |
 //! | end−4 | 4 | CRC-32 of every byte before it |
