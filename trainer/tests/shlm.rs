@@ -54,11 +54,16 @@ fn a_sequence_reads_back_at_the_vertices_as_aprt_simulate_bakes_them() {
         "bytes",
         "raw_bytes",
         "decode_ms_per_frame",
+        "uv_triangles",
     ] {
         assert!(inspect.get(key).is_some(), "{key} missing: {inspect}");
     }
     let frames = inspect["frames"].as_u64().unwrap();
     assert_eq!(inspect["resolution"], 128);
+    assert_eq!(
+        inspect["uv_triangles"], 4672,
+        "generated UVs, stored: {inspect}"
+    );
     assert_eq!(inspect["order"], 2);
     assert_eq!(
         inspect["raw_bytes"].as_u64().unwrap(),

@@ -452,6 +452,10 @@ fn inspect(args: &LightmapInspectArgs) -> Result<()> {
         s.bytes, s.ratio, s.raw_bytes
     );
     println!("  codec: {}", s.codec);
+    match s.uv_triangles {
+        0 => println!("  UVs: the character's texture UVs"),
+        t => println!("  UVs: generated light-map UVs of {t} triangles, stored in the file"),
+    }
     println!(
         "  decode: {:.3} ms per frame ({:.1}x a copy of the frame's f32 maps, {:.3} ms)",
         s.decode_ms_per_frame,

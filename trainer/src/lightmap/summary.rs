@@ -31,6 +31,9 @@ pub struct Summary {
     pub memcpy_ms_per_frame: f64,
     /// The codec and its parameters.
     pub codec: String,
+    /// Triangles of the light-map UVs the file stores (`--uv generate`); 0 when the maps lie
+    /// on the character's texture UVs.
+    pub uv_triangles: usize,
 }
 
 /// Parses `bytes` and decodes every frame once, timing each against a copy of its maps.
@@ -66,5 +69,6 @@ pub fn summarize(bytes: &[u8]) -> Result<Summary> {
         decode_ms_per_frame: median(times),
         memcpy_ms_per_frame: median(copies),
         codec: file.describe(),
+        uv_triangles: file.layout().map_or(0, |l| l.corners.len()),
     })
 }
