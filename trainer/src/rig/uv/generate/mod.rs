@@ -18,8 +18,9 @@ use glam::Vec3;
 use super::{GUTTER, UvLayout};
 use crate::rig::mesh::Mesh;
 
-/// The hard angle engines default to (Unity's "Generate Lightmap UVs"): faces whose normals
-/// are further apart than this are never in one chart.
+/// The hard angle engines default to (Unity's "Generate Lightmap UVs"): an edge between faces
+/// whose normals are further apart than this is a chart boundary (but where a crease ends
+/// inside smooth surface, which no cut can separate without cutting the smooth surface too).
 pub const DEFAULT_HARD_ANGLE_DEG: f32 = 88.0;
 
 /// The margin that keeps charts from mixing: `uvunwrap` leaves twice the margin in empty
