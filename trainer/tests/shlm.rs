@@ -1,8 +1,9 @@
 //! `aprt shlm` through the real binary on the real glTF characters (and the built-in human): a
 //! baked sequence is read back at the vertices within a fixed error of `aprt simulate` on the
 //! same clip, `inspect` reports the keys, `compose` draws, `train` writes a light-map
-//! model (in bone frames unless `--world-frame`) that `eval` and `compose` read, a resumed bake
-//! is bit-identical, and a character without UVs is refused.
+//! model (in bone frames unless `--world-frame`, with an irradiance rig with `--rig`) that
+//! `eval` and `compose` read, a resumed bake is bit-identical, and a character without UVs is
+//! refused.
 
 use std::path::Path;
 
@@ -383,6 +384,69 @@ fn light_map_models_learn_in_bone_frames_unless_asked_for_world_space() {
         errors[0],
         errors[1]
     );
+}
+
+/// `shlm train --rig gradient` stores a gradient irradiance rig that `inspect` reports, and
+/// `compose` lights the texels through it and says so. Under one directional light, whose
+/// radiance is the same at every texel (which a gradient rig's constant term holds exactly),
+/// the picture is the one the same model without the rig composes with the light at each
+/// texel, within one 8-bit level (rounding).
+#[test]
+fn a_light_map_model_with_a_rig_composes_through_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let sun = dir.path().join("sun.toml");
+    std::fs::write(
+        &sun,
+        "[[light]]\nkind = \"directional\"\ndirection = [0.3, 0.9, 0.2]\nirradiance = [1.0, 0.8, 0.6]\n",
+    )
+    .unwrap();
+    let mut pictures = Vec::new();
+    for rig in [Some("gradient"), None] {
+        let model = dir.path().join(format!("{}.aprt", rig.unwrap_or("none")));
+        let mut args = vec!["shlm", "train", "--builtin", "--clip", "wave"];
+        args.extend(["--resolution", "32", "--order", "2", "--rays", "16"]);
+        args.extend(["-o", path(&model)]);
+        args.extend(rig.iter().flat_map(|r| ["--rig", r]));
+        succeed(&args);
+        let info: serde_json::Value =
+            serde_json::from_slice(&succeed(&["inspect", path(&model), "--json"])).unwrap();
+        match rig {
+            Some(kind) => assert_eq!(info["irradiance_rig"]["kind"], kind, "{info}"),
+            None => assert!(info["irradiance_rig"].is_null(), "{info}"),
+        }
+        let png = dir.path().join(format!("{}.png", rig.unwrap_or("none")));
+        let out = run::aprt(&[
+            "shlm",
+            "compose",
+            path(&model),
+            "--builtin",
+            "--clip",
+            "walk",
+            "--frame",
+            "3",
+            "--rays",
+            "16",
+            "--lights",
+            path(&sun),
+            "--png",
+            path(&png),
+        ]);
+        let said = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(out.status.success(), "{said}");
+        let through = "lit through its gradient irradiance rig (4 SH vectors)";
+        assert_eq!(said.contains(through), rig.is_some(), "{said}");
+        pictures.push(image::open(&png).unwrap().to_rgb8());
+    }
+    let (rigged, direct) = (&pictures[0], &pictures[1]);
+    assert_eq!(rigged.dimensions(), direct.dimensions());
+    let worst = rigged
+        .as_raw()
+        .iter()
+        .zip(direct.as_raw())
+        .map(|(a, b)| a.abs_diff(*b))
+        .max()
+        .unwrap();
+    assert!(worst <= 1, "{worst} levels apart");
 }
 
 /// Bakes are deterministic (the same inputs give the same bytes, with or without `--resume`

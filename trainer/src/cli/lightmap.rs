@@ -223,6 +223,11 @@ pub struct LightmapTrainArgs {
     /// at runtime).
     #[arg(long)]
     pub world_frame: bool,
+    /// Fit an irradiance rig of this kind (constant, gradient, lattice:NXxNYxNZ,
+    /// mixed:x=KIND,y=KIND,z=KIND) to the character's bind and training poses, as `aprt train
+    /// --rig` does, and store it in the model: `compose` then lights the texels through it.
+    #[arg(long)]
+    pub rig: Option<crate::irradiance_rig::RigKind>,
     /// Output model file.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -514,6 +519,7 @@ fn train(args: &LightmapTrainArgs) -> Result<()> {
             dir: &checkpoint,
             existing: existing(&args.atlas),
         },
+        irradiance_rig: args.rig,
     };
     let trained = args.source.in_origin(train_light_maps(
         rig.as_ref(),
@@ -525,8 +531,12 @@ fn train(args: &LightmapTrainArgs) -> Result<()> {
     write_atomic(&args.output, &trained.blob)
         .with_context(|| format!("cannot write {}", args.output.display()))?;
     let info = &trained.info;
+    let rig = match &info.irradiance_rig {
+        Some(rig) => format!(", {} irradiance rig", rig.kind),
+        None => String::new(),
+    };
     eprintln!(
-        "wrote {}: {} frames, {} texel rows in {}, k_a {}, k_v {}, alpha {:.3e}, {} bytes (bake {:.1} s, fit {:.1} s)",
+        "wrote {}: {} frames, {} texel rows in {}{rig}, k_a {}, k_v {}, alpha {:.3e}, {} bytes (bake {:.1} s, fit {:.1} s)",
         args.output.display(),
         trained.frames,
         info.vertices,
