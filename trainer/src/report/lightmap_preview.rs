@@ -271,7 +271,7 @@ pub fn save_preview(path: &Path, source: &ComposeSource<'_>, lights: &[Light]) -
     } else {
         let Some((rig, clip)) = source.character else {
             bail!(
-                "{} is a model: give its character and clip (--gltf/--bvh/--builtin, --clip) for the pose",
+                "{} is a model: give its character and clip (--gltf/--bvh/--builtin, --clip) or its OBJ sequence (--obj-seq with --angles) for the pose",
                 source.name
             );
         };
