@@ -27,6 +27,7 @@ use crate::lightmap::model::{
 use crate::lightmap::sample::maps_at_vertices;
 use crate::lightmap::summary::summarize;
 use crate::model::ModelFrame;
+use crate::progress::Reporter;
 use crate::report::lightmap_preview::{ComposeSource, save_preview};
 use crate::rig::uv::UvLayout;
 use crate::rig::uv::generate::{DEFAULT_HARD_ANGLE_DEG, DEFAULT_MARGIN_TEXELS};
@@ -223,6 +224,11 @@ pub struct LightmapTrainArgs {
     /// at runtime).
     #[arg(long)]
     pub world_frame: bool,
+    /// Fit an irradiance rig of this kind (constant, gradient, lattice:NXxNYxNZ,
+    /// mixed:x=KIND,y=KIND,z=KIND) to the character's bind and training poses, as `aprt train
+    /// --rig` does, and store it in the model: `compose` then lights the texels through it.
+    #[arg(long)]
+    pub rig: Option<crate::irradiance_rig::RigKind>,
     /// Output model file.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -259,6 +265,14 @@ fn checkpoint_output(atlas: &AtlasArgs, output: &std::path::Path) -> (Output, Ve
     (checkpoint, inputs)
 }
 
+/// What errors about the source call it: the character, or the OBJ sequence's directory.
+fn subject(source: &SourceArgs) -> String {
+    match &source.obj_seq {
+        Some(dir) if !source.names_rig() => format!("the OBJ sequence {}", dir.display()),
+        _ => "the character".to_owned(),
+    }
+}
+
 fn existing(atlas: &AtlasArgs) -> OnExisting {
     if atlas.resume {
         OnExisting::Resume
@@ -285,8 +299,8 @@ fn prepare(
 
 fn bake(args: &LightmapBakeArgs) -> Result<()> {
     let (checkpoint, settings) = prepare(&args.atlas, &args.output, &args.source, &args.bake)?;
-    let (rig, clip) = args.source.rig(&Terminal)?;
-    let what = "the character";
+    let (rig, clip) = args.source.light_map_rig(&Terminal)?;
+    let what = &subject(&args.source);
     if let Some(shard) = args.shard {
         let baked = args.source.in_origin(bake_light_map_shard(
             rig.as_ref(),
@@ -378,7 +392,7 @@ fn eval(args: &LightmapEvalArgs) -> Result<()> {
     // The truth is read first, so a file that cannot be one is refused before any work.
     let truth = args.against.as_deref().map(read_truth).transpose()?;
     let bytes = read_file(&args.input, InputKind::LightMap)?;
-    let (rig, clip) = args.source.rig(&Terminal)?;
+    let (rig, clip) = args.source.light_map_rig(&Terminal)?;
     let (r, order, maps, layout) = maps_of(&args.input, &bytes, rig.as_ref(), &clip)?;
     let n2 = order * order;
     let flat: Vec<f32> = maps_at_vertices(rig.as_ref(), &layout, &maps, r, n2).concat();
@@ -474,8 +488,8 @@ fn compose(args: &LightmapComposeArgs) -> Result<()> {
     check(&[Output::file(&args.png, "--png")], &inputs)?;
     let bytes = read_file(&args.input, InputKind::LightMap)?;
     let lights = crate::lighting::read_lights(&args.lights)?;
-    let character = if args.source.names_rig() {
-        Some(args.source.rig(&Terminal)?)
+    let character = if args.source.names_light_map_source() {
+        Some(args.source.light_map_rig(&Terminal)?)
     } else {
         None
     };
@@ -500,24 +514,33 @@ fn compose(args: &LightmapComposeArgs) -> Result<()> {
 fn train(args: &LightmapTrainArgs) -> Result<()> {
     let (checkpoint, settings) = prepare(&args.atlas, &args.output, &args.source, &args.bake)?;
     let fit = args.fit.options()?;
-    let (rig, clips, _) = args.source.load(&[], &Terminal)?;
-    let what = "the character";
+    let (rig, clips) = args.source.light_map_source(&Terminal)?;
+    let what = &subject(&args.source);
+    // Meshes read from files have no bones, so their texels are learned in world space, as
+    // `aprt train` learns their vertices.
+    let frame = if args.world_frame {
+        ModelFrame::World
+    } else if !args.source.names_rig() {
+        Terminal.note(&format!(
+            "note: {what} has no skin: its texels are learned in world space (as with --world-frame)"
+        ));
+        ModelFrame::World
+    } else {
+        ModelFrame::Bone
+    };
     let training = LightMapTraining {
         atlas: args.atlas.spec(),
         bake: settings,
         model: LightMapFit {
             options: &fit,
             precision: PrecisionArg::into(args.fit.precision),
-            frame: if args.world_frame {
-                ModelFrame::World
-            } else {
-                ModelFrame::Bone
-            },
+            frame,
         },
         checkpoint: CheckpointSettings {
             dir: &checkpoint,
             existing: existing(&args.atlas),
         },
+        irradiance_rig: args.rig,
     };
     let trained = args.source.in_origin(train_light_maps(
         rig.as_ref(),
@@ -529,8 +552,12 @@ fn train(args: &LightmapTrainArgs) -> Result<()> {
     write_atomic(&args.output, &trained.blob)
         .with_context(|| format!("cannot write {}", args.output.display()))?;
     let info = &trained.info;
+    let rig = match &info.irradiance_rig {
+        Some(rig) => format!(", {} irradiance rig", rig.kind),
+        None => String::new(),
+    };
     eprintln!(
-        "wrote {}: {} frames, {} texel rows in {}, k_a {}, k_v {}, alpha {:.3e}, {} bytes (bake {:.1} s, fit {:.1} s)",
+        "wrote {}: {} frames, {} texel rows in {}{rig}, k_a {}, k_v {}, alpha {:.3e}, {} bytes (bake {:.1} s, fit {:.1} s)",
         args.output.display(),
         trained.frames,
         info.vertices,

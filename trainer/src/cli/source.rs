@@ -11,7 +11,8 @@ use crate::bake::budget::Workload;
 use crate::bake::clip::pose_all;
 use crate::io::outputs::{Input, gltf_inputs, obj_sequence_inputs};
 use crate::io::source::{
-    BuiltinCharacter, ClipSpec, Poses, RigSource, joined, obj_sequence_meshes, parse_frames,
+    BuiltinCharacter, ClipSpec, Poses, RigSource, joined, obj_sequence_meshes, obj_sequence_rig,
+    parse_frames,
 };
 use crate::progress::Reporter;
 use crate::rig::mannequin::MocapOptions;
@@ -361,6 +362,36 @@ impl SourceArgs {
     pub fn rig(&self, reporter: &dyn Reporter) -> Result<(Box<dyn Rig>, Clip)> {
         let (rig, clips, _) = self.load(&[], reporter)?;
         Ok((rig, joined(clips)))
+    }
+
+    /// The character and clips of a light-map command: [`SourceArgs::rig`]'s, or an OBJ
+    /// sequence with its angles as a skinless character with one clip
+    /// ([`crate::io::source::obj_sequence_rig`]).
+    pub fn light_map_source(&self, reporter: &dyn Reporter) -> Result<(Box<dyn Rig>, Vec<Clip>)> {
+        let Some(dir) = self.obj_seq.as_ref().filter(|_| !self.names_rig()) else {
+            let (rig, clips, _) = self.load(&[], reporter)?;
+            return Ok((rig, clips));
+        };
+        self.check_flags()?;
+        let Some(csv) = &self.angles else {
+            bail!(
+                "--obj-seq {}: the light-map commands pose each mesh by its row of joint angles: give --angles FILE",
+                dir.display()
+            );
+        };
+        let (rig, clip) = obj_sequence_rig(dir, csv, reporter)?;
+        Ok((rig, vec![clip]))
+    }
+
+    /// [`SourceArgs::light_map_source`] with its clips joined in order.
+    pub fn light_map_rig(&self, reporter: &dyn Reporter) -> Result<(Box<dyn Rig>, Clip)> {
+        let (rig, clips) = self.light_map_source(reporter)?;
+        Ok((rig, joined(clips)))
+    }
+
+    /// Whether a character or an OBJ sequence, which light-map commands pose, was named.
+    pub fn names_light_map_source(&self) -> bool {
+        self.names_rig() || self.obj_seq.is_some()
     }
 
     /// The meshes to bake with `settings`, without angles: every OBJ of --obj-seq (--angles

@@ -15,6 +15,7 @@ use crate::rig::creature::Creature;
 use crate::rig::gltf::{GltfError, GltfRig};
 use crate::rig::mannequin::{MocapOptions, MocapRig, MocapRigError};
 use crate::rig::mesh::{Mesh, degenerate_note};
+use crate::rig::mesh_sequence::MeshSequence;
 use crate::rig::mocap::Mocap;
 use crate::rig::{Clip, Rig};
 
@@ -53,23 +54,49 @@ impl Poses {
     /// An OBJ sequence (every `.obj` file of `dir`, sorted by name, all with the same mesh)
     /// with one row of `angles` per file. Degenerate triangles are noted to `reporter`.
     pub fn from_obj_sequence(dir: &Path, angles: &Path, reporter: &dyn Reporter) -> Result<Poses> {
-        let files = obj_sequence(dir)?;
-        let rows = crate::io::angles::read_angles(angles, None)?;
-        if rows.len() != files.len() {
-            bail!(
-                "{} has {} rows of angles but {} holds {} OBJ files: one row per pose is needed",
-                angles.display(),
-                rows.len(),
-                dir.display(),
-                files.len()
-            );
-        }
+        let (files, meshes, angles) = read_obj_sequence(dir, angles, reporter)?;
         Ok(Poses::Meshes {
-            meshes: read_same_meshes(&files, reporter)?,
             files,
-            angles: rows,
+            meshes,
+            angles,
         })
     }
+}
+
+/// An OBJ sequence's files, their meshes and one row of angles each.
+type ObjSequence = (Vec<PathBuf>, Vec<Mesh>, Vec<Vec<f64>>);
+
+/// The files of an OBJ sequence, their meshes and one row of `angles` each (see
+/// [`Poses::from_obj_sequence`]).
+fn read_obj_sequence(dir: &Path, angles: &Path, reporter: &dyn Reporter) -> Result<ObjSequence> {
+    let files = obj_sequence(dir)?;
+    let rows = crate::io::angles::read_angles(angles, None)?;
+    if rows.len() != files.len() {
+        bail!(
+            "{} has {} rows of angles but {} holds {} OBJ files: one row per pose is needed",
+            angles.display(),
+            rows.len(),
+            dir.display(),
+            files.len()
+        );
+    }
+    let meshes = read_same_meshes(&files, reporter)?;
+    Ok((files, meshes, rows))
+}
+
+/// An OBJ sequence with its angles (as [`Poses::from_obj_sequence`] reads them) as a skinless
+/// character, [`MeshSequence`], and its one clip: what the commands written for characters
+/// (the light-map ones) take. The first file's texture coordinates (`vt`) are its UVs.
+pub fn obj_sequence_rig(
+    dir: &Path,
+    angles: &Path,
+    reporter: &dyn Reporter,
+) -> Result<(Box<dyn Rig>, Clip)> {
+    let (files, meshes, angles) = read_obj_sequence(dir, angles, reporter)?;
+    let (_, uvs) = crate::io::obj::read_obj_with_uvs(&files[0])?;
+    let sequence = MeshSequence::new(dir.display().to_string(), meshes, angles, uvs)?;
+    let clip = sequence.clip(&dir.display().to_string())?;
+    Ok((Box::new(sequence), clip))
 }
 
 /// The meshes of an OBJ sequence, without angles: every `.obj` file of `dir`, sorted by name,

@@ -6,11 +6,13 @@
 //! of the bind pose and of its training poses, all in that frame: one matrix serves every
 //! pose, and the samples cover where the surface goes, not only where it rests.
 
+use anyhow::Context;
 use aprt_core::{AxisKind, IrradianceRig, Light, Placement, Rgb, RigLayout, RigShape};
 use nalgebra::DMatrix;
 
 use super::kind::RigKind;
 use super::surface_samples::surface_samples;
+use crate::io::source::joined;
 use crate::rig::mesh::Mesh;
 use crate::rig::{Clip, Rig, RigError};
 
@@ -147,6 +149,27 @@ pub fn fitting_meshes(rig: &dyn Rig, clip: &Clip) -> Result<Vec<Mesh>, RigError>
         meshes.push(rig.pose(pose)?);
     }
     Ok(meshes)
+}
+
+/// The surfaces a rig of a character trained on `clips` is fitted over: its bind pose and up
+/// to [`FIT_POSES`] frames spread over the clips joined (for per-vertex models and light-map
+/// models alike: texels lie on the same surface as vertices).
+pub fn rig_fitting_surfaces(rig: &dyn Rig, clips: &[Clip]) -> anyhow::Result<Vec<Mesh>> {
+    let clip = joined(clips.to_vec());
+    fitting_meshes(rig, &clip)
+        .with_context(|| format!("posing clip {} to fit the irradiance rig", clip.name))
+}
+
+/// The bytes of an irradiance rig of `kind` fitted to `meshes` ([`rig_fitting_surfaces`]: a
+/// character's bind pose and training poses in its root frame; or up to [`FIT_POSES`] of the
+/// meshes read from files), its error table computed at `order` on the first of them.
+pub fn fit_irradiance_rig(kind: RigKind, meshes: &[Mesh], order: usize) -> anyhow::Result<Vec<u8>> {
+    let refs: Vec<&Mesh> = meshes.iter().collect();
+    let mut fitted = fit_rig(kind, &refs, None);
+    fitted
+        .tabulate(&meshes[0], order)
+        .context("tabulating the irradiance rig's error")?;
+    Ok(fitted.bytes())
 }
 
 /// Fits a rig of `kind` to `meshes`: the character's surface in its bind pose and training

@@ -84,6 +84,17 @@ fn parse_mixed(spec: &str) -> Result<[AxisKind; 3], String> {
     Ok(out)
 }
 
+impl RigKind {
+    /// The kind of a stored rig, as `--rig` spells it back.
+    pub fn of(rig: &aprt_core::IrradianceRig<'_>) -> RigKind {
+        RigKind {
+            shape: rig.shape(),
+            // A constant rig of one sample is the centroid probe; fitted ones have many.
+            centroid: rig.vectors() == 1 && rig.samples() == 1,
+        }
+    }
+}
+
 impl FromStr for RigKind {
     type Err = RigKindError;
 

@@ -5,6 +5,8 @@
 //! sequence. As a per-vertex model's vertices, rows are learned in the frame of the bone that
 //! drives their triangles most ([`dominant_texel_bones`]), so a limb's rigid motion rotates
 //! its texels' transfer at runtime with no learning, or in the character's world (root) frame.
+//! An irradiance rig, when asked for, is fitted over the surface the texels stand for, as
+//! `aprt train --rig` fits one over the vertices, and stored in the blob.
 
 use std::time::Instant;
 
@@ -16,6 +18,8 @@ use super::codec::MapSequence;
 use super::layout::AtlasSpec;
 use crate::bake::BakeSettings;
 use crate::io::source::joined;
+use crate::irradiance_rig::RigKind;
+use crate::irradiance_rig::fit::{fit_irradiance_rig, rig_fitting_surfaces};
 use crate::model::ModelFrame;
 use crate::model::export::{Extras, Precision, TexelAtlasExtra, encode_model_with};
 use crate::model::fit::{FitOptions, FitReport, fit};
@@ -47,6 +51,8 @@ pub struct LightMapTraining<'a> {
     pub model: LightMapFit<'a>,
     /// Where the bake keeps its finished frames.
     pub checkpoint: CheckpointSettings<'a>,
+    /// The irradiance rig to fit and store with the model, if any.
+    pub irradiance_rig: Option<RigKind>,
 }
 
 /// A trained light-map model and what training measured.
@@ -108,13 +114,31 @@ pub fn train_light_maps(
         &training.checkpoint,
         reporter,
     )?;
-    let (blob, report, fit_seconds) = fit_light_maps(rig, &layout, &clip, &baked, &training.model)?;
+    let fitting = Instant::now();
+    // The texels lie on the character's surface: the rig is fitted over it as for vertices.
+    let rig_section = match training.irradiance_rig {
+        Some(kind) => Some(fit_irradiance_rig(
+            kind,
+            &rig_fitting_surfaces(rig, std::slice::from_ref(&clip))?,
+            training.bake.order,
+        )?),
+        None => None,
+    };
+    let rig_seconds = fitting.elapsed().as_secs_f64();
+    let (blob, report, fit_seconds) = fit_light_maps_with_rig(
+        rig,
+        &layout,
+        &clip,
+        &baked,
+        &training.model,
+        rig_section.as_deref(),
+    )?;
     Ok(TrainedLightMaps {
         info: describe(&blob)?,
         blob,
         report,
         frames: clip.frames.len(),
-        seconds: (baked.seconds, fit_seconds),
+        seconds: (baked.seconds, rig_seconds + fit_seconds),
     })
 }
 
@@ -129,6 +153,18 @@ pub fn fit_light_maps(
     clip: &Clip,
     baked: &BakedMaps,
     model: &LightMapFit<'_>,
+) -> Result<(Vec<u8>, FitReport, f64)> {
+    fit_light_maps_with_rig(rig, layout, clip, baked, model, None)
+}
+
+/// [`fit_light_maps`], storing the irradiance rig section `irradiance_rig` in the blob.
+pub fn fit_light_maps_with_rig(
+    rig: &dyn Rig,
+    layout: &PoseLayout,
+    clip: &Clip,
+    baked: &BakedMaps,
+    model: &LightMapFit<'_>,
+    irradiance_rig: Option<&[u8]>,
 ) -> Result<(Vec<u8>, FitReport, f64)> {
     let start = Instant::now();
     let sequence = &baked.sequence;
@@ -152,7 +188,7 @@ pub fn fit_light_maps(
         &fitted.model,
         model.precision,
         &Extras {
-            irradiance_rig: None,
+            irradiance_rig,
             texel_atlas: Some(TexelAtlasExtra {
                 resolution: sequence.resolution as u32,
                 texels: &rows,

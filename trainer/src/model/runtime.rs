@@ -170,13 +170,8 @@ pub struct RigInfo {
 
 impl RigInfo {
     fn of(rig: &aprt_core::IrradianceRig<'_>, info: &aprt_core::ModelInfo) -> RigInfo {
-        let kind = crate::irradiance_rig::RigKind {
-            shape: rig.shape(),
-            // A constant rig of one sample is the centroid probe; fitted ones have many.
-            centroid: rig.vectors() == 1 && rig.samples() == 1,
-        };
         RigInfo {
-            kind: kind.to_string(),
+            kind: crate::irradiance_rig::RigKind::of(rig).to_string(),
             sh_vectors: rig.vectors(),
             samples: rig.samples(),
             rig_lit_weights: info.rig_lit_weights_len(rig.vectors()),

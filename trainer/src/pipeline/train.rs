@@ -19,9 +19,9 @@ use crate::bake::clip::{BakedClip, pose_all};
 use crate::bake::shard::Shard;
 use crate::bake::{BakeError, BakeSettings};
 use crate::io::atomic::write_atomic;
-use crate::io::source::{Poses, clip_names, joined};
-use crate::irradiance_rig::fit::{FIT_POSES, fitting_meshes};
-use crate::irradiance_rig::{RigKind, fit_rig};
+use crate::io::source::{Poses, clip_names};
+use crate::irradiance_rig::RigKind;
+use crate::irradiance_rig::fit::{FIT_POSES, fit_irradiance_rig, rig_fitting_surfaces};
 use crate::limits::MAX_FRAMES;
 use crate::model::export::{ExportError, Precision, check_alpha};
 use crate::model::fit::{
@@ -832,18 +832,6 @@ fn bake_shard(
     Ok(checkpoint.bake_shard(&meshes, &Vertices, shard, name, reporter)?)
 }
 
-/// The bytes of an irradiance rig of `kind` fitted to `meshes` ([`fitting_surfaces`]: a
-/// character's bind pose and training poses in its root frame; up to [`FIT_POSES`] of the
-/// meshes read from files), its error table computed at `order` on the first of them.
-pub fn fit_irradiance_rig(kind: RigKind, meshes: &[Mesh], order: usize) -> Result<Vec<u8>> {
-    let refs: Vec<&Mesh> = meshes.iter().collect();
-    let mut fitted = fit_rig(kind, &refs, None);
-    fitted
-        .tabulate(&meshes[0], order)
-        .context("tabulating the irradiance rig's error")?;
-    Ok(fitted.bytes())
-}
-
 /// The surfaces an irradiance rig is fitted over: a character's bind pose and up to
 /// [`FIT_POSES`] training poses in its root frame, or up to [`FIT_POSES`] of the meshes read
 /// from files (the first first).
@@ -855,14 +843,6 @@ pub fn fitting_surfaces(poses: &Poses) -> Result<Vec<Mesh>> {
         }
         Poses::Rig { rig, clips, .. } => rig_fitting_surfaces(rig.as_ref(), clips)?,
     })
-}
-
-/// [`fitting_surfaces`] of a character trained on `clips`: its bind pose and up to
-/// [`FIT_POSES`] frames spread over the clips joined.
-pub fn rig_fitting_surfaces(rig: &dyn Rig, clips: &[Clip]) -> Result<Vec<Mesh>> {
-    let clip = joined(clips.to_vec());
-    fitting_meshes(rig, &clip)
-        .with_context(|| format!("posing clip {} to fit the irradiance rig", clip.name))
 }
 
 /// Every frame of the training clips, in order.

@@ -1,12 +1,12 @@
 //! Composing light maps under lights (`SHLM = Σ_i L_i · SHLM_i`, through aprt-core, each
-//! texel lit at its bind-pose position) and the preview `aprt lightmap compose` writes: the light
+//! texel lit at its bind-pose position, through the model's irradiance rig when it has one) and the preview `aprt lightmap compose` writes: the light
 //! map, and with the character the frame rendered with it beside its per-vertex ray-traced
 //! shading and their error, each panel titled and the error map's colour bar under them.
 
 use std::path::Path;
 
 use anyhow::{Context, Result, bail};
-use aprt_core::{Light, Rgb};
+use aprt_core::{IrradianceRig, Light, Placement, Rgb};
 use image::{Rgb as Pixel, RgbImage, imageops};
 
 use crate::bake::{BakeSettings, bake_pose};
@@ -40,7 +40,7 @@ pub struct ComposeSource<'a> {
 }
 
 /// One frame's transfer maps with what lighting them needs.
-struct FrameMaps {
+struct FrameMaps<'a> {
     resolution: usize,
     order: usize,
     /// `resolution²` flags: the texels holding transfer.
@@ -51,10 +51,12 @@ struct FrameMaps {
     map: Vec<f32>,
     /// The light-map UVs the input stores; `None`: the character's texture UVs.
     layout: Option<UvLayout>,
+    /// The model's irradiance rig, which lights the texels when present.
+    rig: Option<IrradianceRig<'a>>,
 }
 
 /// Frame `frame` of a sequence file.
-fn sequence_frame(name: &str, bytes: &[u8], frame: usize) -> Result<FrameMaps> {
+fn sequence_frame(name: &str, bytes: &[u8], frame: usize) -> Result<FrameMaps<'static>> {
     let file = ShlmFile::parse(bytes).with_context(|| format!("{name}: invalid sequence"))?;
     if frame >= file.frames() {
         bail!("--frame {frame}: {name} holds {} frames", file.frames());
@@ -69,18 +71,19 @@ fn sequence_frame(name: &str, bytes: &[u8], frame: usize) -> Result<FrameMaps> {
         positions: file.positions().to_vec(),
         map,
         layout: file.layout().cloned(),
+        rig: None,
     })
 }
 
 /// A light-map model's maps at frame `frame` of the clip, lit at the bind positions of the
 /// rig's atlas at the model's resolution.
-fn model_frame(
+fn model_frame<'a>(
     name: &str,
-    bytes: &[u8],
+    bytes: &'a [u8],
     rig: &dyn Rig,
     clip: &Clip,
     frame: usize,
-) -> Result<FrameMaps> {
+) -> Result<FrameMaps<'a>> {
     let Some(pose) = clip.frames.get(frame) else {
         bail!(
             "--frame {frame}: clip {} has {} frames",
@@ -104,12 +107,15 @@ fn model_frame(
         positions: texel_positions(&atlas, rig.bind_mesh()),
         map,
         layout: stored,
+        rig: aprt_core::Model::parse(bytes)?.irradiance_rig(),
     })
 }
 
 /// The RGB light map (`resolution²` texels, black where no transfer is) of `maps` under
-/// `lights`: the filled texels streamed through aprt-core [`CHUNK`] at a time.
-fn light_map(maps: &FrameMaps, lights: &[Light]) -> Result<Vec<Rgb>> {
+/// `lights`: the filled texels streamed through aprt-core [`CHUNK`] at a time, lit through
+/// the maps' irradiance rig (its vectors projected once, the root at the origin) when they
+/// have one, else by each light at each texel.
+fn light_map(maps: &FrameMaps<'_>, lights: &[Light]) -> Result<Vec<Rgb>> {
     let n2 = maps.order * maps.order;
     let texels: Vec<usize> = (0..maps.filled.len()).filter(|&t| maps.filled[t]).collect();
     if texels.len() != maps.positions.len() {
@@ -123,12 +129,31 @@ fn light_map(maps: &FrameMaps, lights: &[Light]) -> Result<Vec<Rgb>> {
     let mut out = vec![[0.0f32; 3]; maps.filled.len()];
     let mut transfer = vec![0.0f32; CHUNK * n2];
     let mut rgb = [[0.0f32; 3]; CHUNK];
+    let placement = Placement::IDENTITY;
+    let vectors = match &maps.rig {
+        Some(rig) => {
+            let mut vectors = vec![[0.0f32; 3]; rig.vectors() * n2];
+            rig.vectors_from_lights(maps.order, &placement, lights, &[], &mut vectors)?;
+            vectors
+        }
+        None => Vec::new(),
+    };
     for (chunk, positions) in texels.chunks(CHUNK).zip(maps.positions.chunks(CHUNK)) {
         for (i, &t) in chunk.iter().enumerate() {
             transfer[i * n2..][..n2].copy_from_slice(&maps.map[t * n2..][..n2]);
         }
-        let k = chunk.len();
-        composer.compose_lights(&transfer[..k * n2], positions, lights, &[], &mut rgb[..k])?;
+        let (k, lit) = (chunk.len(), &mut rgb[..chunk.len()]);
+        match &maps.rig {
+            Some(rig) => composer.compose_rig(
+                &transfer[..k * n2],
+                rig,
+                &vectors,
+                &placement,
+                positions,
+                lit,
+            )?,
+            None => composer.compose_lights(&transfer[..k * n2], positions, lights, &[], lit)?,
+        }
         for (&t, &c) in chunk.iter().zip(&rgb[..k]) {
             out[t] = c;
         }
@@ -246,7 +271,7 @@ pub fn save_preview(path: &Path, source: &ComposeSource<'_>, lights: &[Light]) -
     } else {
         let Some((rig, clip)) = source.character else {
             bail!(
-                "{} is a model: give its character and clip (--gltf/--bvh/--builtin, --clip) for the pose",
+                "{} is a model: give its character and clip (--gltf/--bvh/--builtin, --clip) or its OBJ sequence (--obj-seq with --angles) for the pose",
                 source.name
             );
         };
@@ -255,6 +280,13 @@ pub fn save_preview(path: &Path, source: &ComposeSource<'_>, lights: &[Light]) -
     let lit = light_map(&maps, lights)?;
     let mut panels = vec![map_image(&lit, maps.resolution)];
     let mut line = format!("light map, {r}x{r} texels", r = maps.resolution);
+    if let Some(rig) = &maps.rig {
+        line.push_str(&format!(
+            ", lit through its {} irradiance rig ({} SH vectors)",
+            crate::irradiance_rig::RigKind::of(rig),
+            rig.vectors()
+        ));
+    }
     let map_title = format!("light map ({r}x{r} texels)", r = maps.resolution);
     let mut titles = vec![map_title.as_str()];
     let mut key = None;
@@ -269,4 +301,73 @@ pub fn save_preview(path: &Path, source: &ComposeSource<'_>, lights: &[Light]) -
     }
     save_png_atomic(path, &captioned(&panels, &titles, key)?)?;
     Ok(line)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::irradiance_rig::RigKind;
+    use crate::irradiance_rig::fit::fit_irradiance_rig;
+    use crate::rig::character::Character;
+    use aprt_core::{DirectionalLight, PointLight};
+
+    /// A map of the built-in human's bind vertices as texels (every other one), each an
+    /// unoccluded clamped-cosine lobe about its normal, lit through a gradient rig fitted to
+    /// the human and directly by each light at each texel: a directional light's radiance is
+    /// the same everywhere, which the rig's constant term holds exactly, so the two agree to
+    /// f32 rounding; a point light beside the character varies in ways a gradient cannot
+    /// follow, so they differ (the rig is not simply ignored).
+    #[test]
+    fn a_rig_lights_a_map_as_its_lights_do_where_it_is_exact() {
+        let human = Character::builtin();
+        let bind = human.bind_mesh();
+        let order = 3;
+        let n2 = order * order;
+        let kind: RigKind = "gradient".parse().unwrap();
+        let section = fit_irradiance_rig(kind, std::slice::from_ref(bind), order).unwrap();
+        let rig = IrradianceRig::parse(&section).unwrap();
+        let texels: Vec<usize> = (0..bind.vertex_count()).step_by(2).collect();
+        let resolution = (texels.len() as f64).sqrt().ceil() as usize;
+        let mut map = vec![0.0f32; resolution * resolution * n2];
+        for (t, &v) in texels.iter().enumerate() {
+            aprt_core::clamped_cosine(order, bind.normals[v], &mut map[t * n2..][..n2]).unwrap();
+        }
+        let maps = |rig| FrameMaps {
+            resolution,
+            order,
+            filled: (0..resolution * resolution)
+                .map(|t| t < texels.len())
+                .collect(),
+            positions: texels.iter().map(|&v| bind.positions[v]).collect(),
+            map: map.clone(),
+            layout: None,
+            rig,
+        };
+        let difference = |light: Light| {
+            let direct = light_map(&maps(None), &[light]).unwrap();
+            let rigged = light_map(&maps(Some(rig)), &[light]).unwrap();
+            let scale = direct.iter().flatten().fold(0.0f32, |m, v| m.max(v.abs()));
+            let worst = direct
+                .iter()
+                .flatten()
+                .zip(rigged.iter().flatten())
+                .fold(0.0f32, |m, (a, b)| m.max((a - b).abs()));
+            worst / scale
+        };
+        let sun = Light::Directional(DirectionalLight {
+            direction: [0.3, 0.9, 0.2],
+            irradiance: [1.0, 0.8, 0.6],
+        });
+        let exact = difference(sun);
+        assert!(exact < 1e-4, "directional: {exact}");
+        let lamp = Light::Point(PointLight {
+            position: [0.6, 0.0, 1.0],
+            intensity: [1.0; 3],
+        });
+        let approximate = difference(lamp);
+        assert!(
+            approximate > 100.0 * exact.max(1e-6),
+            "point: {approximate}"
+        );
+    }
 }

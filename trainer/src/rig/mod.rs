@@ -9,7 +9,8 @@
 //!   mannequin;
 //! - the rigs: [`character`] and [`creature`] (built in, both a [`BuiltinRig`] sharing one
 //!   construction and clip machinery), [`gltf`] (glTF 2.0 skins and animations), [`mocap`]
-//!   (BVH motion-capture files) and [`mannequin`] (the rig a motion-capture skeleton drives);
+//!   (BVH motion-capture files), [`mannequin`] (the rig a motion-capture skeleton drives) and
+//!   [`mesh_sequence`] (meshes read from files, skinless, for the light-map commands);
 //! - what a model needs of a rig: [`pose_layout`] (which pose entries it takes),
 //!   [`bone_frames`] (transfer in each vertex's bone frame) and [`transfer_rotation`]
 //!   (rotating each vertex's SH transfer);
@@ -23,6 +24,7 @@ pub mod gltf;
 pub(crate) mod lathe;
 pub mod mannequin;
 pub mod mesh;
+pub mod mesh_sequence;
 pub mod mocap;
 pub mod pose_layout;
 pub mod pose_sampler;
@@ -115,6 +117,9 @@ pub enum RigError {
     /// Linear blend skinning of the posed joints failed.
     #[error(transparent)]
     Skin(#[from] SkinError),
+    /// From meshes read from files (an OBJ sequence).
+    #[error(transparent)]
+    MeshSequence(#[from] mesh_sequence::MeshSequenceError),
 }
 
 /// A sequence of poses sampled at a fixed rate. Each frame has one value per pose-vector
