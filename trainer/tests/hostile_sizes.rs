@@ -316,38 +316,59 @@ fn an_environment_map_is_sized_from_its_header() {
 fn a_light_map_refuses_another_characters_uvs() {
     let work = tempfile::tempdir().unwrap();
     let bvh = run::tiny_character(work.path(), 3);
+    let bake = |maps: &Path, uv: &str| {
+        run::succeed(&[
+            "shlm",
+            "bake",
+            "--bvh",
+            &bvh,
+            "--resolution",
+            "32",
+            "--order",
+            "2",
+            "--rays",
+            "16",
+            "--uv",
+            uv,
+            "-o",
+            &s(maps),
+        ]);
+    };
+    // On the character's texture UVs the file records their fingerprint; on generated UVs
+    // it stores them, and another character's triangle count gives it away.
     let maps = work.path().join("maps.shlm");
-    let bake = [
-        "shlm",
-        "bake",
-        "--bvh",
-        &bvh,
-        "--resolution",
-        "32",
-        "--order",
-        "2",
-        "--rays",
-        "16",
-        "-o",
-        &s(&maps),
-    ];
-    run::succeed(&bake);
+    bake(&maps, "texture");
+    let generated = work.path().join("generated.shlm");
+    bake(&generated, "generate");
     let out = out_dir(work.path(), "out");
     let npy = s(&out.join("x.npy"));
     let lights = work.path().join("l.toml");
     lights_file(&lights, 1);
     let png = s(&out.join("x.png"));
-    for args in [
+    let eval = |maps: &Path| {
         strings(&[
             "shlm",
             "eval",
-            &s(&maps),
+            &s(maps),
             "--builtin",
             "--clip",
             "wave",
             "--npy",
             &npy,
-        ]),
+        ])
+    };
+    refused(
+        &eval(&generated),
+        &[&generated, &lights],
+        &out,
+        &[
+            "generated.shlm",
+            "stores light-map UVs for",
+            "give the character the light map was baked from",
+        ],
+    );
+    for args in [
+        eval(&maps),
         strings(&[
             "shlm",
             "compose",
@@ -384,9 +405,9 @@ fn a_light_map_refuses_another_characters_uvs() {
     assert!(!String::from_utf8_lossy(&ok.stderr).contains("fingerprint"));
     std::fs::remove_file(&npy).unwrap();
     let mut old = std::fs::read(&maps).unwrap();
-    assert_eq!(&old[8..12], &3u32.to_le_bytes());
+    assert_eq!(&old[8..12], &4u32.to_le_bytes());
     old[8..12].copy_from_slice(&2u32.to_le_bytes());
-    old.drain(52..56);
+    old.drain(52..64);
     old.truncate(old.len() - 4);
     let crc = crc32fast::hash(&old);
     old.extend_from_slice(&crc.to_le_bytes());
