@@ -262,6 +262,68 @@ pub enum Error {
 impl core::fmt::Display for Error {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match *self {
+            Error::BadSkinning { bone } => {
+                write!(f, "skinning matrix of bone {bone} is NaN or infinite")
+            }
+            Error::NonFiniteNormal { index } => {
+                write!(f, "vertex normal {index} is NaN or infinite")
+            }
+            Error::WeightsForOtherRig => {
+                write!(f, "rig lighting weights were computed for another rig")
+            }
+            Error::BufferTooSmall { needed } => write!(f, "buffer too small: needs {needed} bytes"),
+            Error::WeightsTooSmall { needed, capacity } => write!(
+                f,
+                "weights hold {capacity} values, this model needs {needed}"
+            ),
+            Error::WrongLength {
+                what,
+                expected,
+                found,
+            } => write!(
+                f,
+                "{what:?}: {found} values given, the model needs {expected}"
+            ),
+            Error::NonFiniteAngle { index } => write!(f, "pose entry {index} is NaN or infinite"),
+            Error::NonFiniteLighting { index } => {
+                write!(f, "lighting coefficient {index} is NaN or infinite")
+            }
+            Error::NonFiniteLightMap { texel } => {
+                write!(f, "light map of texel {texel} holds NaN or infinity")
+            }
+            Error::NonFinitePosition { index } => {
+                write!(f, "vertex position {index} is NaN or infinite")
+            }
+            Error::BadRotation { bone } => {
+                write!(f, "rotation of bone {bone} is not orthonormal")
+            }
+            Error::BadLight { index, reason } => write!(f, "light {index} is invalid: {reason}"),
+            Error::BadLightWeight { index } => {
+                write!(f, "weight of light {index} is negative, NaN or infinite")
+            }
+            Error::VertexRange { first, count } => {
+                write!(f, "vertex range {first}..{first}+{count} is out of bounds")
+            }
+            Error::TriangleRange {
+                triangle,
+                triangles,
+            } => write!(
+                f,
+                "triangle {triangle} is past the atlas's {triangles} triangles"
+            ),
+            Error::WeightsNotSet => write!(f, "weights were not computed (or their call failed)"),
+            Error::WeightsForOtherModel => write!(f, "weights were computed for another model"),
+            Error::Source => write!(f, "blob source read failed"),
+            _ => self.fmt_blob_error(f),
+        }
+    }
+}
+
+impl Error {
+    /// The messages of the errors a blob's layout or contents cause (the others are the
+    /// caller's inputs, written by `Display::fmt` itself).
+    fn fmt_blob_error(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
             Error::Truncated { needed } => {
                 write!(f, "blob truncated: needs at least {needed} bytes")
             }
@@ -331,58 +393,8 @@ impl core::fmt::Display for Error {
                 "occluder proxies have a bad count, cull, bone, centre, radius, mask or length"
             ),
             Error::NoProxies => write!(f, "the model has no occluder proxies"),
-            Error::BadSkinning { bone } => {
-                write!(f, "skinning matrix of bone {bone} is NaN or infinite")
-            }
-            Error::NonFiniteNormal { index } => {
-                write!(f, "vertex normal {index} is NaN or infinite")
-            }
-            Error::WeightsForOtherRig => {
-                write!(f, "rig lighting weights were computed for another rig")
-            }
-            Error::BufferTooSmall { needed } => write!(f, "buffer too small: needs {needed} bytes"),
-            Error::WeightsTooSmall { needed, capacity } => write!(
-                f,
-                "weights hold {capacity} values, this model needs {needed}"
-            ),
-            Error::WrongLength {
-                what,
-                expected,
-                found,
-            } => write!(
-                f,
-                "{what:?}: {found} values given, the model needs {expected}"
-            ),
-            Error::NonFiniteAngle { index } => write!(f, "pose entry {index} is NaN or infinite"),
-            Error::NonFiniteLighting { index } => {
-                write!(f, "lighting coefficient {index} is NaN or infinite")
-            }
-            Error::NonFiniteLightMap { texel } => {
-                write!(f, "light map of texel {texel} holds NaN or infinity")
-            }
-            Error::NonFinitePosition { index } => {
-                write!(f, "vertex position {index} is NaN or infinite")
-            }
-            Error::BadRotation { bone } => {
-                write!(f, "rotation of bone {bone} is not orthonormal")
-            }
-            Error::BadLight { index, reason } => write!(f, "light {index} is invalid: {reason}"),
-            Error::BadLightWeight { index } => {
-                write!(f, "weight of light {index} is negative, NaN or infinite")
-            }
-            Error::VertexRange { first, count } => {
-                write!(f, "vertex range {first}..{first}+{count} is out of bounds")
-            }
-            Error::TriangleRange {
-                triangle,
-                triangles,
-            } => write!(
-                f,
-                "triangle {triangle} is past the atlas's {triangles} triangles"
-            ),
-            Error::WeightsNotSet => write!(f, "weights were not computed (or their call failed)"),
-            Error::WeightsForOtherModel => write!(f, "weights were computed for another model"),
-            Error::Source => write!(f, "blob source read failed"),
+            // Every other variant is written by `Display::fmt`.
+            _ => write!(f, "{self:?}"),
         }
     }
 }
