@@ -37,17 +37,6 @@ pub fn read_uvs(
         .iter()
         .map(|b| f32::from_le_bytes(*b))
         .collect();
-    if let Some(i) = floats.iter().position(|x| !(0.0..=1.0).contains(x)) {
-        return Err(CodecError::Invalid {
-            what: WHAT,
-            message: format!(
-                "triangle {} corner {} has {} outside [0, 1]",
-                i / 6,
-                i % 6 / 2,
-                floats[i]
-            ),
-        });
-    }
     let layout = UvLayout {
         corners: floats
             .as_chunks::<6>()
@@ -56,6 +45,12 @@ pub fn read_uvs(
             .map(|t| [[t[0], t[1]], [t[2], t[3]], [t[4], t[5]]])
             .collect(),
     };
+    if let Some((triangle, corner, x)) = layout.outside_unit_square() {
+        return Err(CodecError::Invalid {
+            what: WHAT,
+            message: format!("triangle {triangle} corner {corner} has {x} outside [0, 1]"),
+        });
+    }
     if layout.fingerprint() != fingerprint {
         return Err(CodecError::Invalid {
             what: WHAT,

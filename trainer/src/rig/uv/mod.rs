@@ -77,6 +77,18 @@ impl UvLayout {
         h.finalize()
     }
 
+    /// The first corner whose UV is not in `[0, 1]²` (or is NaN), as (triangle, corner, the
+    /// offending coordinate): what a light-map atlas, stored or generated, must never have.
+    pub fn outside_unit_square(&self) -> Option<(usize, usize, f32)> {
+        self.corners.iter().enumerate().find_map(|(t, corners)| {
+            corners.iter().enumerate().find_map(|(k, uv)| {
+                uv.iter()
+                    .find(|x| !(0.0..=1.0).contains(*x))
+                    .map(|&x| (t, k, x))
+            })
+        })
+    }
+
     /// The layout of a mesh with one UV per vertex (as glTF stores them). A corner naming a
     /// vertex without a UV gets NaN, which [`Atlas::build`] refuses, naming the triangle.
     pub fn from_vertex_uvs(uvs: &[[f32; 2]], triangles: &[[u32; 3]]) -> UvLayout {
