@@ -48,6 +48,7 @@
 mod blob;
 mod eval;
 mod irradiance_rig;
+mod lanes;
 mod light;
 mod lightmap;
 mod math;

@@ -3,6 +3,7 @@
 //! The convention is stated once, on [`eval_basis`], where the crate's documentation shows it.
 
 use crate::blob::format::VERTEX_BLOCK;
+use crate::lanes::{Lanes, Portable};
 use crate::math;
 
 /// Highest supported SH order (bands `0..MAX_ORDER`).
@@ -226,41 +227,37 @@ pub(crate) fn eval_basis_lanes(
     dirs: DirectionLanes,
     out: &mut [[f32; VERTEX_BLOCK]; MAX_COEFFS],
 ) {
+    let dirs = dirs.map(Portable);
+    let mut y = [Portable::splat(0.0); MAX_COEFFS];
     match order {
-        1 => basis_lanes::<1>(dirs, out),
-        2 => basis_lanes::<2>(dirs, out),
-        3 => basis_lanes::<3>(dirs, out),
-        4 => basis_lanes::<4>(dirs, out),
-        5 => basis_lanes::<5>(dirs, out),
-        _ => basis_lanes::<6>(dirs, out),
+        1 => basis_lanes::<Portable, 1>(dirs, &mut y),
+        2 => basis_lanes::<Portable, 2>(dirs, &mut y),
+        3 => basis_lanes::<Portable, 3>(dirs, &mut y),
+        4 => basis_lanes::<Portable, 4>(dirs, &mut y),
+        5 => basis_lanes::<Portable, 5>(dirs, &mut y),
+        _ => basis_lanes::<Portable, 6>(dirs, &mut y),
+    }
+    for (o, y) in out.iter_mut().zip(&y).take(order * order) {
+        *o = y.0;
     }
 }
 
-/// Eight lanes of `f(lane)`.
+/// [`basis_of`], lane by lane, in any [`Lanes`]: the first `N²` entries of `out`.
 #[inline(always)]
-fn lanes(f: impl Fn(usize) -> f32) -> [f32; VERTEX_BLOCK] {
-    core::array::from_fn(f)
-}
-
-/// [`basis_of`], lane by lane.
-#[inline(always)]
-fn basis_lanes<const N: usize>(
-    [x, y, z]: DirectionLanes,
-    out: &mut [[f32; VERTEX_BLOCK]; MAX_COEFFS],
-) {
-    let (mut cm, mut sm) = ([1.0f32; VERTEX_BLOCK], [0.0f32; VERTEX_BLOCK]);
+pub(crate) fn basis_lanes<V: Lanes, const N: usize>([x, y, z]: [V; 3], out: &mut [V; MAX_COEFFS]) {
+    let (mut cm, mut sm) = (V::splat(1.0), V::splat(0.0));
     let mut pmm = 1.0f32;
     for m in 0..N {
-        let mut p_prev2 = [0.0f32; VERTEX_BLOCK];
-        let mut p_prev = [pmm; VERTEX_BLOCK];
+        let mut p_prev2 = V::splat(0.0);
+        let mut p_prev = V::splat(pmm);
         for l in m..N {
             let p = if l == m {
-                [pmm; VERTEX_BLOCK]
+                V::splat(pmm)
             } else if l == m + 1 {
-                lanes(|i| (2 * m + 1) as f32 * z[i] * pmm)
+                V::splat((2 * m + 1) as f32) * z * V::splat(pmm)
             } else {
                 let [a, b] = RECURRENCE[l][m];
-                lanes(|i| a * z[i] * p_prev[i] - b * p_prev2[i])
+                V::splat(a) * z * p_prev - V::splat(b) * p_prev2
             };
             if l > m {
                 p_prev2 = p_prev;
@@ -268,17 +265,14 @@ fn basis_lanes<const N: usize>(
             }
             let k = NORMS[l][m];
             if m == 0 {
-                out[index(l, 0)] = lanes(|i| k * p[i]);
+                out[index(l, 0)] = V::splat(k) * p;
             } else {
-                let k2 = lanes(|i| core::f32::consts::SQRT_2 * k * p[i]);
-                out[index(l, m as i32)] = lanes(|i| k2[i] * cm[i]);
-                out[index(l, -(m as i32))] = lanes(|i| k2[i] * sm[i]);
+                let k2 = V::splat(core::f32::consts::SQRT_2 * k) * p;
+                out[index(l, m as i32)] = k2 * cm;
+                out[index(l, -(m as i32))] = k2 * sm;
             }
         }
-        let (ncm, nsm) = (
-            lanes(|i| cm[i] * x[i] - sm[i] * y[i]),
-            lanes(|i| cm[i] * y[i] + sm[i] * x[i]),
-        );
+        let (ncm, nsm) = (cm * x - sm * y, cm * y + sm * x);
         cm = ncm;
         sm = nsm;
         pmm *= (2 * m + 1) as f32;

@@ -30,6 +30,8 @@ use kernels::{
     transfer_stored,
 };
 pub(crate) use rig::check_positions;
+#[cfg(target_arch = "x86_64")]
+pub(crate) use kernels::Avx2;
 use weights::check_capacity;
 pub use weights::{LitWeights, MAX_POSE_WEIGHTS, PoseWeights};
 pub(crate) use weights::{Stamp, check_stamp};
@@ -41,7 +43,17 @@ use crate::sh::MAX_COEFFS;
 
 /// The index of the first NaN or infinite value, if any.
 pub(crate) fn first_non_finite(xs: &[f32]) -> Option<usize> {
-    xs.iter().position(|x| !x.is_finite())
+    match all_finite(xs) {
+        true => None,
+        false => xs.iter().position(|x| !x.is_finite()),
+    }
+}
+
+/// Whether every value is finite: the largest magnitude's bits below infinity's. An integer
+/// maximum over the whole slice, which vectorises, where a search stopping at the first
+/// non-finite value runs one value at a time (per-vertex inputs are scanned every frame).
+pub(crate) fn all_finite(xs: &[f32]) -> bool {
+    xs.iter().fold(0u32, |m, x| m.max(x.to_bits() & 0x7fff_ffff)) < 0x7f80_0000
 }
 
 impl ModelInfo {

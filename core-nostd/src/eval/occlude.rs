@@ -6,8 +6,8 @@ use super::first_non_finite;
 use super::rig::check_positions;
 use crate::blob::format::VERTEX_BLOCK;
 use crate::blob::{Error, Input, ModelInfo, Reader};
-use crate::proxies::{ProxyFrame, block_occlusion};
-use crate::rotation::Rotation;
+use crate::proxies::{Block, Output, ProxyFrame, block_occlusion};
+use crate::rotation::{IDENTITY, Rotation};
 use crate::sh::MAX_COEFFS;
 
 impl ModelInfo {
@@ -29,56 +29,64 @@ impl ModelInfo {
                 found: normals.len(),
             });
         }
-        if let Some(index) = normals.iter().position(|n| first_non_finite(n).is_some()) {
-            return Err(Error::NonFiniteNormal { index });
+        if let Some(i) = first_non_finite(normals.as_flattened()) {
+            return Err(Error::NonFiniteNormal { index: i / 3 });
         }
         self.check_range(first, count)
     }
 
-    /// Visits every vertex of `first .. first + count` that some proxy reaches with its
-    /// index in the range and its occlusion `D` (n² values; in its bone's frame when
-    /// `rotations` are given). Proxies are first cut to the vertex's bone's and to its
-    /// block's reach; a vertex of zero normal sees none.
-    fn each_occlusion<R: Reader>(
+    /// Hands `visit` every block of `first .. first + count` that a proxy may reach, with the
+    /// index in the range of its lane 0 (lane `l` is vertex `start + l` of the range; lanes
+    /// outside it take no proxy). A lane takes the proxies of its bone's mask, and in the
+    /// bone's frame when `rotations` are given.
+    fn each_receiving_block<R: Reader>(
         &self,
         r: &mut R,
         frame: &ProxyFrame,
         (first, count): (usize, usize),
         (positions, normals): (&[[f32; 3]], &[[f32; 3]]),
         rotations: Option<&[Rotation]>,
+        mut visit: impl FnMut(isize, &Block),
+    ) -> Result<(), Error> {
+        let end = first + count;
+        self.each_block(r, first, count, |v0, bones, _| {
+            let mut block = Block {
+                masks: [0; VERTEX_BLOCK],
+                vertices: [([0.0; 3], [0.0; 3]); VERTEX_BLOCK],
+                rotations: rotations.map(|_| [IDENTITY; VERTEX_BLOCK]),
+            };
+            for j in v0.max(first)..(v0 + VERTEX_BLOCK).min(end) {
+                let (l, i, bone) = (j - v0, j - first, bones[j - v0]);
+                block.masks[l] = frame.candidates.get(bone).copied().unwrap_or(0);
+                block.vertices[l] = (positions[i], normals[i]);
+                if let (Some(lanes), Some(r)) = (&mut block.rotations, rotations) {
+                    lanes[l] = r.get(bone).copied().unwrap_or(IDENTITY);
+                }
+            }
+            if block.masks.iter().any(|&m| m != 0) {
+                visit(v0 as isize - first as isize, &block);
+            }
+        })
+    }
+
+    /// Visits every vertex of `first .. first + count` that some proxy reaches with its
+    /// index in the range and its occlusion `D` (n² values; in its bone's frame when
+    /// `rotations` are given). A vertex of zero normal sees no proxy.
+    fn each_occlusion<R: Reader>(
+        &self,
+        r: &mut R,
+        frame: &ProxyFrame,
+        range: (usize, usize),
+        vertices: (&[[f32; 3]], &[[f32; 3]]),
+        rotations: Option<&[Rotation]>,
         mut visit: impl FnMut(usize, &[f32]),
     ) -> Result<(), Error> {
-        let (end, n2) = (first + count, self.coeffs());
+        let n2 = self.coeffs();
         let mut d = [[0.0f32; MAX_COEFFS]; VERTEX_BLOCK];
-        self.each_block(r, first, count, |v0, bones, _| {
-            let (lo, hi) = (v0.max(first), (v0 + bones.len()).min(end));
-            let block =
-                frame.block_mask(&bones[lo - v0..hi - v0], &positions[lo - first..hi - first]);
-            if block == 0 {
-                return;
-            }
-            // Lanes outside the range keep an empty mask.
-            let (mut masks, mut vertices) = (
-                [0u64; VERTEX_BLOCK],
-                [([0.0f32; 3], [0.0f32; 3]); VERTEX_BLOCK],
-            );
-            let mut lane_rotations = [None; VERTEX_BLOCK];
-            for j in lo..hi {
-                let (l, i, bone) = (j - v0, j - first, bones[j - v0]);
-                masks[l] = frame.candidates.get(bone).copied().unwrap_or(0) & block;
-                vertices[l] = (positions[i], normals[i]);
-                lane_rotations[l] = rotations.and_then(|r| r.get(bone));
-            }
-            if masks == [0; VERTEX_BLOCK] {
-                return;
-            }
-            let reached =
-                block_occlusion(frame, self.order, masks, vertices, lane_rotations, &mut d);
-            for j in lo..hi {
-                let l = j - v0;
-                if reached & (1 << l) != 0 {
-                    visit(j - first, &d[l][..n2]);
-                }
+        self.each_receiving_block(r, frame, range, vertices, rotations, |start, block| {
+            let reached = block_occlusion(frame, self.order, block, Output::Transfer(&mut d));
+            for (l, d) in d.iter().enumerate().filter(|&(l, _)| reached & (1 << l) != 0) {
+                visit((start + l as isize) as usize, &d[..n2]);
             }
         })
     }
@@ -113,8 +121,16 @@ impl ModelInfo {
         self.check_sh_lighting(lighting)?;
         self.check_occlusion_inputs(frame, positions, normals, first, out.len())?;
         let range = (first, out.len());
-        self.each_occlusion(r, frame, range, (positions, normals), None, |i, d| {
-            out[i] -= d.iter().zip(lighting).map(|(d, l)| d * l).sum::<f32>();
+        let mut shading = [0.0f32; VERTEX_BLOCK];
+        self.each_receiving_block(r, frame, range, (positions, normals), None, |start, block| {
+            let output = Output::Shading {
+                lighting,
+                out: &mut shading,
+            };
+            let reached = block_occlusion(frame, self.order, block, output);
+            for (l, s) in shading.iter().enumerate().filter(|&(l, _)| reached & (1 << l) != 0) {
+                out[(start + l as isize) as usize] -= s;
+            }
         })
     }
 

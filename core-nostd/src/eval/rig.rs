@@ -134,8 +134,8 @@ pub(crate) fn check_positions(positions: &[[f32; 3]], count: usize) -> Result<()
             found: positions.len(),
         });
     }
-    match positions.iter().position(|p| first_non_finite(p).is_some()) {
-        Some(index) => Err(Error::NonFinitePosition { index }),
+    match first_non_finite(positions.as_flattened()) {
+        Some(i) => Err(Error::NonFinitePosition { index: i / 3 }),
         None => Ok(()),
     }
 }

@@ -3,16 +3,17 @@
 //! pose and lighting weights.
 
 use super::MAX_PROXIES;
-use super::occlusion::vertex_occlusion;
+use super::caps::Sphere;
+use super::occlusion::{Block, Output, block_occlusion};
 use super::section::{
     BONE_RECORD, PRELUDE, PROXY_RECORD, ProxyCheck, bone_record, prelude, proxy_record,
 };
-use crate::blob::format::MAX_BONES;
+use crate::blob::format::{MAX_BONES, VERTEX_BLOCK};
 use crate::blob::{Error, Input, ModelInfo, Reader, Resident};
 use crate::eval::{Stamp, check_stamp, first_non_finite};
 use crate::math;
 use crate::rotation::Rotation;
-use crate::sh::{MAX_ORDER, coeff_count};
+use crate::sh::{MAX_COEFFS, MAX_ORDER, coeff_count};
 
 /// A bone's skinning matrix, bind pose to posed, as an engine computes it for linear blend
 /// skinning: 3 × 4, row-major, `[r00, r01, r02, t0, r10, r11, r12, t1, r20, r21, r22, t2]`.
@@ -55,44 +56,12 @@ impl ProxyFrame {
 
     /// Proxy `i`: its centre, radius and squared reach.
     #[inline(always)]
-    pub(crate) fn sphere(&self, i: usize) -> ([f32; 3], f32, f32) {
-        (self.centres[i], self.radii[i], self.reach2[i])
-    }
-
-    /// The proxies that may reach a block of vertices of bones `bones` at `positions`: those
-    /// of the bones' masks whose reach meets the block's box. One test per proxy and block
-    /// spares the vertices of a block every proxy that cannot touch any of them.
-    pub(crate) fn block_mask(&self, bones: &[usize], positions: &[[f32; 3]]) -> u64 {
-        let mut mask = bones
-            .iter()
-            .map(|&b| self.candidates.get(b).copied().unwrap_or(0))
-            .fold(0, |m, c| m | c);
-        if mask == 0 {
-            return 0;
+    pub(crate) fn sphere(&self, i: usize) -> Sphere {
+        Sphere {
+            centre: self.centres[i],
+            radius: self.radii[i],
+            reach2: self.reach2[i],
         }
-        let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-        for p in positions {
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
-        let mut left = mask;
-        while left != 0 {
-            let i = left.trailing_zeros() as usize;
-            left &= left - 1;
-            let c = self.centres[i];
-            let gap2: f32 = (0..3)
-                .map(|k| {
-                    let g = (lo[k] - c[k]).max(c[k] - hi[k]).max(0.0);
-                    g * g
-                })
-                .sum();
-            if gap2 >= self.reach2[i] {
-                mask &= !(1 << i);
-            }
-        }
-        mask
     }
 }
 
@@ -174,19 +143,24 @@ impl ProxyFrame {
         if first_non_finite(&position).is_some() {
             return Err(Error::NonFinitePosition { index: 0 });
         }
-        let mask = self.candidates.get(bone).copied().unwrap_or(0);
-        let reached = vertex_occlusion(self, order, mask, (position, normal), rotation, out);
-        if !reached {
-            out[..n2].fill(0.0);
+        let mut masks = [0u64; VERTEX_BLOCK];
+        masks[0] = self.candidates.get(bone).copied().unwrap_or(0);
+        let mut vertices = [([0.0f32; 3], [0.0f32; 3]); VERTEX_BLOCK];
+        vertices[0] = (position, normal);
+        let block = Block {
+            masks,
+            vertices,
+            rotations: rotation.map(|r| [*r; VERTEX_BLOCK]),
+        };
+        let mut lanes = [[0.0f32; MAX_COEFFS]; VERTEX_BLOCK];
+        let reached = block_occlusion(self, order, &block, Output::Transfer(&mut lanes)) & 1 != 0;
+        let out = &mut out[..n2];
+        match reached {
+            true => out.copy_from_slice(&lanes[0][..n2]),
+            false => out.fill(0.0),
         }
         Ok(reached)
     }
-}
-
-/// The unit normal, or `None` for a zero or non-finite one (that vertex sees no proxy).
-pub(crate) fn unit(n: [f32; 3]) -> Option<[f32; 3]> {
-    let len = math::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    (len > 1e-20 && len.is_finite()).then(|| n.map(|x| x / len))
 }
 
 impl ModelInfo {

@@ -24,12 +24,13 @@
 //! reach `r / √cull`, leaving each bone a mask of the proxies that can touch it. The bone's
 //! own proxies and its neighbours' are masked out in the blob: the learnt model carries them.
 
+mod caps;
 mod frame;
 mod occlusion;
 mod section;
 
 pub use frame::{ProxyFrame, ProxySet, Skinning};
-pub(crate) use occlusion::block_occlusion;
+pub(crate) use occlusion::{Block, Output, block_occlusion, occlusion_kernel};
 pub use section::MAX_PROXIES;
 pub(crate) use section::ProxyCheck;
 #[cfg(feature = "format")]

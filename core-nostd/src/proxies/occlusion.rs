@@ -1,343 +1,360 @@
-//! One vertex's occlusion by the proxies that may touch it (see the module above).
+//! The occlusion of a block's eight vertices by the proxies that may touch them (see the
+//! module above), lane-wise: each proxy is tested against the eight lanes at once, and its
+//! caps are computed for all of them together ([`caps`]), so a proxy costs one pass over the
+//! block however many of its vertices it reaches. Where only shading is wanted the lighting is
+//! folded in: a cap's occlusion dotted with the lighting is `F Σ_l ratio_l Σ_m L_lm y_lm(axis)`,
+//! one value per lane instead of n².
+//!
+//! Every lane sums its caps in proxy order with the same operations whatever the other lanes
+//! hold, so a vertex's bits do not depend on its block, and [`ProxyFrame::occlusion`] (one
+//! vertex, what the trainer's targets are made with) runs this kernel with one lane.
 
 use core::f32::consts::PI;
 
-use super::frame::{ProxyFrame, unit};
+use super::MAX_PROXIES;
+use super::caps::{Caps, Fade, Receivers, band_ratios, caps, offsets};
+use super::frame::ProxyFrame;
 use crate::blob::format::VERTEX_BLOCK;
-use crate::light::sphere_irradiance;
-use crate::math;
+use crate::lanes::{Lanes, Portable};
 use crate::rotation::Rotation;
-use crate::sh::{
-    DirectionLanes, MAX_COEFFS, MAX_ORDER, clamped_cosine, eval_basis, eval_basis_lanes, normalise,
-};
+use crate::sh::{MAX_COEFFS, MAX_ORDER, basis_lanes};
 
-/// The zonal bands of the cosine-weighted cap, `2π ∫_{cos α}^1 t P_l(t) dt`, relative to band
-/// 0 (`π sin²α`): with `c = cos α` they are `sin²α · q_l(c)`, `q = [1/2, (1 + c + c²)/(3(1 + c)),
-/// (3c² + 1)/8, c³/2, (35c⁴ − 10c² − 1)/48, c³(9c² − 5)/8]`, factored so that no band cancels
-/// for small caps (all tend to `sin²α / 2`). For a cap about the normal they are its exact
-/// projection; tilted, the cosine is taken as its value along the axis (module doc).
-fn cosine_cap_bands(d: f32, r: f32) -> ([f32; MAX_ORDER], f32) {
-    // `cos α = √((d − r)/d · (1 + r/d))`, exact as `d → r` (as `sphere_light_bands`).
-    let c = math::sqrt(((d - r) / d * (1.0 + r / d)).max(0.0));
-    let (c2, c3) = (c * c, c * c * c);
-    let bands = [
-        1.0,
-        2.0 * (1.0 + c + c2) / (3.0 * (1.0 + c)),
-        (3.0 * c2 + 1.0) / 4.0,
-        c3,
-        (35.0 * c2 * c2 - 10.0 * c2 - 1.0) / 24.0,
-        c3 * (9.0 * c2 - 5.0) / 4.0,
-    ];
-    (bands, c)
+/// A block's vertices as the kernel takes them. Lane `l` is occluded by the proxies of
+/// `masks[l]` (none for a lane outside the range); its vertex is `vertices[l]`, position and
+/// normal (any length; a zero or non-finite one sees no proxy), posed, world space.
+#[derive(Clone, Copy)]
+pub(crate) struct Block {
+    pub(crate) masks: [u64; VERTEX_BLOCK],
+    pub(crate) vertices: [([f32; 3], [f32; 3]); VERTEX_BLOCK],
+    /// Each lane's bone rotation, where the occlusion is wanted in the vertices' bone frames.
+    pub(crate) rotations: Option<[Rotation; VERTEX_BLOCK]>,
 }
 
-/// `Rᵀ v`: a world direction in a bone's frame.
-fn to_bone(r: &Rotation, v: [f32; 3]) -> [f32; 3] {
-    [0, 1, 2].map(|k| r[0][k] * v[0] + r[1][k] * v[1] + r[2][k] * v[2])
-}
-
-/// The fade of a cap of `sin²α = s2` kept from `cull`: 0 below it, 1 from twice it, a
-/// smoothstep between, so that a sphere entering a vertex's reach never pops.
-fn fade(s2: f32, cull: f32) -> f32 {
-    if cull <= 0.0 {
-        return 1.0;
-    }
-    let t = ((s2 - cull) / cull).clamp(0.0, 1.0);
-    t * t * (3.0 - 2.0 * t)
-}
-
-/// One sphere's occlusion seen from a vertex, all but its SH basis.
-enum Cap {
-    /// The sphere does not reach the vertex (or fades out).
-    Miss,
-    /// The vertex is inside the sphere: every direction is blocked, the whole lobe goes.
-    Inside,
-    /// The cap of form factor `f` whose bands `f · ratio[l]` are taken about `axis` (in the
-    /// frame the sum is in; not normalised).
-    Tilted {
-        f: f32,
-        axis: [f32; 3],
-        ratio: [f32; MAX_ORDER],
+/// What the kernel writes for the lanes some proxy reaches.
+pub(crate) enum Output<'a> {
+    /// The occlusion dotted with world SH `lighting` (n² values), one value per lane.
+    Shading {
+        lighting: &'a [f32],
+        out: &'a mut [f32; VERTEX_BLOCK],
     },
+    /// The occlusion's n² coefficients per lane.
+    Transfer(&'a mut [[f32; MAX_COEFFS]; VERTEX_BLOCK]),
 }
 
-/// The cap of one sphere seen from `position` (normal `normal`, unit), in the frame of
-/// `rotation` when given, world otherwise.
-fn cap(
-    (centre, radius, reach2): ([f32; 3], f32, f32),
-    (position, normal): ([f32; 3], [f32; 3]),
-    rotation: Option<&Rotation>,
-    cull: f32,
-) -> Cap {
-    let v = [0, 1, 2].map(|k| centre[k] - position[k]);
-    let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-    if d2 >= reach2 {
-        return Cap::Miss;
-    }
-    if d2 <= radius * radius {
-        return Cap::Inside;
-    }
-    let s2 = radius * radius / d2;
-    let weight = fade(s2, cull);
-    if weight == 0.0 {
-        return Cap::Miss;
-    }
-    let d = math::sqrt(d2);
-    let axis = v.map(|x| x / d);
-    let cos_beta = dot(axis, normal);
-    let f = weight * sphere_irradiance(radius, d, cos_beta);
-    if f <= 0.0 {
-        return Cap::Miss;
-    }
-    let (ratio, cos_alpha) = cosine_cap_bands(d, radius);
-    // The cosine's tilt across the cap, `(n⊥·ω) 1_cap`, is the derivative as the axis turns
-    // towards n⊥ of the zonal `max(a·ω − cos α, 0)`, whose band 0 is `π (1 − cos α)²`. To
-    // first order it moves the cap's centre of weight towards the normal: the bands are taken
-    // about `a + π (1 − cos α)² n⊥ k / F` instead of `a` (`k` the share of the cap the horizon
-    // keeps, so the shift vanishes with the cap). Exact in band 0; the other bands are off by
-    // the second order of the shift, a few percent for a cap of 40° tilted 40°.
-    let unclipped = PI * s2 * cos_beta * weight;
-    let kept = (unclipped / f).clamp(0.0, 1.0);
-    let shift = kept * weight * PI * (1.0 - cos_alpha) * (1.0 - cos_alpha) / f;
-    let centre_of_weight = [0, 1, 2].map(|k| axis[k] + shift * (normal[k] - cos_beta * axis[k]));
-    let axis = rotation.map_or(centre_of_weight, |r| to_bone(r, centre_of_weight));
-    Cap::Tilted { f, axis, ratio }
-}
-
-/// Adds the whole cosine lobe about `normal` (a vertex inside a sphere) to `sum` and returns
-/// its form factor, π (0 when the normal has no direction).
-fn add_inside(
-    order: usize,
-    normal: [f32; 3],
-    rotation: Option<&Rotation>,
-    sum: &mut [f32; MAX_COEFFS],
-) -> f32 {
-    let n2 = order * order;
-    let mut y = [0.0f32; MAX_COEFFS];
-    let normal = rotation.map_or(normal, |r| to_bone(r, normal));
-    if clamped_cosine(order, normal, &mut y[..n2]).is_err() {
-        return 0.0;
-    }
-    for (s, y) in sum[..n2].iter_mut().zip(&y) {
-        *s += y;
-    }
-    PI
-}
-
-/// Adds a tilted cap's bands, `f · ratio[l] · y_lm`, to `sum` (`y` its basis at the unit axis).
-#[inline(always)]
-fn add_bands(
-    order: usize,
-    f: f32,
-    ratio: &[f32; MAX_ORDER],
-    y: impl Fn(usize) -> f32,
-    sum: &mut [f32; MAX_COEFFS],
-) {
-    for (l, ratio) in ratio.iter().enumerate().take(order) {
-        let weight = f * ratio;
-        let band = l * l..(l + 1) * (l + 1);
-        for (c, s) in band.clone().zip(&mut sum[band]) {
-            *s += weight * y(c);
-        }
-    }
-}
-
-/// Adds one sphere's occlusion seen from a vertex to `sum` (`order²` values) and returns its
-/// form factor `F` (0 when it does not reach the vertex).
-fn add_cap(
-    order: usize,
-    sphere: ([f32; 3], f32, f32),
-    (position, normal): ([f32; 3], [f32; 3]),
-    rotation: Option<&Rotation>,
-    cull: f32,
-    sum: &mut [f32; MAX_COEFFS],
-) -> f32 {
-    match cap(sphere, (position, normal), rotation, cull) {
-        Cap::Miss => 0.0,
-        Cap::Inside => add_inside(order, normal, rotation, sum),
-        Cap::Tilted { f, axis, ratio } => {
-            let n2 = order * order;
-            let mut y = [0.0f32; MAX_COEFFS];
-            if eval_basis(order, axis, &mut y[..n2]).is_err() {
-                return 0.0;
-            }
-            add_bands(order, f, &ratio, |c| y[c], sum);
-            f
-        }
-    }
-}
-
-fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-/// The proxies of `mask` whose reach holds `position`: one distance each, before the normal
-/// is even normalised, since most vertices of a block in reach are out of every cap's.
-fn within_reach(frame: &ProxyFrame, mut mask: u64, position: [f32; 3]) -> u64 {
-    let mut reached = 0;
-    while mask != 0 {
-        let i = mask.trailing_zeros() as usize;
-        mask &= mask - 1;
-        let c = frame.centres[i];
-        let v = [c[0] - position[0], c[1] - position[1], c[2] - position[2]];
-        if v[0] * v[0] + v[1] * v[1] + v[2] * v[2] < frame.reach2[i] {
-            reached |= 1 << i;
-        }
-    }
-    reached
-}
-
-/// The occlusion `D` of one vertex at `position` with `normal` (any length) by the proxies of
-/// `mask` (those `frame` lets touch the vertex's bone, and its block), into `out` (`order²`
-/// values, in the frame of `rotation` when given: the vertex's bone frame; world otherwise).
-/// Returns whether any proxy reached it (`out` is untouched otherwise). A zero or non-finite
-/// normal sees nothing.
-pub(crate) fn vertex_occlusion(
-    frame: &ProxyFrame,
-    order: usize,
-    mask: u64,
-    (position, normal): ([f32; 3], [f32; 3]),
-    rotation: Option<&Rotation>,
-    out: &mut [f32],
-) -> bool {
-    let mut mask = within_reach(frame, mask, position);
-    let Some(normal) = unit(normal).filter(|_| mask != 0) else {
-        return false;
-    };
-    let mut sum = [0.0f32; MAX_COEFFS];
-    let mut union = Union::NONE;
-    while mask != 0 {
-        let i = mask.trailing_zeros() as usize;
-        mask &= mask - 1;
-        let f = add_cap(
-            order,
-            frame.sphere(i),
-            (position, normal),
-            rotation,
-            frame.cull,
-            &mut sum,
-        );
-        union.add(f);
-    }
-    union.finish(&sum, &mut out[..order * order])
-}
-
-/// [`vertex_occlusion`] of the eight vertices of a block at once, with the same bits: lane `l`
-/// has `masks[l]`, `vertices[l]` and `rotations[l]`, and its occlusion goes to `out[l]` where
-/// the returned bits have `1 << l`. Each proxy's caps have their SH bases evaluated for the
-/// eight lanes together ([`eval_basis_lanes`]); each lane sums its caps in the same order.
+/// The occlusion of `block` by `frame`'s proxies at SH `order` (1..=6) into `output`; returns
+/// the lanes some proxy reached (bit `l`; the others' outputs are untouched). Runs in AVX2
+/// where the CPU has it, with the portable kernel's bits.
 pub(crate) fn block_occlusion(
     frame: &ProxyFrame,
     order: usize,
-    mut masks: [u64; VERTEX_BLOCK],
-    vertices: [([f32; 3], [f32; 3]); VERTEX_BLOCK],
-    rotations: [Option<&Rotation>; VERTEX_BLOCK],
-    out: &mut [[f32; MAX_COEFFS]; VERTEX_BLOCK],
+    block: &Block,
+    output: Output<'_>,
 ) -> u8 {
-    let mut normals = [[0.0f32; 3]; VERTEX_BLOCK];
-    for ((mask, n), &(position, normal)) in masks.iter_mut().zip(&mut normals).zip(&vertices) {
-        *mask = within_reach(frame, *mask, position);
-        match unit(normal).filter(|_| *mask != 0) {
-            Some(unit) => *n = unit,
-            None => *mask = 0,
+    #[cfg(target_arch = "x86_64")]
+    if let Some(avx2) = crate::eval::Avx2::get() {
+        return avx2.occlusion(frame, order, block, output);
+    }
+    occlusion_kernel::<Portable>(frame, order, block, output)
+}
+
+/// [`block_occlusion`] in the lanes `V`.
+#[inline(always)]
+pub(crate) fn occlusion_kernel<V: Lanes>(
+    frame: &ProxyFrame,
+    order: usize,
+    block: &Block,
+    output: Output<'_>,
+) -> u8 {
+    match order {
+        1 => kernel::<V, 1>(frame, block, output),
+        2 => kernel::<V, 2>(frame, block, output),
+        3 => kernel::<V, 3>(frame, block, output),
+        4 => kernel::<V, 4>(frame, block, output),
+        5 => kernel::<V, 5>(frame, block, output),
+        _ => kernel::<V, 6>(frame, block, output),
+    }
+}
+
+#[inline(always)]
+fn kernel<V: Lanes, const N: usize>(frame: &ProxyFrame, block: &Block, output: Output<'_>) -> u8 {
+    let (receivers, valid) = receivers::<V>(block);
+    let mut masks = block.masks;
+    for (l, mask) in masks.iter_mut().enumerate() {
+        if valid & (1 << l) == 0 {
+            *mask = 0;
         }
     }
-    let mut sums = [[0.0f32; MAX_COEFFS]; VERTEX_BLOCK];
-    let mut unions = [Union::NONE; VERTEX_BLOCK];
-    let mut y = [[0.0f32; VERTEX_BLOCK]; MAX_COEFFS];
-    let mut proxies = masks.iter().fold(0, |all, m| all | m);
-    while proxies != 0 {
-        let i = proxies.trailing_zeros() as usize;
-        proxies &= proxies - 1;
-        let mut axes: DirectionLanes = [
-            [0.0; VERTEX_BLOCK],
-            [0.0; VERTEX_BLOCK],
-            [1.0; VERTEX_BLOCK],
-        ];
-        let mut tilted = [None; VERTEX_BLOCK];
-        for l in (0..VERTEX_BLOCK).filter(|&l| masks[l] & (1 << i) != 0) {
-            let (vertex, rotation) = ((vertices[l].0, normals[l]), rotations[l]);
-            let f = match cap(frame.sphere(i), vertex, rotation, frame.cull) {
-                Cap::Miss => 0.0,
-                Cap::Inside => add_inside(order, normals[l], rotation, &mut sums[l]),
-                // As `eval_basis` would refuse it: the cap adds nothing.
-                Cap::Tilted { f, axis, ratio } => match normalise(axis) {
-                    Err(_) => 0.0,
-                    Ok(unit) => {
-                        (0..3).for_each(|k| axes[k][l] = unit[k]);
-                        tilted[l] = Some((f, ratio));
-                        continue;
-                    }
-                },
+    let (lanes_of, proxies) = lanes_of_proxies(&masks);
+    if proxies == 0 {
+        return 0;
+    }
+    let rotations = match block.rotations {
+        Some(r) => Some(rotation_lanes::<V>(r)),
+        None => None,
+    };
+    let pass = Pass {
+        frame,
+        receivers,
+        rotations,
+        lanes_of: &lanes_of,
+        proxies,
+    };
+    match output {
+        Output::Shading { lighting, out } => {
+            let mut sum = ShadingSum {
+                lighting,
+                sum: V::splat(0.0),
             };
-            unions[l].add(f);
+            let union = pass.run::<N>(&mut sum);
+            let (reached, scale) = union.finish();
+            let shading = (sum.sum * scale).to_array();
+            for l in (0..VERTEX_BLOCK).filter(|l| reached & (1 << l) != 0) {
+                out[l] = shading[l];
+            }
+            reached
         }
-        if tilted.iter().any(Option::is_some) {
-            eval_basis_lanes(order, axes, &mut y);
-            for (l, cap) in tilted.iter().enumerate() {
-                if let Some((f, ratio)) = cap {
-                    add_bands(order, *f, ratio, |c| y[c][l], &mut sums[l]);
-                    unions[l].add(*f);
+        Output::Transfer(out) => {
+            let mut sum = TransferSum {
+                sums: [V::splat(0.0); MAX_COEFFS],
+            };
+            let union = pass.run::<N>(&mut sum);
+            let (reached, scale) = union.finish();
+            for (c, s) in sum.sums.iter().enumerate().take(N * N) {
+                let lanes = (*s * scale).to_array();
+                for l in (0..VERTEX_BLOCK).filter(|l| reached & (1 << l) != 0) {
+                    out[l][c] = lanes[l];
                 }
+            }
+            reached
+        }
+    }
+}
+
+/// The block's positions and unit normals in lanes, and the lanes whose normal has a direction.
+#[inline(always)]
+fn receivers<V: Lanes>(block: &Block) -> (Receivers<V>, u8) {
+    let mut p = [[0.0f32; VERTEX_BLOCK]; 3];
+    let mut n = [[0.0f32; VERTEX_BLOCK]; 3];
+    for (l, (position, normal)) in block.vertices.iter().enumerate() {
+        for k in 0..3 {
+            p[k][l] = position[k];
+            n[k][l] = normal[k];
+        }
+    }
+    let n = [
+        V::from_array(n[0]),
+        V::from_array(n[1]),
+        V::from_array(n[2]),
+    ];
+    let length = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    let valid = V::and(V::splat(1e-20).lt(length), length.lt(V::splat(f32::INFINITY)));
+    let zero = V::splat(0.0);
+    let receivers = Receivers {
+        positions: [
+            V::from_array(p[0]),
+            V::from_array(p[1]),
+            V::from_array(p[2]),
+        ],
+        normals: [
+            V::select(valid, n[0] / length, zero),
+            V::select(valid, n[1] / length, zero),
+            V::select(valid, n[2] / length, zero),
+        ],
+    };
+    (receivers, V::bits(valid))
+}
+
+/// For each proxy, the lanes whose mask holds it; and every proxy some lane's mask holds.
+/// Lanes of one bone share a mask, so this walks each distinct mask once.
+fn lanes_of_proxies(masks: &[u64; VERTEX_BLOCK]) -> ([u8; MAX_PROXIES], u64) {
+    let mut lanes_of = [0u8; MAX_PROXIES];
+    let mut done = 0u8;
+    let mut all = 0u64;
+    for (l, &mask) in masks.iter().enumerate() {
+        if done & (1 << l) != 0 || mask == 0 {
+            continue;
+        }
+        let lanes = masks
+            .iter()
+            .enumerate()
+            .filter(|&(_, &m)| m == mask)
+            .fold(0u8, |lanes, (k, _)| lanes | 1 << k);
+        done |= lanes;
+        all |= mask;
+        let mut left = mask;
+        while left != 0 {
+            lanes_of[left.trailing_zeros() as usize] |= lanes;
+            left &= left - 1;
+        }
+    }
+    (lanes_of, all)
+}
+
+/// A rotation per lane, as nine lanes `r[row][column]`.
+#[inline(always)]
+fn rotation_lanes<V: Lanes>(rotations: [Rotation; VERTEX_BLOCK]) -> [[V; 3]; 3] {
+    let mut r = [[[0.0f32; VERTEX_BLOCK]; 3]; 3];
+    for (l, rotation) in rotations.iter().enumerate() {
+        for i in 0..3 {
+            for j in 0..3 {
+                r[i][j][l] = rotation[i][j];
             }
         }
     }
-    let mut reached = 0;
-    for (l, ((union, sum), out)) in unions.iter().zip(&sums).zip(out).enumerate() {
-        if masks[l] != 0 && union.finish(sum, &mut out[..order * order]) {
-            reached |= 1 << l;
-        }
-    }
-    reached
+    let row = |i: usize| [r[i][0], r[i][1], r[i][2]];
+    let [a, b, c] = [row(0), row(1), row(2)];
+    [
+        [V::from_array(a[0]), V::from_array(a[1]), V::from_array(a[2])],
+        [V::from_array(b[0]), V::from_array(b[1]), V::from_array(b[2])],
+        [V::from_array(c[0]), V::from_array(c[1]), V::from_array(c[2])],
+    ]
 }
 
-/// The union of a vertex's caps: their form factors' sum and the share of the lobe none of
+/// One block's pass over the proxies its lanes may meet.
+struct Pass<'a, V: Lanes> {
+    frame: &'a ProxyFrame,
+    receivers: Receivers<V>,
+    rotations: Option<[[V; 3]; 3]>,
+    lanes_of: &'a [u8; MAX_PROXIES],
+    proxies: u64,
+}
+
+impl<V: Lanes> Pass<'_, V> {
+    /// Adds every cap to `sum` in proxy order; returns the lanes' union of caps.
+    #[inline(always)]
+    fn run<const N: usize>(&self, sum: &mut impl CapSum<V>) -> Union<V> {
+        let fade = Fade::new(self.frame.cull);
+        let mut union = Union::none();
+        let mut left = self.proxies;
+        while left != 0 {
+            let i = left.trailing_zeros() as usize;
+            left &= left - 1;
+            let sphere = self.frame.sphere(i);
+            let offsets = offsets(sphere, self.receivers.positions);
+            let within = offsets.1.lt(V::splat(sphere.reach2));
+            let hit = V::and(V::mask_of(self.lanes_of[i]), within);
+            if V::bits(hit) == 0 {
+                continue;
+            }
+            let Caps {
+                f,
+                axis,
+                cos_alpha,
+            } = caps(sphere, fade, &self.receivers, offsets, hit);
+            let axis = self.unit_axis(axis);
+            let mut y = [V::splat(0.0); MAX_COEFFS];
+            basis_lanes::<V, N>(axis, &mut y);
+            sum.add::<N>(f, &band_ratios(cos_alpha), &y);
+            union.add(f);
+        }
+        union
+    }
+
+    /// The axis in the frame of the output (each lane's bone, or world), unit length. The
+    /// centre of weight is at least 1 long (its shift is perpendicular to the unit axis), and
+    /// so is the `+z` of lanes without a cap, so the division is safe.
+    #[inline(always)]
+    fn unit_axis(&self, axis: [V; 3]) -> [V; 3] {
+        let axis = match &self.rotations {
+            // `Rᵀ a`: a world direction in the bone's frame.
+            Some(r) => [
+                r[0][0] * axis[0] + r[1][0] * axis[1] + r[2][0] * axis[2],
+                r[0][1] * axis[0] + r[1][1] * axis[1] + r[2][1] * axis[2],
+                r[0][2] * axis[0] + r[1][2] * axis[1] + r[2][2] * axis[2],
+            ],
+            None => axis,
+        };
+        let length = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]).sqrt();
+        let inverse = V::splat(1.0) / length;
+        [axis[0] * inverse, axis[1] * inverse, axis[2] * inverse]
+    }
+}
+
+/// Where a lane's caps go: `F · ratio_l · y_lm` each.
+trait CapSum<V: Lanes> {
+    fn add<const N: usize>(&mut self, f: V, ratios: &[V; MAX_ORDER], y: &[V; MAX_COEFFS]);
+}
+
+/// The caps' occlusion dotted with the lighting, `Σ F Σ_l ratio_l Σ_m L_lm y_lm`.
+struct ShadingSum<'a, V> {
+    lighting: &'a [f32],
+    sum: V,
+}
+
+impl<V: Lanes> CapSum<V> for ShadingSum<'_, V> {
+    #[inline(always)]
+    fn add<const N: usize>(&mut self, f: V, ratios: &[V; MAX_ORDER], y: &[V; MAX_COEFFS]) {
+        let mut bands = V::splat(0.0);
+        for (l, &ratio) in ratios.iter().enumerate().take(N) {
+            let mut band = V::splat(0.0);
+            for c in l * l..(l + 1) * (l + 1) {
+                band = band + V::splat(self.lighting[c]) * y[c];
+            }
+            bands = bands + ratio * band;
+        }
+        self.sum = self.sum + f * bands;
+    }
+}
+
+/// The caps' occlusion, n² coefficients per lane.
+struct TransferSum<V> {
+    sums: [V; MAX_COEFFS],
+}
+
+impl<V: Lanes> CapSum<V> for TransferSum<V> {
+    #[inline(always)]
+    fn add<const N: usize>(&mut self, f: V, ratios: &[V; MAX_ORDER], y: &[V; MAX_COEFFS]) {
+        for (l, &ratio) in ratios.iter().enumerate().take(N) {
+            let weight = f * ratio;
+            for c in l * l..(l + 1) * (l + 1) {
+                self.sums[c] = self.sums[c] + weight * y[c];
+            }
+        }
+    }
+}
+
+/// The union of each lane's caps: their form factors' sum, and the share of the lobe none of
 /// them blocks.
-#[derive(Clone, Copy)]
-struct Union {
-    total: f32,
-    visible: f32,
+struct Union<V> {
+    total: V,
+    visible: V,
 }
 
-impl Union {
-    const NONE: Union = Union {
-        total: 0.0,
-        visible: 1.0,
-    };
-
-    fn add(&mut self, f: f32) {
-        self.total += f;
-        self.visible *= (1.0 - f / PI).max(0.0);
+impl<V: Lanes> Union<V> {
+    #[inline(always)]
+    fn none() -> Self {
+        Union {
+            total: V::splat(0.0),
+            visible: V::splat(1.0),
+        }
     }
 
-    /// Writes the caps' summed occlusion `sum`, scaled to their union, into `out` (n² values)
-    /// and returns true, or returns false when no cap reached the vertex.
-    fn finish(self, sum: &[f32; MAX_COEFFS], out: &mut [f32]) -> bool {
-        if self.total.is_nan() || self.total <= 0.0 {
-            return false;
-        }
-        // The caps overlap: their union blocks `π (1 − Π (1 − F_i/π))` of the lobe, not `Σ F_i`.
-        let scale = PI * (1.0 - self.visible) / self.total;
-        for (o, s) in out.iter_mut().zip(sum) {
-            *o = s * scale;
-        }
-        true
+    #[inline(always)]
+    fn add(&mut self, f: V) {
+        self.total = self.total + f;
+        let open = V::splat(1.0) - f * V::splat(1.0 / PI);
+        self.visible = self.visible * open.max(V::splat(0.0));
+    }
+
+    /// The lanes some cap reached, and the scale that takes their summed caps to their union:
+    /// overlapping caps block `π (1 − Π (1 − F_i/π))` of the lobe, not `Σ F_i`.
+    #[inline(always)]
+    fn finish(self) -> (u8, V) {
+        let reached = V::splat(0.0).lt(self.total);
+        let scale = V::splat(PI) * (V::splat(1.0) - self.visible) / self.total;
+        (V::bits(reached), scale)
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::{block_occlusion, vertex_occlusion};
+    use super::{Block, Output, occlusion_kernel};
     use crate::blob::format::VERTEX_BLOCK;
+    use crate::lanes::Portable;
     use crate::proxies::ProxyFrame;
     use crate::rotation::Rotation;
     use crate::sh::MAX_COEFFS;
     use crate::test_values::weight;
-
-    /// Three values of the shared test sequence from `i`, times `scale`.
-    fn vec(i: usize, scale: f32) -> [f32; 3] {
-        [0, 1, 2].map(|k| scale * weight(i + k))
-    }
 
     /// A rotation about z by `angle`.
     fn turn(angle: f32) -> Rotation {
@@ -345,83 +362,179 @@ mod tests {
         [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
     }
 
-    /// The block kernel gives every lane `vertex_occlusion`'s bits and reach, at every order:
-    /// 24 proxies, blocks whose lanes have partial masks, zero normals, vertices inside a
-    /// sphere, lanes without proxies, and bone rotations or none.
-    #[test]
-    fn blocks_give_each_vertex_its_own_bits() {
-        // A fresh stretch of the test sequence for each value drawn.
-        let mut next = 0;
-        let mut draw = |scale: f32| {
-            next += 3;
-            vec(next, scale)
-        };
+    /// 24 proxies from the shared test sequence, culled at `sin²α = 0.05`.
+    fn frame() -> ProxyFrame {
         let mut frame = ProxyFrame::new();
         frame.cull = 0.05;
         for i in 0..24 {
-            frame.centres[i] = draw(1.2);
-            frame.radii[i] = 0.05 + 0.25 * (draw(1.0)[0] + 0.85);
+            frame.centres[i] = [0, 1, 2].map(|k| 1.2 * weight(3 * i + k));
+            frame.radii[i] = 0.05 + 0.25 * (weight(100 + i) + 0.85);
             frame.reach2[i] = frame.radii[i] * frame.radii[i] / frame.cull;
         }
-        let rotations = [turn(0.3), turn(-1.2)];
+        frame
+    }
+
+    /// Block `b` of the cases: lanes with every mask, none and partial ones, zero normals, a
+    /// vertex inside a sphere, and bone rotations or none.
+    fn block(frame: &ProxyFrame, b: usize) -> Block {
+        let draw = |i: usize, scale: f32| [0, 1, 2].map(|k| scale * weight(1000 + 24 * b + 3 * i + k));
+        let masks = core::array::from_fn(|l| match (b + l) % 5 {
+            0 => 0,
+            1 => (1 << 24) - 1,
+            _ => (weight(5000 + 8 * b + l).to_bits() as u64) & ((1 << 24) - 1),
+        });
+        let vertices = core::array::from_fn(|l| {
+            let position = match l {
+                3 => frame.centres[b % 24],
+                _ => draw(l, 1.4),
+            };
+            let normal = if (b + l) % 7 == 0 { [0.0; 3] } else { draw(l + 8, 1.0) };
+            (position, normal)
+        });
+        let rotations =
+            (b % 3 != 0).then(|| core::array::from_fn(|l| turn(0.3 - 0.2 * l as f32)));
+        Block {
+            masks,
+            vertices,
+            rotations,
+        }
+    }
+
+    /// Lane `lane` of `block` alone in an otherwise empty block.
+    fn alone(block: &Block, lane: usize) -> Block {
+        let mut masks = [0; VERTEX_BLOCK];
+        masks[0] = block.masks[lane];
+        let mut vertices = [([0.0; 3], [0.0; 3]); VERTEX_BLOCK];
+        vertices[0] = block.vertices[lane];
+        Block {
+            masks,
+            vertices,
+            rotations: block.rotations.map(|r| [r[lane]; VERTEX_BLOCK]),
+        }
+    }
+
+    /// Both outputs of `kernel` for `block` at `order`: the lanes reached, the shading under a
+    /// fixed lighting, and the coefficients.
+    fn run(
+        kernel: impl Fn(&ProxyFrame, usize, &Block, Output<'_>) -> u8,
+        frame: &ProxyFrame,
+        order: usize,
+        block: &Block,
+    ) -> (u8, [f32; VERTEX_BLOCK], [[f32; MAX_COEFFS]; VERTEX_BLOCK]) {
+        let lighting: [f32; MAX_COEFFS] = core::array::from_fn(|c| weight(7000 + c));
+        let mut shading = [0.0f32; VERTEX_BLOCK];
+        let mut d = [[0.0f32; MAX_COEFFS]; VERTEX_BLOCK];
+        let output = Output::Shading {
+            lighting: &lighting[..order * order],
+            out: &mut shading,
+        };
+        let reached = kernel(frame, order, block, output);
+        assert_eq!(kernel(frame, order, block, Output::Transfer(&mut d)), reached);
+        (reached, shading, d)
+    }
+
+    fn same_bits(a: &[f32], b: &[f32]) -> bool {
+        a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+    }
+
+    /// A vertex gets the same bits whatever the other lanes of its block hold, which is what
+    /// lets the one-vertex call (the trainer's targets) and the block kernel agree.
+    #[test]
+    fn each_lane_gets_its_own_bits() {
+        let frame = frame();
+        let kernel = occlusion_kernel::<Portable>;
         let mut lanes_reached = 0;
         for order in 1..=6 {
-            for block in 0..40 {
-                let masks: [u64; VERTEX_BLOCK] = core::array::from_fn(|l| match (block + l) % 5 {
-                    0 => 0,
-                    1 => (1 << 24) - 1,
-                    _ => (draw(1.0)[0].to_bits() as u64) & ((1 << 24) - 1),
-                });
-                let vertices: [([f32; 3], [f32; 3]); VERTEX_BLOCK] = core::array::from_fn(|l| {
-                    let position = match l {
-                        3 => frame.centres[block % 24], // inside a sphere
-                        _ => draw(1.4),
-                    };
-                    let normal = if (block + l) % 7 == 0 {
-                        [0.0; 3]
-                    } else {
-                        draw(1.0)
-                    };
-                    (position, normal)
-                });
-                let lane_rotations: [Option<&Rotation>; VERTEX_BLOCK] =
-                    core::array::from_fn(|l| (block % 3 != 0).then_some(&rotations[l % 2]));
-                let mut out = [[0.0f32; MAX_COEFFS]; VERTEX_BLOCK];
-                let reached =
-                    block_occlusion(&frame, order, masks, vertices, lane_rotations, &mut out);
+            for b in 0..40 {
+                let block = block(&frame, b);
+                let (reached, shading, d) = run(kernel, &frame, order, &block);
                 for l in 0..VERTEX_BLOCK {
-                    let mut alone = [0.0f32; MAX_COEFFS];
-                    let hit = vertex_occlusion(
-                        &frame,
-                        order,
-                        masks[l],
-                        vertices[l],
-                        lane_rotations[l],
-                        &mut alone,
-                    );
-                    assert_eq!(
-                        reached & (1 << l) != 0,
-                        hit,
-                        "order {order}, block {block}, lane {l}"
-                    );
-                    if hit {
+                    let (one, one_shading, one_d) = run(kernel, &frame, order, &alone(&block, l));
+                    assert_eq!(reached >> l & 1, one & 1, "order {order}, block {b}, lane {l}");
+                    if one & 1 != 0 {
                         lanes_reached += 1;
-                        let n2 = order * order;
-                        let same = out[l][..n2]
-                            .iter()
-                            .zip(&alone[..n2])
-                            .all(|(a, b)| a.to_bits() == b.to_bits());
-                        assert!(
-                            same,
-                            "order {order}, block {block}, lane {l}: {:?} against {:?}",
-                            &out[l][..n2],
-                            &alone[..n2]
-                        );
+                        assert_eq!(shading[l].to_bits(), one_shading[0].to_bits());
+                        assert!(same_bits(&d[l][..order * order], &one_d[0][..order * order]));
                     }
                 }
             }
         }
         // The cases reach: most lanes with proxies meet a cap.
         assert!(lanes_reached > 6 * 40 * 3, "{lanes_reached}");
+    }
+
+    /// Folding the lighting in gives the coefficients dotted with it, to f32 rounding.
+    #[test]
+    fn shading_is_the_occlusion_dotted_with_the_lighting() {
+        let frame = frame();
+        let lighting: [f32; MAX_COEFFS] = core::array::from_fn(|c| weight(7000 + c));
+        for order in 1..=6 {
+            for b in (0..40).filter(|b| b % 3 == 0) {
+                let (reached, shading, d) =
+                    run(occlusion_kernel::<Portable>, &frame, order, &block(&frame, b));
+                for l in (0..VERTEX_BLOCK).filter(|l| reached >> l & 1 != 0) {
+                    let n2 = order * order;
+                    let dot: f64 = (0..n2).map(|c| f64::from(d[l][c] * lighting[c])).sum();
+                    let size: f64 = (0..n2).map(|c| f64::from((d[l][c] * lighting[c]).abs())).sum();
+                    let error = (f64::from(shading[l]) - dot).abs();
+                    assert!(error <= 1e-5 * (1.0 + size), "order {order}, block {b}, lane {l}");
+                }
+            }
+        }
+    }
+
+    /// The AVX2 kernel gives the portable bits, in every lane, output and order.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx2_occlusion_gives_the_portable_bits() {
+        let Some(avx2) = crate::eval::Avx2::get() else {
+            return;
+        };
+        let frame = frame();
+        let wide = |f: &ProxyFrame, order: usize, block: &Block, out: Output<'_>| {
+            avx2.occlusion(f, order, block, out)
+        };
+        for order in 1..=6 {
+            for b in 0..40 {
+                let block = block(&frame, b);
+                let portable = run(occlusion_kernel::<Portable>, &frame, order, &block);
+                let (reached, shading, d) = run(wide, &frame, order, &block);
+                assert_eq!(reached, portable.0);
+                for l in (0..VERTEX_BLOCK).filter(|l| reached >> l & 1 != 0) {
+                    assert_eq!(shading[l].to_bits(), portable.1[l].to_bits(), "{order} {b} {l}");
+                    assert!(same_bits(&d[l][..order * order], &portable.2[l][..order * order]));
+                }
+            }
+        }
+    }
+
+    /// FNV-1a over the bits of every case's outputs, from the kernel this target dispatches to.
+    fn occlusion_bits_digest() -> u64 {
+        let frame = frame();
+        let mut digest = 0xcbf2_9ce4_8422_2325u64;
+        let mut eat = |xs: &[f32]| {
+            for byte in xs.iter().flat_map(|x| x.to_bits().to_le_bytes()) {
+                digest = (digest ^ u64::from(byte)).wrapping_mul(0x0100_0000_01b3);
+            }
+        };
+        for order in 1..=6 {
+            for b in 0..40 {
+                let (reached, shading, d) =
+                    run(super::block_occlusion, &frame, order, &block(&frame, b));
+                for l in (0..VERTEX_BLOCK).filter(|l| reached >> l & 1 != 0) {
+                    eat(&[shading[l]]);
+                    eat(&d[l][..order * order]);
+                }
+            }
+        }
+        digest
+    }
+
+    /// The proxies' occlusion has the same bits on every target, as the shading kernels do
+    /// (`kernel_bits_are_the_same_on_every_target`): x86-64 in AVX2 and in the portable
+    /// kernel, aarch64 under qemu and wasm32 under Node gave this digest.
+    #[test]
+    fn occlusion_bits_are_the_same_on_every_target() {
+        assert_eq!(occlusion_bits_digest(), 14_416_061_520_590_355_451);
     }
 }

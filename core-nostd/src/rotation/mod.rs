@@ -15,6 +15,9 @@ use recurrence::ShRotationMatrix;
 /// A 3×3 rotation matrix, row-major (`r[row][column]`): `r · v` rotates the column vector `v`.
 pub type Rotation = [[f32; 3]; 3];
 
+/// The rotation that turns nothing.
+pub(crate) const IDENTITY: Rotation = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
 /// Whether `r` is a rotation within `tol`: its columns unit and orthogonal. Guards callers
 /// that pass a blended (non-orthogonal) skinning matrix; the angle-preserving part is all a
 /// rotation of SH needs.

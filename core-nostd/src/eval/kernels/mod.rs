@@ -24,6 +24,8 @@
 mod portable;
 #[cfg(target_arch = "x86_64")]
 mod x86;
+#[cfg(target_arch = "x86_64")]
+pub(crate) use x86::Avx2;
 
 use crate::blob::format::{Encoding, VERTEX_BLOCK};
 pub(crate) use portable::texel;

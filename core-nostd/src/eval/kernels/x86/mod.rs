@@ -30,6 +30,8 @@ use core::arch::x86_64::{
 };
 use core::sync::atomic::{AtomicU8, Ordering};
 
+mod lanes;
+
 use super::{BlockLayout, IdentityWeights, bone_lanes};
 use crate::blob::format::{Encoding, MAX_COEF_DIMS, VERTEX_BLOCK};
 
