@@ -7,9 +7,11 @@
  *   ./shade fixtures/golden/v1-bones.aprt
  *
  * The frame: a resident model, a pose, SH lighting from a directional light, shading and
- * transfer of every vertex; three lights per vertex; the irradiance rig when the model has
- * one; light maps composed from the transfer; and the same shading through a streamed model.
- * Inputs are literal tables (no arithmetic), so C and Rust start from the same bits.
+ * transfer of every vertex; three lights per vertex; the occluder proxies' occlusion of the
+ * shading and the transfer when the model has proxies; the irradiance rig when the model has
+ * one; light maps composed from the transfer; and the same shading (and occlusion) through a
+ * streamed model. Inputs are literal tables (no arithmetic), so C and Rust start from the same
+ * bits.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -26,6 +28,13 @@ static const float SKY_DIR[3] = {0.5f, -0.8f, 0.9f};
 /* A quarter turn's 3-4-5 cousin about z: exactly orthonormal. */
 static const float TURN[9] = {0.8f, -0.6f, 0.0f, 0.6f, 0.8f, 0.0f, 0.0f, 0.0f, 1.0f};
 static const float IDENTITY[9] = {1.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f, 0.0f, 0.0f, 1.0f};
+/* The translation of every bone's skinning matrix (its rotation is the bone's, above). */
+static const float SHIFT[3] = {0.05f, -0.1f, 0.2f};
+/* The vertices' normals, cycled like POSITIONS (the last one zero: it sees no proxy). */
+static const float NORMALS[8][3] = {
+    {0.0f, 0.0f, 1.0f},  {0.6f, 0.0f, 0.8f},  {0.0f, 0.6f, 0.8f}, {-0.6f, 0.0f, 0.8f},
+    {0.0f, -0.6f, 0.8f}, {0.0f, 0.0f, -1.0f}, {0.8f, 0.0f, 0.6f}, {0.0f, 0.0f, 0.0f},
+};
 
 static const aprt_light LIGHTS[3] = {
     {APRT_LIGHT_SPHERE, {0.5f, 1.0f, 2.0f}, {0.0f, 0.0f, 0.0f}, 0.3f, {2.0f, 1.5f, 1.0f}},
@@ -123,9 +132,10 @@ int main(int argc, char **argv) {
   check(aprt_model_init(blob, blob_len, model_mem, aprt_model_size(), &model), "model");
   aprt_model_info info;
   check(aprt_model_get_info(model, &info), "info");
-  printf("model order %u coeffs %u vertices %u pose_len %u bones %u rig %u atlas %d\n",
+  printf("model order %u coeffs %u vertices %u pose_len %u bones %u rig %u atlas %d"
+         " proxies %d\n",
          info.order, info.coeffs, info.vertices, info.pose_len, info.bones, info.rig_vectors,
-         (int)info.has_atlas);
+         (int)info.has_atlas, (int)info.has_proxies);
 
   aprt_frame *frame;
   void *frame_mem = storage(aprt_frame_size(), aprt_frame_align());
@@ -157,6 +167,34 @@ int main(int argc, char **argv) {
                           n),
         "lights");
   print("lights", rgb, 3 * n);
+
+  /* The occluder proxies: each bone's skinning matrix is its rotation with SHIFT as the
+   * translation (3 x 4, row-major); normals from the table. Shading and transfer lose what
+   * the posed spheres block. */
+  float *skinning = zalloc(12 * (size_t)info.bones, sizeof(float));
+  for (size_t b = 0; b < info.bones; b++)
+    for (size_t r = 0; r < 3; r++) {
+      memcpy(&skinning[12 * b + 4 * r], &bones[9 * b + 3 * r], 12);
+      skinning[12 * b + 4 * r + 3] = SHIFT[r];
+    }
+  float *normals = zalloc(3 * n, sizeof(float));
+  for (size_t j = 0; j < n; j++) memcpy(&normals[3 * j], NORMALS[j % 8], 12);
+  aprt_proxy_frame *proxies;
+  void *proxies_mem = storage(aprt_proxy_frame_size(), aprt_proxy_frame_align());
+  check(aprt_proxy_frame_init(proxies_mem, aprt_proxy_frame_size(), &proxies), "proxy frame");
+  if (info.has_proxies) {
+    check(aprt_pose_proxies(model, skinning, 12 * (size_t)info.bones, proxies), "pose proxies");
+    float *occluded = zalloc(n * n2, sizeof(float));
+    memcpy(occluded, shading, n * sizeof(float));
+    check(aprt_occlude(model, proxies, sky, n2, positions, normals, 0, occluded, n), "occlude");
+    print("occluded", occluded, n);
+    memcpy(occluded, transfer, n * n2 * sizeof(float));
+    check(aprt_occlude_transfer(model, proxies, bones, info.bones, positions, normals, 0, n,
+                                occluded, n * n2),
+          "occlude transfer");
+    print("occluded_transfer", occluded, n * n2);
+    free(occluded);
+  }
 
   /* The irradiance rig: its vectors from the lights, then rig-lit shading. */
   size_t k = info.rig_vectors;
@@ -213,7 +251,22 @@ int main(int argc, char **argv) {
   check(aprt_light_sh(streamed, frame, sky, n2, bones, info.bones), "streamed light");
   check(aprt_shade(streamed, frame, 0, shading, n), "streamed shade");
   print("streamed", shading, n);
+  if (info.has_proxies) {
+    check(aprt_proxy_frame_init(proxies_mem, aprt_proxy_frame_size(), &proxies),
+          "proxy frame again");
+    check(aprt_pose_proxies(streamed, skinning, 12 * (size_t)info.bones, proxies),
+          "streamed pose proxies");
+    check(aprt_occlude(streamed, proxies, sky, n2, positions, normals, 0, shading, n),
+          "streamed occlude");
+    print("streamed_occluded", shading, n);
+    check(aprt_transfer(streamed, frame, 0, transfer, n * n2), "streamed transfer");
+    check(aprt_occlude_transfer(streamed, proxies, bones, info.bones, positions, normals, 0, n,
+                                transfer, n * n2),
+          "streamed occlude transfer");
+    print("streamed_occluded_transfer", transfer, n * n2);
+  }
 
+  free(proxies_mem), free(normals), free(skinning);
   free(scratch), free(streamed_mem), free(vectors), free(rgb), free(positions);
   free(transfer), free(shading), free(bones), free(angles);
   free(frame_mem), free(model_mem), free(blob);

@@ -22,6 +22,11 @@ const float POSITIONS[8][3] = {
 const float SKY_DIR[3] = {0.5f, -0.8f, 0.9f};
 const float TURN[9] = {0.8f, -0.6f, 0.0f, 0.6f, 0.8f, 0.0f, 0.0f, 0.0f, 1.0f};
 const float IDENTITY[9] = {1.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f, 0.0f, 0.0f, 1.0f};
+const float SHIFT[3] = {0.05f, -0.1f, 0.2f};
+const float NORMALS[8][3] = {
+    {0.0f, 0.0f, 1.0f},  {0.6f, 0.0f, 0.8f},  {0.0f, 0.6f, 0.8f}, {-0.6f, 0.0f, 0.8f},
+    {0.0f, -0.6f, 0.8f}, {0.0f, 0.0f, -1.0f}, {0.8f, 0.0f, 0.6f}, {0.0f, 0.0f, 0.0f},
+};
 const std::vector<aprt_light> LIGHTS = {
     {APRT_LIGHT_SPHERE, {0.5f, 1.0f, 2.0f}, {0.0f, 0.0f, 0.0f}, 0.3f, {2.0f, 1.5f, 1.0f}},
     {APRT_LIGHT_POINT, {-1.0f, 0.5f, 1.0f}, {0.0f, 0.0f, 0.0f}, 0.0f, {1.0f, 1.0f, 1.0f}},
@@ -52,9 +57,10 @@ void run(const char *path) {
   const std::vector<std::uint8_t> blob = read_file(path);
   const aprt::Model model(blob);
   const aprt_model_info &info = model.info();
-  std::printf("model order %u coeffs %u vertices %u pose_len %u bones %u rig %u atlas %d\n",
+  std::printf("model order %u coeffs %u vertices %u pose_len %u bones %u rig %u atlas %d"
+              " proxies %d\n",
               info.order, info.coeffs, info.vertices, info.pose_len, info.bones,
-              info.rig_vectors, int(info.has_atlas));
+              info.rig_vectors, int(info.has_atlas), int(info.has_proxies));
   const std::size_t n = info.vertices, n2 = info.coeffs, k = info.rig_vectors;
 
   std::vector<float> angles(info.pose_len), bones(9 * std::size_t(info.bones));
@@ -67,7 +73,8 @@ void run(const char *path) {
   aprt::Frame frame;
   frame.set_pose(model, angles);
   frame.light_sh(model, sky, bones);
-  print("shade", frame.shade(model));
+  const std::vector<float> shading = frame.shade(model);
+  print("shade", shading);
   const std::vector<float> transfer = frame.transfer(model);
   print("transfer", transfer);
 
@@ -75,6 +82,25 @@ void run(const char *path) {
   for (std::size_t j = 0; j < n; j++) std::memcpy(&positions[3 * j], POSITIONS[j % 8], 12);
   frame.shade_lights(model, bones, LIGHTS, WEIGHTS, positions, rgb);
   print("lights", rgb);
+
+  // The occluder proxies, posed by each bone's rotation with SHIFT as its translation.
+  std::vector<float> skinning(12 * std::size_t(info.bones)), normals(3 * n);
+  for (std::size_t b = 0; b < info.bones; b++)
+    for (std::size_t r = 0; r < 3; r++) {
+      std::memcpy(&skinning[12 * b + 4 * r], &bones[9 * b + 3 * r], 12);
+      skinning[12 * b + 4 * r + 3] = SHIFT[r];
+    }
+  for (std::size_t j = 0; j < n; j++) std::memcpy(&normals[3 * j], NORMALS[j % 8], 12);
+  if (info.has_proxies) {
+    aprt::ProxyFrame proxies;
+    proxies.pose(model, skinning);
+    std::vector<float> occluded = shading;
+    proxies.occlude(model, sky, positions, normals, occluded);
+    print("occluded", occluded);
+    occluded = transfer;
+    proxies.occlude_transfer(model, bones, positions, normals, occluded);
+    print("occluded_transfer", occluded);
+  }
 
   std::vector<float> vectors(3 * k * n2);
   if (info.has_rig) {
@@ -112,7 +138,17 @@ void run(const char *path) {
   aprt::Frame again;
   again.set_pose(streamed, angles);
   again.light_sh(streamed, sky, bones);
-  print("streamed", again.shade(streamed));
+  std::vector<float> streamed_shading = again.shade(streamed);
+  print("streamed", streamed_shading);
+  if (info.has_proxies) {
+    aprt::ProxyFrame proxies;
+    proxies.pose(streamed, skinning);
+    proxies.occlude(streamed, sky, positions, normals, streamed_shading);
+    print("streamed_occluded", streamed_shading);
+    std::vector<float> streamed_transfer = again.transfer(streamed);
+    proxies.occlude_transfer(streamed, bones, positions, normals, streamed_transfer);
+    print("streamed_occluded_transfer", streamed_transfer);
+  }
 }
 
 }  // namespace

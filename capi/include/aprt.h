@@ -168,6 +168,10 @@ typedef struct aprt_frame aprt_frame;
 // A validated model in the caller's storage. Opaque; see `aprt_model_init`.
 typedef struct aprt_model aprt_model;
 
+// One frame's posed occluder proxies in the caller's storage (about 3 KiB, any model's).
+// Opaque; see `aprt_proxy_frame_init`.
+typedef struct aprt_proxy_frame aprt_proxy_frame;
+
 // One light. `kind` is one of `APRT_LIGHT_*` (checked: anything else is
 // `APRT_STATUS_BAD_LIGHT_KIND`); the fields a kind does not use are ignored. Values are
 // checked by the core: non-finite, negative or zero-length ones give `APRT_STATUS_BAD_LIGHT`.
@@ -241,6 +245,10 @@ typedef struct {
   bool has_atlas;
   // Whether the handle streams its blob through a read callback.
   bool streamed;
+  // Whether the model carries occluder proxies: then every frame needs
+  // `aprt_pose_proxies` and `aprt_occlude` (or `aprt_occlude_transfer`). (It sits in what
+  // was padding, so the struct's size and other offsets are those of ABI version 1.)
+  bool has_proxies;
   // Scratch bytes `aprt_model_stream_init` needs for this model (one block of vertex rows,
   // plus the irradiance rig when there is one).
   size_t scratch_bytes;
@@ -444,6 +452,82 @@ aprt_status aprt_model_angle_index(const aprt_model *model,
                                    const uint8_t *name,
                                    size_t name_len,
                                    size_t *index);
+
+// Bytes of storage an `aprt_proxy_frame` needs (about 3 KiB: the core's most proxies and
+// bones).
+size_t aprt_proxy_frame_size(void);
+
+// Alignment the storage of an `aprt_proxy_frame` needs.
+size_t aprt_proxy_frame_align(void);
+
+// Writes an empty proxy frame into `storage` (`storage_len` ≥ `aprt_proxy_frame_size()`
+// bytes, aligned to `aprt_proxy_frame_align()`) and its address to `*out`. It holds no
+// resources: free the storage when done. Re-initialising it empties it.
+// `APRT_STATUS_NULL_POINTER`, `APRT_STATUS_MISALIGNED` or `APRT_STATUS_STORAGE_TOO_SMALL`
+// for bad storage.
+aprt_status aprt_proxy_frame_init(void *storage,
+                                  size_t storage_len,
+                                  aprt_proxy_frame **out);
+
+// Poses the model's occluder proxies for this frame into `proxies`: each sphere moved by its
+// bone's skinning matrix, and per bone the proxies that can reach its vertices. `skinning`
+// holds `skinning_len` = 12 · `info.bones` floats: per bone its skinning matrix, bind pose to
+// posed (the matrix an engine computes for linear blend skinning, `world · inverse_bind`),
+// 3 × 4 row-major `[r00 r01 r02 t0  r10 r11 r12 t1  r20 r21 r22 t2]`, in the units of the
+// model's positions. On any failure but a bad `proxies` pointer, `proxies` is left empty.
+//
+// `APRT_STATUS_NO_PROXIES` when the model has none (`info.has_proxies`);
+// `APRT_STATUS_WRONG_LENGTH` when `skinning_len` is not 12 · `info.bones`;
+// `APRT_STATUS_BAD_SKINNING` for a NaN or infinite matrix entry.
+aprt_status aprt_pose_proxies(const aprt_model *model,
+                              const float *skinning,
+                              size_t skinning_len,
+                              aprt_proxy_frame *proxies);
+
+// Subtracts from `out` (the `aprt_shade` output of vertices `first .. first + count`, in
+// place) what the posed `proxies` block under the world SH `lighting` (`lighting_len` =
+// `info.coeffs` floats, as given to `aprt_light_sh`): `out_j −= Σ_c L_c D_jc`. `positions`
+// and `normals` hold `count` triples each (3 · `count` floats): the vertices' posed world
+// positions (the units of the skinning translations) and normals (any length; a zero normal
+// sees no proxy), i.e. the caller's skinned mesh. Any range works, as for `aprt_shade`.
+//
+// `APRT_STATUS_NO_PROXIES` when the model has none; `APRT_STATUS_WEIGHTS_NOT_SET` before
+// `aprt_pose_proxies` (or after one that failed); `APRT_STATUS_WEIGHTS_FOR_OTHER_MODEL` for
+// proxies posed by another model; `APRT_STATUS_WRONG_LENGTH`, `APRT_STATUS_VERTEX_RANGE`,
+// `APRT_STATUS_NON_FINITE_LIGHTING`, `APRT_STATUS_NON_FINITE_POSITION` and
+// `APRT_STATUS_NON_FINITE_NORMAL` for bad inputs (`out` is then unchanged).
+aprt_status aprt_occlude(const aprt_model *model,
+                         const aprt_proxy_frame *proxies,
+                         const float *lighting,
+                         size_t lighting_len,
+                         const float *positions,
+                         const float *normals,
+                         size_t first,
+                         float *out,
+                         size_t count);
+
+// Subtracts the posed `proxies`' occlusion `D_j` from `out` (the `aprt_transfer` output of
+// vertices `first .. first + count`, in place: `out_len` = `count` · `info.coeffs` floats,
+// vertex-major), in each vertex's bone frame for a bone-frame model: `bones` holds
+// `bone_count` = `info.bones` rotations (9 floats each, row-major, as for `aprt_light_sh`);
+// a world-frame model takes `NULL, 0`. `positions` and `normals` are as for `aprt_occlude`
+// (`count` triples each).
+//
+// `APRT_STATUS_NO_PROXIES` when the model has none; `APRT_STATUS_WEIGHTS_NOT_SET` before
+// `aprt_pose_proxies`; `APRT_STATUS_WEIGHTS_FOR_OTHER_MODEL` for proxies posed by another
+// model; `APRT_STATUS_BAD_ROTATION` for a rotation that is not orthonormal;
+// `APRT_STATUS_WRONG_LENGTH` (`out_len`, `bone_count`), `APRT_STATUS_VERTEX_RANGE`,
+// `APRT_STATUS_NON_FINITE_POSITION` and `APRT_STATUS_NON_FINITE_NORMAL` for bad inputs.
+aprt_status aprt_occlude_transfer(const aprt_model *model,
+                                  const aprt_proxy_frame *proxies,
+                                  const float *bones,
+                                  size_t bone_count,
+                                  const float *positions,
+                                  const float *normals,
+                                  size_t first,
+                                  size_t count,
+                                  float *out,
+                                  size_t out_len);
 
 // Writes the model's rig vectors for this frame to `out_rgb` (`out_count` RGB triples, at
 // least `info.rig_vectors · info.coeffs`, vector-major): `lights` (`light_count`) projected

@@ -1,7 +1,8 @@
 // aprt.hpp: a small RAII wrapper over the C ABI (aprt.h), C++17.
 //
 // aprt::Model owns its blob (moved in, so it outlives the model that reads it in place) and
-// the aligned storage of its handle; aprt::Frame owns its storage. A failing call throws
+// the aligned storage of its handle; aprt::Frame and aprt::ProxyFrame own their storage.
+// Array lengths are checked against each other before the call. A failing call throws
 // aprt::Error, which carries the status and its message. Nothing else is hidden: every
 // method is one C call, so the output is the C path's, bit for bit.
 #ifndef APRT_HPP
@@ -166,6 +167,51 @@ class Frame {
   detail::Storage storage_;
   aprt_frame *handle_ = nullptr;
   std::vector<float> rig_lit_;
+};
+
+// One frame's posed occluder proxies, for a model with info().has_proxies: pose them every
+// frame, then subtract their occlusion from Frame::shade or Frame::transfer output. Positions
+// and normals are the skinned mesh's, 3 floats per vertex.
+class ProxyFrame {
+ public:
+  ProxyFrame() : storage_(detail::allocate(aprt_proxy_frame_size(), aprt_proxy_frame_align())) {
+    check(aprt_proxy_frame_init(storage_.get(), aprt_proxy_frame_size(), &handle_),
+          "aprt_proxy_frame_init");
+  }
+
+  // `skinning`: 12 floats per bone, its bind-to-posed matrix (3 x 4, row-major).
+  void pose(const Model &m, const std::vector<float> &skinning) {
+    check(aprt_pose_proxies(m.get(), skinning.data(), skinning.size(), handle_),
+          "aprt_pose_proxies");
+  }
+  // Subtracts from `shading` (vertices first .. first + shading.size()) what the proxies
+  // block under the SH `lighting` given to Frame::light_sh.
+  void occlude(const Model &m, const std::vector<float> &lighting,
+               const std::vector<float> &positions, const std::vector<float> &normals,
+               std::vector<float> &shading, std::size_t first = 0) const {
+    if (positions.size() != 3 * shading.size() || normals.size() != positions.size())
+      throw Error(APRT_STATUS_WRONG_LENGTH, "aprt_occlude");
+    check(aprt_occlude(m.get(), handle_, lighting.data(), lighting.size(), positions.data(),
+                       normals.data(), first, shading.data(), shading.size()),
+          "aprt_occlude");
+  }
+  // Subtracts the proxies' occlusion from `transfer` (info().coeffs floats per vertex from
+  // `first`, one vertex per position), in the bone frames of `bones` (9 floats per bone).
+  void occlude_transfer(const Model &m, const std::vector<float> &bones,
+                        const std::vector<float> &positions, const std::vector<float> &normals,
+                        std::vector<float> &transfer, std::size_t first = 0) const {
+    if (bones.size() % 9 || positions.size() % 3 || normals.size() != positions.size())
+      throw Error(APRT_STATUS_WRONG_LENGTH, "aprt_occlude_transfer");
+    check(aprt_occlude_transfer(m.get(), handle_, bones.data(), bones.size() / 9,
+                                positions.data(), normals.data(), first, positions.size() / 3,
+                                transfer.data(), transfer.size()),
+          "aprt_occlude_transfer");
+  }
+  const aprt_proxy_frame *get() const noexcept { return handle_; }
+
+ private:
+  detail::Storage storage_;
+  aprt_proxy_frame *handle_ = nullptr;
 };
 
 }  // namespace aprt

@@ -41,7 +41,7 @@ macro_rules! plain {
         impl Plain for $t {}
     )*};
 }
-plain!(u8, u16, f32, [f32; 3], [[f32; 3]; 3]);
+plain!(u8, u16, f32, [f32; 3], [f32; 12], [[f32; 3]; 3]);
 plain!(crate::lights::aprt_light, crate::rig::aprt_placement);
 plain!(crate::model::aprt_source);
 
@@ -107,6 +107,16 @@ pub(crate) fn matrices<'a>(
     count: usize,
 ) -> Result<&'a [[[f32; 3]; 3]], aprt_status> {
     slice(ptr.cast::<[[f32; 3]; 3]>(), count)
+}
+
+/// `floats / 12` skinning matrices (3 × 4, row-major) from `floats` floats;
+/// [`aprt_status::WrongLength`] when `floats` is not a multiple of 12.
+pub(crate) fn skinning<'a>(ptr: *const f32, floats: usize) -> Result<&'a [[f32; 12]], aprt_status> {
+    slice(ptr, floats)?;
+    match floats.is_multiple_of(12) {
+        true => slice(ptr.cast::<[f32; 12]>(), floats / 12),
+        false => Err(aprt_status::WrongLength),
+    }
 }
 
 /// One value at `ptr`.

@@ -5,8 +5,8 @@
 //!
 //! - **Opaque handles in the caller's memory.** The core never allocates, and neither does
 //!   this layer: `aprt_model_size()`/`aprt_model_align()` then `aprt_model_init` into the
-//!   caller's buffer, with the blob read in place; `aprt_frame_*` likewise for the per-frame
-//!   state. Handles hold no resources and have no destroy call.
+//!   caller's buffer, with the blob read in place; `aprt_frame_*` and `aprt_proxy_frame_*`
+//!   likewise for the per-frame state. Handles hold no resources and have no destroy call.
 //! - **One status enum** ([`aprt_status`], stable numbers) returned by every call, with
 //!   `aprt_status_message`; results go to out-parameters.
 //! - **Every pointer is checked** for NULL and alignment, and handles for a tag, in one module
@@ -20,8 +20,10 @@
 //! A frame is the core's: `aprt_set_pose`, `aprt_light_sh` (SH, with the bones' rotations of a
 //! bone-frame model), then `aprt_shade` or `aprt_transfer` over any vertex range; per-vertex
 //! lights with `aprt_shade_lights`; the irradiance rig with `aprt_rig_vectors`,
-//! `aprt_light_rig`, `aprt_shade_rig`; light maps with `aprt_lightmap_compose*`. The kernels
-//! are the core's, so a C program's output equals the Rust path's to the bit.
+//! `aprt_light_rig`, `aprt_shade_rig`; a model's occluder proxies with `aprt_pose_proxies`
+//! (into an `aprt_proxy_frame`), then `aprt_occlude` or `aprt_occlude_transfer`; light maps
+//! with `aprt_lightmap_compose*`. The kernels are the core's, so a C program's output equals
+//! the Rust path's to the bit.
 
 // The version functions below export symbols: `#[unsafe(no_mangle)]` is the only unsafe in
 // this file (see `tests/unsafe_confined.rs`).
@@ -32,6 +34,7 @@ pub mod frame;
 pub mod lightmap;
 pub mod lights;
 pub mod model;
+pub mod proxies;
 pub mod rig;
 pub mod status;
 
@@ -44,6 +47,7 @@ pub use lights::{
 pub use model::{
     APRT_FRAME_BONES, APRT_FRAME_WORLD, aprt_model, aprt_model_info, aprt_read_fn, aprt_source,
 };
+pub use proxies::aprt_proxy_frame;
 pub use rig::aprt_placement;
 pub use status::aprt_status;
 

@@ -4,7 +4,7 @@
 //! destroy call: the caller frees the storage when it is done.
 //!
 //! Every per-frame call goes through `with_model`, which gives the two kinds one face
-//! (`Eval`), so the frame, light and rig modules never ask which kind they have.
+//! (`Eval`), so the frame, light, rig and proxies modules never ask which kind they have.
 // `#[unsafe(no_mangle)]` is the only unsafe here (exported names must be unique); every
 // unsafe operation lives in `ffi_ptr`, which `tests/unsafe_confined.rs` checks.
 #![allow(unsafe_code)]
@@ -14,7 +14,7 @@ use std::ffi::c_void;
 
 use aprt_core::{
     BlobSource, Error, Frame, IrradianceRig, Light, LitWeights, Model, ModelInfo, Placement,
-    PoseWeights, RigLitWeights, Rotation, SourceError, StreamedModel,
+    PoseWeights, ProxyFrame, RigLitWeights, Rotation, Skinning, SourceError, StreamedModel,
 };
 
 use crate::ffi_ptr::{self, Handle, ReadFn};
@@ -78,6 +78,10 @@ pub struct aprt_model_info {
     pub has_atlas: bool,
     /// Whether the handle streams its blob through a read callback.
     pub streamed: bool,
+    /// Whether the model carries occluder proxies: then every frame needs
+    /// `aprt_pose_proxies` and `aprt_occlude` (or `aprt_occlude_transfer`). (It sits in what
+    /// was padding, so the struct's size and other offsets are those of ABI version 1.)
+    pub has_proxies: bool,
     /// Scratch bytes `aprt_model_stream_init` needs for this model (one block of vertex rows,
     /// plus the irradiance rig when there is one).
     pub scratch_bytes: usize,
@@ -166,6 +170,26 @@ pub(crate) trait Eval {
         lit: &RigLitWeights<'_>,
         placement: &Placement,
         out: Range<'_>,
+    ) -> Result<(), Error>;
+    fn pose_proxies(&mut self, skinning: &[Skinning], frame: &mut ProxyFrame) -> Result<(), Error>;
+    fn occlude(
+        &mut self,
+        frame: &ProxyFrame,
+        lighting: &[f32],
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        first: usize,
+        out: &mut [f32],
+    ) -> Result<(), Error>;
+    #[allow(clippy::too_many_arguments)]
+    fn occlude_transfer(
+        &mut self,
+        frame: &ProxyFrame,
+        bones: &[Rotation],
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        first: usize,
+        out: &mut [f32],
     ) -> Result<(), Error>;
 }
 
@@ -266,6 +290,31 @@ impl Eval for Model<'static> {
         let rig = self.irradiance_rig().ok_or(Error::NoIrradianceRig)?;
         Model::shade_rig(self, lit, &rig, p, r.positions, r.first, r.out)
     }
+    fn pose_proxies(&mut self, skinning: &[Skinning], frame: &mut ProxyFrame) -> Result<(), Error> {
+        Model::pose_proxies(self, skinning, frame)
+    }
+    fn occlude(
+        &mut self,
+        frame: &ProxyFrame,
+        lighting: &[f32],
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        first: usize,
+        out: &mut [f32],
+    ) -> Result<(), Error> {
+        Model::occlude(self, frame, lighting, positions, normals, first, out)
+    }
+    fn occlude_transfer(
+        &mut self,
+        frame: &ProxyFrame,
+        bones: &[Rotation],
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        first: usize,
+        out: &mut [f32],
+    ) -> Result<(), Error> {
+        Model::occlude_transfer(self, frame, bones, positions, normals, first, out)
+    }
 }
 
 impl Eval for Streamed {
@@ -330,6 +379,33 @@ impl Eval for Streamed {
         let rig = self.rig.ok_or(Error::NoIrradianceRig)?;
         let (positions, first, out) = (r.positions, r.first, r.out);
         self.model.shade_rig(lit, &rig, p, positions, first, out)
+    }
+    fn pose_proxies(&mut self, skinning: &[Skinning], frame: &mut ProxyFrame) -> Result<(), Error> {
+        self.model.pose_proxies(skinning, frame)
+    }
+    fn occlude(
+        &mut self,
+        frame: &ProxyFrame,
+        lighting: &[f32],
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        first: usize,
+        out: &mut [f32],
+    ) -> Result<(), Error> {
+        self.model
+            .occlude(frame, lighting, positions, normals, first, out)
+    }
+    fn occlude_transfer(
+        &mut self,
+        frame: &ProxyFrame,
+        bones: &[Rotation],
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        first: usize,
+        out: &mut [f32],
+    ) -> Result<(), Error> {
+        self.model
+            .occlude_transfer(frame, bones, positions, normals, first, out)
     }
 }
 
@@ -499,6 +575,7 @@ fn describe(info: &ModelInfo, rig: Option<IrradianceRig<'_>>, streamed: bool) ->
         has_rig: rig.is_some(),
         has_atlas: info.texel_atlas_bytes() > 0,
         streamed,
+        has_proxies: info.has_proxies(),
         scratch_bytes: info.scratch_bytes() + info.irradiance_rig_bytes(),
         rig_lit_len: match rig {
             Some(_) => info.rig_lit_weights_len(k),

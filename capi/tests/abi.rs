@@ -55,22 +55,31 @@ fn a_whole_frame_runs_to_ok() {
         let blob = golden(kind);
         let f = fixture(&blob);
         for (i, s) in whole_frame(f.model).into_iter().enumerate() {
-            // Calls 9 to 12 and 14 need the rig, which the golden blobs do not carry.
+            // Calls 9 to 12 and 14 need the rig, which the golden blobs do not carry; calls
+            // 16 to 18 need the proxies, which only the golden `proxies` carries.
             let rig_call = (9..=12).contains(&i) || i == 14;
-            let want: &[aprt_status] = match rig_call {
-                true => &[
+            let proxy_call = (16..=18).contains(&i) && kind != "proxies";
+            let want: &[aprt_status] = match (rig_call, proxy_call) {
+                (true, _) => &[
                     aprt_status::NoIrradianceRig,
                     aprt_status::WeightsNotSet,
                     aprt_status::WrongLength,
                 ],
-                false => &[OK],
+                (_, true) => &[aprt_status::NoProxies],
+                _ => &[OK],
             };
             assert!(want.contains(&s), "{kind}: call {i} gave {s:?}");
         }
     }
     let blob = rig_blob();
     let f = fixture(&blob);
-    assert!(whole_frame(f.model).iter().all(|&s| s == OK));
+    for (i, s) in whole_frame(f.model).into_iter().enumerate() {
+        let want = match i {
+            16..=18 => aprt_status::NoProxies,
+            _ => OK,
+        };
+        assert_eq!(s, want, "rig: call {i}");
+    }
 }
 
 #[test]

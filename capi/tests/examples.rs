@@ -1,8 +1,8 @@
 //! The C and C++ examples (`examples/shade.c`, `examples/shade.cpp`), built with the system
 //! `cc` and `c++` against the staticlib (and the C one against the cdylib) and run on the
-//! golden blobs and a model with an irradiance rig, print exactly what the same frame
-//! computed through `aprt_core` in Rust prints: every float's bits, so C, C++ and Rust agree
-//! to the last bit.
+//! golden blobs (one with occluder proxies) and a model with an irradiance rig, print exactly
+//! what the same frame computed through `aprt_core` in Rust prints: every float's bits, so C,
+//! C++ and Rust agree to the last bit.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -10,7 +10,7 @@ use std::process::Command;
 
 use aprt_core::{
     DirectionalLight, Light, LightMap, LitWeights, Model, Placement, PointLight, PoseWeights,
-    RigLitWeights, Rotation, SphereLight, StreamedModel, project_directional,
+    ProxyFrame, RigLitWeights, Rotation, Skinning, SphereLight, StreamedModel, project_directional,
 };
 
 // The inputs of shade.c and shade.cpp, literally.
@@ -28,6 +28,19 @@ const POSITIONS: [[f32; 3]; 8] = [
 const SKY_DIR: [f32; 3] = [0.5, -0.8, 0.9];
 const TURN: Rotation = [[0.8, -0.6, 0.0], [0.6, 0.8, 0.0], [0.0, 0.0, 1.0]];
 const IDENTITY: Rotation = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+/// The translation of every bone's skinning matrix (its rotation is the bone's, above).
+const SHIFT: [f32; 3] = [0.05, -0.1, 0.2];
+/// The vertices' normals, cycled like `POSITIONS` (the last one zero: it sees no proxy).
+const NORMALS: [[f32; 3]; 8] = [
+    [0.0, 0.0, 1.0],
+    [0.6, 0.0, 0.8],
+    [0.0, 0.6, 0.8],
+    [-0.6, 0.0, 0.8],
+    [0.0, -0.6, 0.8],
+    [0.0, 0.0, -1.0],
+    [0.8, 0.0, 0.6],
+    [0.0, 0.0, 0.0],
+];
 const WEIGHTS: [f32; 3] = [1.0, 0.5, 1.0];
 const PLACE: Placement = Placement {
     rotation: [[0.8, 0.0, -0.6], [0.0, 1.0, 0.0], [0.6, 0.0, 0.8]],
@@ -74,10 +87,12 @@ fn expected(blob: &[u8]) -> String {
     let atlas = i32::from(model.texel_atlas().is_some());
     writeln!(
         out,
-        "model order {} coeffs {n2} vertices {n} pose_len {} bones {} rig {k} atlas {atlas}",
+        "model order {} coeffs {n2} vertices {n} pose_len {} bones {} rig {k} atlas {atlas} \
+         proxies {}",
         info.order(),
         info.pose_len(),
-        info.bones()
+        info.bones(),
+        i32::from(info.has_proxies())
     )
     .unwrap();
     let angles: Vec<f32> = (0..info.pose_len()).map(|i| ANGLES[i % 8]).collect();
@@ -104,6 +119,41 @@ fn expected(blob: &[u8]) -> String {
         .shade_lights(&pose, &bones, &lights, &WEIGHTS, &positions, 0, &mut rgb)
         .unwrap();
     line(&mut out, "lights", rgb.as_flattened());
+
+    // The occluder proxies, posed by each bone's rotation with SHIFT as its translation.
+    let skinning: Vec<Skinning> = bones
+        .iter()
+        .map(|r| {
+            let row = |i: usize| [r[i][0], r[i][1], r[i][2], SHIFT[i]];
+            [row(0), row(1), row(2)].concat().try_into().unwrap()
+        })
+        .collect();
+    let normals: Vec<[f32; 3]> = (0..n).map(|j| NORMALS[j % 8]).collect();
+    if info.has_proxies() {
+        let mut proxies = Box::new(ProxyFrame::new());
+        model.pose_proxies(&skinning, &mut proxies).unwrap();
+        let mut occluded = shading.clone();
+        model
+            .occlude(&proxies, sky, &positions, &normals, 0, &mut occluded)
+            .unwrap();
+        // The inputs reach some vertices and miss others, so the lines test something.
+        let changed = occluded
+            .iter()
+            .zip(&shading)
+            .filter(|(a, b)| a != b)
+            .count();
+        assert!(
+            0 < changed && changed < n,
+            "{changed} of {n} vertices occluded"
+        );
+        line(&mut out, "occluded", &occluded);
+        let mut occluded = transfer.clone();
+        model
+            .occlude_transfer(&proxies, &bones, &positions, &normals, 0, &mut occluded)
+            .unwrap();
+        assert_ne!(occluded, transfer);
+        line(&mut out, "occluded_transfer", &occluded);
+    }
 
     let mut vectors = vec![[0.0f32; 3]; k * n2];
     if let Some(rig) = rig {
@@ -146,6 +196,19 @@ fn expected(blob: &[u8]) -> String {
     streamed.light(&pose, sky, &bones, &mut lit).unwrap();
     streamed.shade(&lit, 0, &mut shading).unwrap();
     line(&mut out, "streamed", &shading);
+    if info.has_proxies() {
+        let mut proxies = Box::new(ProxyFrame::new());
+        streamed.pose_proxies(&skinning, &mut proxies).unwrap();
+        streamed
+            .occlude(&proxies, sky, &positions, &normals, 0, &mut shading)
+            .unwrap();
+        line(&mut out, "streamed_occluded", &shading);
+        streamed.transfer(&pose, 0, &mut transfer).unwrap();
+        streamed
+            .occlude_transfer(&proxies, &bones, &positions, &normals, 0, &mut transfer)
+            .unwrap();
+        line(&mut out, "streamed_occluded_transfer", &transfer);
+    }
     out
 }
 
@@ -252,10 +315,11 @@ fn c_and_cpp_examples_match_rust_bit_for_bit() {
     if shared {
         compile("cc", "-std=c11", "shade.c", &c_so, true);
     }
-    let mut rigs = 0;
+    let (mut rigs, mut occluded) = (0, 0);
     for model in models(&dir) {
         let want = expected(&std::fs::read(&model).unwrap());
         rigs += usize::from(want.contains("\nrig "));
+        occluded += usize::from(want.contains("\noccluded "));
         let exes = [&c, &cpp, &c_so];
         for exe in &exes[..2 + usize::from(shared)] {
             let got = run(exe, &model);
@@ -271,4 +335,5 @@ fn c_and_cpp_examples_match_rust_bit_for_bit() {
         }
     }
     assert_eq!(rigs, 1, "one model exercises the irradiance rig");
+    assert_eq!(occluded, 1, "one model exercises the occluder proxies");
 }

@@ -7,4 +7,5 @@ mod abi;
 mod examples;
 mod header;
 mod hostile;
+mod proxies;
 mod unsafe_confined;

@@ -1,5 +1,5 @@
 //! Helpers the ABI tests share: aligned storage for handles, and one whole frame driven
-//! through the C functions, every status collected.
+//! through the C functions (the occluder proxies' calls last), every status collected.
 
 #![allow(dead_code)]
 
@@ -11,6 +11,7 @@ use aprt_capi::frame::*;
 use aprt_capi::lightmap::*;
 use aprt_capi::lights::*;
 use aprt_capi::model::*;
+use aprt_capi::proxies::*;
 use aprt_capi::rig::*;
 use aprt_capi::*;
 
@@ -194,6 +195,53 @@ pub fn whole_frame(model: *const aprt_model) -> Vec<aprt_status> {
         positions.as_ptr(),
         rgb.as_mut_ptr(),
         n,
+    ));
+    // The occluder proxies: still bones, every normal up.
+    let mut proxies_mem = storage(aprt_proxy_frame_size());
+    let mut proxies = null_mut();
+    statuses.push(aprt_proxy_frame_init(
+        ptr(&mut proxies_mem),
+        aprt_proxy_frame_size(),
+        &mut proxies,
+    ));
+    let still = [
+        1.0f32, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0,
+    ];
+    let skinning: Vec<f32> = still.iter().copied().cycle().take(12 * bones).collect();
+    statuses.push(aprt_pose_proxies(
+        model,
+        skinning.as_ptr(),
+        skinning.len(),
+        proxies,
+    ));
+    let normals: Vec<f32> = [0.0f32, 0.0, 1.0]
+        .iter()
+        .copied()
+        .cycle()
+        .take(3 * n)
+        .collect();
+    statuses.push(aprt_occlude(
+        model,
+        proxies,
+        sky.as_ptr(),
+        n2,
+        positions.as_ptr(),
+        normals.as_ptr(),
+        0,
+        shading.as_mut_ptr(),
+        n,
+    ));
+    statuses.push(aprt_occlude_transfer(
+        model,
+        proxies,
+        rotations.as_ptr(),
+        bones,
+        positions.as_ptr(),
+        normals.as_ptr(),
+        0,
+        n,
+        transfer.as_mut_ptr(),
+        transfer.len(),
     ));
     statuses
 }
