@@ -169,6 +169,8 @@ impl Lanes for Portable {
 
     #[inline(always)]
     fn mask_of(bits: u8) -> PortableMask {
-        PortableMask(core::array::from_fn(|l| 0u32.wrapping_sub(u32::from(bits >> l & 1))))
+        PortableMask(core::array::from_fn(|l| {
+            0u32.wrapping_sub(u32::from(bits >> l & 1))
+        }))
     }
 }

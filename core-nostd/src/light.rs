@@ -605,8 +605,8 @@ pub(crate) fn sphere_irradiance(radius: f32, distance: f32, cos_theta: f32) -> f
         return PI * s2 * cos_theta.max(0.0);
     }
     // The horizon cuts the cap (Snyder 1996). Its two terms cancel to O(α³): small caps need
-    // f64; from sin²α = 0.01 (α ≈ 6°) f32 keeps five digits of `π sin²α` at half the cost, and
-    // every occluder proxy's cap is that large (`horizon_in_f32_keeps_five_digits`).
+    // f64; from sin²α = 0.01 (α ≈ 6°) f32 keeps five digits of `π sin²α` at half the cost
+    // (`horizon_in_f32_keeps_five_digits`). Occluder proxies have their own lane-wise form.
     if s2 >= HORIZON_F32 {
         horizon_clipped(radius, distance, cos_theta)
     } else {

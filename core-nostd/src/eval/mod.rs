@@ -25,13 +25,13 @@ mod occlude;
 mod rig;
 mod weights;
 
+#[cfg(target_arch = "x86_64")]
+pub(crate) use kernels::Avx2;
 use kernels::{
     BlockLayout, IdentityWeights, RowRef, bone_lanes, dot, shade_blocks, transfer_identity,
     transfer_stored,
 };
 pub(crate) use rig::check_positions;
-#[cfg(target_arch = "x86_64")]
-pub(crate) use kernels::Avx2;
 use weights::check_capacity;
 pub use weights::{LitWeights, MAX_POSE_WEIGHTS, PoseWeights};
 pub(crate) use weights::{Stamp, check_stamp};
@@ -53,7 +53,9 @@ pub(crate) fn first_non_finite(xs: &[f32]) -> Option<usize> {
 /// maximum over the whole slice, which vectorises, where a search stopping at the first
 /// non-finite value runs one value at a time (per-vertex inputs are scanned every frame).
 pub(crate) fn all_finite(xs: &[f32]) -> bool {
-    xs.iter().fold(0u32, |m, x| m.max(x.to_bits() & 0x7fff_ffff)) < 0x7f80_0000
+    xs.iter()
+        .fold(0u32, |m, x| m.max(x.to_bits() & 0x7fff_ffff))
+        < 0x7f80_0000
 }
 
 impl ModelInfo {

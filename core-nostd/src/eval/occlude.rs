@@ -7,7 +7,7 @@ use super::rig::check_positions;
 use crate::blob::format::VERTEX_BLOCK;
 use crate::blob::{Error, Input, ModelInfo, Reader};
 use crate::proxies::{Block, Output, ProxyFrame, block_occlusion};
-use crate::rotation::{IDENTITY, Rotation};
+use crate::rotation::Rotation;
 use crate::sh::MAX_COEFFS;
 
 impl ModelInfo {
@@ -50,18 +50,12 @@ impl ModelInfo {
     ) -> Result<(), Error> {
         let end = first + count;
         self.each_block(r, first, count, |v0, bones, _| {
-            let mut block = Block {
-                masks: [0; VERTEX_BLOCK],
-                vertices: [([0.0; 3], [0.0; 3]); VERTEX_BLOCK],
-                rotations: rotations.map(|_| [IDENTITY; VERTEX_BLOCK]),
-            };
+            let mut block = Block::empty(rotations.is_some());
             for j in v0.max(first)..(v0 + VERTEX_BLOCK).min(end) {
                 let (l, i, bone) = (j - v0, j - first, bones[j - v0]);
-                block.masks[l] = frame.candidates.get(bone).copied().unwrap_or(0);
-                block.vertices[l] = (positions[i], normals[i]);
-                if let (Some(lanes), Some(r)) = (&mut block.rotations, rotations) {
-                    lanes[l] = r.get(bone).copied().unwrap_or(IDENTITY);
-                }
+                let mask = frame.candidates.get(bone).copied().unwrap_or(0);
+                let rotation = rotations.and_then(|r| r.get(bone));
+                block.set(l, mask, (positions[i], normals[i]), rotation);
             }
             if block.masks.iter().any(|&m| m != 0) {
                 visit(v0 as isize - first as isize, &block);
@@ -85,7 +79,11 @@ impl ModelInfo {
         let mut d = [[0.0f32; MAX_COEFFS]; VERTEX_BLOCK];
         self.each_receiving_block(r, frame, range, vertices, rotations, |start, block| {
             let reached = block_occlusion(frame, self.order, block, Output::Transfer(&mut d));
-            for (l, d) in d.iter().enumerate().filter(|&(l, _)| reached & (1 << l) != 0) {
+            for (l, d) in d
+                .iter()
+                .enumerate()
+                .filter(|&(l, _)| reached & (1 << l) != 0)
+            {
                 visit((start + l as isize) as usize, &d[..n2]);
             }
         })
@@ -122,16 +120,27 @@ impl ModelInfo {
         self.check_occlusion_inputs(frame, positions, normals, first, out.len())?;
         let range = (first, out.len());
         let mut shading = [0.0f32; VERTEX_BLOCK];
-        self.each_receiving_block(r, frame, range, (positions, normals), None, |start, block| {
-            let output = Output::Shading {
-                lighting,
-                out: &mut shading,
-            };
-            let reached = block_occlusion(frame, self.order, block, output);
-            for (l, s) in shading.iter().enumerate().filter(|&(l, _)| reached & (1 << l) != 0) {
-                out[(start + l as isize) as usize] -= s;
-            }
-        })
+        self.each_receiving_block(
+            r,
+            frame,
+            range,
+            (positions, normals),
+            None,
+            |start, block| {
+                let output = Output::Shading {
+                    lighting,
+                    out: &mut shading,
+                };
+                let reached = block_occlusion(frame, self.order, block, output);
+                for (l, s) in shading
+                    .iter()
+                    .enumerate()
+                    .filter(|&(l, _)| reached & (1 << l) != 0)
+                {
+                    out[(start + l as isize) as usize] -= s;
+                }
+            },
+        )
     }
 
     #[allow(clippy::too_many_arguments)]

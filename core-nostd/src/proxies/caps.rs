@@ -95,7 +95,9 @@ pub(crate) fn form_factor<V: Lanes>(s2: V, cot_alpha: V, cos_beta: V, horizon: b
     }
     let sin_beta = (one - cos_beta * cos_beta).max(zero).sqrt();
     // `sin β = 0` only where the cap is above or below the horizon: discarded below.
-    let y = (zero - cot_alpha * cos_beta / sin_beta).max(V::splat(-1.0)).min(one);
+    let y = (zero - cot_alpha * cos_beta / sin_beta)
+        .max(V::splat(-1.0))
+        .min(one);
     let w = sin_beta * (one - y * y).max(zero).sqrt();
     let clipped = (cos_beta * acos(y) - cot_alpha * w) * s2 + atan2_positive(w, cot_alpha);
     V::select(s2.lt(cos_beta * cos_beta), above, clipped.max(zero))
@@ -139,7 +141,11 @@ pub(crate) struct Fade {
 
 impl Fade {
     pub(crate) fn new(cull: f32) -> Fade {
-        let inverse = if cull > 0.0 { 1.0 / cull } else { f32::INFINITY };
+        let inverse = if cull > 0.0 {
+            1.0 / cull
+        } else {
+            f32::INFINITY
+        };
         Fade { cull, inverse }
     }
 
@@ -216,7 +222,9 @@ pub(crate) fn caps<V: Lanes>(
     // shift vanishes with the cap). Exact in band 0; the other bands are off by the second
     // order of the shift, a few percent for a cap of 40° tilted 40°.
     let inverse_f = one / unweighted;
-    let kept = (V::splat(PI) * s2 * cos_beta * inverse_f).max(zero).min(one);
+    let kept = (V::splat(PI) * s2 * cos_beta * inverse_f)
+        .max(zero)
+        .min(one);
     let gap = one - cos_alpha;
     let shift = kept * V::splat(PI) * gap * gap * inverse_f;
     let valid = V::and(hit, V::or(inside, zero.lt(f)));

@@ -143,15 +143,9 @@ impl ProxyFrame {
         if first_non_finite(&position).is_some() {
             return Err(Error::NonFinitePosition { index: 0 });
         }
-        let mut masks = [0u64; VERTEX_BLOCK];
-        masks[0] = self.candidates.get(bone).copied().unwrap_or(0);
-        let mut vertices = [([0.0f32; 3], [0.0f32; 3]); VERTEX_BLOCK];
-        vertices[0] = (position, normal);
-        let block = Block {
-            masks,
-            vertices,
-            rotations: rotation.map(|r| [*r; VERTEX_BLOCK]),
-        };
+        let mut block = Block::empty(rotation.is_some());
+        let mask = self.candidates.get(bone).copied().unwrap_or(0);
+        block.set(0, mask, (position, normal), rotation);
         let mut lanes = [[0.0f32; MAX_COEFFS]; VERTEX_BLOCK];
         let reached = block_occlusion(self, order, &block, Output::Transfer(&mut lanes)) & 1 != 0;
         let out = &mut out[..n2];

@@ -6,8 +6,9 @@
 //! occlusion, so that at runtime `transfer = model(pose) − occlusion(pose)`.
 //!
 //! Each sphere seen from a vertex is a cap of half-angle `α`, `sin α = r/d`. Its occlusion of
-//! the vertex's transfer is the cap's clamped-cosine integral `F` (the exact, horizon-clipped
-//! form factor of a sphere; `π sin²α cos β` when the cap is above the horizon) spread over the
+//! the vertex's transfer is the cap's clamped-cosine integral `F` (the horizon-clipped form
+//! factor of a sphere, `π sin²α cos β` when the cap is above the horizon, within 2.5e-6 of the
+//! exact one: its `acos` and `atan` are polynomials, `caps.rs`) spread over the
 //! bands as the cosine-weighted cap's zonal harmonic `2π ∫ t P_l(t)` about the cap's centre of
 //! weight (its axis moved towards the normal by the cosine's tilt, to first order):
 //! `D_lm = F · ζ_l · y_lm(a')`. Band 0 is exact, and every band for a cap about the normal;
@@ -23,6 +24,9 @@
 //! each bone's bounding sphere (of the vertices it carries) is tested against each proxy's
 //! reach `r / √cull`, leaving each bone a mask of the proxies that can touch it. The bone's
 //! own proxies and its neighbours' are masked out in the blob: the learnt model carries them.
+//! A block of eight vertices then tests each proxy of its lanes' masks against all eight at
+//! once, and computes the caps of those that reach any lane together, lane-wise and
+//! branch-free (`occlusion.rs`), in AVX2 where the CPU has it: the same bits on every target.
 
 mod caps;
 mod frame;

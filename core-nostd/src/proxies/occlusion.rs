@@ -16,18 +16,52 @@ use super::caps::{Caps, Fade, Receivers, band_ratios, caps, offsets};
 use super::frame::ProxyFrame;
 use crate::blob::format::VERTEX_BLOCK;
 use crate::lanes::{Lanes, Portable};
-use crate::rotation::Rotation;
+use crate::rotation::{IDENTITY, Rotation};
 use crate::sh::{MAX_COEFFS, MAX_ORDER, basis_lanes};
 
-/// A block's vertices as the kernel takes them. Lane `l` is occluded by the proxies of
-/// `masks[l]` (none for a lane outside the range); its vertex is `vertices[l]`, position and
-/// normal (any length; a zero or non-finite one sees no proxy), posed, world space.
+/// A block's vertices as the kernel takes them, one array per axis. Lane `l` is occluded by
+/// the proxies of `masks[l]` (none for a lane outside the range); its vertex is at
+/// `positions[k][l]` with normal `normals[k][l]` (any length; a zero or non-finite one sees no
+/// proxy), posed, world space.
 #[derive(Clone, Copy)]
 pub(crate) struct Block {
     pub(crate) masks: [u64; VERTEX_BLOCK],
-    pub(crate) vertices: [([f32; 3], [f32; 3]); VERTEX_BLOCK],
+    pub(crate) positions: [[f32; VERTEX_BLOCK]; 3],
+    pub(crate) normals: [[f32; VERTEX_BLOCK]; 3],
     /// Each lane's bone rotation, where the occlusion is wanted in the vertices' bone frames.
     pub(crate) rotations: Option<[Rotation; VERTEX_BLOCK]>,
+}
+
+impl Block {
+    /// A block whose lanes take no proxy; with rotations (the identity until set) when `rotated`.
+    pub(crate) fn empty(rotated: bool) -> Block {
+        Block {
+            masks: [0; VERTEX_BLOCK],
+            positions: [[0.0; VERTEX_BLOCK]; 3],
+            normals: [[0.0; VERTEX_BLOCK]; 3],
+            rotations: rotated.then_some([IDENTITY; VERTEX_BLOCK]),
+        }
+    }
+
+    /// Lane `l`: the proxies of `mask` occlude the vertex at `position` with `normal`, in the
+    /// frame of `rotation` if the block has rotations.
+    #[inline(always)]
+    pub(crate) fn set(
+        &mut self,
+        l: usize,
+        mask: u64,
+        (position, normal): ([f32; 3], [f32; 3]),
+        rotation: Option<&Rotation>,
+    ) {
+        self.masks[l] = mask;
+        for k in 0..3 {
+            self.positions[k][l] = position[k];
+            self.normals[k][l] = normal[k];
+        }
+        if let (Some(lanes), Some(r)) = (&mut self.rotations, rotation) {
+            lanes[l] = *r;
+        }
+    }
 }
 
 /// What the kernel writes for the lanes some proxy reaches.
@@ -133,21 +167,17 @@ fn kernel<V: Lanes, const N: usize>(frame: &ProxyFrame, block: &Block, output: O
 /// The block's positions and unit normals in lanes, and the lanes whose normal has a direction.
 #[inline(always)]
 fn receivers<V: Lanes>(block: &Block) -> (Receivers<V>, u8) {
-    let mut p = [[0.0f32; VERTEX_BLOCK]; 3];
-    let mut n = [[0.0f32; VERTEX_BLOCK]; 3];
-    for (l, (position, normal)) in block.vertices.iter().enumerate() {
-        for k in 0..3 {
-            p[k][l] = position[k];
-            n[k][l] = normal[k];
-        }
-    }
+    let (p, n) = (&block.positions, &block.normals);
     let n = [
         V::from_array(n[0]),
         V::from_array(n[1]),
         V::from_array(n[2]),
     ];
     let length = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-    let valid = V::and(V::splat(1e-20).lt(length), length.lt(V::splat(f32::INFINITY)));
+    let valid = V::and(
+        V::splat(1e-20).lt(length),
+        length.lt(V::splat(f32::INFINITY)),
+    );
     let zero = V::splat(0.0);
     let receivers = Receivers {
         positions: [
@@ -204,9 +234,21 @@ fn rotation_lanes<V: Lanes>(rotations: [Rotation; VERTEX_BLOCK]) -> [[V; 3]; 3] 
     let row = |i: usize| [r[i][0], r[i][1], r[i][2]];
     let [a, b, c] = [row(0), row(1), row(2)];
     [
-        [V::from_array(a[0]), V::from_array(a[1]), V::from_array(a[2])],
-        [V::from_array(b[0]), V::from_array(b[1]), V::from_array(b[2])],
-        [V::from_array(c[0]), V::from_array(c[1]), V::from_array(c[2])],
+        [
+            V::from_array(a[0]),
+            V::from_array(a[1]),
+            V::from_array(a[2]),
+        ],
+        [
+            V::from_array(b[0]),
+            V::from_array(b[1]),
+            V::from_array(b[2]),
+        ],
+        [
+            V::from_array(c[0]),
+            V::from_array(c[1]),
+            V::from_array(c[2]),
+        ],
     ]
 }
 
@@ -220,34 +262,57 @@ struct Pass<'a, V: Lanes> {
 }
 
 impl<V: Lanes> Pass<'_, V> {
-    /// Adds every cap to `sum` in proxy order; returns the lanes' union of caps.
+    /// Adds every cap to `sum` in proxy order; returns the lanes' union of caps. The proxies
+    /// that reach some lane are listed first, without a branch per proxy, and then run two at
+    /// a time: two independent chains of square roots and divisions, which the processor
+    /// overlaps, where one would wait on each in turn.
     #[inline(always)]
     fn run<const N: usize>(&self, sum: &mut impl CapSum<V>) -> Union<V> {
-        let fade = Fade::new(self.frame.cull);
-        let mut union = Union::none();
+        let mut reaching = [(0usize, 0u8); MAX_PROXIES];
+        let mut count = 0;
         let mut left = self.proxies;
         while left != 0 {
             let i = left.trailing_zeros() as usize;
             left &= left - 1;
             let sphere = self.frame.sphere(i);
-            let offsets = offsets(sphere, self.receivers.positions);
-            let within = offsets.1.lt(V::splat(sphere.reach2));
-            let hit = V::and(V::mask_of(self.lanes_of[i]), within);
-            if V::bits(hit) == 0 {
-                continue;
-            }
-            let Caps {
-                f,
-                axis,
-                cos_alpha,
-            } = caps(sphere, fade, &self.receivers, offsets, hit);
-            let axis = self.unit_axis(axis);
-            let mut y = [V::splat(0.0); MAX_COEFFS];
-            basis_lanes::<V, N>(axis, &mut y);
-            sum.add::<N>(f, &band_ratios(cos_alpha), &y);
-            union.add(f);
+            let (_, d2) = offsets(sphere, self.receivers.positions);
+            let within = d2.lt(V::splat(sphere.reach2));
+            let hit = V::bits(V::and(V::mask_of(self.lanes_of[i]), within));
+            reaching[count] = (i, hit);
+            count += usize::from(hit != 0);
+        }
+        let fade = Fade::new(self.frame.cull);
+        let mut union = Union::none();
+        let mut pairs = reaching[..count].chunks_exact(2);
+        for pair in &mut pairs {
+            let a = self.caps(pair[0], fade);
+            let b = self.caps(pair[1], fade);
+            self.add::<N>(a, sum, &mut union);
+            self.add::<N>(b, sum, &mut union);
+        }
+        if let [last] = pairs.remainder() {
+            let cap = self.caps(*last, fade);
+            self.add::<N>(cap, sum, &mut union);
         }
         union
+    }
+
+    /// The caps of proxy `i` over the lanes of `hit`.
+    #[inline(always)]
+    fn caps(&self, (i, hit): (usize, u8), fade: Fade) -> Caps<V> {
+        let sphere = self.frame.sphere(i);
+        let offsets = offsets(sphere, self.receivers.positions);
+        caps(sphere, fade, &self.receivers, offsets, V::mask_of(hit))
+    }
+
+    /// Adds one proxy's caps to `sum` and `union`.
+    #[inline(always)]
+    fn add<const N: usize>(&self, caps: Caps<V>, sum: &mut impl CapSum<V>, union: &mut Union<V>) {
+        let axis = self.unit_axis(caps.axis);
+        let mut y = [V::splat(0.0); MAX_COEFFS];
+        basis_lanes::<V, N>(axis, &mut y);
+        sum.add::<N>(caps.f, &band_ratios(caps.cos_alpha), &y);
+        union.add(caps.f);
     }
 
     /// The axis in the frame of the output (each lane's bone, or world), unit length. The
@@ -377,40 +442,42 @@ mod tests {
     /// Block `b` of the cases: lanes with every mask, none and partial ones, zero normals, a
     /// vertex inside a sphere, and bone rotations or none.
     fn block(frame: &ProxyFrame, b: usize) -> Block {
-        let draw = |i: usize, scale: f32| [0, 1, 2].map(|k| scale * weight(1000 + 24 * b + 3 * i + k));
-        let masks = core::array::from_fn(|l| match (b + l) % 5 {
-            0 => 0,
-            1 => (1 << 24) - 1,
-            _ => (weight(5000 + 8 * b + l).to_bits() as u64) & ((1 << 24) - 1),
-        });
-        let vertices = core::array::from_fn(|l| {
+        let draw =
+            |i: usize, scale: f32| [0, 1, 2].map(|k| scale * weight(1000 + 24 * b + 3 * i + k));
+        let mut block = Block::empty(b % 3 != 0);
+        for l in 0..VERTEX_BLOCK {
+            let mask = match (b + l) % 5 {
+                0 => 0,
+                1 => (1 << 24) - 1,
+                _ => (weight(5000 + 8 * b + l).to_bits() as u64) & ((1 << 24) - 1),
+            };
             let position = match l {
                 3 => frame.centres[b % 24],
                 _ => draw(l, 1.4),
             };
-            let normal = if (b + l) % 7 == 0 { [0.0; 3] } else { draw(l + 8, 1.0) };
-            (position, normal)
-        });
-        let rotations =
-            (b % 3 != 0).then(|| core::array::from_fn(|l| turn(0.3 - 0.2 * l as f32)));
-        Block {
-            masks,
-            vertices,
-            rotations,
+            let normal = if (b + l) % 7 == 0 {
+                [0.0; 3]
+            } else {
+                draw(l + 8, 1.0)
+            };
+            block.set(
+                l,
+                mask,
+                (position, normal),
+                Some(&turn(0.3 - 0.2 * l as f32)),
+            );
         }
+        block
     }
 
     /// Lane `lane` of `block` alone in an otherwise empty block.
     fn alone(block: &Block, lane: usize) -> Block {
-        let mut masks = [0; VERTEX_BLOCK];
-        masks[0] = block.masks[lane];
-        let mut vertices = [([0.0; 3], [0.0; 3]); VERTEX_BLOCK];
-        vertices[0] = block.vertices[lane];
-        Block {
-            masks,
-            vertices,
-            rotations: block.rotations.map(|r| [r[lane]; VERTEX_BLOCK]),
-        }
+        let mut one = Block::empty(block.rotations.is_some());
+        let position = [0, 1, 2].map(|k| block.positions[k][lane]);
+        let normal = [0, 1, 2].map(|k| block.normals[k][lane]);
+        let rotation = block.rotations.map(|r| r[lane]);
+        one.set(0, block.masks[lane], (position, normal), rotation.as_ref());
+        one
     }
 
     /// Both outputs of `kernel` for `block` at `order`: the lanes reached, the shading under a
@@ -429,7 +496,10 @@ mod tests {
             out: &mut shading,
         };
         let reached = kernel(frame, order, block, output);
-        assert_eq!(kernel(frame, order, block, Output::Transfer(&mut d)), reached);
+        assert_eq!(
+            kernel(frame, order, block, Output::Transfer(&mut d)),
+            reached
+        );
         (reached, shading, d)
     }
 
@@ -450,11 +520,18 @@ mod tests {
                 let (reached, shading, d) = run(kernel, &frame, order, &block);
                 for l in 0..VERTEX_BLOCK {
                     let (one, one_shading, one_d) = run(kernel, &frame, order, &alone(&block, l));
-                    assert_eq!(reached >> l & 1, one & 1, "order {order}, block {b}, lane {l}");
+                    assert_eq!(
+                        reached >> l & 1,
+                        one & 1,
+                        "order {order}, block {b}, lane {l}"
+                    );
                     if one & 1 != 0 {
                         lanes_reached += 1;
                         assert_eq!(shading[l].to_bits(), one_shading[0].to_bits());
-                        assert!(same_bits(&d[l][..order * order], &one_d[0][..order * order]));
+                        assert!(same_bits(
+                            &d[l][..order * order],
+                            &one_d[0][..order * order]
+                        ));
                     }
                 }
             }
@@ -470,14 +547,23 @@ mod tests {
         let lighting: [f32; MAX_COEFFS] = core::array::from_fn(|c| weight(7000 + c));
         for order in 1..=6 {
             for b in (0..40).filter(|b| b % 3 == 0) {
-                let (reached, shading, d) =
-                    run(occlusion_kernel::<Portable>, &frame, order, &block(&frame, b));
+                let (reached, shading, d) = run(
+                    occlusion_kernel::<Portable>,
+                    &frame,
+                    order,
+                    &block(&frame, b),
+                );
                 for l in (0..VERTEX_BLOCK).filter(|l| reached >> l & 1 != 0) {
                     let n2 = order * order;
                     let dot: f64 = (0..n2).map(|c| f64::from(d[l][c] * lighting[c])).sum();
-                    let size: f64 = (0..n2).map(|c| f64::from((d[l][c] * lighting[c]).abs())).sum();
+                    let size: f64 = (0..n2)
+                        .map(|c| f64::from((d[l][c] * lighting[c]).abs()))
+                        .sum();
                     let error = (f64::from(shading[l]) - dot).abs();
-                    assert!(error <= 1e-5 * (1.0 + size), "order {order}, block {b}, lane {l}");
+                    assert!(
+                        error <= 1e-5 * (1.0 + size),
+                        "order {order}, block {b}, lane {l}"
+                    );
                 }
             }
         }
@@ -501,8 +587,15 @@ mod tests {
                 let (reached, shading, d) = run(wide, &frame, order, &block);
                 assert_eq!(reached, portable.0);
                 for l in (0..VERTEX_BLOCK).filter(|l| reached >> l & 1 != 0) {
-                    assert_eq!(shading[l].to_bits(), portable.1[l].to_bits(), "{order} {b} {l}");
-                    assert!(same_bits(&d[l][..order * order], &portable.2[l][..order * order]));
+                    assert_eq!(
+                        shading[l].to_bits(),
+                        portable.1[l].to_bits(),
+                        "{order} {b} {l}"
+                    );
+                    assert!(same_bits(
+                        &d[l][..order * order],
+                        &portable.2[l][..order * order]
+                    ));
                 }
             }
         }
