@@ -29,6 +29,12 @@ pub(crate) trait Lanes:
     fn from_array(a: [f32; VERTEX_BLOCK]) -> Self;
     /// The lanes as an array.
     fn to_array(self) -> [f32; VERTEX_BLOCK];
+    /// Eight points' coordinates, one lane each: `[x, y, z]`.
+    #[inline(always)]
+    fn from_points(points: &[[f32; 3]; VERTEX_BLOCK]) -> [Self; 3] {
+        let axis = |k: usize| Self::from_array(core::array::from_fn(|l| points[l][k]));
+        [axis(0), axis(1), axis(2)]
+    }
     /// Correctly rounded square root.
     fn sqrt(self) -> Self;
     /// Absolute value (the sign bit cleared).

@@ -228,7 +228,7 @@ pub(crate) fn eval_basis_lanes(
     out: &mut [[f32; VERTEX_BLOCK]; MAX_COEFFS],
 ) {
     let dirs = dirs.map(Portable);
-    let mut y = [Portable::splat(0.0); MAX_COEFFS];
+    let mut y = BasisArray([Portable::splat(0.0); MAX_COEFFS]);
     match order {
         1 => basis_lanes::<Portable, 1>(dirs, &mut y),
         2 => basis_lanes::<Portable, 2>(dirs, &mut y),
@@ -237,45 +237,82 @@ pub(crate) fn eval_basis_lanes(
         5 => basis_lanes::<Portable, 5>(dirs, &mut y),
         _ => basis_lanes::<Portable, 6>(dirs, &mut y),
     }
-    for (o, y) in out.iter_mut().zip(&y).take(order * order) {
+    for (o, y) in out.iter_mut().zip(&y.0).take(order * order) {
         *o = y.0;
     }
 }
 
-/// [`basis_of`], lane by lane, in any [`Lanes`]: the first `N²` entries of `out`.
+/// Where [`basis_lanes`] puts each value: `put(l, c, y_c)`, in its own order (by `m`, then
+/// `l`), so that a kernel can use a value as it is made instead of storing all `n²`.
+pub(crate) trait BasisSink<V> {
+    fn put(&mut self, l: usize, c: usize, y: V);
+}
+
+/// The basis stored whole, `[c]`.
+struct BasisArray<V>([V; MAX_COEFFS]);
+
+impl<V> BasisSink<V> for BasisArray<V> {
+    #[inline(always)]
+    fn put(&mut self, _: usize, c: usize, y: V) {
+        self.0[c] = y;
+    }
+}
+
+/// `(2m − 1)!!`, `P_m^m / sin^m θ` without the Condon–Shortley phase: exact in f32.
+const DOUBLE_FACTORIAL: [f32; MAX_ORDER] = [1.0, 1.0, 3.0, 15.0, 105.0, 945.0];
+
+/// [`basis_of`], lane by lane, in any [`Lanes`], into `sink`: the same operations on each
+/// lane, so the same bits. Written one column `m` at a time with the order a constant, so that
+/// every loop unrolls and the values stay in registers.
 #[inline(always)]
-pub(crate) fn basis_lanes<V: Lanes, const N: usize>([x, y, z]: [V; 3], out: &mut [V; MAX_COEFFS]) {
+pub(crate) fn basis_lanes<V: Lanes, const N: usize>(
+    [x, y, z]: [V; 3],
+    sink: &mut impl BasisSink<V>,
+) {
+    // Re and Im of (x + iy)^m.
     let (mut cm, mut sm) = (V::splat(1.0), V::splat(0.0));
-    let mut pmm = 1.0f32;
-    for m in 0..N {
-        let mut p_prev2 = V::splat(0.0);
-        let mut p_prev = V::splat(pmm);
-        for l in m..N {
-            let p = if l == m {
-                V::splat(pmm)
-            } else if l == m + 1 {
-                V::splat((2 * m + 1) as f32) * z * V::splat(pmm)
-            } else {
-                let [a, b] = RECURRENCE[l][m];
-                V::splat(a) * z * p_prev - V::splat(b) * p_prev2
-            };
-            if l > m {
-                p_prev2 = p_prev;
-                p_prev = p;
+    basis_column::<V, N, 0>(z, (cm, sm), sink);
+    macro_rules! columns {
+        ($($m:literal)*) => {$(
+            if $m < N {
+                (cm, sm) = (cm * x - sm * y, cm * y + sm * x);
+                basis_column::<V, N, $m>(z, (cm, sm), sink);
             }
-            let k = NORMS[l][m];
-            if m == 0 {
-                out[index(l, 0)] = V::splat(k) * p;
-            } else {
-                let k2 = V::splat(core::f32::consts::SQRT_2 * k) * p;
-                out[index(l, m as i32)] = k2 * cm;
-                out[index(l, -(m as i32))] = k2 * sm;
-            }
+        )*};
+    }
+    columns!(1 2 3 4 5);
+}
+
+/// Column `M` of the basis, `y_lm` and `y_l,−m` for `l = M .. N`, from `z` and `(x + iy)^M`.
+#[inline(always)]
+fn basis_column<V: Lanes, const N: usize, const M: usize>(
+    z: V,
+    (cm, sm): (V, V),
+    sink: &mut impl BasisSink<V>,
+) {
+    let pmm = DOUBLE_FACTORIAL[M];
+    let (mut p_prev2, mut p_prev) = (V::splat(0.0), V::splat(pmm));
+    for l in M..N {
+        let p = if l == M {
+            V::splat(pmm)
+        } else if l == M + 1 {
+            V::splat((2 * M + 1) as f32) * z * V::splat(pmm)
+        } else {
+            let [a, b] = RECURRENCE[l][M];
+            V::splat(a) * z * p_prev - V::splat(b) * p_prev2
+        };
+        if l > M {
+            p_prev2 = p_prev;
+            p_prev = p;
         }
-        let (ncm, nsm) = (cm * x - sm * y, cm * y + sm * x);
-        cm = ncm;
-        sm = nsm;
-        pmm *= (2 * m + 1) as f32;
+        let k = NORMS[l][M];
+        if M == 0 {
+            sink.put(l, index(l, 0), V::splat(k) * p);
+        } else {
+            let k2 = V::splat(core::f32::consts::SQRT_2 * k) * p;
+            sink.put(l, index(l, M as i32), k2 * cm);
+            sink.put(l, index(l, -(M as i32)), k2 * sm);
+        }
     }
 }
 

@@ -7,7 +7,7 @@ use super::rig::check_positions;
 use crate::blob::format::VERTEX_BLOCK;
 use crate::blob::{Error, Input, ModelInfo, Reader};
 use crate::proxies::{Block, Output, ProxyFrame, block_occlusion};
-use crate::rotation::Rotation;
+use crate::rotation::{IDENTITY, Rotation};
 use crate::sh::MAX_COEFFS;
 
 impl ModelInfo {
@@ -39,27 +39,55 @@ impl ModelInfo {
     /// index in the range of its lane 0 (lane `l` is vertex `start + l` of the range; lanes
     /// outside it take no proxy). A lane takes the proxies of its bone's mask, and in the
     /// bone's frame when `rotations` are given.
-    fn each_receiving_block<R: Reader>(
+    fn each_receiving_block<'a, R: Reader>(
         &self,
         r: &mut R,
         frame: &ProxyFrame,
         (first, count): (usize, usize),
-        (positions, normals): (&[[f32; 3]], &[[f32; 3]]),
-        rotations: Option<&[Rotation]>,
+        (positions, normals): (&'a [[f32; 3]], &'a [[f32; 3]]),
+        rotations: Option<&'a [Rotation]>,
         mut visit: impl FnMut(isize, &Block),
     ) -> Result<(), Error> {
         let end = first + count;
         self.each_block(r, first, count, |v0, bones, _| {
-            let mut block = Block::empty(rotations.is_some());
-            for j in v0.max(first)..(v0 + VERTEX_BLOCK).min(end) {
-                let (l, i, bone) = (j - v0, j - first, bones[j - v0]);
-                let mask = frame.candidates.get(bone).copied().unwrap_or(0);
-                let rotation = rotations.and_then(|r| r.get(bone));
-                block.set(l, mask, (positions[i], normals[i]), rotation);
+            let lanes = v0.max(first) - v0..(v0 + VERTEX_BLOCK).min(end) - v0;
+            // The lanes' proxies first: most blocks of a frame have none within reach of
+            // their bones, and are done before their vertices are read.
+            let mut masks = [0u64; VERTEX_BLOCK];
+            for l in lanes.clone() {
+                masks[l] = frame.candidates.get(bones[l]).copied().unwrap_or(0);
             }
-            if block.masks.iter().any(|&m| m != 0) {
-                visit(v0 as isize - first as isize, &block);
+            if masks.iter().all(|&m| m == 0) {
+                return;
             }
+            let rotations = rotations.map(|r| {
+                core::array::from_fn(|l| r.get(bones[l]).filter(|_| lanes.contains(&l)))
+                    .map(|r: Option<&Rotation>| r.unwrap_or(&IDENTITY))
+            });
+            let start = v0 as isize - first as isize;
+            // A whole block is read in place; one the range cuts is copied, zero-padded.
+            let (mut p, mut n) = ([[0.0f32; 3]; VERTEX_BLOCK], [[0.0f32; 3]; VERTEX_BLOCK]);
+            let whole = |xs: &'a [[f32; 3]]| {
+                let at = usize::try_from(start).ok()?;
+                xs.get(at..at + VERTEX_BLOCK)?.try_into().ok()
+            };
+            let (positions, normals) = match (whole(positions), whole(normals)) {
+                (Some(p), Some(n)) => (p, n),
+                _ => {
+                    for l in lanes {
+                        let i = v0 + l - first;
+                        (p[l], n[l]) = (positions[i], normals[i]);
+                    }
+                    (&p, &n)
+                }
+            };
+            let block = Block {
+                masks,
+                positions,
+                normals,
+                rotations,
+            };
+            visit(start, &block);
         })
     }
 

@@ -83,11 +83,6 @@ fn stretch(m: &Skinning) -> f32 {
         .fold(0.0, f32::max)
 }
 
-fn distance(a: [f32; 3], b: [f32; 3]) -> f32 {
-    let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    math::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
-}
-
 /// A proxies section on its own, validated: what a tool that writes one (the trainer) poses
 /// and evaluates with exactly the code a model runs.
 #[derive(Clone, Copy, Debug)]
@@ -143,9 +138,17 @@ impl ProxyFrame {
         if first_non_finite(&position).is_some() {
             return Err(Error::NonFinitePosition { index: 0 });
         }
-        let mut block = Block::empty(rotation.is_some());
-        let mask = self.candidates.get(bone).copied().unwrap_or(0);
-        block.set(0, mask, (position, normal), rotation);
+        let mut masks = [0; VERTEX_BLOCK];
+        masks[0] = self.candidates.get(bone).copied().unwrap_or(0);
+        let (mut positions, mut normals) =
+            ([[0.0f32; 3]; VERTEX_BLOCK], [[0.0f32; 3]; VERTEX_BLOCK]);
+        (positions[0], normals[0]) = (position, normal);
+        let block = Block {
+            masks,
+            positions: &positions,
+            normals: &normals,
+            rotations: rotation.map(|r| [r; VERTEX_BLOCK]),
+        };
         let mut lanes = [[0.0f32; MAX_COEFFS]; VERTEX_BLOCK];
         let reached = block_occlusion(self, order, &block, Output::Transfer(&mut lanes)) & 1 != 0;
         let out = &mut out[..n2];
@@ -221,12 +224,15 @@ fn pose_section<R: Reader>(
     })?;
     frame.cull = cull;
     // A proxy reaches no farther than where its cap shrinks to `cull`: `d = r / √cull`.
-    let reach = |radius: f32| match cull > 0.0 {
-        true => radius / math::sqrt(cull),
-        false => f32::INFINITY,
-    };
+    let mut reach = [f32::INFINITY; MAX_PROXIES];
+    if cull > 0.0 {
+        let inverse = 1.0 / math::sqrt(cull);
+        for (reach, radius) in reach.iter_mut().zip(&frame.radii).take(count) {
+            *reach = radius * inverse;
+        }
+    }
     for p in 0..count {
-        frame.reach2[p] = reach(frame.radii[p]) * reach(frame.radii[p]);
+        frame.reach2[p] = reach[p] * reach[p];
     }
     frame.candidates = [0; MAX_BONES];
     let bone_records = records + (count * PROXY_RECORD) as u64;
@@ -239,10 +245,13 @@ fn pose_section<R: Reader>(
                 _ => return Err(Error::BadProxies),
             };
             let (centre, radius) = (apply(m, centre), radius * stretch(m));
+            // The bone's bound meets the proxy's reach: `|c − c_p| ≤ r + reach_p`, squared.
             let mut mask = 0u64;
             for p in 0..count {
-                let gap = distance(centre, frame.centres[p]) - radius;
-                if ignored >> p & 1 == 0 && gap <= reach(frame.radii[p]) {
+                let v = [0, 1, 2].map(|k| centre[k] - frame.centres[p][k]);
+                let gap = radius + reach[p];
+                let meets = v[0] * v[0] + v[1] * v[1] + v[2] * v[2] <= gap * gap;
+                if ignored >> p & 1 == 0 && meets {
                     mask |= 1 << p;
                 }
             }

@@ -16,52 +16,20 @@ use super::caps::{Caps, Fade, Receivers, band_ratios, caps, offsets};
 use super::frame::ProxyFrame;
 use crate::blob::format::VERTEX_BLOCK;
 use crate::lanes::{Lanes, Portable};
-use crate::rotation::{IDENTITY, Rotation};
-use crate::sh::{MAX_COEFFS, MAX_ORDER, basis_lanes};
+use crate::rotation::Rotation;
+use crate::sh::{BasisSink, MAX_COEFFS, MAX_ORDER, basis_lanes};
 
-/// A block's vertices as the kernel takes them, one array per axis. Lane `l` is occluded by
-/// the proxies of `masks[l]` (none for a lane outside the range); its vertex is at
-/// `positions[k][l]` with normal `normals[k][l]` (any length; a zero or non-finite one sees no
-/// proxy), posed, world space.
+/// A block's vertices as the kernel takes them: lane `l` is occluded by the proxies of
+/// `masks[l]` (none for a lane outside the range); its vertex is at `positions[l]` with normal
+/// `normals[l]` (any length; a zero or non-finite one sees no proxy), posed, world space, read
+/// in place from the caller's arrays.
 #[derive(Clone, Copy)]
-pub(crate) struct Block {
+pub(crate) struct Block<'a> {
     pub(crate) masks: [u64; VERTEX_BLOCK],
-    pub(crate) positions: [[f32; VERTEX_BLOCK]; 3],
-    pub(crate) normals: [[f32; VERTEX_BLOCK]; 3],
+    pub(crate) positions: &'a [[f32; 3]; VERTEX_BLOCK],
+    pub(crate) normals: &'a [[f32; 3]; VERTEX_BLOCK],
     /// Each lane's bone rotation, where the occlusion is wanted in the vertices' bone frames.
-    pub(crate) rotations: Option<[Rotation; VERTEX_BLOCK]>,
-}
-
-impl Block {
-    /// A block whose lanes take no proxy; with rotations (the identity until set) when `rotated`.
-    pub(crate) fn empty(rotated: bool) -> Block {
-        Block {
-            masks: [0; VERTEX_BLOCK],
-            positions: [[0.0; VERTEX_BLOCK]; 3],
-            normals: [[0.0; VERTEX_BLOCK]; 3],
-            rotations: rotated.then_some([IDENTITY; VERTEX_BLOCK]),
-        }
-    }
-
-    /// Lane `l`: the proxies of `mask` occlude the vertex at `position` with `normal`, in the
-    /// frame of `rotation` if the block has rotations.
-    #[inline(always)]
-    pub(crate) fn set(
-        &mut self,
-        l: usize,
-        mask: u64,
-        (position, normal): ([f32; 3], [f32; 3]),
-        rotation: Option<&Rotation>,
-    ) {
-        self.masks[l] = mask;
-        for k in 0..3 {
-            self.positions[k][l] = position[k];
-            self.normals[k][l] = normal[k];
-        }
-        if let (Some(lanes), Some(r)) = (&mut self.rotations, rotation) {
-            lanes[l] = *r;
-        }
-    }
+    pub(crate) rotations: Option<[&'a Rotation; VERTEX_BLOCK]>,
 }
 
 /// What the kernel writes for the lanes some proxy reaches.
@@ -167,12 +135,7 @@ fn kernel<V: Lanes, const N: usize>(frame: &ProxyFrame, block: &Block, output: O
 /// The block's positions and unit normals in lanes, and the lanes whose normal has a direction.
 #[inline(always)]
 fn receivers<V: Lanes>(block: &Block) -> (Receivers<V>, u8) {
-    let (p, n) = (&block.positions, &block.normals);
-    let n = [
-        V::from_array(n[0]),
-        V::from_array(n[1]),
-        V::from_array(n[2]),
-    ];
+    let n = V::from_points(block.normals);
     let length = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
     let valid = V::and(
         V::splat(1e-20).lt(length),
@@ -180,11 +143,7 @@ fn receivers<V: Lanes>(block: &Block) -> (Receivers<V>, u8) {
     );
     let zero = V::splat(0.0);
     let receivers = Receivers {
-        positions: [
-            V::from_array(p[0]),
-            V::from_array(p[1]),
-            V::from_array(p[2]),
-        ],
+        positions: V::from_points(block.positions),
         normals: [
             V::select(valid, n[0] / length, zero),
             V::select(valid, n[1] / length, zero),
@@ -198,23 +157,23 @@ fn receivers<V: Lanes>(block: &Block) -> (Receivers<V>, u8) {
 /// Lanes of one bone share a mask, so this walks each distinct mask once.
 fn lanes_of_proxies(masks: &[u64; VERTEX_BLOCK]) -> ([u8; MAX_PROXIES], u64) {
     let mut lanes_of = [0u8; MAX_PROXIES];
-    let mut done = 0u8;
     let mut all = 0u64;
-    for (l, &mask) in masks.iter().enumerate() {
-        if done & (1 << l) != 0 || mask == 0 {
-            continue;
-        }
+    let mut left = masks
+        .iter()
+        .enumerate()
+        .fold(0u8, |bits, (l, &m)| bits | u8::from(m != 0) << l);
+    while left != 0 {
+        let mask = masks[left.trailing_zeros() as usize];
         let lanes = masks
             .iter()
             .enumerate()
-            .filter(|&(_, &m)| m == mask)
-            .fold(0u8, |lanes, (k, _)| lanes | 1 << k);
-        done |= lanes;
+            .fold(0u8, |bits, (l, &m)| bits | u8::from(m == mask) << l);
+        left &= !lanes;
         all |= mask;
-        let mut left = mask;
-        while left != 0 {
-            lanes_of[left.trailing_zeros() as usize] |= lanes;
-            left &= left - 1;
+        let mut proxies = mask;
+        while proxies != 0 {
+            lanes_of[proxies.trailing_zeros() as usize] |= lanes;
+            proxies &= proxies - 1;
         }
     }
     (lanes_of, all)
@@ -222,7 +181,7 @@ fn lanes_of_proxies(masks: &[u64; VERTEX_BLOCK]) -> ([u8; MAX_PROXIES], u64) {
 
 /// A rotation per lane, as nine lanes `r[row][column]`.
 #[inline(always)]
-fn rotation_lanes<V: Lanes>(rotations: [Rotation; VERTEX_BLOCK]) -> [[V; 3]; 3] {
+fn rotation_lanes<V: Lanes>(rotations: [&Rotation; VERTEX_BLOCK]) -> [[V; 3]; 3] {
     let mut r = [[[0.0f32; VERTEX_BLOCK]; 3]; 3];
     for (l, rotation) in rotations.iter().enumerate() {
         for i in 0..3 {
@@ -268,7 +227,7 @@ impl<V: Lanes> Pass<'_, V> {
     /// overlaps, where one would wait on each in turn.
     #[inline(always)]
     fn run<const N: usize>(&self, sum: &mut impl CapSum<V>) -> Union<V> {
-        let mut reaching = [(0usize, 0u8); MAX_PROXIES];
+        let mut reaching = [(0u8, 0u8); MAX_PROXIES];
         let mut count = 0;
         let mut left = self.proxies;
         while left != 0 {
@@ -278,7 +237,7 @@ impl<V: Lanes> Pass<'_, V> {
             let (_, d2) = offsets(sphere, self.receivers.positions);
             let within = d2.lt(V::splat(sphere.reach2));
             let hit = V::bits(V::and(V::mask_of(self.lanes_of[i]), within));
-            reaching[count] = (i, hit);
+            reaching[count] = (i as u8, hit);
             count += usize::from(hit != 0);
         }
         let fade = Fade::new(self.frame.cull);
@@ -299,8 +258,8 @@ impl<V: Lanes> Pass<'_, V> {
 
     /// The caps of proxy `i` over the lanes of `hit`.
     #[inline(always)]
-    fn caps(&self, (i, hit): (usize, u8), fade: Fade) -> Caps<V> {
-        let sphere = self.frame.sphere(i);
+    fn caps(&self, (i, hit): (u8, u8), fade: Fade) -> Caps<V> {
+        let sphere = self.frame.sphere(usize::from(i));
         let offsets = offsets(sphere, self.receivers.positions);
         caps(sphere, fade, &self.receivers, offsets, V::mask_of(hit))
     }
@@ -309,9 +268,7 @@ impl<V: Lanes> Pass<'_, V> {
     #[inline(always)]
     fn add<const N: usize>(&self, caps: Caps<V>, sum: &mut impl CapSum<V>, union: &mut Union<V>) {
         let axis = self.unit_axis(caps.axis);
-        let mut y = [V::splat(0.0); MAX_COEFFS];
-        basis_lanes::<V, N>(axis, &mut y);
-        sum.add::<N>(caps.f, &band_ratios(caps.cos_alpha), &y);
+        sum.add::<N>(caps.f, &band_ratios(caps.cos_alpha), axis);
         union.add(caps.f);
     }
 
@@ -335,9 +292,9 @@ impl<V: Lanes> Pass<'_, V> {
     }
 }
 
-/// Where a lane's caps go: `F · ratio_l · y_lm` each.
+/// Where a lane's caps go: `F · ratio_l · y_lm(axis)` each.
 trait CapSum<V: Lanes> {
-    fn add<const N: usize>(&mut self, f: V, ratios: &[V; MAX_ORDER], y: &[V; MAX_COEFFS]);
+    fn add<const N: usize>(&mut self, f: V, ratios: &[V; MAX_ORDER], axis: [V; 3]);
 }
 
 /// The caps' occlusion dotted with the lighting, `Σ F Σ_l ratio_l Σ_m L_lm y_lm`.
@@ -346,15 +303,29 @@ struct ShadingSum<'a, V> {
     sum: V,
 }
 
+/// Each band's `Σ_m L_lm y_lm`, summed as the basis makes its values.
+struct BandDots<'a, V> {
+    lighting: &'a [f32],
+    bands: [V; MAX_ORDER],
+}
+
+impl<V: Lanes> BasisSink<V> for BandDots<'_, V> {
+    #[inline(always)]
+    fn put(&mut self, l: usize, c: usize, y: V) {
+        self.bands[l] = self.bands[l] + V::splat(self.lighting[c]) * y;
+    }
+}
+
 impl<V: Lanes> CapSum<V> for ShadingSum<'_, V> {
     #[inline(always)]
-    fn add<const N: usize>(&mut self, f: V, ratios: &[V; MAX_ORDER], y: &[V; MAX_COEFFS]) {
+    fn add<const N: usize>(&mut self, f: V, ratios: &[V; MAX_ORDER], axis: [V; 3]) {
+        let mut dots = BandDots {
+            lighting: self.lighting,
+            bands: [V::splat(0.0); MAX_ORDER],
+        };
+        basis_lanes::<V, N>(axis, &mut dots);
         let mut bands = V::splat(0.0);
-        for (l, &ratio) in ratios.iter().enumerate().take(N) {
-            let mut band = V::splat(0.0);
-            for c in l * l..(l + 1) * (l + 1) {
-                band = band + V::splat(self.lighting[c]) * y[c];
-            }
+        for (&ratio, &band) in ratios.iter().zip(&dots.bands).take(N) {
             bands = bands + ratio * band;
         }
         self.sum = self.sum + f * bands;
@@ -366,15 +337,31 @@ struct TransferSum<V> {
     sums: [V; MAX_COEFFS],
 }
 
+/// A cap's bands added to the sums as the basis makes them: `sums_c += weights_l · y_c`.
+struct WeightedBasis<'a, V> {
+    weights: [V; MAX_ORDER],
+    sums: &'a mut [V; MAX_COEFFS],
+}
+
+impl<V: Lanes> BasisSink<V> for WeightedBasis<'_, V> {
+    #[inline(always)]
+    fn put(&mut self, l: usize, c: usize, y: V) {
+        self.sums[c] = self.sums[c] + self.weights[l] * y;
+    }
+}
+
 impl<V: Lanes> CapSum<V> for TransferSum<V> {
     #[inline(always)]
-    fn add<const N: usize>(&mut self, f: V, ratios: &[V; MAX_ORDER], y: &[V; MAX_COEFFS]) {
-        for (l, &ratio) in ratios.iter().enumerate().take(N) {
-            let weight = f * ratio;
-            for c in l * l..(l + 1) * (l + 1) {
-                self.sums[c] = self.sums[c] + weight * y[c];
-            }
+    fn add<const N: usize>(&mut self, f: V, ratios: &[V; MAX_ORDER], axis: [V; 3]) {
+        let mut weights = [V::splat(0.0); MAX_ORDER];
+        for (w, &ratio) in weights.iter_mut().zip(ratios).take(N) {
+            *w = f * ratio;
         }
+        let mut sink = WeightedBasis {
+            weights,
+            sums: &mut self.sums,
+        };
+        basis_lanes::<V, N>(axis, &mut sink);
     }
 }
 
@@ -439,45 +426,63 @@ mod tests {
         frame
     }
 
+    /// A block's inputs, owned.
+    struct Case {
+        masks: [u64; VERTEX_BLOCK],
+        positions: [[f32; 3]; VERTEX_BLOCK],
+        normals: [[f32; 3]; VERTEX_BLOCK],
+        rotations: Option<[Rotation; VERTEX_BLOCK]>,
+    }
+
+    impl Case {
+        fn block(&self) -> Block<'_> {
+            Block {
+                masks: self.masks,
+                positions: &self.positions,
+                normals: &self.normals,
+                rotations: self
+                    .rotations
+                    .as_ref()
+                    .map(|r| core::array::from_fn(|l| &r[l])),
+            }
+        }
+
+        /// Lane `lane` alone in an otherwise empty block.
+        fn alone(&self, lane: usize) -> Case {
+            let mut one = Case {
+                masks: [0; VERTEX_BLOCK],
+                positions: [[0.0; 3]; VERTEX_BLOCK],
+                normals: [[0.0; 3]; VERTEX_BLOCK],
+                rotations: self.rotations.map(|r| [r[lane]; VERTEX_BLOCK]),
+            };
+            one.masks[0] = self.masks[lane];
+            one.positions[0] = self.positions[lane];
+            one.normals[0] = self.normals[lane];
+            one
+        }
+    }
+
     /// Block `b` of the cases: lanes with every mask, none and partial ones, zero normals, a
-    /// vertex inside a sphere, and bone rotations or none.
-    fn block(frame: &ProxyFrame, b: usize) -> Block {
+    /// vertex inside a sphere, and bone rotations (about z by a different angle each) or none.
+    fn case(frame: &ProxyFrame, b: usize) -> Case {
         let draw =
             |i: usize, scale: f32| [0, 1, 2].map(|k| scale * weight(1000 + 24 * b + 3 * i + k));
-        let mut block = Block::empty(b % 3 != 0);
-        for l in 0..VERTEX_BLOCK {
-            let mask = match (b + l) % 5 {
+        Case {
+            masks: core::array::from_fn(|l| match (b + l) % 5 {
                 0 => 0,
                 1 => (1 << 24) - 1,
                 _ => (weight(5000 + 8 * b + l).to_bits() as u64) & ((1 << 24) - 1),
-            };
-            let position = match l {
+            }),
+            positions: core::array::from_fn(|l| match l {
                 3 => frame.centres[b % 24],
                 _ => draw(l, 1.4),
-            };
-            let normal = if (b + l) % 7 == 0 {
-                [0.0; 3]
-            } else {
-                draw(l + 8, 1.0)
-            };
-            block.set(
-                l,
-                mask,
-                (position, normal),
-                Some(&turn(0.3 - 0.2 * l as f32)),
-            );
+            }),
+            normals: core::array::from_fn(|l| match (b + l) % 7 {
+                0 => [0.0; 3],
+                _ => draw(l + 8, 1.0),
+            }),
+            rotations: (b % 3 != 0).then(|| core::array::from_fn(|l| turn(0.3 - 0.2 * l as f32))),
         }
-        block
-    }
-
-    /// Lane `lane` of `block` alone in an otherwise empty block.
-    fn alone(block: &Block, lane: usize) -> Block {
-        let mut one = Block::empty(block.rotations.is_some());
-        let position = [0, 1, 2].map(|k| block.positions[k][lane]);
-        let normal = [0, 1, 2].map(|k| block.normals[k][lane]);
-        let rotation = block.rotations.map(|r| r[lane]);
-        one.set(0, block.masks[lane], (position, normal), rotation.as_ref());
-        one
     }
 
     /// Both outputs of `kernel` for `block` at `order`: the lanes reached, the shading under a
@@ -516,10 +521,12 @@ mod tests {
         let mut lanes_reached = 0;
         for order in 1..=6 {
             for b in 0..40 {
-                let block = block(&frame, b);
+                let case = case(&frame, b);
+                let block = case.block();
                 let (reached, shading, d) = run(kernel, &frame, order, &block);
                 for l in 0..VERTEX_BLOCK {
-                    let (one, one_shading, one_d) = run(kernel, &frame, order, &alone(&block, l));
+                    let (one, one_shading, one_d) =
+                        run(kernel, &frame, order, &case.alone(l).block());
                     assert_eq!(
                         reached >> l & 1,
                         one & 1,
@@ -551,7 +558,7 @@ mod tests {
                     occlusion_kernel::<Portable>,
                     &frame,
                     order,
-                    &block(&frame, b),
+                    &case(&frame, b).block(),
                 );
                 for l in (0..VERTEX_BLOCK).filter(|l| reached >> l & 1 != 0) {
                     let n2 = order * order;
@@ -582,7 +589,8 @@ mod tests {
         };
         for order in 1..=6 {
             for b in 0..40 {
-                let block = block(&frame, b);
+                let case = case(&frame, b);
+                let block = case.block();
                 let portable = run(occlusion_kernel::<Portable>, &frame, order, &block);
                 let (reached, shading, d) = run(wide, &frame, order, &block);
                 assert_eq!(reached, portable.0);
@@ -612,8 +620,12 @@ mod tests {
         };
         for order in 1..=6 {
             for b in 0..40 {
-                let (reached, shading, d) =
-                    run(super::block_occlusion, &frame, order, &block(&frame, b));
+                let (reached, shading, d) = run(
+                    super::block_occlusion,
+                    &frame,
+                    order,
+                    &case(&frame, b).block(),
+                );
                 for l in (0..VERTEX_BLOCK).filter(|l| reached >> l & 1 != 0) {
                     eat(&[shading[l]]);
                     eat(&d[l][..order * order]);
@@ -628,6 +640,6 @@ mod tests {
     /// kernel, aarch64 under qemu and wasm32 under Node gave this digest.
     #[test]
     fn occlusion_bits_are_the_same_on_every_target() {
-        assert_eq!(occlusion_bits_digest(), 14_416_061_520_590_355_451);
+        assert_eq!(occlusion_bits_digest(), 10_527_027_863_001_694_332);
     }
 }

@@ -4,10 +4,10 @@
 
 use core::arch::x86_64::{
     __m256, _CMP_LE_OQ, _CMP_LT_OQ, _mm256_add_ps, _mm256_and_ps, _mm256_and_si256,
-    _mm256_blendv_ps, _mm256_castsi256_ps, _mm256_cmp_ps, _mm256_cmpeq_epi32, _mm256_div_ps,
-    _mm256_loadu_ps, _mm256_max_ps, _mm256_min_ps, _mm256_movemask_ps, _mm256_mul_ps, _mm256_or_ps,
-    _mm256_set1_epi32, _mm256_set1_ps, _mm256_setr_epi32, _mm256_sqrt_ps, _mm256_storeu_ps,
-    _mm256_sub_ps,
+    _mm256_blend_ps, _mm256_blendv_ps, _mm256_castsi256_ps, _mm256_cmp_ps, _mm256_cmpeq_epi32,
+    _mm256_div_ps, _mm256_loadu_ps, _mm256_max_ps, _mm256_min_ps, _mm256_movemask_ps,
+    _mm256_mul_ps, _mm256_or_ps, _mm256_permutevar8x32_ps, _mm256_set1_epi32, _mm256_set1_ps,
+    _mm256_setr_epi32, _mm256_sqrt_ps, _mm256_storeu_ps, _mm256_sub_ps,
 };
 use core::ops::{Add, Div, Mul, Sub};
 
@@ -59,6 +59,39 @@ impl Lanes for Wide {
         let mut a = [0.0f32; VERTEX_BLOCK];
         unsafe { _mm256_storeu_ps(a.as_mut_ptr(), self.0) };
         a
+    }
+
+    /// Three loads and, per axis, two blends and a permutation: the eight points' 24 values
+    /// in memory hold `x` at every third position from 0, `y` from 1 and `z` from 2.
+    #[inline(always)]
+    fn from_points(points: &[[f32; 3]; VERTEX_BLOCK]) -> [Self; 3] {
+        let p = points.as_flattened().as_ptr();
+        unsafe {
+            let (a, b, c) = (
+                _mm256_loadu_ps(p),
+                _mm256_loadu_ps(p.add(8)),
+                _mm256_loadu_ps(p.add(16)),
+            );
+            // Value 3l + k sits in register (3l + k) / 8, lane (3l + k) % 8: blend each lane
+            // from the register holding one of the axis's values there, then put them in order.
+            let x = _mm256_blend_ps::<0b0100_1001>(_mm256_blend_ps::<0b1001_0010>(c, b), a);
+            let y = _mm256_blend_ps::<0b1001_0010>(_mm256_blend_ps::<0b0010_0100>(c, b), a);
+            let z = _mm256_blend_ps::<0b0010_0100>(_mm256_blend_ps::<0b0100_1001>(c, b), a);
+            [
+                Wide(_mm256_permutevar8x32_ps(
+                    x,
+                    _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5),
+                )),
+                Wide(_mm256_permutevar8x32_ps(
+                    y,
+                    _mm256_setr_epi32(1, 4, 7, 2, 5, 0, 3, 6),
+                )),
+                Wide(_mm256_permutevar8x32_ps(
+                    z,
+                    _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7),
+                )),
+            ]
+        }
     }
 
     #[inline(always)]
