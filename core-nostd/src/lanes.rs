@@ -37,6 +37,10 @@ pub(crate) trait Lanes:
     }
     /// Correctly rounded square root.
     fn sqrt(self) -> Self;
+    /// The smallest lane (of finite lanes: exact, whatever the order of comparisons).
+    fn reduce_min(self) -> f32;
+    /// The largest lane (likewise).
+    fn reduce_max(self) -> f32;
     /// Absolute value (the sign bit cleared).
     fn abs(self) -> Self;
     /// `self < other ? self : other`.
@@ -124,6 +128,20 @@ impl Lanes for Portable {
     #[inline(always)]
     fn sqrt(self) -> Self {
         self.map(math::sqrt)
+    }
+
+    #[inline(always)]
+    fn reduce_min(self) -> f32 {
+        self.0
+            .iter()
+            .fold(f32::INFINITY, |m, &x| if x < m { x } else { m })
+    }
+
+    #[inline(always)]
+    fn reduce_max(self) -> f32 {
+        self.0
+            .iter()
+            .fold(f32::NEG_INFINITY, |m, &x| if x > m { x } else { m })
     }
 
     #[inline(always)]

@@ -3,12 +3,16 @@
 //! a model of the demo's shape (order 4, k_v 22, bone frames), in the `wave` pose whose raised
 //! arm meets the hat. Shading (pose, lighting, every vertex) and the proxies (posing them,
 //! subtracting their occlusion from every vertex) run in interleaved batches; the ratio is the
-//! median of per-round ratios. One core. `cargo bench -p aprt-tests --bench proxies`.
+//! median of per-round ratios. One core. The same again with the portable kernels alone
+//! (`use_portable_kernels`), which every target without AVX2 runs.
+//! `cargo bench -p aprt-tests --bench proxies`.
 
 use std::hint::black_box;
 use std::time::Duration;
 
-use aprt_core::{LitWeights, Model, PoseWeights, ProxyFrame, project_directional};
+use aprt_core::{
+    LitWeights, Model, PoseWeights, ProxyFrame, project_directional, use_portable_kernels,
+};
 use aprt_tests::{interleaved_seconds, median_ratio, random_model};
 use aprt_trainer::bone_frames::{bone_rotations, dominant_bones};
 use aprt_trainer::model::occluders::{DEFAULT_CULL, rig_section, skinning_of};
@@ -75,12 +79,25 @@ fn main() {
         .unwrap();
         black_box(&occluded);
     };
-    let times = interleaved_seconds(Duration::from_secs(4), 15, &mut [&mut shade, &mut proxies]);
-    let median = |t: &[f64]| {
-        let mut t = t.to_vec();
-        t.sort_by(f64::total_cmp);
-        t[t.len() / 2] * 1e6
+    let mut measure = || {
+        let times =
+            interleaved_seconds(Duration::from_secs(4), 15, &mut [&mut shade, &mut proxies]);
+        let median = |t: &[f64]| {
+            let mut t = t.to_vec();
+            t.sort_by(f64::total_cmp);
+            t[t.len() / 2] * 1e6
+        };
+        format!(
+            "shading {:.1} µs/frame, proxies {:.1} µs/frame: proxies / shading = {:.2}x",
+            median(&times[0]),
+            median(&times[1]),
+            median_ratio(&times[1], &times[0])
+        )
     };
+    let dispatched = measure();
+    use_portable_kernels(true);
+    let portable = measure();
+    use_portable_kernels(false);
     let contacts: u32 = (0..info.bones()).map(|b| frame.candidates(b)).sum();
     let mut vertex_bones = vec![0u16; v];
     core.vertex_bones(0, &mut vertex_bones).unwrap();
@@ -104,10 +121,6 @@ fn main() {
         fit.proxies.len(),
         contacts
     );
-    println!(
-        "shading {:.1} µs/frame, proxies {:.1} µs/frame: proxies / shading = {:.2}x",
-        median(&times[0]),
-        median(&times[1]),
-        median_ratio(&times[1], &times[0])
-    );
+    println!("{dispatched}");
+    println!("portable kernels: {portable}");
 }

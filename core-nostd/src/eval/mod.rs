@@ -21,6 +21,7 @@ mod analytic;
 mod bounds;
 mod features;
 pub(crate) mod kernels;
+pub use kernels::use_portable_kernels;
 mod occlude;
 mod rig;
 mod weights;
@@ -49,20 +50,22 @@ pub(crate) fn first_non_finite(xs: &[f32]) -> Option<usize> {
     }
 }
 
-/// Whether every value is finite: no value has every exponent bit set. Integer masks and
-/// compares over eight independent lanes, which vectorise on every target (SSE2 included),
-/// where a search stopping at the first non-finite value runs one value at a time (per-vertex
-/// inputs are scanned every frame).
+/// Whether every value is finite: no value has every exponent bit set, found with integer
+/// masks, adds and ors over eight independent lanes (a full exponent carries into the sign
+/// bit), which vectorise on every target, SSE2 included; a search stopping at the first
+/// non-finite value runs one value at a time (per-vertex inputs are scanned every frame).
 pub(crate) fn all_finite(xs: &[f32]) -> bool {
     const EXPONENT: u32 = 0x7f80_0000;
+    let carry = |x: &f32| (x.to_bits() & EXPONENT) + 0x0080_0000;
     let (chunks, tail) = xs.as_chunks::<8>();
     let mut seen = [0u32; 8];
     for chunk in chunks {
         for (s, x) in seen.iter_mut().zip(chunk) {
-            *s |= u32::from(x.to_bits() & EXPONENT == EXPONENT);
+            *s |= carry(x);
         }
     }
-    seen.iter().all(|&s| s == 0) && tail.iter().all(|x| x.is_finite())
+    let tail = tail.iter().fold(0, |all, x| all | carry(x));
+    seen.iter().fold(tail, |all, s| all | s) & 0x8000_0000 == 0
 }
 
 impl ModelInfo {

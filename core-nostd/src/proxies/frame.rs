@@ -31,6 +31,9 @@ pub struct ProxyFrame {
     pub(crate) radii: [f32; MAX_PROXIES],
     /// `(r / √cull)²`: beyond it a proxy's cap is culled (infinite when nothing is).
     pub(crate) reach2: [f32; MAX_PROXIES],
+    /// The centres' coordinates and the reaches `r / √cull`, one array each, eight proxies a
+    /// group: what a block tests eight proxies at a time against.
+    pub(crate) groups: [[[f32; 8]; MAX_PROXIES / 8]; 4],
     /// Per bone, the proxies that may occlude its vertices this frame.
     pub(crate) candidates: [u64; MAX_BONES],
 }
@@ -44,6 +47,7 @@ impl ProxyFrame {
             centres: [[0.0; 3]; MAX_PROXIES],
             radii: [0.0; MAX_PROXIES],
             reach2: [0.0; MAX_PROXIES],
+            groups: [[[0.0; 8]; MAX_PROXIES / 8]; 4],
             candidates: [0; MAX_BONES],
         }
     }
@@ -52,6 +56,19 @@ impl ProxyFrame {
     /// per-vertex cost grows with.
     pub fn candidates(&self, bone: usize) -> u32 {
         self.candidates.get(bone).map_or(0, |m| m.count_ones())
+    }
+
+    /// Sets proxy `i`: posed centre, radius and reach (`r / √cull`, infinite when nothing is
+    /// culled).
+    pub(crate) fn set_sphere(&mut self, i: usize, centre: [f32; 3], radius: f32, reach: f32) {
+        self.centres[i] = centre;
+        self.radii[i] = radius;
+        self.reach2[i] = reach * reach;
+        let (g, k) = (i / 8, i % 8);
+        for (axis, x) in centre.iter().enumerate() {
+            self.groups[axis][g][k] = *x;
+        }
+        self.groups[3][g][k] = reach;
     }
 
     /// Proxy `i`: its centre, radius and squared reach.
@@ -231,8 +248,8 @@ fn pose_section<R: Reader>(
             *reach = radius * inverse;
         }
     }
-    for p in 0..count {
-        frame.reach2[p] = reach[p] * reach[p];
+    for (p, &reach) in reach.iter().enumerate().take(count) {
+        frame.set_sphere(p, frame.centres[p], frame.radii[p], reach);
     }
     frame.candidates = [0; MAX_BONES];
     let bone_records = records + (count * PROXY_RECORD) as u64;
@@ -247,9 +264,9 @@ fn pose_section<R: Reader>(
             let (centre, radius) = (apply(m, centre), radius * stretch(m));
             // The bone's bound meets the proxy's reach: `|c − c_p| ≤ r + reach_p`, squared.
             let mut mask = 0u64;
-            for p in 0..count {
-                let v = [0, 1, 2].map(|k| centre[k] - frame.centres[p][k]);
-                let gap = radius + reach[p];
+            for (p, (proxy, reach)) in frame.centres.iter().zip(&reach).enumerate().take(count) {
+                let v = [0, 1, 2].map(|k| centre[k] - proxy[k]);
+                let gap = radius + reach;
                 let meets = v[0] * v[0] + v[1] * v[1] + v[2] * v[2] <= gap * gap;
                 if ignored >> p & 1 == 0 && meets {
                     mask |= 1 << p;

@@ -34,7 +34,9 @@ mod occlusion;
 mod section;
 
 pub use frame::{ProxyFrame, ProxySet, Skinning};
-pub(crate) use occlusion::{Block, Output, block_occlusion, occlusion_kernel};
+#[cfg(target_arch = "x86_64")]
+pub(crate) use occlusion::occlusion_kernel;
+pub(crate) use occlusion::{Block, Output, block_occlusion};
 pub use section::MAX_PROXIES;
 pub(crate) use section::ProxyCheck;
 #[cfg(feature = "format")]

@@ -79,9 +79,15 @@ pub(crate) fn occlusion_kernel<V: Lanes>(
 
 #[inline(always)]
 fn kernel<V: Lanes, const N: usize>(frame: &ProxyFrame, block: &Block, output: Output<'_>) -> u8 {
-    let (receivers, valid) = receivers::<V>(block);
+    let positions = V::from_points(block.positions);
+    let near = near_proxies(frame, positions, &block.masks);
+    if near == 0 {
+        return 0;
+    }
+    let (receivers, valid) = receivers::<V>(block, positions);
     let mut masks = block.masks;
     for (l, mask) in masks.iter_mut().enumerate() {
+        *mask &= near;
         if valid & (1 << l) == 0 {
             *mask = 0;
         }
@@ -90,6 +96,9 @@ fn kernel<V: Lanes, const N: usize>(frame: &ProxyFrame, block: &Block, output: O
     if proxies == 0 {
         return 0;
     }
+    // A match, not `Option::map`: a function passed to `map` is compiled apart from the AVX2
+    // kernel, and its lane loads would be calls.
+    #[allow(clippy::manual_map)]
     let rotations = match block.rotations {
         Some(r) => Some(rotation_lanes::<V>(r)),
         None => None,
@@ -134,7 +143,7 @@ fn kernel<V: Lanes, const N: usize>(frame: &ProxyFrame, block: &Block, output: O
 
 /// The block's positions and unit normals in lanes, and the lanes whose normal has a direction.
 #[inline(always)]
-fn receivers<V: Lanes>(block: &Block) -> (Receivers<V>, u8) {
+fn receivers<V: Lanes>(block: &Block, positions: [V; 3]) -> (Receivers<V>, u8) {
     let n = V::from_points(block.normals);
     let length = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
     let valid = V::and(
@@ -143,7 +152,7 @@ fn receivers<V: Lanes>(block: &Block) -> (Receivers<V>, u8) {
     );
     let zero = V::splat(0.0);
     let receivers = Receivers {
-        positions: V::from_points(block.positions),
+        positions,
         normals: [
             V::select(valid, n[0] / length, zero),
             V::select(valid, n[1] / length, zero),
@@ -153,21 +162,59 @@ fn receivers<V: Lanes>(block: &Block) -> (Receivers<V>, u8) {
     (receivers, V::bits(valid))
 }
 
+/// The proxies of the lanes' masks that may reach some lane: those whose reach meets the
+/// bound of the lanes' positions (the centre of their box and the largest distance from it),
+/// eight proxies a test. A lane within a proxy's reach is within reach plus bound of the
+/// centre, so no cap is lost (the bound is widened by a part in a thousand against rounding);
+/// the lanes are tested exactly afterwards.
+#[inline(always)]
+fn near_proxies<V: Lanes>(frame: &ProxyFrame, p: [V; 3], masks: &[u64; VERTEX_BLOCK]) -> u64 {
+    let candidates = masks.iter().fold(0, |all, m| all | m);
+    let active = lanes_where(masks, |m| m != 0);
+    let (on, big) = (V::mask_of(active), V::splat(f32::INFINITY));
+    let small = V::splat(f32::NEG_INFINITY);
+    let centre = [
+        0.5 * (V::select(on, p[0], big).reduce_min() + V::select(on, p[0], small).reduce_max()),
+        0.5 * (V::select(on, p[1], big).reduce_min() + V::select(on, p[1], small).reduce_max()),
+        0.5 * (V::select(on, p[2], big).reduce_min() + V::select(on, p[2], small).reduce_max()),
+    ];
+    let d = [
+        p[0] - V::splat(centre[0]),
+        p[1] - V::splat(centre[1]),
+        p[2] - V::splat(centre[2]),
+    ];
+    let spread = V::select(on, d[0] * d[0] + d[1] * d[1] + d[2] * d[2], V::splat(0.0));
+    // The lanes' square root, not libm's: its scalar `sqrtss` in AVX code would cost a
+    // transition between the SSE and AVX register states on some CPUs.
+    let bound = V::splat(spread.sqrt().reduce_max() * 1.001);
+    let mut near = 0u64;
+    for g in 0..MAX_PROXIES / 8 {
+        let group = (candidates >> (8 * g)) as u8;
+        if group == 0 {
+            continue;
+        }
+        let [x, y, z, reach] = &frame.groups;
+        let v = [
+            V::from_array(x[g]) - V::splat(centre[0]),
+            V::from_array(y[g]) - V::splat(centre[1]),
+            V::from_array(z[g]) - V::splat(centre[2]),
+        ];
+        let gap = V::from_array(reach[g]) + bound;
+        let meets = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).lt(gap * gap);
+        near |= u64::from(V::bits(meets) & group) << (8 * g);
+    }
+    near
+}
+
 /// For each proxy, the lanes whose mask holds it; and every proxy some lane's mask holds.
 /// Lanes of one bone share a mask, so this walks each distinct mask once.
 fn lanes_of_proxies(masks: &[u64; VERTEX_BLOCK]) -> ([u8; MAX_PROXIES], u64) {
     let mut lanes_of = [0u8; MAX_PROXIES];
     let mut all = 0u64;
-    let mut left = masks
-        .iter()
-        .enumerate()
-        .fold(0u8, |bits, (l, &m)| bits | u8::from(m != 0) << l);
+    let mut left = lanes_where(masks, |m| m != 0);
     while left != 0 {
         let mask = masks[left.trailing_zeros() as usize];
-        let lanes = masks
-            .iter()
-            .enumerate()
-            .fold(0u8, |bits, (l, &m)| bits | u8::from(m == mask) << l);
+        let lanes = lanes_where(masks, |m| m == mask);
         left &= !lanes;
         all |= mask;
         let mut proxies = mask;
@@ -177,6 +224,16 @@ fn lanes_of_proxies(masks: &[u64; VERTEX_BLOCK]) -> ([u8; MAX_PROXIES], u64) {
         }
     }
     (lanes_of, all)
+}
+
+/// The lanes whose mask passes `test`, as bits.
+#[inline(always)]
+fn lanes_where(masks: &[u64; VERTEX_BLOCK], test: impl Fn(u64) -> bool) -> u8 {
+    let mut bits = 0u8;
+    for (l, &m) in masks.iter().enumerate() {
+        bits |= u8::from(test(m)) << l;
+    }
+    bits
 }
 
 /// A rotation per lane, as nine lanes `r[row][column]`.
@@ -419,9 +476,9 @@ mod tests {
         let mut frame = ProxyFrame::new();
         frame.cull = 0.05;
         for i in 0..24 {
-            frame.centres[i] = [0, 1, 2].map(|k| 1.2 * weight(3 * i + k));
-            frame.radii[i] = 0.05 + 0.25 * (weight(100 + i) + 0.85);
-            frame.reach2[i] = frame.radii[i] * frame.radii[i] / frame.cull;
+            let radius = 0.05 + 0.25 * (weight(100 + i) + 0.85);
+            let centre = [0, 1, 2].map(|k| 1.2 * weight(3 * i + k));
+            frame.set_sphere(i, centre, radius, radius / libm::sqrtf(frame.cull));
         }
         frame
     }
@@ -481,7 +538,8 @@ mod tests {
                 0 => [0.0; 3],
                 _ => draw(l + 8, 1.0),
             }),
-            rotations: (b % 3 != 0).then(|| core::array::from_fn(|l| turn(0.3 - 0.2 * l as f32))),
+            rotations: (!b.is_multiple_of(3))
+                .then(|| core::array::from_fn(|l| turn(0.3 - 0.2 * l as f32))),
         }
     }
 

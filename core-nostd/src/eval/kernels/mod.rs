@@ -30,6 +30,17 @@ pub(crate) use x86::Avx2;
 use crate::blob::format::{Encoding, VERTEX_BLOCK};
 pub(crate) use portable::texel;
 
+/// Runs the portable kernels from now on (`true`), or lets the run-time dispatch choose the
+/// CPU's widest again (`false`, the default). The two compute the same bits; this is for
+/// measuring one against the other (`cargo bench -p aprt-tests --bench proxies`) and for an
+/// engine that wants one code path on every machine. Process-wide; a no-op off x86-64.
+pub fn use_portable_kernels(portable: bool) {
+    #[cfg(target_arch = "x86_64")]
+    x86::force_portable(portable);
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = portable;
+}
+
 /// Little-endian element encodings, decoded in the hot loops.
 pub(crate) trait Decode: Copy {
     fn value(self) -> f32;

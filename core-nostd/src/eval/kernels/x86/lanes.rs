@@ -3,11 +3,13 @@
 //! instruction with the IEEE result the portable lanes compute one lane at a time.
 
 use core::arch::x86_64::{
-    __m256, _CMP_LE_OQ, _CMP_LT_OQ, _mm256_add_ps, _mm256_and_ps, _mm256_and_si256,
-    _mm256_blend_ps, _mm256_blendv_ps, _mm256_castsi256_ps, _mm256_cmp_ps, _mm256_cmpeq_epi32,
-    _mm256_div_ps, _mm256_loadu_ps, _mm256_max_ps, _mm256_min_ps, _mm256_movemask_ps,
-    _mm256_mul_ps, _mm256_or_ps, _mm256_permutevar8x32_ps, _mm256_set1_epi32, _mm256_set1_ps,
-    _mm256_setr_epi32, _mm256_sqrt_ps, _mm256_storeu_ps, _mm256_sub_ps,
+    __m256, _CMP_LE_OQ, _CMP_LT_OQ, _mm_cvtss_f32, _mm_max_ps, _mm_max_ss, _mm_min_ps, _mm_min_ss,
+    _mm_movehl_ps, _mm_shuffle_ps, _mm256_add_ps, _mm256_and_ps, _mm256_and_si256, _mm256_blend_ps,
+    _mm256_blendv_ps, _mm256_castps256_ps128, _mm256_castsi256_ps, _mm256_cmp_ps,
+    _mm256_cmpeq_epi32, _mm256_div_ps, _mm256_extractf128_ps, _mm256_loadu_ps, _mm256_max_ps,
+    _mm256_min_ps, _mm256_movemask_ps, _mm256_mul_ps, _mm256_or_ps, _mm256_permutevar8x32_ps,
+    _mm256_set1_epi32, _mm256_set1_ps, _mm256_setr_epi32, _mm256_sqrt_ps, _mm256_storeu_ps,
+    _mm256_sub_ps,
 };
 use core::ops::{Add, Div, Mul, Sub};
 
@@ -100,6 +102,30 @@ impl Lanes for Wide {
     }
 
     #[inline(always)]
+    fn reduce_min(self) -> f32 {
+        unsafe {
+            let m = _mm_min_ps(
+                _mm256_castps256_ps128(self.0),
+                _mm256_extractf128_ps::<1>(self.0),
+            );
+            let m = _mm_min_ps(m, _mm_movehl_ps(m, m));
+            _mm_cvtss_f32(_mm_min_ss(m, _mm_shuffle_ps::<1>(m, m)))
+        }
+    }
+
+    #[inline(always)]
+    fn reduce_max(self) -> f32 {
+        unsafe {
+            let m = _mm_max_ps(
+                _mm256_castps256_ps128(self.0),
+                _mm256_extractf128_ps::<1>(self.0),
+            );
+            let m = _mm_max_ps(m, _mm_movehl_ps(m, m));
+            _mm_cvtss_f32(_mm_max_ss(m, _mm_shuffle_ps::<1>(m, m)))
+        }
+    }
+
+    #[inline(always)]
     fn abs(self) -> Self {
         Wide(unsafe { _mm256_and_ps(self.0, _mm256_castsi256_ps(_mm256_set1_epi32(0x7fff_ffff))) })
     }
@@ -165,25 +191,12 @@ impl Avx2 {
         block: &Block,
         output: Output<'_>,
     ) -> u8 {
-        // SAFETY: `self` exists only on a CPU with AVX2, and says whether it has AVX-512F
-        // (whose CPUs all have AVX-512VL).
-        unsafe {
-            match self.avx512 {
-                true => occlusion_512(frame, order, block, output),
-                false => occlusion(frame, order, block, output),
-            }
-        }
+        // SAFETY: `self` exists only on a CPU with AVX2.
+        unsafe { occlusion(frame, order, block, output) }
     }
 }
 
 #[target_feature(enable = "avx2")]
 fn occlusion(frame: &ProxyFrame, order: usize, block: &Block, output: Output<'_>) -> u8 {
-    occlusion_kernel::<Wide>(frame, order, block, output)
-}
-
-/// The same eight-lane instructions with AVX-512VL's encoding, whose 32 registers spare the
-/// kernel's spills to the stack.
-#[target_feature(enable = "avx2,avx512f,avx512vl")]
-fn occlusion_512(frame: &ProxyFrame, order: usize, block: &Block, output: Output<'_>) -> u8 {
     occlusion_kernel::<Wide>(frame, order, block, output)
 }

@@ -49,6 +49,11 @@ const NEITHER: u8 = 1;
 const AVX2: u8 = 2;
 const AVX512: u8 = 3;
 
+/// Makes [`Avx2::get`] find nothing (`portable`), or detect again.
+pub(crate) fn force_portable(portable: bool) {
+    FOUND.store(if portable { NEITHER } else { UNKNOWN }, Ordering::Relaxed);
+}
+
 impl Avx2 {
     /// The token, if this CPU has AVX2 and F16C. Detection runs once; afterwards this is one
     /// relaxed load (racing first calls detect twice and store the same answer).
