@@ -168,7 +168,7 @@ typedef struct aprt_frame aprt_frame;
 // A validated model in the caller's storage. Opaque; see `aprt_model_init`.
 typedef struct aprt_model aprt_model;
 
-// One frame's posed occluder proxies in the caller's storage (about 3 KiB, any model's).
+// One frame's posed occluder proxies in the caller's storage (about 4 KiB, any model's).
 // Opaque; see `aprt_proxy_frame_init`.
 typedef struct aprt_proxy_frame aprt_proxy_frame;
 
@@ -453,7 +453,7 @@ aprt_status aprt_model_angle_index(const aprt_model *model,
                                    size_t name_len,
                                    size_t *index);
 
-// Bytes of storage an `aprt_proxy_frame` needs (about 3 KiB: the core's most proxies and
+// Bytes of storage an `aprt_proxy_frame` needs (about 4 KiB: the core's most proxies and
 // bones).
 size_t aprt_proxy_frame_size(void);
 

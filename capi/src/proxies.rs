@@ -18,7 +18,7 @@ use crate::ffi_ptr::{self, Handle};
 use crate::model::{aprt_model, with_model};
 use crate::status::{aprt_status, guard};
 
-/// One frame's posed occluder proxies in the caller's storage (about 3 KiB, any model's).
+/// One frame's posed occluder proxies in the caller's storage (about 4 KiB, any model's).
 /// Opaque; see `aprt_proxy_frame_init`.
 // `repr(C)` puts the tag at offset 0, so checking a pointer for this handle reads only its
 // first 8 bytes. `align(8)`, which the `u64`s inside need anyway, also keeps cbindgen from
@@ -37,7 +37,7 @@ impl Handle for aprt_proxy_frame {
 
 const _: () = assert!(aprt_proxy_frame::TAG_OFFSET == 0, "the tag comes first");
 
-/// Bytes of storage an `aprt_proxy_frame` needs (about 3 KiB: the core's most proxies and
+/// Bytes of storage an `aprt_proxy_frame` needs (about 4 KiB: the core's most proxies and
 /// bones).
 #[unsafe(no_mangle)]
 pub extern "C" fn aprt_proxy_frame_size() -> usize {

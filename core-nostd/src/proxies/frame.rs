@@ -21,7 +21,7 @@ pub type Skinning = [f32; 12];
 
 /// The proxies of one frame, posed by [`Model::pose_proxies`](crate::Model::pose_proxies)
 /// and read by [`Model::occlude`](crate::Model::occlude) and
-/// [`Model::occlude_transfer`](crate::Model::occlude_transfer). About 3 KiB; `new` is a
+/// [`Model::occlude_transfer`](crate::Model::occlude_transfer). About 4 KiB; `new` is a
 /// `const fn`, so it can live in a `static`.
 #[derive(Clone, Debug)]
 pub struct ProxyFrame {
