@@ -35,9 +35,9 @@ impl ModelInfo {
         self.check_range(first, count)
     }
 
-    /// Hands `visit` every block of `first .. first + count` that a proxy may reach, with the
-    /// index in the range of its lane 0 (lane `l` is vertex `start + l` of the range; lanes
-    /// outside it take no proxy). A lane takes the proxies of its bone's mask, and in the
+    /// Hands `visit` every block of `first .. first + count` that a proxy may reach, with its
+    /// first vertex `v0` (lane `l` is vertex `v0 + l`; lanes outside the range take no proxy,
+    /// so no proxy reaches them). A lane takes the proxies of its bone's mask, and in the
     /// bone's frame when `rotations` are given.
     fn each_receiving_block<'a, R: Reader>(
         &self,
@@ -46,7 +46,7 @@ impl ModelInfo {
         (first, count): (usize, usize),
         (positions, normals): (&'a [[f32; 3]], &'a [[f32; 3]]),
         rotations: Option<&'a [Rotation]>,
-        mut visit: impl FnMut(isize, &Block),
+        mut visit: impl FnMut(usize, &Block),
     ) -> Result<(), Error> {
         let end = first + count;
         self.each_block(r, first, count, |v0, bones, _| {
@@ -60,17 +60,11 @@ impl ModelInfo {
             if masks.iter().all(|&m| m == 0) {
                 return;
             }
-            let rotations = rotations.map(|r| {
-                core::array::from_fn(|l| r.get(bones[l]).filter(|_| lanes.contains(&l)))
-                    .map(|r: Option<&Rotation>| r.unwrap_or(&IDENTITY))
-            });
-            let start = v0 as isize - first as isize;
+            // Lanes outside the range have no proxies; their rotation is never read.
+            let rotations = rotations.map(|r| bones.map(|b| r.get(b).unwrap_or(&IDENTITY)));
             // A whole block is read in place; one the range cuts is copied, zero-padded.
             let (mut p, mut n) = ([[0.0f32; 3]; VERTEX_BLOCK], [[0.0f32; 3]; VERTEX_BLOCK]);
-            let whole = |xs: &'a [[f32; 3]]| {
-                let at = usize::try_from(start).ok()?;
-                xs.get(at..at + VERTEX_BLOCK)?.try_into().ok()
-            };
+            let whole = |xs: &'a [[f32; 3]]| xs.get(v0.checked_sub(first)?..)?.first_chunk();
             let (positions, normals) = match (whole(positions), whole(normals)) {
                 (Some(p), Some(n)) => (p, n),
                 _ => {
@@ -87,7 +81,7 @@ impl ModelInfo {
                 normals,
                 rotations,
             };
-            visit(start, &block);
+            visit(v0, &block);
         })
     }
 
@@ -98,21 +92,22 @@ impl ModelInfo {
         &self,
         r: &mut R,
         frame: &ProxyFrame,
-        range: (usize, usize),
+        (first, count): (usize, usize),
         vertices: (&[[f32; 3]], &[[f32; 3]]),
         rotations: Option<&[Rotation]>,
         mut visit: impl FnMut(usize, &[f32]),
     ) -> Result<(), Error> {
         let n2 = self.coeffs();
         let mut d = [[0.0f32; MAX_COEFFS]; VERTEX_BLOCK];
-        self.each_receiving_block(r, frame, range, vertices, rotations, |start, block| {
+        let range = (first, count);
+        self.each_receiving_block(r, frame, range, vertices, rotations, |v0, block| {
             let reached = block_occlusion(frame, self.order, block, Output::Transfer(&mut d));
             for (l, d) in d
                 .iter()
                 .enumerate()
                 .filter(|&(l, _)| reached & (1 << l) != 0)
             {
-                visit((start + l as isize) as usize, &d[..n2]);
+                visit(v0 + l - first, &d[..n2]);
             }
         })
     }
@@ -148,27 +143,20 @@ impl ModelInfo {
         self.check_occlusion_inputs(frame, positions, normals, first, out.len())?;
         let range = (first, out.len());
         let mut shading = [0.0f32; VERTEX_BLOCK];
-        self.each_receiving_block(
-            r,
-            frame,
-            range,
-            (positions, normals),
-            None,
-            |start, block| {
-                let output = Output::Shading {
-                    lighting,
-                    out: &mut shading,
-                };
-                let reached = block_occlusion(frame, self.order, block, output);
-                for (l, s) in shading
-                    .iter()
-                    .enumerate()
-                    .filter(|&(l, _)| reached & (1 << l) != 0)
-                {
-                    out[(start + l as isize) as usize] -= s;
-                }
-            },
-        )
+        self.each_receiving_block(r, frame, range, (positions, normals), None, |v0, block| {
+            let output = Output::Shading {
+                lighting,
+                out: &mut shading,
+            };
+            let reached = block_occlusion(frame, self.order, block, output);
+            for (l, s) in shading
+                .iter()
+                .enumerate()
+                .filter(|&(l, _)| reached & (1 << l) != 0)
+            {
+                out[v0 + l - first] -= s;
+            }
+        })
     }
 
     #[allow(clippy::too_many_arguments)]

@@ -27,12 +27,10 @@ pub type Skinning = [f32; 12];
 pub struct ProxyFrame {
     pub(crate) stamp: Stamp,
     pub(crate) cull: f32,
-    pub(crate) centres: [[f32; 3]; MAX_PROXIES],
     pub(crate) radii: [f32; MAX_PROXIES],
-    /// `(r / √cull)²`: beyond it a proxy's cap is culled (infinite when nothing is).
-    pub(crate) reach2: [f32; MAX_PROXIES],
-    /// The centres' coordinates and the reaches `r / √cull`, one array each, eight proxies a
-    /// group: what a block tests eight proxies at a time against.
+    /// The posed centres' coordinates and the reaches `r / √cull` (beyond which a cap is
+    /// culled; infinite when nothing is), one array each, eight proxies a group: what a block
+    /// tests eight proxies at a time against.
     pub(crate) groups: [[[f32; 8]; MAX_PROXIES / 8]; 4],
     /// Per bone, the proxies that may occlude its vertices this frame.
     pub(crate) candidates: [u64; MAX_BONES],
@@ -44,9 +42,7 @@ impl ProxyFrame {
         Self {
             stamp: None,
             cull: 0.0,
-            centres: [[0.0; 3]; MAX_PROXIES],
             radii: [0.0; MAX_PROXIES],
-            reach2: [0.0; MAX_PROXIES],
             groups: [[[0.0; 8]; MAX_PROXIES / 8]; 4],
             candidates: [0; MAX_BONES],
         }
@@ -61,9 +57,7 @@ impl ProxyFrame {
     /// Sets proxy `i`: posed centre, radius and reach (`r / √cull`, infinite when nothing is
     /// culled).
     pub(crate) fn set_sphere(&mut self, i: usize, centre: [f32; 3], radius: f32, reach: f32) {
-        self.centres[i] = centre;
         self.radii[i] = radius;
-        self.reach2[i] = reach * reach;
         let (g, k) = (i / 8, i % 8);
         for (axis, x) in centre.iter().enumerate() {
             self.groups[axis][g][k] = *x;
@@ -71,13 +65,14 @@ impl ProxyFrame {
         self.groups[3][g][k] = reach;
     }
 
-    /// Proxy `i`: its centre, radius and squared reach.
+    /// Proxy `i`: its centre, radius and reach.
     #[inline(always)]
     pub(crate) fn sphere(&self, i: usize) -> Sphere {
+        let ([x, y, z, reach], (g, k)) = (&self.groups, (i / 8, i % 8));
         Sphere {
-            centre: self.centres[i],
+            centre: [x[g][k], y[g][k], z[g][k]],
             radius: self.radii[i],
-            reach2: self.reach2[i],
+            reach: reach[g][k],
         }
     }
 }
@@ -230,49 +225,41 @@ fn pose_section<R: Reader>(
     // Validated at open; checked again, since a streamed source may have changed since.
     let count = (count as usize).min(MAX_PROXIES);
     let records = offset + PRELUDE as u64;
+    // A proxy reaches no farther than where its cap shrinks to `cull`: `d = r / √cull`.
+    let reach = |radius: f32| match cull > 0.0 {
+        true => radius / math::sqrt(cull),
+        false => f32::INFINITY,
+    };
     r.chunks(records, PROXY_RECORD, count, |first, bytes| {
         for (i, record) in bytes.chunks_exact(PROXY_RECORD).enumerate() {
             let (bone, centre, radius) = proxy_record(record);
             let m = skinning.get(bone as usize).ok_or(Error::BadProxies)?;
-            frame.centres[first + i] = apply(m, centre);
-            frame.radii[first + i] = radius * stretch(m);
+            let radius = radius * stretch(m);
+            frame.set_sphere(first + i, apply(m, centre), radius, reach(radius));
         }
         Ok(())
     })?;
     frame.cull = cull;
-    // A proxy reaches no farther than where its cap shrinks to `cull`: `d = r / √cull`.
-    let mut reach = [f32::INFINITY; MAX_PROXIES];
-    if cull > 0.0 {
-        let inverse = 1.0 / math::sqrt(cull);
-        for (reach, radius) in reach.iter_mut().zip(&frame.radii).take(count) {
-            *reach = radius * inverse;
-        }
-    }
-    for (p, &reach) in reach.iter().enumerate().take(count) {
-        frame.set_sphere(p, frame.centres[p], frame.radii[p], reach);
-    }
     frame.candidates = [0; MAX_BONES];
     let bone_records = records + (count * PROXY_RECORD) as u64;
     r.chunks(bone_records, BONE_RECORD, bones, |first, bytes| {
         for (i, record) in bytes.chunks_exact(BONE_RECORD).enumerate() {
             let b = first + i;
             let (centre, radius, ignored) = bone_record(record);
-            let (m, slot) = match (skinning.get(b), frame.candidates.get_mut(b)) {
-                (Some(m), Some(slot)) => (m, slot),
-                _ => return Err(Error::BadProxies),
-            };
+            let m = skinning.get(b).ok_or(Error::BadProxies)?;
             let (centre, radius) = (apply(m, centre), radius * stretch(m));
             // The bone's bound meets the proxy's reach: `|c − c_p| ≤ r + reach_p`, squared.
             let mut mask = 0u64;
-            for (p, (proxy, reach)) in frame.centres.iter().zip(&reach).enumerate().take(count) {
-                let v = [0, 1, 2].map(|k| centre[k] - proxy[k]);
-                let gap = radius + reach;
+            for p in 0..count {
+                let proxy = frame.sphere(p);
+                let v = [0, 1, 2].map(|k| centre[k] - proxy.centre[k]);
+                let gap = radius + proxy.reach;
                 let meets = v[0] * v[0] + v[1] * v[1] + v[2] * v[2] <= gap * gap;
                 if ignored >> p & 1 == 0 && meets {
                     mask |= 1 << p;
                 }
             }
-            *slot = mask;
+            *frame.candidates.get_mut(b).ok_or(Error::BadProxies)? = mask;
         }
         Ok(())
     })

@@ -7,7 +7,7 @@
 //!
 //! Each sphere seen from a vertex is a cap of half-angle `α`, `sin α = r/d`. Its occlusion of
 //! the vertex's transfer is the cap's clamped-cosine integral `F` (the horizon-clipped form
-//! factor of a sphere, `π sin²α cos β` when the cap is above the horizon, within 2.5e-6 of the
+//! factor of a sphere, `π sin²α cos β` when the cap is above the horizon, within 1e-6 of the
 //! exact one: its `acos` and `atan` are polynomials, `caps.rs`) spread over the
 //! bands as the cosine-weighted cap's zonal harmonic `2π ∫ t P_l(t)` about the cap's centre of
 //! weight (its axis moved towards the normal by the cosine's tilt, to first order):

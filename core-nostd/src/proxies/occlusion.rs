@@ -12,7 +12,7 @@
 use core::f32::consts::PI;
 
 use super::MAX_PROXIES;
-use super::caps::{Caps, Fade, Receivers, band_ratios, caps, offsets};
+use super::caps::{Fade, Receivers, band_ratios, caps, offsets};
 use super::frame::ProxyFrame;
 use crate::blob::format::VERTEX_BLOCK;
 use crate::lanes::{Lanes, Portable};
@@ -278,55 +278,28 @@ struct Pass<'a, V: Lanes> {
 }
 
 impl<V: Lanes> Pass<'_, V> {
-    /// Adds every cap to `sum` in proxy order; returns the lanes' union of caps. The proxies
-    /// that reach some lane are listed first, without a branch per proxy, and then run two at
-    /// a time: two independent chains of square roots and divisions, which the processor
-    /// overlaps, where one would wait on each in turn.
+    /// Adds every cap to `sum` in proxy order; returns the lanes' union of caps.
     #[inline(always)]
     fn run<const N: usize>(&self, sum: &mut impl CapSum<V>) -> Union<V> {
-        let mut reaching = [(0u8, 0u8); MAX_PROXIES];
-        let mut count = 0;
+        let fade = Fade::new(self.frame.cull);
+        let mut union = Union::none();
         let mut left = self.proxies;
         while left != 0 {
             let i = left.trailing_zeros() as usize;
             left &= left - 1;
             let sphere = self.frame.sphere(i);
-            let (_, d2) = offsets(sphere, self.receivers.positions);
-            let within = d2.lt(V::splat(sphere.reach2));
-            let hit = V::bits(V::and(V::mask_of(self.lanes_of[i]), within));
-            reaching[count] = (i as u8, hit);
-            count += usize::from(hit != 0);
-        }
-        let fade = Fade::new(self.frame.cull);
-        let mut union = Union::none();
-        let mut pairs = reaching[..count].chunks_exact(2);
-        for pair in &mut pairs {
-            let a = self.caps(pair[0], fade);
-            let b = self.caps(pair[1], fade);
-            self.add::<N>(a, sum, &mut union);
-            self.add::<N>(b, sum, &mut union);
-        }
-        if let [last] = pairs.remainder() {
-            let cap = self.caps(*last, fade);
-            self.add::<N>(cap, sum, &mut union);
+            let offsets = offsets(sphere, self.receivers.positions);
+            let within = offsets.1.lt(V::splat(sphere.reach * sphere.reach));
+            let hit = V::and(V::mask_of(self.lanes_of[i]), within);
+            if V::bits(hit) == 0 {
+                continue;
+            }
+            let caps = caps(sphere, fade, &self.receivers, offsets, hit);
+            let axis = self.unit_axis(caps.axis);
+            sum.add::<N>(caps.f, &band_ratios(caps.cos_alpha), axis);
+            union.add(caps.f);
         }
         union
-    }
-
-    /// The caps of proxy `i` over the lanes of `hit`.
-    #[inline(always)]
-    fn caps(&self, (i, hit): (u8, u8), fade: Fade) -> Caps<V> {
-        let sphere = self.frame.sphere(usize::from(i));
-        let offsets = offsets(sphere, self.receivers.positions);
-        caps(sphere, fade, &self.receivers, offsets, V::mask_of(hit))
-    }
-
-    /// Adds one proxy's caps to `sum` and `union`.
-    #[inline(always)]
-    fn add<const N: usize>(&self, caps: Caps<V>, sum: &mut impl CapSum<V>, union: &mut Union<V>) {
-        let axis = self.unit_axis(caps.axis);
-        sum.add::<N>(caps.f, &band_ratios(caps.cos_alpha), axis);
-        union.add(caps.f);
     }
 
     /// The axis in the frame of the output (each lane's bone, or world), unit length. The
@@ -531,7 +504,7 @@ mod tests {
                 _ => (weight(5000 + 8 * b + l).to_bits() as u64) & ((1 << 24) - 1),
             }),
             positions: core::array::from_fn(|l| match l {
-                3 => frame.centres[b % 24],
+                3 => frame.sphere(b % 24).centre,
                 _ => draw(l, 1.4),
             }),
             normals: core::array::from_fn(|l| match (b + l) % 7 {
