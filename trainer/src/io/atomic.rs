@@ -104,12 +104,13 @@ fn write_whole(path: &Path, bytes: &[u8], publish: Publish) -> std::io::Result<b
         remove_stale_temporaries(dir, name);
     }
     let prefix = temp_prefix(name);
-    let mut tmp = tempfile::Builder::new()
-        .prefix(&prefix)
-        .suffix(TEMP_SUFFIX)
-        .rand_bytes(6)
-        .tempfile_in(dir)?;
-    let _pending = Pending::register(tmp.path());
+    let (mut tmp, _pending) = Pending::create(|| {
+        tempfile::Builder::new()
+            .prefix(&prefix)
+            .suffix(TEMP_SUFFIX)
+            .rand_bytes(6)
+            .tempfile_in(dir)
+    })?;
     tmp.write_all(bytes)?;
     // Temporary files are created private (0600); outputs are ordinary files.
     #[cfg(unix)]
@@ -258,9 +259,16 @@ fn pending() -> MutexGuard<'static, Vec<PathBuf>> {
 struct Pending(PathBuf);
 
 impl Pending {
-    fn register(path: &Path) -> Pending {
-        pending().push(path.to_owned());
-        Pending(path.to_owned())
+    /// Creates a temporary with `create` and lists it, holding the list's lock throughout: a
+    /// signal handled meanwhile waits, then finds the temporary listed and removes it.
+    fn create(
+        create: impl FnOnce() -> std::io::Result<tempfile::NamedTempFile>,
+    ) -> std::io::Result<(tempfile::NamedTempFile, Pending)> {
+        let mut list = pending();
+        let tmp = create()?;
+        list.push(tmp.path().to_owned());
+        let listed = Pending(tmp.path().to_owned());
+        Ok((tmp, listed))
     }
 }
 
