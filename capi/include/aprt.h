@@ -10,6 +10,8 @@
  * model is used. Every call returns an aprt_status; outputs are valid only after
  * APRT_STATUS_OK. Arrays are (pointer, length) pairs; NULL is accepted only with length 0.
  * Vectors and colours are 3 consecutive floats, rotations 9 (row-major).
+ *
+ * Needs C99 or C++11 (or later): `//` comments, trailing commas in enums, <stdbool.h>.
  */
 
 #ifndef APRT_H
@@ -132,7 +134,8 @@ typedef enum {
   APRT_STATUS_BUFFER_TOO_SMALL = 205,
   // The frame's weights are too small for this model.
   APRT_STATUS_WEIGHTS_TOO_SMALL = 206,
-  // An array has the wrong length for this model.
+  // An array has the wrong length for this model, or one no buffer can have (its bytes
+  // overflow).
   APRT_STATUS_WRONG_LENGTH = 207,
   // A pose entry is NaN or infinite.
   APRT_STATUS_NON_FINITE_ANGLE = 208,
@@ -250,7 +253,8 @@ typedef struct {
   // was padding, so the struct's size and other offsets are those of ABI version 1.)
   bool has_proxies;
   // Scratch bytes `aprt_model_stream_init` needs for this model (one block of vertex rows,
-  // plus the irradiance rig when there is one).
+  // plus the irradiance rig when there is one): keep it with the blob, and the next stream
+  // init of it needs no size query.
   size_t scratch_bytes;
   // Floats the buffer of `aprt_light_rig` needs (0 without a rig).
   size_t rig_lit_len;
@@ -282,8 +286,10 @@ aprt_status aprt_frame_init(void *storage,
 
 // Sets the frame's pose from the pose vector `angles` (`angles_len` = `info.pose_len`
 // floats: each kept joint's rotation vector relative to its rest pose, see the core's
-// `Model::set_pose`). The frame's lighting is then stale: call `aprt_light_sh` again before
-// `aprt_shade`; the rig weights are dropped (`aprt_light_rig` again before `aprt_shade_rig`).
+// `Model::set_pose`). It drops the frame's lighting, which was pushed through the old pose:
+// `aprt_shade` returns `APRT_STATUS_WEIGHTS_NOT_SET` until `aprt_light_sh` lights the frame
+// again, even when the lighting has not changed; likewise the rig weights
+// (`aprt_light_rig` again before `aprt_shade_rig`). A failed call drops them too.
 aprt_status aprt_set_pose(const aprt_model *model,
                           aprt_frame *frame,
                           const float *angles,
@@ -293,6 +299,7 @@ aprt_status aprt_set_pose(const aprt_model *model,
 // `info.coeffs` floats, real orthonormal SH, `c = l² + l + m`, z up). A bone-frame model needs
 // `bone_count` = `info.bones` rotations in `bones` (9 floats each, row-major: the rotation of
 // each bone's skinning matrix `world · inverse_bind`); a world-frame model takes `NULL, 0`.
+// Light again after every `aprt_set_pose`; a failed call leaves the frame unlit.
 aprt_status aprt_light_sh(const aprt_model *model,
                           aprt_frame *frame,
                           const float *lighting,
@@ -302,7 +309,8 @@ aprt_status aprt_light_sh(const aprt_model *model,
 
 // Writes the shading of vertices `first .. first + count` under the frame's lighting to
 // `out` (`count` floats): `Σ_c L_c t_c(j)`; multiply by albedo / π for exit radiance. Any
-// range works, so threads may shade disjoint ranges of one frame.
+// range works, so threads may shade disjoint ranges of one frame. Needs `aprt_light_sh`
+// since the frame's last `aprt_set_pose` (`APRT_STATUS_WEIGHTS_NOT_SET`).
 aprt_status aprt_shade(const aprt_model *model,
                        const aprt_frame *frame,
                        size_t first,
@@ -423,16 +431,23 @@ aprt_status aprt_model_init(const uint8_t *blob,
                             size_t storage_len,
                             aprt_model **out);
 
-// Validates a blob read through `source` (copied), streaming it through the caller's
-// `scratch`, and on success writes a model handle into `storage` and its address to `*out`.
+// Validates a blob read through `source` (copied) completely, as `aprt_model_init` does,
+// streaming it through the caller's `scratch`, and on success writes a model handle into
+// `storage` and its address to `*out`.
 //
 // `scratch` (`scratch_len` bytes) belongs to the model from then on: it must stay valid and
-// untouched while the handle is used. When it is too small the call returns
-// `APRT_STATUS_BUFFER_TOO_SMALL` and writes the bytes it needs to `*scratch_needed`; call
-// again with that many (a model with an irradiance rig may ask twice: first for the blocks,
-// then for the rig too). `info.scratch_bytes` is the final figure. A model with a rig is
-// validated twice at init (once to learn its sizes). A streamed handle must not be used by
-// two threads at once, nor from its own read callback (`APRT_STATUS_BUSY`).
+// untouched while the handle is used. It needs `info.scratch_bytes`. When it is too small
+// the call returns `APRT_STATUS_BUFFER_TOO_SMALL` and writes the bytes it needs to
+// `*scratch_needed`; call again with that many (a model with an irradiance rig may ask
+// twice: first for its blocks, then with the rig's bytes too).
+//
+// Asking is not cheap: the size is known only once the blob is validated, so every call,
+// a query with a scratch of 0 included, reads and checks the whole blob through `read_at`,
+// and a model with a rig is read twice by a call whose scratch suffices (once to learn where
+// the rig goes). From a scratch of 0, a model without a rig opens after 2 whole reads, one
+// with a rig after 4; given `info.scratch_bytes` at once (kept from an earlier run with the
+// same blob), after 1 and 2. A streamed handle must not be used by two threads at once, nor
+// from its own read callback (`APRT_STATUS_BUSY`).
 aprt_status aprt_model_stream_init(const aprt_source *source,
                                    uint8_t *scratch,
                                    size_t scratch_len,

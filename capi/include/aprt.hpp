@@ -2,8 +2,10 @@
 //
 // aprt::Model owns its blob (moved in, so it outlives the model that reads it in place) and
 // the aligned storage of its handle; aprt::Frame and aprt::ProxyFrame own their storage.
-// Array lengths are checked against each other before the call. A failing call throws
-// aprt::Error, which carries the status and its message. Nothing else is hidden: every
+// Array lengths are checked against each other before the call (a float array that is not a
+// whole number of rotations, vectors or triples throws APRT_STATUS_WRONG_LENGTH rather than
+// being cut short). A failing call throws aprt::Error, which carries the status and its
+// message. Nothing else is hidden: every
 // method is one C call, so the output is the C path's, bit for bit.
 #ifndef APRT_HPP
 #define APRT_HPP
@@ -48,18 +50,27 @@ using Storage = std::unique_ptr<void, AlignedDelete>;
 inline Storage allocate(std::size_t size, std::size_t align) {
   return Storage(::operator new(size, std::align_val_t(align)), AlignedDelete{align});
 }
+// The count of `per`-float items in `floats` floats (9 a rotation, 3 a vector); throws
+// APRT_STATUS_WRONG_LENGTH for a partial item, which the C call could not see.
+inline std::size_t items(std::size_t floats, std::size_t per, const char *what) {
+  if (floats % per) throw Error(APRT_STATUS_WRONG_LENGTH, what);
+  return floats / per;
+}
 }  // namespace detail
 
 // A model: resident (the blob read in place) or streamed through a read callback and a
 // scratch buffer the model owns. Either way it validates the blob once.
 class Model {
  public:
-  explicit Model(std::vector<std::uint8_t> blob) : Model(std::move(blob), false) {}
+  explicit Model(std::vector<std::uint8_t> blob) : Model(std::move(blob), false, 0) {}
 
   // A model streamed from `blob` through the read callback, copying as a read from flash
-  // would; a real source reads a file or flash. The scratch grows until the model stops
-  // asking (at most twice).
-  static Model streamed(std::vector<std::uint8_t> blob) { return Model(std::move(blob), true); }
+  // would; a real source reads a file or flash. The scratch starts at `scratch_bytes` and
+  // grows until the model stops asking (at most twice). Each ask reads the whole blob once
+  // more: pass info().scratch_bytes of an earlier run to open it with one validation.
+  static Model streamed(std::vector<std::uint8_t> blob, std::size_t scratch_bytes = 0) {
+    return Model(std::move(blob), true, scratch_bytes);
+  }
 
   // The handle points into storage_ and reads *blob_ and scratch_: moving keeps all three
   // where they are.
@@ -72,9 +83,10 @@ class Model {
   const aprt_model *get() const noexcept { return handle_; }
 
  private:
-  Model(std::vector<std::uint8_t> blob, bool stream)
+  Model(std::vector<std::uint8_t> blob, bool stream, std::size_t scratch_bytes)
       : blob_(std::make_unique<std::vector<std::uint8_t>>(std::move(blob))),
-        storage_(detail::allocate(aprt_model_size(), aprt_model_align())) {
+        storage_(detail::allocate(aprt_model_size(), aprt_model_align())),
+        scratch_(stream ? scratch_bytes : 0) {
     if (aprt_abi_version() != APRT_ABI_VERSION) throw Error(APRT_STATUS_UNKNOWN, "ABI version");
     if (stream) {
       aprt_source source{&Model::read_at, blob_.get(), blob_->size()};
@@ -122,7 +134,7 @@ class Frame {
   void light_sh(const Model &m, const std::vector<float> &lighting,
                 const std::vector<float> &bones) {
     check(aprt_light_sh(m.get(), handle_, lighting.data(), lighting.size(), bones.data(),
-                        bones.size() / 9),
+                        detail::items(bones.size(), 9, "aprt_light_sh")),
           "aprt_light_sh");
   }
   std::vector<float> shade(const Model &m) const {
@@ -139,26 +151,30 @@ class Frame {
   void shade_lights(const Model &m, const std::vector<float> &bones,
                     const std::vector<aprt_light> &lights, const std::vector<float> &weights,
                     const std::vector<float> &positions, std::vector<float> &rgb) const {
+    const char *what = "aprt_shade_lights";
     if (weights.size() != lights.size() || rgb.size() != positions.size())
-      throw Error(APRT_STATUS_WRONG_LENGTH, "aprt_shade_lights");
-    check(aprt_shade_lights(m.get(), handle_, bones.data(), bones.size() / 9, lights.data(),
-                            weights.data(), lights.size(), positions.data(), 0, rgb.data(),
-                            rgb.size() / 3),
-          "aprt_shade_lights");
+      throw Error(APRT_STATUS_WRONG_LENGTH, what);
+    check(aprt_shade_lights(m.get(), handle_, bones.data(), detail::items(bones.size(), 9, what),
+                            lights.data(), weights.data(), lights.size(), positions.data(), 0,
+                            rgb.data(), detail::items(rgb.size(), 3, what)),
+          what);
   }
   // The rig's lighting weights live in rig_lit_, which the frame keeps for shade_rig.
   void light_rig(const Model &m, const std::vector<float> &vectors,
                  const std::vector<float> &bones) {
+    const char *what = "aprt_light_rig";
+    std::size_t count = detail::items(vectors.size(), 3, what);
+    std::size_t bone_count = detail::items(bones.size(), 9, what);
     rig_lit_.assign(m.info().rig_lit_len, 0.0f);
-    check(aprt_light_rig(m.get(), handle_, vectors.data(), vectors.size() / 3, bones.data(),
-                         bones.size() / 9, rig_lit_.data(), rig_lit_.size()),
-          "aprt_light_rig");
+    check(aprt_light_rig(m.get(), handle_, vectors.data(), count, bones.data(), bone_count,
+                         rig_lit_.data(), rig_lit_.size()),
+          what);
   }
   std::vector<float> shade_rig(const Model &m, const aprt_placement &place,
                                const std::vector<float> &positions) const {
+    std::size_t count = detail::items(positions.size(), 3, "aprt_shade_rig");
     std::vector<float> out(positions.size());
-    check(aprt_shade_rig(m.get(), handle_, &place, positions.data(), 0, out.data(),
-                         out.size() / 3),
+    check(aprt_shade_rig(m.get(), handle_, &place, positions.data(), 0, out.data(), count),
           "aprt_shade_rig");
     return out;
   }
@@ -200,12 +216,13 @@ class ProxyFrame {
   void occlude_transfer(const Model &m, const std::vector<float> &bones,
                         const std::vector<float> &positions, const std::vector<float> &normals,
                         std::vector<float> &transfer, std::size_t first = 0) const {
-    if (bones.size() % 9 || positions.size() % 3 || normals.size() != positions.size())
-      throw Error(APRT_STATUS_WRONG_LENGTH, "aprt_occlude_transfer");
-    check(aprt_occlude_transfer(m.get(), handle_, bones.data(), bones.size() / 9,
-                                positions.data(), normals.data(), first, positions.size() / 3,
-                                transfer.data(), transfer.size()),
-          "aprt_occlude_transfer");
+    const char *what = "aprt_occlude_transfer";
+    if (normals.size() != positions.size()) throw Error(APRT_STATUS_WRONG_LENGTH, what);
+    std::size_t bone_count = detail::items(bones.size(), 9, what);
+    std::size_t count = detail::items(positions.size(), 3, what);
+    check(aprt_occlude_transfer(m.get(), handle_, bones.data(), bone_count, positions.data(),
+                                normals.data(), first, count, transfer.data(), transfer.size()),
+          what);
   }
   const aprt_proxy_frame *get() const noexcept { return handle_; }
 

@@ -7,14 +7,18 @@
 //!
 //! - NULL is refused ([`aprt_status::NullPointer`]), except a NULL array of length 0, which is
 //!   the empty slice (C callers pass `NULL, 0` for "none").
-//! - Misalignment for the element type is refused ([`aprt_status::Misaligned`]); so is a length
-//!   whose byte size overflows `isize` ([`aprt_status::LengthOverflow`]).
+//! - Misalignment for the element type is refused ([`aprt_status::Misaligned`]). A length whose
+//!   byte size overflows `isize` fits no buffer, so it is the caller's wrong length
+//!   ([`aprt_status::WrongLength`]; [`past_vertices`] and the lights name it better), never
+//!   the blob's [`aprt_status::LengthOverflow`].
 //! - Elements are [`Plain`]: types for which every bit pattern is a valid value (integers,
 //!   floats, arrays and `#[repr(C)]` structs of them), so no C bytes can make an invalid value.
-//! - Handles carry a tag word at a fixed offset, checked before a reference is made
+//! - Handles are `#[repr(C)]` with a tag word first, checked before a reference is made
 //!   ([`aprt_status::BadHandle`]): storage that was never initialised (zeroed, or another
-//!   kind's) is refused rather than read as a handle. This is a best effort against mistakes,
-//!   not a proof: garbage that happens to hold the tag cannot be told apart.
+//!   kind's) is refused rather than read as a handle. The check reads the first 8 bytes only,
+//!   which lie inside every kind of handle, so a handle of another (smaller) kind is never
+//!   read past its end. This is a best effort against mistakes, not a proof: garbage that
+//!   happens to hold the tag cannot be told apart.
 //!
 //! What the caller promises, as the header states on each function: a pointer with a length
 //! points to that many initialised elements that no one else writes during the call; outputs
@@ -45,11 +49,12 @@ plain!(u8, u16, f32, [f32; 3], [f32; 12], [[f32; 3]; 3]);
 plain!(crate::lights::aprt_light, crate::rig::aprt_placement);
 plain!(crate::model::aprt_source);
 
-/// A handle type stored in caller memory, recognised by `TAG` at byte `TAG_OFFSET`.
+/// A handle type stored in caller memory, recognised by `TAG` in its first 8 bytes.
 pub(crate) trait Handle {
     /// The word a live handle of this type holds.
     const TAG: u64;
-    /// Where the word is, `offset_of!` its field.
+    /// Where the word is, `offset_of!` its field: 0 (`check_handle` refuses to compile
+    /// otherwise), so that checking any storage reads only bytes every handle has.
     const TAG_OFFSET: usize;
 }
 
@@ -62,7 +67,15 @@ fn check<T>(ptr: *const T, len: usize) -> Result<(), aprt_status> {
     }
     match len.checked_mul(size_of::<T>()) {
         Some(bytes) if bytes <= isize::MAX as usize => Ok(()),
-        _ => Err(aprt_status::LengthOverflow),
+        _ => Err(aprt_status::WrongLength),
+    }
+}
+
+/// The status of a vertex count no buffer can hold: it runs past every model's vertices.
+pub(crate) fn past_vertices(status: aprt_status) -> aprt_status {
+    match status {
+        aprt_status::WrongLength => aprt_status::VertexRange,
+        other => other,
     }
 }
 
@@ -161,16 +174,21 @@ pub(crate) fn place<T: Handle>(
     Ok(ptr)
 }
 
-/// Whether `ptr` holds a live handle of type `T` (NULL, alignment and the tag checked).
+/// Whether `ptr` holds a live handle of type `T` (NULL, the tag, then alignment checked).
+/// The tag is read before `T`'s alignment is checked, so another kind of handle (aligned for
+/// its own kind) is a bad handle, not a misaligned one.
 fn check_handle<T: Handle>(ptr: *const T) -> Result<(), aprt_status> {
-    check(ptr, 1)?;
-    // SAFETY: the tag word lies inside the caller's storage of a T (offset_of! of a u64 field,
-    // so aligned); reading it creates no reference to a possibly invalid T.
-    let tag = unsafe { ptr.cast::<u8>().add(T::TAG_OFFSET).cast::<u64>().read() };
-    match tag == T::TAG {
-        true => Ok(()),
-        false => Err(aprt_status::BadHandle),
+    const { assert!(T::TAG_OFFSET == 0, "a handle's tag comes first") };
+    let word = ptr.cast::<u64>();
+    check(word, 1)?;
+    // SAFETY: non-NULL and aligned for the u64 (checked); the caller promises storage of some
+    // handle, and every handle starts with its 8-byte tag. Reading it creates no reference to
+    // a possibly invalid T.
+    let tag = unsafe { word.read() };
+    if tag != T::TAG {
+        return Err(aprt_status::BadHandle);
     }
+    check(ptr, 1)
 }
 
 /// The handle at `ptr`, shared.

@@ -18,11 +18,18 @@ use crate::model::{aprt_model, with_model};
 use crate::status::{aprt_status, guard};
 
 /// One character's per-frame state in the caller's storage. Opaque; see `aprt_frame_init`.
+// `repr(C)` puts the tag first, where every handle check reads (a Rust layout put it last, so
+// checking a model passed as a frame read 82 KiB past the model). `align(8)` keeps cbindgen
+// from spelling out fields C cannot name: it declares the type opaque.
 #[allow(non_camel_case_types)]
+#[repr(C, align(8))]
 pub struct aprt_frame {
     tag: u64,
     pub(crate) pose: PoseWeights,
     pub(crate) lit: LitWeights,
+    /// Whether `lit` is of the current pose: `aprt_set_pose` clears it, a successful
+    /// `aprt_light_sh` sets it, so `aprt_shade` never shades with the last pose's lighting.
+    pub(crate) lit_current: bool,
     /// Filled by `aprt_light_rig` over the caller's buffer, read by `aprt_shade_rig`.
     pub(crate) rig: Option<RigLitWeights<'static>>,
 }
@@ -59,6 +66,7 @@ pub extern "C" fn aprt_frame_init(
             tag: aprt_frame::TAG,
             pose: PoseWeights::new(),
             lit: LitWeights::new(),
+            lit_current: false,
             rig: None,
         };
         ffi_ptr::write(out, ffi_ptr::place(storage, storage_len, frame)?)
@@ -67,8 +75,10 @@ pub extern "C" fn aprt_frame_init(
 
 /// Sets the frame's pose from the pose vector `angles` (`angles_len` = `info.pose_len`
 /// floats: each kept joint's rotation vector relative to its rest pose, see the core's
-/// `Model::set_pose`). The frame's lighting is then stale: call `aprt_light_sh` again before
-/// `aprt_shade`; the rig weights are dropped (`aprt_light_rig` again before `aprt_shade_rig`).
+/// `Model::set_pose`). It drops the frame's lighting, which was pushed through the old pose:
+/// `aprt_shade` returns `APRT_STATUS_WEIGHTS_NOT_SET` until `aprt_light_sh` lights the frame
+/// again, even when the lighting has not changed; likewise the rig weights
+/// (`aprt_light_rig` again before `aprt_shade_rig`). A failed call drops them too.
 #[unsafe(no_mangle)]
 pub extern "C" fn aprt_set_pose(
     model: *const aprt_model,
@@ -79,7 +89,8 @@ pub extern "C" fn aprt_set_pose(
     guard(|| {
         let angles = ffi_ptr::slice(angles, angles_len)?;
         let frame = ffi_ptr::handle_mut(frame)?;
-        // Rig weights are of the old pose: drop them (and the buffer they borrow).
+        // Lighting and rig weights are of the old pose: drop them (and the buffer lent).
+        frame.lit_current = false;
         frame.rig = None;
         with_model(model, |m| Ok(m.set_pose(angles, &mut frame.pose)?))
     })
@@ -89,6 +100,7 @@ pub extern "C" fn aprt_set_pose(
 /// `info.coeffs` floats, real orthonormal SH, `c = l² + l + m`, z up). A bone-frame model needs
 /// `bone_count` = `info.bones` rotations in `bones` (9 floats each, row-major: the rotation of
 /// each bone's skinning matrix `world · inverse_bind`); a world-frame model takes `NULL, 0`.
+/// Light again after every `aprt_set_pose`; a failed call leaves the frame unlit.
 #[unsafe(no_mangle)]
 pub extern "C" fn aprt_light_sh(
     model: *const aprt_model,
@@ -102,15 +114,19 @@ pub extern "C" fn aprt_light_sh(
         let lighting = ffi_ptr::slice(lighting, lighting_len)?;
         let bones = ffi_ptr::matrices(bones, bone_count)?;
         let frame = ffi_ptr::handle_mut(frame)?;
+        frame.lit_current = false;
         with_model(model, |m| {
             Ok(m.light(&frame.pose, lighting, bones, &mut frame.lit)?)
-        })
+        })?;
+        frame.lit_current = true;
+        Ok(())
     })
 }
 
 /// Writes the shading of vertices `first .. first + count` under the frame's lighting to
 /// `out` (`count` floats): `Σ_c L_c t_c(j)`; multiply by albedo / π for exit radiance. Any
-/// range works, so threads may shade disjoint ranges of one frame.
+/// range works, so threads may shade disjoint ranges of one frame. Needs `aprt_light_sh`
+/// since the frame's last `aprt_set_pose` (`APRT_STATUS_WEIGHTS_NOT_SET`).
 #[unsafe(no_mangle)]
 pub extern "C" fn aprt_shade(
     model: *const aprt_model,
@@ -120,9 +136,14 @@ pub extern "C" fn aprt_shade(
     count: usize,
 ) -> aprt_status {
     guard(|| {
-        let out = ffi_ptr::slice_mut(out, count)?;
+        let out = ffi_ptr::slice_mut(out, count).map_err(ffi_ptr::past_vertices)?;
         let frame = ffi_ptr::handle(frame)?;
-        with_model(model, |m| Ok(m.shade(&frame.lit, first, out)?))
+        with_model(model, |m| {
+            if !frame.lit_current {
+                return Err(aprt_status::WeightsNotSet);
+            }
+            Ok(m.shade(&frame.lit, first, out)?)
+        })
     })
 }
 
@@ -138,7 +159,7 @@ pub extern "C" fn aprt_transfer(
     out_len: usize,
 ) -> aprt_status {
     guard(|| {
-        let out = ffi_ptr::slice_mut(out, out_len)?;
+        let out = ffi_ptr::slice_mut(out, out_len).map_err(ffi_ptr::past_vertices)?;
         let frame = ffi_ptr::handle(frame)?;
         with_model(model, |m| Ok(m.transfer(&frame.pose, first, out)?))
     })
@@ -154,7 +175,7 @@ pub extern "C" fn aprt_vertex_bones(
     count: usize,
 ) -> aprt_status {
     guard(|| {
-        let out = ffi_ptr::slice_mut(out, count)?;
+        let out = ffi_ptr::slice_mut(out, count).map_err(ffi_ptr::past_vertices)?;
         with_model(model, |m| Ok(m.vertex_bones(first, out)?))
     })
 }

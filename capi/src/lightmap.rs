@@ -9,7 +9,7 @@
 use aprt_core::LightMap;
 
 use crate::ffi_ptr;
-use crate::lights::{Lights, aprt_light};
+use crate::lights::{Lights, aprt_light, too_many};
 use crate::model::{aprt_model, with_model};
 use crate::rig::{aprt_placement, read_placement};
 use crate::status::{aprt_status, guard};
@@ -56,7 +56,7 @@ pub extern "C" fn aprt_lightmap_compose_lights(
     guard(|| {
         let maps = ffi_ptr::slice(maps, maps_len)?;
         let positions = ffi_ptr::triples(positions, texels)?;
-        let lights = ffi_ptr::slice(lights, light_count)?;
+        let lights = ffi_ptr::slice(lights, light_count).map_err(too_many)?;
         let environment = ffi_ptr::triples(environment, env_coeffs)?;
         let out = ffi_ptr::triples_mut(out_rgb, texels)?;
         let lights = Lights::convert(lights)?;

@@ -62,6 +62,14 @@ pub(crate) fn to_core(l: &aprt_light) -> Result<Light, aprt_status> {
     })
 }
 
+/// The status of a light count no buffer can hold: more than [`APRT_MAX_LIGHTS`].
+pub(crate) fn too_many(status: aprt_status) -> aprt_status {
+    match status {
+        aprt_status::WrongLength => aprt_status::TooManyLights,
+        other => other,
+    }
+}
+
 /// Up to [`APRT_MAX_LIGHTS`] converted lights, on the stack.
 pub(crate) struct Lights {
     buf: [Light; APRT_MAX_LIGHTS],
@@ -118,8 +126,8 @@ pub extern "C" fn aprt_shade_lights(
 ) -> aprt_status {
     guard(|| {
         let bones = ffi_ptr::matrices(bones, bone_count)?;
-        let lights = ffi_ptr::slice(lights, light_count)?;
-        let weights = ffi_ptr::slice(weights, light_count)?;
+        let lights = ffi_ptr::slice(lights, light_count).map_err(too_many)?;
+        let weights = ffi_ptr::slice(weights, light_count).map_err(too_many)?;
         let range = Range::from_c(positions, first, out_rgb, count)?;
         let frame = ffi_ptr::handle(frame)?;
         let set = Lights::convert(lights)?;

@@ -83,14 +83,17 @@ pub struct aprt_model_info {
     /// was padding, so the struct's size and other offsets are those of ABI version 1.)
     pub has_proxies: bool,
     /// Scratch bytes `aprt_model_stream_init` needs for this model (one block of vertex rows,
-    /// plus the irradiance rig when there is one).
+    /// plus the irradiance rig when there is one): keep it with the blob, and the next stream
+    /// init of it needs no size query.
     pub scratch_bytes: usize,
     /// Floats the buffer of `aprt_light_rig` needs (0 without a rig).
     pub rig_lit_len: usize,
 }
 
 /// A validated model in the caller's storage. Opaque; see `aprt_model_init`.
+// `repr(C)`: the tag first, as in every handle; `align(8)` makes cbindgen declare it opaque.
 #[allow(non_camel_case_types)]
+#[repr(C, align(8))]
 pub struct aprt_model {
     tag: u64,
     kind: Kind,
@@ -215,10 +218,11 @@ impl Range<'_> {
         out_rgb: *mut f32,
         count: usize,
     ) -> Result<Self, aprt_status> {
+        let vertices = ffi_ptr::past_vertices;
         Ok(Range {
-            positions: ffi_ptr::triples(positions, count)?,
+            positions: ffi_ptr::triples(positions, count).map_err(vertices)?,
             first,
-            out: ffi_ptr::triples_mut(out_rgb, count)?,
+            out: ffi_ptr::triples_mut(out_rgb, count).map_err(vertices)?,
         })
     }
 }
@@ -462,16 +466,23 @@ pub extern "C" fn aprt_model_init(
     })
 }
 
-/// Validates a blob read through `source` (copied), streaming it through the caller's
-/// `scratch`, and on success writes a model handle into `storage` and its address to `*out`.
+/// Validates a blob read through `source` (copied) completely, as `aprt_model_init` does,
+/// streaming it through the caller's `scratch`, and on success writes a model handle into
+/// `storage` and its address to `*out`.
 ///
 /// `scratch` (`scratch_len` bytes) belongs to the model from then on: it must stay valid and
-/// untouched while the handle is used. When it is too small the call returns
-/// `APRT_STATUS_BUFFER_TOO_SMALL` and writes the bytes it needs to `*scratch_needed`; call
-/// again with that many (a model with an irradiance rig may ask twice: first for the blocks,
-/// then for the rig too). `info.scratch_bytes` is the final figure. A model with a rig is
-/// validated twice at init (once to learn its sizes). A streamed handle must not be used by
-/// two threads at once, nor from its own read callback (`APRT_STATUS_BUSY`).
+/// untouched while the handle is used. It needs `info.scratch_bytes`. When it is too small
+/// the call returns `APRT_STATUS_BUFFER_TOO_SMALL` and writes the bytes it needs to
+/// `*scratch_needed`; call again with that many (a model with an irradiance rig may ask
+/// twice: first for its blocks, then with the rig's bytes too).
+///
+/// Asking is not cheap: the size is known only once the blob is validated, so every call,
+/// a query with a scratch of 0 included, reads and checks the whole blob through `read_at`,
+/// and a model with a rig is read twice by a call whose scratch suffices (once to learn where
+/// the rig goes). From a scratch of 0, a model without a rig opens after 2 whole reads, one
+/// with a rig after 4; given `info.scratch_bytes` at once (kept from an earlier run with the
+/// same blob), after 1 and 2. A streamed handle must not be used by two threads at once, nor
+/// from its own read callback (`APRT_STATUS_BUSY`).
 #[unsafe(no_mangle)]
 pub extern "C" fn aprt_model_stream_init(
     source: *const aprt_source,

@@ -35,8 +35,6 @@ impl Handle for aprt_proxy_frame {
     const TAG_OFFSET: usize = std::mem::offset_of!(aprt_proxy_frame, tag);
 }
 
-const _: () = assert!(aprt_proxy_frame::TAG_OFFSET == 0, "the tag comes first");
-
 /// Bytes of storage an `aprt_proxy_frame` needs (about 4 KiB: the core's most proxies and
 /// bones).
 #[unsafe(no_mangle)]
@@ -136,9 +134,10 @@ pub extern "C" fn aprt_occlude(
 ) -> aprt_status {
     guard(|| {
         let lighting = ffi_ptr::slice(lighting, lighting_len)?;
-        let positions = ffi_ptr::triples(positions, count)?;
-        let normals = ffi_ptr::triples(normals, count)?;
-        let out = ffi_ptr::slice_mut(out, count)?;
+        let vertices = ffi_ptr::past_vertices;
+        let positions = ffi_ptr::triples(positions, count).map_err(vertices)?;
+        let normals = ffi_ptr::triples(normals, count).map_err(vertices)?;
+        let out = ffi_ptr::slice_mut(out, count).map_err(vertices)?;
         let frame = &ffi_ptr::handle(proxies)?.proxies;
         with_model(model, |m| {
             if !m.info().has_proxies() {
@@ -177,9 +176,10 @@ pub extern "C" fn aprt_occlude_transfer(
 ) -> aprt_status {
     guard(|| {
         let bones = ffi_ptr::matrices(bones, bone_count)?;
-        let positions = ffi_ptr::triples(positions, count)?;
-        let normals = ffi_ptr::triples(normals, count)?;
-        let out = ffi_ptr::slice_mut(out, out_len)?;
+        let vertices = ffi_ptr::past_vertices;
+        let positions = ffi_ptr::triples(positions, count).map_err(vertices)?;
+        let normals = ffi_ptr::triples(normals, count).map_err(vertices)?;
+        let out = ffi_ptr::slice_mut(out, out_len).map_err(vertices)?;
         let frame = &ffi_ptr::handle(proxies)?.proxies;
         with_model(model, |m| {
             if !m.info().has_proxies() {

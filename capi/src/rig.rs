@@ -10,7 +10,7 @@ use aprt_core::{Placement, RigLitWeights};
 
 use crate::ffi_ptr;
 use crate::frame::aprt_frame;
-use crate::lights::{Lights, aprt_light, to_core};
+use crate::lights::{Lights, aprt_light, to_core, too_many};
 use crate::model::{Range, aprt_model, with_model};
 use crate::status::{aprt_status, guard};
 
@@ -54,7 +54,7 @@ pub extern "C" fn aprt_rig_vectors(
 ) -> aprt_status {
     guard(|| {
         let place = read_placement(placement)?;
-        let lights = ffi_ptr::slice(lights, light_count)?;
+        let lights = ffi_ptr::slice(lights, light_count).map_err(too_many)?;
         let environment = ffi_ptr::triples(environment, env_coeffs)?;
         let out = ffi_ptr::triples_mut(out_rgb, out_count)?;
         with_model(model, |m| {

@@ -105,7 +105,8 @@ pub enum aprt_status {
     BufferTooSmall = 205,
     /// The frame's weights are too small for this model.
     WeightsTooSmall = 206,
-    /// An array has the wrong length for this model.
+    /// An array has the wrong length for this model, or one no buffer can have (its bytes
+    /// overflow).
     WrongLength = 207,
     /// A pose entry is NaN or infinite.
     NonFiniteAngle = 208,

@@ -17,7 +17,7 @@ use aprt_capi::status::{ALL, aprt_status_message};
 use aprt_capi::*;
 use common::*;
 
-use aprt_status::{BadHandle, NullPointer, Ok as OK};
+use aprt_status::{BadHandle, NullPointer, Ok as OK, VertexRange};
 
 /// A resident model of `blob` (kept alive by the caller) and an empty frame.
 struct Fixture {
@@ -597,4 +597,64 @@ fn a_new_pose_drops_the_rig_weights() {
     // A buffer too small is refused, and leaves no weights.
     assert_eq!(light_rig(&mut buffer[..1]), aprt_status::WeightsTooSmall);
     assert_eq!(shade_rig(&mut rgb), aprt_status::WeightsNotSet);
+}
+
+#[test]
+fn a_new_pose_drops_the_sh_lighting() {
+    let blob = golden("bones");
+    let f = fixture(&blob);
+    let mut info = aprt_model_info::default();
+    assert_eq!(aprt_model_get_info(f.model, &mut info), OK);
+    let (n, n2, nb) = (
+        info.vertices as usize,
+        info.coeffs as usize,
+        info.bones as usize,
+    );
+    let identity = [1.0f32, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+    let bones: Vec<f32> = identity.iter().copied().cycle().take(9 * nb).collect();
+    let sky = vec![0.5f32; n2];
+    let mut out = vec![0.0f32; n];
+    let pose = |angles: &[f32]| aprt_set_pose(f.model, f.frame, angles.as_ptr(), angles.len());
+    let light = || aprt_light_sh(f.model, f.frame, sky.as_ptr(), n2, bones.as_ptr(), nb);
+    let mut shade = || aprt_shade(f.model, f.frame, 0, out.as_mut_ptr(), n);
+    let (still, bent) = (vec![0.0f32; info.pose_len as usize], vec![0.4f32; 5]);
+    assert_eq!(pose(&still), OK);
+    assert_eq!(shade(), aprt_status::WeightsNotSet, "never lit");
+    assert_eq!(light(), OK);
+    assert_eq!(shade(), OK);
+    // A second pose without lighting: the old shading is not served.
+    assert_eq!(pose(&bent), OK);
+    assert_eq!(shade(), aprt_status::WeightsNotSet, "lit for the last pose");
+    assert_eq!(light(), OK);
+    assert_eq!(shade(), OK);
+    // A failed pose or lighting leaves the frame unlit too.
+    assert_eq!(pose(&[f32::NAN; 5]), aprt_status::NonFiniteAngle);
+    assert_eq!(shade(), aprt_status::WeightsNotSet);
+    assert_eq!(pose(&bent), OK);
+    assert_eq!(light(), OK);
+    let nan = vec![f32::NAN; n2];
+    let status = aprt_light_sh(f.model, f.frame, nan.as_ptr(), n2, bones.as_ptr(), nb);
+    assert_eq!(status, aprt_status::NonFiniteLighting);
+    assert_eq!(shade(), aprt_status::WeightsNotSet);
+}
+
+#[test]
+fn lengths_no_buffer_can_have_name_the_callers_range() {
+    let blob = golden("world");
+    let f = fixture(&blob);
+    let mut info = aprt_model_info::default();
+    assert_eq!(aprt_model_get_info(f.model, &mut info), OK);
+    let mut out = [0.0f32; 64];
+    let o = out.as_mut_ptr();
+    let three = [0.0f32; 3];
+    let (p, l) = (three.as_ptr(), LIGHTS.as_ptr());
+    let (max, half) = (usize::MAX, usize::MAX / 2);
+    assert_eq!(aprt_shade(f.model, f.frame, 1, o, max), VertexRange);
+    assert_eq!(aprt_transfer(f.model, f.frame, 0, o, max), VertexRange);
+    let status = aprt_shade_lights(f.model, f.frame, null(), 0, l, p, 1, p, 0, o, half);
+    assert_eq!(status, VertexRange);
+    let status = aprt_shade_lights(f.model, f.frame, null(), 0, l, p, max, p, 0, o, 1);
+    assert_eq!(status, aprt_status::TooManyLights);
+    let status = aprt_set_pose(f.model, f.frame, p, max);
+    assert_eq!(status, aprt_status::WrongLength);
 }
