@@ -1,6 +1,7 @@
 // The aprt core in the page: web/wasm compiled to a raw wasm32 module (no wasm-bindgen, no
 // allocator). The module keeps its buffers in statics and exports their addresses; this file
-// copies a frame's inputs in, calls `aprt_shade` and hands back a view of the shading.
+// copies a frame's inputs in, calls `aprt_shade` (and `aprt_occlude` for a model with
+// occluder proxies) and hands back a view of the shading.
 
 /** Loads `aprt-simd.wasm` when the browser validates it (or `choice` is 'simd'), else
  *  `aprt-scalar.wasm`; `choice` 'scalar' forces the scalar build. */
@@ -57,6 +58,7 @@ export class Core {
       poseLen: this.e.aprt_pose_len(),
       bones: this.e.aprt_bones(),
       order: this.e.aprt_order(),
+      proxies: this.e.aprt_has_proxies() === 1,
     };
     this.info.coeffs = this.info.order * this.info.order;
   }
@@ -72,15 +74,30 @@ export class Core {
     return Float32Array.from(this.f32(this.e.aprt_lighting(), this.info.coeffs));
   }
 
-  /** Writes a frame's pose vector and bone rotations (bones × 9, row-major). */
-  setPose(angles, rotations) {
+  /** Writes a frame's pose vector, bone rotations (bones × 9, row-major) and, for a model
+   *  with occluder proxies, the bones' skinning matrices (bones × 12, 3 × 4 row-major). */
+  setPose(angles, rotations, skinning) {
     this.f32(this.e.aprt_angles(), this.info.poseLen).set(angles);
     this.f32(this.e.aprt_bone_rotations(), this.info.bones * 9).set(rotations);
+    if (this.info.proxies) this.f32(this.e.aprt_skinning(), this.info.bones * 12).set(skinning);
+  }
+
+  /** Views of the module's posed mesh (vertices × 3 each), where the page skins the frame:
+   *  `occlude` reads it there, and the renderer draws it, without a copy. */
+  mesh() {
+    const n = this.info.vertices * 3;
+    return { positions: this.f32(this.e.aprt_positions(), n), normals: this.f32(this.e.aprt_normals(), n) };
   }
 
   /** One frame through the core (set_pose, light, shade); returns a view of the shading. */
   shade() {
     if (this.e.aprt_shade() !== 0) throw this.error();
     return this.f32(this.e.aprt_shading(), this.info.vertices);
+  }
+
+  /** After `shade`, for a model with occluder proxies: poses them by the skinning matrices
+   *  and takes what they block from the shading, in place, under the same lighting. */
+  occlude() {
+    if (this.e.aprt_occlude() !== 0) throw this.error();
   }
 }

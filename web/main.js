@@ -1,6 +1,7 @@
 // The page: plays the exported clip, shades every frame through the core (aprt.js) under an
-// SH environment plus the light the user drags, draws it (render.js) and shows the frame time
-// and the core's µs per frame. `window.aprtPage` exposes the state the browser test reads.
+// SH environment plus the light the user drags, with the model's occluder proxies when it has
+// them, draws it (render.js) and shows the frame time and the core's µs per frame.
+// `window.aprtPage` exposes the state the browser test reads.
 
 import { loadCore } from './aprt.js';
 import { frameAt, loadClip, poseOf, skinFrame } from './clip.js';
@@ -47,39 +48,52 @@ async function main() {
   const canvas = document.getElementById('view');
   const renderer = new Renderer(canvas, clip.arrays.indices, m.vertices);
   const cam = camera(clip.arrays.positions, m.up, canvas.width / canvas.height);
-  const positions = new Float32Array(m.vertices * 3);
-  const normals = new Float32Array(m.vertices * 3);
   const light = { azimuth: -0.6, elevation: 0.8, strength: 2.5 };
   const env = environment(core.info.order);
   const shadeMean = new Mean(120);
+  const proxiesMean = new Mean(120);
   const frameMean = new Mean(120);
   const page = { ready: false, frame: -1, core, manifest: m, shading: null, lighting: null };
   window.aprtPage = page;
 
-  /** One frame: pose and light the core, shade (timed alone), skin and draw. */
+  /** One frame: skin the mesh into the core, pose and light it, shade and correct by the
+   *  proxies (each timed alone), draw. */
   function render(f) {
-    const { angles, rotations } = poseOf(clip, f);
-    core.setPose(angles, rotations);
+    const { angles, rotations, skinning } = poseOf(clip, f);
+    const mesh = core.mesh();
+    skinFrame(clip, f, mesh.positions, mesh.normals);
+    core.setPose(angles, rotations, skinning);
     core.setLighting(env, direction(light.azimuth, light.elevation), light.strength);
     const t0 = performance.now();
     const shading = core.shade();
     shadeMean.push(performance.now() - t0);
-    skinFrame(clip, f, positions, normals);
-    renderer.draw(cam, positions, normals, shading);
+    if (core.info.proxies) {
+      page.unoccluded = Float32Array.from(shading);
+      const t1 = performance.now();
+      core.occlude();
+      proxiesMean.push(performance.now() - t1);
+    }
+    renderer.draw(cam, mesh.positions, mesh.normals, shading);
     page.frame = f;
     page.shading = Float32Array.from(shading);
     page.lighting = core.lighting();
   }
 
-  /** µs per `aprt_shade` over `n` calls of the current frame (the page's own timer is coarse). */
-  page.bench = (n) => {
+  /** µs per `aprt_shade` over `n` calls of the current frame (the page's own timer is coarse),
+   *  each followed by `aprt_occlude` when `proxies` is set (for a model with them). */
+  page.bench = (n, proxies = false) => {
     const t0 = performance.now();
-    for (let i = 0; i < n; i++) core.shade();
+    for (let i = 0; i < n; i++) {
+      core.shade();
+      if (proxies) core.occlude();
+    }
     return ((performance.now() - t0) * 1000) / n;
   };
 
-  /** The live mean of the last 120 frames' shade, in µs (cold caches, the GPU thread busy). */
+  /** The live means of the last 120 frames' shade and proxies, in µs (cold caches, the GPU
+   *  thread busy). */
   page.liveShadeUs = () => shadeMean.value * 1000;
+  page.liveProxiesUs = () => proxiesMean.value * 1000;
 
   let dragging = null;
   canvas.addEventListener('pointerdown', (e) => (dragging = { x: e.clientX, y: e.clientY }));
@@ -102,10 +116,12 @@ async function main() {
     if (!frozen || page.frame < 0) render(frameAt(m, seconds));
     stats.textContent = [
       `clip ${m.clip}: frame ${page.frame + 1} of ${m.frames} at ${m.fps} fps`,
-      `${m.vertices} vertices, order ${core.info.order}, ${core.info.bones} bones`,
+      `${m.vertices} vertices, order ${core.info.order}, ${core.info.bones} bones` +
+        (core.info.proxies ? ', occluder proxies' : ''),
       `wasm ${core.flavour}, ${core.wasmBytes} bytes`,
       `frame time   ${frameMean.value.toFixed(2)} ms`,
       `core shade   ${(shadeMean.value * 1000).toFixed(0)} µs per frame`,
+      ...(core.info.proxies ? [`proxies      ${(proxiesMean.value * 1000).toFixed(0)} µs per frame`] : []),
       `light az ${light.azimuth.toFixed(2)} el ${light.elevation.toFixed(2)}`,
     ].join('\n');
     page.ready = true;

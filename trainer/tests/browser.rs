@@ -1,7 +1,8 @@
 //! The web page (`web/`) against the trainer: the checked-in export is what `aprt export-web`
-//! writes today, and, in headless Chromium, the page's per-vertex shading equals `aprt eval`
-//! of the same frame (≤ 1e-5 relative) and its render matches `web/test/reference.png`
-//! (`web/test/browser-test.mjs` does the browser half).
+//! writes today, of a model with occluder proxies, and, in headless Chromium, the page skins
+//! the mesh bit for bit as the trainer does, its per-vertex shading with the proxies equals
+//! `aprt eval` of the same frame (≤ 1e-5 relative) and its render matches
+//! `web/test/reference.png` (`web/test/browser-test.mjs` does the browser half).
 //!
 //! The browser half needs `node`, Chromium (`/usr/bin/chromium`, or `$APRT_CHROMIUM`) and
 //! `web/test/node_modules` (`npm ci` there). Without them it prints why it skipped; with
@@ -11,6 +12,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use aprt_trainer::io::npy::encode_f32;
+use aprt_trainer::runtime::proxies_section;
+use aprt_trainer::{Character, Rig};
 use run::refuse;
 
 use crate::run;
@@ -35,12 +39,18 @@ fn scratch(name: &str) -> PathBuf {
 }
 
 /// The page's data is the checked-in model exported now: a change to the export, the
-/// built-in character or its clip shows here, not as a puzzling browser failure.
+/// built-in character or its clip shows here, not as a puzzling browser failure. The model
+/// has occluder proxies, so the export takes them and the browser test checks them.
 #[test]
 fn the_checked_in_web_export_is_current() {
     let data = web().join("data");
     let out = scratch("export");
     let model = data.join("model.aprt");
+    let blob = std::fs::read(&model).unwrap();
+    assert!(
+        proxies_section(&blob).unwrap().is_some(),
+        "web/data/model.aprt has no occluder proxies: the browser test would not check them"
+    );
     let args = [
         "export-web",
         model.to_str().unwrap(),
@@ -113,6 +123,20 @@ fn missing_prerequisite() -> Option<String> {
     None
 }
 
+/// Each frame of `wave` as the trainer poses it (`aprt eval` gives the proxies this mesh),
+/// `frames × 2 × vertices × 3` (positions, then normals), into `path`.
+fn write_posed_mesh(path: &Path) {
+    let rig = Character::builtin();
+    let clip = rig.clip("wave").unwrap();
+    let mut values = Vec::new();
+    for pose in &clip.frames {
+        let mesh = rig.pose(pose).unwrap();
+        values.extend(mesh.positions.iter().chain(&mesh.normals).flatten());
+    }
+    let shape = [clip.frames.len(), 2, rig.bind_mesh().vertex_count(), 3];
+    std::fs::write(path, encode_f32(&shape, &values)).unwrap();
+}
+
 #[test]
 fn the_page_in_chromium_shades_as_aprt_eval_and_renders_the_reference() {
     if let Some(why) = missing_prerequisite() {
@@ -137,9 +161,12 @@ fn the_page_in_chromium_shades_as_aprt_eval_and_renders_the_reference() {
         "wave",
     ];
     aprt(&[&eval[..], &["--npy", npy.to_str().unwrap()]].concat());
+    let posed = out.join("posed.npy");
+    write_posed_mesh(&posed);
     let output = Command::new("node")
         .arg(web().join("test/browser-test.mjs"))
         .args(["--reference", npy.to_str().unwrap(), "--t", "1.25"])
+        .args(["--posed", posed.to_str().unwrap()])
         .args(["--out", out.join("shots").to_str().unwrap()])
         .output()
         .expect("node runs");

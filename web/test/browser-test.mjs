@@ -1,13 +1,18 @@
 // The page in headless Chromium (the system's, through playwright-core; nothing downloaded):
 // for each wasm build it loads `?t=T&freeze=1`, reads the per-vertex shading back from the
-// module and compares it with `aprt eval` of the same frame under the page's lighting, times
-// the core's frame (batched, and live while the clip plays), and compares a screenshot of the canvas with reference.png (pixelmatch).
+// module and compares it with `aprt eval` of the same frame under the page's lighting (for a
+// model with occluder proxies, after their correction, which must matter far beyond the
+// tolerance), checks the page's skinned mesh against the trainer's bit for bit (--posed),
+// times the core's frame (batched, and live while the clip plays), and compares a screenshot
+// of the canvas with reference.png (pixelmatch).
 //
-//   node browser-test.mjs --reference eval.npy [--t 1.25] [--bench 300] [--out DIR]
-//                         [--update-reference]
+//   node browser-test.mjs --reference eval.npy [--posed posed.npy] [--t 1.25] [--bench 300]
+//                         [--out DIR] [--update-reference]
 //
 // eval.npy is `aprt eval web/data/model.aprt --builtin --clip wave --npy eval.npy`
-// (frames × vertices × n² world transfer); shading_j = Σ_c T[f, j, c] L_c.
+// (frames × vertices × n² world transfer, the proxies' occlusion subtracted);
+// shading_j = Σ_c T[f, j, c] L_c. posed.npy is the trainer's posed mesh of every frame
+// (frames × 2 × vertices × 3: positions, normals), which `aprt eval` gives the proxies.
 
 import { readFile, writeFile, mkdir } from 'node:fs/promises';
 import { dirname, join } from 'node:path';
@@ -38,6 +43,7 @@ const CHROMIUM_ARGS = [
 const { values: opts } = parseArgs({
   options: {
     reference: { type: 'string' },
+    posed: { type: 'string' },
     t: { type: 'string', default: '1.25' },
     bench: { type: 'string', default: '300' },
     out: { type: 'string' },
@@ -67,14 +73,23 @@ async function runPage(browser, url, flavour) {
   const state = await page.evaluate(() => {
     const p = window.aprtPage;
     if (p.error) return { error: p.error };
+    const mesh = p.core.mesh();
     return { frame: p.frame, flavour: p.core.flavour, wasmBytes: p.core.wasmBytes, fps: p.manifest.fps,
-      shading: Array.from(p.shading), lighting: Array.from(p.lighting) };
+      shading: Array.from(p.shading), lighting: Array.from(p.lighting), proxies: p.core.info.proxies,
+      unoccluded: p.unoccluded && Array.from(p.unoccluded),
+      posed: { positions: Array.from(mesh.positions), normals: Array.from(mesh.normals) } };
   });
   if (state.error || errors.length) throw new Error(`page (${flavour}): ${state.error ?? errors.join('; ')}`);
   // Median of 5 runs of `bench` calls each: the page's timer is coarse, a batch is not.
-  const runs = [];
-  for (let i = 0; i < 5; i++) runs.push(await page.evaluate((n) => window.aprtPage.bench(n), Number(opts.bench)));
-  state.shadeUs = runs.sort((a, b) => a - b)[2];
+  const median = async (proxies) => {
+    const runs = [];
+    for (let i = 0; i < 5; i++) {
+      runs.push(await page.evaluate(([n, p]) => window.aprtPage.bench(n, p), [Number(opts.bench), proxies]));
+    }
+    return runs.sort((a, b) => a - b)[2];
+  };
+  state.shadeUs = await median(false);
+  if (state.proxies) state.frameUs = await median(true);
   state.screenshot = await page.locator('#view').screenshot();
   // The page as a user sees it: the clip playing, the shade timed every frame, with cold
   // caches and the renderer busy; the mean of the last 120 frames after 3 s.
@@ -82,21 +97,33 @@ async function runPage(browser, url, flavour) {
   await page.waitForFunction(() => window.aprtPage?.ready, null, { timeout: 60000 });
   await page.waitForTimeout(3000);
   state.liveUs = await page.evaluate(() => window.aprtPage.liveShadeUs());
+  state.liveProxiesUs = await page.evaluate(() => window.aprtPage.liveProxiesUs());
   await page.close();
   return state;
 }
 
-/** `relativeTo(frame)` of the page's shading against `aprt eval` of `frame`. */
-function compareShading(state, npy, frame = state.frame) {
+/** Largest |`shading` − `aprt eval` of `frame`| relative to the largest |eval|. */
+function compareShading(state, npy, frame = state.frame, shading = state.shading) {
   const expected = evalShading(npy, frame, state.lighting);
   let worst = 0;
   let scale = 0;
   for (let j = 0; j < expected.length; j++) {
-    worst = Math.max(worst, Math.abs(state.shading[j] - expected[j]));
+    worst = Math.max(worst, Math.abs(shading[j] - expected[j]));
     scale = Math.max(scale, Math.abs(expected[j]));
   }
-  if (state.shading.length !== expected.length) throw new Error('vertex count differs from eval.npy');
+  if (shading.length !== expected.length) throw new Error('vertex count differs from eval.npy');
   return worst / scale;
+}
+
+/** How many of the page's posed coordinates (positions and normals of its frame) differ from
+ *  the trainer's in posed.npy: the proxies must see the mesh `aprt eval` gave them. */
+function posedMismatches(state, posed) {
+  const [frames, two, vertices, three] = posed.shape;
+  if (two !== 2 || three !== 3 || state.frame >= frames) throw new Error(`posed.npy ${posed.shape}`);
+  const page = [...state.posed.positions, ...state.posed.normals];
+  if (page.length !== 2 * vertices * 3) throw new Error('vertex count differs from posed.npy');
+  const base = state.frame * page.length;
+  return page.filter((x, i) => x !== posed.data[base + i]).length;
 }
 
 async function compareImage(png, outDir) {
@@ -123,6 +150,7 @@ async function compareImage(png, outDir) {
 async function main() {
   if (!opts.reference) throw new Error('give --reference eval.npy (aprt eval of the exported clip)');
   const npy = readNpy(new Uint8Array(await readFile(opts.reference)));
+  const posed = opts.posed && readNpy(new Uint8Array(await readFile(opts.posed)));
   if (opts.out) await mkdir(opts.out, { recursive: true });
   const server = await serve(dirname(here));
   const browser = await chromium.launch({
@@ -140,13 +168,27 @@ async function main() {
       // Not a vacuous comparison: the next frame's shading is far outside the tolerance.
       const neighbour = compareShading(state, npy, (state.frame + 1) % npy.shape[0]);
       if (!(neighbour > 100 * MAX_RELATIVE)) failures.push(`${flavour}: the next frame is only ${neighbour} from this one`);
+      // With proxies, what the page shades without them must be far from aprt eval too, so a
+      // page that skipped them would fail.
+      const without = state.proxies ? compareShading(state, npy, state.frame, state.unoccluded) : null;
+      if (state.proxies && !(without > 100 * MAX_RELATIVE)) {
+        failures.push(`${flavour}: the proxies change the shading by only ${without}`);
+      }
+      const mismatches = posed ? posedMismatches(state, posed) : null;
+      if (mismatches) failures.push(`${flavour}: ${mismatches} posed coordinates differ from the trainer's`);
       const pixels = await compareImage(state.screenshot, opts.out && join(opts.out, flavour));
       if (pixels > MAX_DIFF_PIXELS) failures.push(`${flavour}: ${pixels} pixels differ from reference.png`);
       results[flavour] = { frame: state.frame, wasm_bytes: state.wasmBytes, max_relative: relative,
-        shade_us: state.shadeUs, live_shade_us: state.liveUs, diff_pixels: pixels };
+        without_proxies: without, shade_us: state.shadeUs, with_proxies_us: state.frameUs, live_shade_us: state.liveUs,
+        live_proxies_us: state.proxies ? state.liveProxiesUs : null, posed_mismatches: mismatches, diff_pixels: pixels };
+      const [proxies, withProxies, liveProxies] = state.proxies
+        ? [`; without the proxies ${without.toExponential(2)}`, ` (${state.frameUs.toFixed(1)} with the proxies)`,
+          ` (+${state.liveProxiesUs.toFixed(0)} for the proxies)`]
+        : ['', '', ''];
       console.log(`${flavour}: frame ${state.frame}, ${state.wasmBytes} wasm bytes, shading vs aprt eval ` +
-        `${relative.toExponential(2)} relative (≤ ${MAX_RELATIVE}; the next frame ${neighbour.toExponential(2)}), ${state.shadeUs.toFixed(1)} µs per frame, ` +
-        `${state.liveUs.toFixed(0)} µs live, ` +
+        `${relative.toExponential(2)} relative (≤ ${MAX_RELATIVE}; the next frame ${neighbour.toExponential(2)}${proxies}), ` +
+        `${state.shadeUs.toFixed(1)} µs per frame${withProxies}, ${state.liveUs.toFixed(0)} µs live${liveProxies}, ` +
+        (posed ? `posed mesh ${mismatches} coordinates off the trainer's, ` : '') +
         `${pixels} pixels differ from reference.png (≤ ${MAX_DIFF_PIXELS})`);
     }
   } finally {

@@ -308,12 +308,6 @@ fn export_web(args: &ExportWebArgs) -> Result<()> {
     if !args.source.names_rig() {
         bail!("give the clip the page plays: a character (--builtin, --gltf, --bvh) and --clip");
     }
-    if crate::model::runtime::proxies_section(&blob)?.is_some() {
-        bail!(
-            "{}: the page does not pose occluder proxies yet; train with --proxies none",
-            args.model.display()
-        );
-    }
     let (rig, clip) = args.source.rig(&Terminal)?;
     let (manifest, bin) = web_export(rig.as_ref(), &clip, &info)
         .with_context(|| format!("exporting {} for the web", args.model.display()))?;

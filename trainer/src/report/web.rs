@@ -1,7 +1,10 @@
 //! `aprt export-web`: what the web page (`web/`) needs to play a clip of a model's character
-//! through aprt-core in the browser: the mesh and its skin (the page skins it every frame),
-//! and per frame the skinning matrices, the model's pose vector and the bones' rotations,
-//! computed by the same code as `aprt eval` so the page's shading can be checked against it.
+//! through aprt-core in the browser: the mesh and its skin (the page skins it every frame,
+//! bit for bit as `rig/skin.rs` does), and per frame the skinning matrices, the model's pose
+//! vector and the bones' rotations, computed by the same code as `aprt eval` so the page's
+//! shading can be checked against it. A model with occluder proxies needs nothing more: its
+//! bones' skinning matrices, which pose the proxies, are the first joints', and the posed
+//! mesh they occlude is the page's own skinning.
 //!
 //! The files: `manifest.json` (dimensions, and each array's dtype, shape and byte offset in
 //! `clip.bin`), `clip.bin` (little-endian arrays, each 4-byte aligned) and `model.aprt` (the
@@ -63,7 +66,8 @@ pub struct WebManifest {
     pub model: &'static str,
     /// The arrays of `clip.bin`, by name: `positions` and `normals` (bind pose, vertices × 3),
     /// `indices` (triangles × 3), `skin_joints` and `skin_weights` (vertices × influences),
-    /// `joint_matrices` (frames × joints × 12, the 3 × 4 skinning matrices row-major),
+    /// `joint_matrices` (frames × joints × 12, the 3 × 4 skinning matrices row-major, what
+    /// `Model::pose_proxies` takes),
     /// `angles` (frames × pose_len, the model's pose vector) and `bone_rotations`
     /// (frames × bones × 9, row-major, what `Model::light` takes).
     pub arrays: std::collections::BTreeMap<&'static str, WebArray>,

@@ -12,14 +12,17 @@
 //! The calling sequence: `aprt_blob(len)` → write the blob there → `aprt_load(len)`; then
 //! every frame write `aprt_angles()` (pose_len f32), `aprt_bone_rotations()` (bones × 9
 //! f32, row-major) and `aprt_lighting()` (order² f32), optionally `aprt_add_directional`,
-//! then `aprt_shade()` and read `aprt_shading()` (vertices f32). A call that fails returns
+//! then `aprt_shade()` and read `aprt_shading()` (vertices f32). A model with occluder
+//! proxies (`aprt_has_proxies()`) then takes `aprt_skinning()` (bones × 12 f32, 3 × 4
+//! row-major), `aprt_positions()` and `aprt_normals()` (vertices × 3 f32, the posed mesh)
+//! and `aprt_occlude()`, which corrects `aprt_shading()` in place. A call that fails returns
 //! −1 and leaves its message at `aprt_error()` (`aprt_error_len()` bytes of UTF-8).
 #![allow(unsafe_code)]
 
 use core::cell::UnsafeCell;
 use core::fmt::Write;
 
-use aprt_core::{MAX_BONES, MAX_COEFFS, MAX_POSE_LEN, Rotation};
+use aprt_core::{MAX_BONES, MAX_COEFFS, MAX_POSE_LEN, Rotation, Skinning};
 
 use crate::session::{BLOB_CAPACITY, MAX_SHADED, Session, add_directional};
 
@@ -55,6 +58,9 @@ static ANGLES: Shared<[f32; MAX_POSE_LEN]> = Shared::new([0.0; MAX_POSE_LEN]);
 static BONES: Shared<[Rotation; MAX_BONES]> = Shared::new([[[0.0; 3]; 3]; MAX_BONES]);
 static LIGHTING: Shared<[f32; MAX_COEFFS]> = Shared::new([0.0; MAX_COEFFS]);
 static SHADING: Shared<[f32; MAX_SHADED]> = Shared::new([0.0; MAX_SHADED]);
+static SKINNING: Shared<[Skinning; MAX_BONES]> = Shared::new([[0.0; 12]; MAX_BONES]);
+static POSITIONS: Shared<[[f32; 3]; MAX_SHADED]> = Shared::new([[0.0; 3]; MAX_SHADED]);
+static NORMALS: Shared<[[f32; 3]; MAX_SHADED]> = Shared::new([[0.0; 3]; MAX_SHADED]);
 static ERROR: Shared<Message> = Shared::new(Message {
     bytes: [0; 256],
     len: 0,
@@ -156,6 +162,12 @@ pub extern "C" fn aprt_order() -> usize {
     dimension(aprt_core::ModelInfo::order)
 }
 
+/// 1 when the loaded model has occluder proxies ([`aprt_occlude`] after every shade), else 0.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_has_proxies() -> usize {
+    dimension(|info| usize::from(info.has_proxies()))
+}
+
 /// Where JavaScript writes the pose vector.
 #[unsafe(no_mangle)]
 pub extern "C" fn aprt_angles() -> *mut f32 {
@@ -172,6 +184,24 @@ pub extern "C" fn aprt_bone_rotations() -> *mut f32 {
 #[unsafe(no_mangle)]
 pub extern "C" fn aprt_lighting() -> *mut f32 {
     LIGHTING.ptr().cast()
+}
+
+/// Where JavaScript writes the bones' skinning matrices, 12 f32 each (3 × 4, row-major).
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_skinning() -> *mut f32 {
+    SKINNING.ptr().cast()
+}
+
+/// Where JavaScript writes the posed vertex positions, 3 f32 each.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_positions() -> *mut f32 {
+    POSITIONS.ptr().cast()
+}
+
+/// Where JavaScript writes the posed vertex normals, 3 f32 each.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_normals() -> *mut f32 {
+    NORMALS.ptr().cast()
 }
 
 /// Where [`aprt_shade`] leaves one value per vertex.
@@ -216,6 +246,30 @@ pub extern "C" fn aprt_shade() -> i32 {
     }
 }
 
+/// After [`aprt_shade`], for a model with occluder proxies: poses them and subtracts what
+/// they block under the same lighting from the shading: 0, or −1.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_occlude() -> i32 {
+    let Some(session) = session() else {
+        return fail("no model is loaded");
+    };
+    let info = *session.info();
+    // SAFETY: the buffers are distinct statics, none borrowed elsewhere during this export.
+    let (skinning, lighting, positions, normals, shading) = unsafe {
+        (
+            &SKINNING.get()[..info.bones()],
+            &LIGHTING.get()[..info.coeffs()],
+            &POSITIONS.get()[..info.vertices()],
+            &NORMALS.get()[..info.vertices()],
+            SHADING.get(),
+        )
+    };
+    match session.occlude(skinning, lighting, (positions, normals), shading) {
+        Ok(()) => 0,
+        Err(err) => fail(err),
+    }
+}
+
 /// The last error's UTF-8 text.
 #[unsafe(no_mangle)]
 pub extern "C" fn aprt_error() -> *const u8 {
@@ -238,11 +292,26 @@ mod tests {
     use std::vec::Vec;
 
     const BLOB: &[u8] = include_bytes!("../../../fixtures/golden/v1-bones.aprt");
+    const PROXIES: &[u8] = include_bytes!("../../../fixtures/golden/v1-proxies.aprt");
 
     fn error_text() -> std::string::String {
         // SAFETY: the exports return the message's address and length.
         let bytes = unsafe { core::slice::from_raw_parts(aprt_error(), aprt_error_len()) };
         std::string::String::from_utf8(bytes.to_vec()).unwrap()
+    }
+
+    /// Writes `blob` where [`aprt_blob`] says and loads it, as `web/aprt.js` does.
+    fn load(blob: &[u8]) -> i32 {
+        let ptr = aprt_blob(blob.len());
+        // SAFETY: the buffer holds BLOB_CAPACITY bytes and nothing borrows it after aprt_blob.
+        unsafe { core::ptr::copy_nonoverlapping(blob.as_ptr(), ptr, blob.len()) };
+        aprt_load(blob.len())
+    }
+
+    /// The `n` values [`aprt_shading`] holds.
+    fn shading(n: usize) -> Vec<f32> {
+        // SAFETY: the buffer holds MAX_SHADED values; no borrow is live.
+        unsafe { core::slice::from_raw_parts(aprt_shading(), n) }.to_vec()
     }
 
     /// Copies `values` to an address an export handed out, as `web/aprt.js` does.
@@ -252,7 +321,8 @@ mod tests {
     }
 
     /// The one test that calls the exports: `web/aprt.js`'s sequence, its errors, and the
-    /// shading equal to [`Session::shade`]'s.
+    /// shading equal to [`Session::shade`]'s, then [`Session::occlude`]'s for a model with
+    /// occluder proxies.
     #[test]
     fn the_javascript_calling_sequence() {
         assert_eq!(aprt_shade(), -1);
@@ -260,9 +330,7 @@ mod tests {
         assert!(aprt_blob(BLOB_CAPACITY + 1).is_null());
         assert!(error_text().contains("exceed"), "{}", error_text());
 
-        let ptr = aprt_blob(BLOB.len());
-        // SAFETY: the buffer holds BLOB_CAPACITY bytes and nothing borrows it after aprt_blob.
-        unsafe { core::ptr::copy_nonoverlapping(BLOB.as_ptr(), ptr, BLOB.len()) };
+        assert_eq!(load(BLOB), 0);
         assert_eq!(aprt_load(10), -1);
         assert!(error_text().contains("truncated"), "{}", error_text());
         assert_eq!(aprt_vertices(), 0);
@@ -290,8 +358,52 @@ mod tests {
         session
             .shade(&angles, &lighting, &bones, &mut expected)
             .unwrap();
-        // SAFETY: aprt_shade wrote `vertices` values there; no borrow is live.
-        let shading = unsafe { core::slice::from_raw_parts(aprt_shading(), info.vertices()) };
-        assert_eq!(shading, &expected[..]);
+        assert_eq!(shading(info.vertices()), expected);
+        assert_eq!(aprt_has_proxies(), 0);
+        assert_eq!(aprt_occlude(), -1);
+        assert!(
+            error_text().contains("no occluder proxies"),
+            "{}",
+            error_text()
+        );
+        the_sequence_with_proxies();
+    }
+
+    /// [`the_javascript_calling_sequence`] for a model with proxies: skinning matrices and
+    /// the posed mesh written, then `aprt_occlude` after `aprt_shade`.
+    fn the_sequence_with_proxies() {
+        assert_eq!(load(PROXIES), 0, "{}", error_text());
+        assert_eq!(aprt_has_proxies(), 1);
+        let mut session = Box::new(Session::open(PROXIES).unwrap());
+        let info = *session.info();
+        let angles = vec![0.3; info.pose_len()];
+        let bones = vec![[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]; info.bones()];
+        let lighting = vec![0.7; info.coeffs()];
+        let lift = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.1, 0.0, 0.0, 1.0, 0.2];
+        let skinning = vec![lift; info.bones()];
+        let positions: Vec<[f32; 3]> = (0..info.vertices())
+            .map(|j| [0.05 * j as f32 - 0.4, 0.0, 0.1])
+            .collect();
+        let normals = vec![[0.0, 0.6, 0.8]; info.vertices()];
+        write(aprt_angles(), &angles);
+        write(aprt_bone_rotations(), bones.as_flattened().as_flattened());
+        write(aprt_lighting(), &lighting);
+        write(aprt_skinning(), skinning.as_flattened());
+        write(aprt_positions(), positions.as_flattened());
+        write(aprt_normals(), normals.as_flattened());
+        assert_eq!(aprt_shade(), 0, "{}", error_text());
+        let unoccluded = shading(info.vertices());
+        assert_eq!(aprt_occlude(), 0, "{}", error_text());
+
+        let mut expected = vec![0.0; info.vertices()];
+        let mesh = (&positions[..], &normals[..]);
+        session
+            .shade(&angles, &lighting, &bones, &mut expected)
+            .unwrap();
+        session
+            .occlude(&skinning, &lighting, mesh, &mut expected)
+            .unwrap();
+        assert_eq!(shading(info.vertices()), expected);
+        assert_ne!(expected, unoccluded);
     }
 }

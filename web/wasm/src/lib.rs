@@ -2,10 +2,11 @@
 //! "C"` exports and no allocator, for the hand-written `web/aprt.js`.
 //!
 //! The core allocates nothing, so neither does this crate: a model's blob, the pose, the
-//! bones' rotations, the lighting and the shading live in fixed-size `static` buffers that
-//! JavaScript reads and writes through exported pointers ([`exports`]). The per-frame logic
-//! is [`Session`], safe and unit-tested on the host; only the statics and the exports that
-//! hand out their addresses are unsafe. Without wasm-bindgen the module stays small (its
+//! bones' rotations, the lighting, the shading and, for occluder proxies, the skinning
+//! matrices and the posed mesh live in fixed-size `static` buffers that JavaScript reads and
+//! writes through exported pointers ([`exports`]). The per-frame logic is [`Session`], safe
+//! and unit-tested on the host; only the statics and the exports that hand out their
+//! addresses are unsafe. Without wasm-bindgen the module stays small (its
 //! bytes are in `docs/results/web.md`).
 #![no_std]
 

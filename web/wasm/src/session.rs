@@ -1,7 +1,9 @@
 //! One loaded model and its per-frame state: what the exports drive, written in safe Rust
 //! so the host can test it against the core's own calls.
 
-use aprt_core::{Error, LitWeights, Model, ModelInfo, PoseWeights, Rotation, ShError};
+use aprt_core::{
+    Error, LitWeights, Model, ModelInfo, PoseWeights, ProxyFrame, Rotation, ShError, Skinning,
+};
 
 /// The largest blob the page can load (16 MiB of linear memory, zero until written, so it
 /// costs no `.wasm` bytes).
@@ -10,12 +12,13 @@ pub const BLOB_CAPACITY: usize = 16 << 20;
 /// The most vertices one [`Session::shade`] fills (262,144: a 1 MiB shading buffer).
 pub const MAX_SHADED: usize = 1 << 18;
 
-/// A validated model and the caller-owned state of its frames (about 80 KiB, so it lives in
+/// A validated model and the caller-owned state of its frames (about 84 KiB, so it lives in
 /// a `static` on wasm32).
 pub struct Session<'a> {
     model: Model<'a>,
     pose: PoseWeights,
     lit: LitWeights,
+    proxies: ProxyFrame,
 }
 
 impl<'a> Session<'a> {
@@ -34,6 +37,7 @@ impl<'a> Session<'a> {
             model,
             pose: PoseWeights::new(),
             lit: LitWeights::new(),
+            proxies: ProxyFrame::new(),
         })
     }
 
@@ -44,7 +48,8 @@ impl<'a> Session<'a> {
 
     /// One frame: `set_pose(angles)`, `light(lighting, bones)`, then the shading of every
     /// vertex into `shading[..vertices]`. Exactly the core's three calls, nothing more, so
-    /// the page's timing of this is the model's cost per frame.
+    /// the page's timing of this is the shading's cost per frame (a model with occluder
+    /// proxies adds [`Session::occlude`]'s).
     pub fn shade(
         &mut self,
         angles: &[f32],
@@ -62,6 +67,27 @@ impl<'a> Session<'a> {
                 needed: info.vertices() * 4,
             })?;
         self.model.shade(&self.lit, 0, out)
+    }
+
+    /// A model with occluder proxies, after [`Session::shade`]: poses them by the bones'
+    /// `skinning` matrices and subtracts what they block under `lighting` (the same as
+    /// `shade`'s) from `shading`. `positions` and `normals` (one per vertex) are the posed
+    /// mesh, skinned exactly as the trainer skins it, or the shading is not `aprt eval`'s.
+    /// The core's two calls, nothing more.
+    pub fn occlude(
+        &mut self,
+        skinning: &[Skinning],
+        lighting: &[f32],
+        (positions, normals): (&[[f32; 3]], &[[f32; 3]]),
+        shading: &mut [f32],
+    ) -> Result<(), Error> {
+        let vertices = self.model.info().vertices();
+        self.model.pose_proxies(skinning, &mut self.proxies)?;
+        let out = shading.get_mut(..vertices).ok_or(Error::BufferTooSmall {
+            needed: vertices * 4,
+        })?;
+        self.model
+            .occlude(&self.proxies, lighting, positions, normals, 0, out)
     }
 }
 
@@ -89,8 +115,11 @@ mod tests {
     use super::*;
     use std::boxed::Box;
     use std::vec;
+    use std::vec::Vec;
 
     const BONES: &[u8] = include_bytes!("../../../fixtures/golden/v1-bones.aprt");
+    const PROXIES: &[u8] = include_bytes!("../../../fixtures/golden/v1-proxies.aprt");
+    const STILL: Skinning = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0];
 
     /// The session's frame is the core's three calls: same inputs, same bits.
     #[test]
@@ -117,6 +146,45 @@ mod tests {
         assert_eq!(shading[info.vertices()..], [0.0; 3]);
     }
 
+    /// A frame with proxies is the core's five calls, and the proxies take something off:
+    /// the golden model's two spheres hang above bone 1's vertices, which face them.
+    #[test]
+    fn occlude_is_the_cores_two_calls_after_shade() {
+        let mut session = Box::new(Session::open(PROXIES).unwrap());
+        let info = *session.info();
+        let angles = vec![0.1; info.pose_len()];
+        let lighting = [1.0, 0.0, 0.8, 0.0];
+        let bones = vec![[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]; info.bones()];
+        let skinning = vec![STILL; info.bones()];
+        let positions: Vec<[f32; 3]> = (0..info.vertices())
+            .map(|j| [0.05 * j as f32 - 0.4, 0.1, 0.0])
+            .collect();
+        let normals = vec![[0.0, 0.0, 1.0]; info.vertices()];
+        let mut shading = vec![0.0; info.vertices()];
+        session
+            .shade(&angles, &lighting, &bones, &mut shading)
+            .unwrap();
+        let unoccluded = shading.clone();
+        session
+            .occlude(&skinning, &lighting, (&positions, &normals), &mut shading)
+            .unwrap();
+
+        let model = Model::parse(PROXIES).unwrap();
+        let (mut pose, mut lit) = (Box::new(PoseWeights::new()), Box::new(LitWeights::new()));
+        let mut frame = Box::new(ProxyFrame::new());
+        model.set_pose(&angles, &mut pose).unwrap();
+        model.light(&pose, &lighting, &bones, &mut lit).unwrap();
+        let mut expected = vec![0.0; info.vertices()];
+        model.shade(&lit, 0, &mut expected).unwrap();
+        model.pose_proxies(&skinning, &mut frame).unwrap();
+        model
+            .occlude(&frame, &lighting, &positions, &normals, 0, &mut expected)
+            .unwrap();
+        assert_eq!(shading, expected);
+        assert!(shading.iter().zip(&unoccluded).any(|(s, u)| s < u));
+        assert!(shading[..8] == unoccluded[..8], "bone 0 ignores both");
+    }
+
     #[test]
     fn short_buffers_are_errors_not_panics() {
         let mut session = Box::new(Session::open(BONES).unwrap());
@@ -132,6 +200,25 @@ mod tests {
         assert!(session.shade(&[], &lighting, &bones, &mut short).is_err());
         assert!(add_directional(3, [0.0, 0.0, 1.0], 1.0, &mut [0.0; 4]).is_err());
         assert!(Session::open(&BONES[..100]).is_err());
+        let no_proxies = session.occlude(&[STILL; 3], &lighting, (&[], &[]), &mut short);
+        assert!(matches!(no_proxies, Err(Error::NoProxies)));
+
+        let mut session = Box::new(Session::open(PROXIES).unwrap());
+        let info = *session.info();
+        let lighting = vec![1.0; info.coeffs()];
+        let mut shading = vec![0.0; info.vertices()];
+        let vertices = vec![[0.0, 0.0, 1.0]; info.vertices()];
+        let few = &vertices[1..];
+        for (skinning, positions, normals) in [
+            (&[STILL][..], &vertices[..], &vertices[..]),
+            (&[STILL, STILL][..], few, &vertices[..]),
+            (&[STILL, STILL][..], &vertices[..], few),
+        ] {
+            let result = session.occlude(skinning, &lighting, (positions, normals), &mut shading);
+            assert!(result.is_err());
+        }
+        let (ok, short) = ((&vertices[..], &vertices[..]), &mut shading[1..]);
+        assert!(session.occlude(&[STILL; 2], &lighting, ok, short).is_err());
     }
 
     #[test]
