@@ -82,7 +82,8 @@ typedef enum {
   APRT_STATUS_HEADER_MALFORMED = 105,
   // Bytes follow the header encoding or the last section.
   APRT_STATUS_TRAILING_BYTES = 106,
-  // A header dimension is zero, too large or inconsistent.
+  // A header dimension is zero, too large or inconsistent, or an `order` argument is
+  // outside 1..=6.
   APRT_STATUS_BAD_DIMENSION = 107,
   // A section lies outside the blob or inside the header.
   APRT_STATUS_SECTION_OUT_OF_RANGE = 108,
@@ -161,6 +162,10 @@ typedef enum {
   APRT_STATUS_SOURCE = 218,
   // The triangle is past the last one whose corner UVs the texel atlas records.
   APRT_STATUS_TRIANGLE_RANGE = 219,
+  // A result overflowed to infinity or NaN (inputs, or a blob's values, too large for
+  // f32): the call's outputs are not to be used. No call returns OK with a non-finite
+  // output.
+  APRT_STATUS_OVERFLOW = 220,
   // An error of a newer core than this table knows.
   APRT_STATUS_UNKNOWN = 999,
 } aprt_status;
@@ -192,7 +197,9 @@ typedef struct {
 } aprt_light;
 
 // Where the character's root frame is in the world this frame: `world = rotation · p +
-// translation`, the rotation row-major and orthonormal.
+// translation`, the rotation row-major and a proper rotation (orthonormal within 1e-3, not
+// mirrored: `APRT_STATUS_BAD_ROTATION` otherwise), the translation finite
+// (`APRT_STATUS_NON_FINITE_POSITION`).
 typedef struct {
   // Root → world rotation, row-major.
   float rotation[3][3];
@@ -378,7 +385,7 @@ aprt_status aprt_lightmap_compose_rig(const aprt_model *model,
 // 1 for all of it, `1 − aprt_rig_share` when a rig carries the rest), through the vertex's
 // posed transfer: lights near the character stay self-shadowed. `bones` as in `aprt_light_sh`.
 // Needs `aprt_set_pose` first (not `aprt_light_sh`). Everything is checked before anything is
-// written.
+// written, but for `APRT_STATUS_OVERFLOW`, which is found in the sums.
 aprt_status aprt_shade_lights(const aprt_model *model,
                               const aprt_frame *frame,
                               const float *bones,
@@ -393,7 +400,10 @@ aprt_status aprt_shade_lights(const aprt_model *model,
 
 // Writes to `out` (`out_len` ≥ order² floats; the first order² are written) the SH
 // projection of a directional light of `intensity` from `direction` (3 floats, towards the
-// light, any non-zero length): a lighting vector for `aprt_light_sh`. `order` is 1..=6.
+// light, any non-zero length): a lighting vector for `aprt_light_sh`. `order` is 1..=6
+// (`APRT_STATUS_BAD_DIMENSION`); a shorter `out` is `APRT_STATUS_BUFFER_TOO_SMALL`; a zero
+// or non-finite direction, or an intensity that is negative, NaN, infinite or so large
+// that the projection overflows, `APRT_STATUS_BAD_LIGHT`.
 aprt_status aprt_project_directional(uint32_t order,
                                      const float *direction,
                                      float intensity,
@@ -403,8 +413,9 @@ aprt_status aprt_project_directional(uint32_t order,
 // Adds (`+=`) to `out_rgb` (`coeffs` RGB triples, `coeffs` = order², order 1..=6) the RGB
 // SH radiance of `light` as seen from the world point `at` (3 floats): with
 // `aprt_project_directional`, how a C caller builds an environment for `aprt_light_sh`,
-// `aprt_rig_vectors` or the light maps. Nothing is written on an error (`BAD_LIGHT`, also
-// for a point exactly on a point light).
+// `aprt_rig_vectors` or the light maps. Nothing is written on an error: `BAD_LIGHT` for an
+// invalid light or `at`, or a sum that overflows; an order or `coeffs` as in
+// `aprt_project_directional`.
 aprt_status aprt_light_radiance_sh(const aprt_light *light,
                                    uint32_t order,
                                    const float *at,
@@ -510,7 +521,8 @@ aprt_status aprt_pose_proxies(const aprt_model *model,
 // `aprt_pose_proxies` (or after one that failed); `APRT_STATUS_WEIGHTS_FOR_OTHER_MODEL` for
 // proxies posed by another model; `APRT_STATUS_WRONG_LENGTH`, `APRT_STATUS_VERTEX_RANGE`,
 // `APRT_STATUS_NON_FINITE_LIGHTING`, `APRT_STATUS_NON_FINITE_POSITION` and
-// `APRT_STATUS_NON_FINITE_NORMAL` for bad inputs (`out` is then unchanged).
+// `APRT_STATUS_NON_FINITE_NORMAL` for bad inputs (`out` is then unchanged);
+// `APRT_STATUS_OVERFLOW` when inputs too large overflowed it.
 aprt_status aprt_occlude(const aprt_model *model,
                          const aprt_proxy_frame *proxies,
                          const float *lighting,
@@ -563,7 +575,9 @@ aprt_status aprt_rig_vectors(const aprt_model *model,
 // `aprt_shade_lights`) to 1 (the rig), for the character at `placement`: 0 nearer than the
 // distance where the rig's error exceeds `target` grey levels, 1 beyond `(1 + band)` times
 // it, linear between so nothing pops (the core's `IrradianceRig::share_of`; 0.25 is the
-// default band). Directional lights are always 1.
+// default band). Directional lights are always 1. `APRT_STATUS_BAD_LIGHT` for an invalid
+// light, `APRT_STATUS_BAD_LIGHT_WEIGHT` for a `target` or `band` that is negative, NaN or
+// infinite.
 aprt_status aprt_rig_share(const aprt_model *model,
                            const aprt_light *light,
                            const aprt_placement *placement,

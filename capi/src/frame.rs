@@ -15,7 +15,7 @@ use aprt_core::{LitWeights, PoseWeights, RigLitWeights};
 
 use crate::ffi_ptr::{self, Handle};
 use crate::model::{aprt_model, with_model};
-use crate::status::{aprt_status, guard};
+use crate::status::{aprt_status, finite, guard};
 
 /// One character's per-frame state in the caller's storage. Opaque; see `aprt_frame_init`.
 // `repr(C)` puts the tag first, where every handle check reads (a Rust layout put it last, so
@@ -142,7 +142,8 @@ pub extern "C" fn aprt_shade(
             if !frame.lit_current {
                 return Err(aprt_status::WeightsNotSet);
             }
-            Ok(m.shade(&frame.lit, first, out)?)
+            m.shade(&frame.lit, first, out)?;
+            finite(out)
         })
     })
 }
@@ -161,7 +162,10 @@ pub extern "C" fn aprt_transfer(
     guard(|| {
         let out = ffi_ptr::slice_mut(out, out_len).map_err(ffi_ptr::past_vertices)?;
         let frame = ffi_ptr::handle(frame)?;
-        with_model(model, |m| Ok(m.transfer(&frame.pose, first, out)?))
+        with_model(model, |m| {
+            m.transfer(&frame.pose, first, out)?;
+            finite(out)
+        })
     })
 }
 

@@ -5,12 +5,14 @@
 // unsafe operation lives in `ffi_ptr`, which `tests/unsafe_confined.rs` checks.
 #![allow(unsafe_code)]
 
-use aprt_core::{DirectionalLight, Light, PointLight, SphereLight, project_directional};
+use aprt_core::{
+    DirectionalLight, Light, LightError, PointLight, ShError, SphereLight, project_directional,
+};
 
 use crate::ffi_ptr;
 use crate::frame::aprt_frame;
 use crate::model::{LightSet, Range, aprt_model, with_model};
-use crate::status::{aprt_status, guard};
+use crate::status::{aprt_status, finite, guard};
 
 /// A sphere of uniform emitted radiance: `position`, `radius` > 0, `colour` = radiance.
 pub const APRT_LIGHT_SPHERE: u32 = 1;
@@ -70,6 +72,16 @@ pub(crate) fn too_many(status: aprt_status) -> aprt_status {
     }
 }
 
+/// The status of a failed SH projection: an order outside 1..=6 is a bad dimension, as the
+/// light maps call it, a short output a short buffer, and the rest a bad light.
+fn sh_status(e: ShError) -> aprt_status {
+    match e {
+        ShError::BadOrder => aprt_status::BadDimension,
+        ShError::OutputTooSmall => aprt_status::BufferTooSmall,
+        _ => aprt_status::BadLight,
+    }
+}
+
 /// Up to [`APRT_MAX_LIGHTS`] converted lights, on the stack.
 pub(crate) struct Lights {
     buf: [Light; APRT_MAX_LIGHTS],
@@ -108,7 +120,7 @@ impl Lights {
 /// 1 for all of it, `1 − aprt_rig_share` when a rig carries the rest), through the vertex's
 /// posed transfer: lights near the character stay self-shadowed. `bones` as in `aprt_light_sh`.
 /// Needs `aprt_set_pose` first (not `aprt_light_sh`). Everything is checked before anything is
-/// written.
+/// written, but for `APRT_STATUS_OVERFLOW`, which is found in the sums.
 #[allow(clippy::too_many_arguments)]
 #[unsafe(no_mangle)]
 pub extern "C" fn aprt_shade_lights(
@@ -138,13 +150,17 @@ pub extern "C" fn aprt_shade_lights(
         };
         with_model(model, |m| {
             Ok(m.shade_lights(&frame.pose, &light_set, range)?)
-        })
+        })?;
+        finite(ffi_ptr::triples(out_rgb, count)?.as_flattened())
     })
 }
 
 /// Writes to `out` (`out_len` ≥ order² floats; the first order² are written) the SH
 /// projection of a directional light of `intensity` from `direction` (3 floats, towards the
-/// light, any non-zero length): a lighting vector for `aprt_light_sh`. `order` is 1..=6.
+/// light, any non-zero length): a lighting vector for `aprt_light_sh`. `order` is 1..=6
+/// (`APRT_STATUS_BAD_DIMENSION`); a shorter `out` is `APRT_STATUS_BUFFER_TOO_SMALL`; a zero
+/// or non-finite direction, or an intensity that is negative, NaN, infinite or so large
+/// that the projection overflows, `APRT_STATUS_BAD_LIGHT`.
 #[unsafe(no_mangle)]
 pub extern "C" fn aprt_project_directional(
     order: u32,
@@ -156,16 +172,16 @@ pub extern "C" fn aprt_project_directional(
     guard(|| {
         let direction = ffi_ptr::read(direction.cast::<[f32; 3]>())?;
         let out = ffi_ptr::slice_mut(out, out_len)?;
-        project_directional(order as usize, direction, intensity, out)
-            .map_err(|_| aprt_status::BadLight)
+        project_directional(order as usize, direction, intensity, out).map_err(sh_status)
     })
 }
 
 /// Adds (`+=`) to `out_rgb` (`coeffs` RGB triples, `coeffs` = order², order 1..=6) the RGB
 /// SH radiance of `light` as seen from the world point `at` (3 floats): with
 /// `aprt_project_directional`, how a C caller builds an environment for `aprt_light_sh`,
-/// `aprt_rig_vectors` or the light maps. Nothing is written on an error (`BAD_LIGHT`, also
-/// for a point exactly on a point light).
+/// `aprt_rig_vectors` or the light maps. Nothing is written on an error: `BAD_LIGHT` for an
+/// invalid light or `at`, or a sum that overflows; an order or `coeffs` as in
+/// `aprt_project_directional`.
 #[unsafe(no_mangle)]
 pub extern "C" fn aprt_light_radiance_sh(
     light: *const aprt_light,
@@ -180,6 +196,9 @@ pub extern "C" fn aprt_light_radiance_sh(
         let out = ffi_ptr::triples_mut(out_rgb, coeffs)?;
         to_core(&light)?
             .add_radiance_sh(order as usize, at, out)
-            .map_err(|_| aprt_status::BadLight)
+            .map_err(|e| match e {
+                LightError::Sh(e) => sh_status(e),
+                _ => aprt_status::BadLight,
+            })
     })
 }

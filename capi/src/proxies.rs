@@ -16,7 +16,7 @@ use aprt_core::ProxyFrame;
 
 use crate::ffi_ptr::{self, Handle};
 use crate::model::{aprt_model, with_model};
-use crate::status::{aprt_status, guard};
+use crate::status::{aprt_status, finite, guard};
 
 /// One frame's posed occluder proxies in the caller's storage (about 4 KiB, any model's).
 /// Opaque; see `aprt_proxy_frame_init`.
@@ -118,7 +118,8 @@ fn pose(
 /// `aprt_pose_proxies` (or after one that failed); `APRT_STATUS_WEIGHTS_FOR_OTHER_MODEL` for
 /// proxies posed by another model; `APRT_STATUS_WRONG_LENGTH`, `APRT_STATUS_VERTEX_RANGE`,
 /// `APRT_STATUS_NON_FINITE_LIGHTING`, `APRT_STATUS_NON_FINITE_POSITION` and
-/// `APRT_STATUS_NON_FINITE_NORMAL` for bad inputs (`out` is then unchanged).
+/// `APRT_STATUS_NON_FINITE_NORMAL` for bad inputs (`out` is then unchanged);
+/// `APRT_STATUS_OVERFLOW` when inputs too large overflowed it.
 #[allow(clippy::too_many_arguments)]
 #[unsafe(no_mangle)]
 pub extern "C" fn aprt_occlude(
@@ -143,7 +144,8 @@ pub extern "C" fn aprt_occlude(
             if !m.info().has_proxies() {
                 return Err(aprt_status::NoProxies);
             }
-            Ok(m.occlude(frame, lighting, positions, normals, first, out)?)
+            m.occlude(frame, lighting, positions, normals, first, out)?;
+            finite(out)
         })
     })
 }
@@ -185,7 +187,8 @@ pub extern "C" fn aprt_occlude_transfer(
             if !m.info().has_proxies() {
                 return Err(aprt_status::NoProxies);
             }
-            Ok(m.occlude_transfer(frame, bones, positions, normals, first, out)?)
+            m.occlude_transfer(frame, bones, positions, normals, first, out)?;
+            finite(out)
         })
     })
 }

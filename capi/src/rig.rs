@@ -12,10 +12,12 @@ use crate::ffi_ptr;
 use crate::frame::aprt_frame;
 use crate::lights::{Lights, aprt_light, to_core, too_many};
 use crate::model::{Range, aprt_model, with_model};
-use crate::status::{aprt_status, guard};
+use crate::status::{aprt_status, finite, guard};
 
 /// Where the character's root frame is in the world this frame: `world = rotation · p +
-/// translation`, the rotation row-major and orthonormal.
+/// translation`, the rotation row-major and a proper rotation (orthonormal within 1e-3, not
+/// mirrored: `APRT_STATUS_BAD_ROTATION` otherwise), the translation finite
+/// (`APRT_STATUS_NON_FINITE_POSITION`).
 #[allow(non_camel_case_types)]
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -26,12 +28,37 @@ pub struct aprt_placement {
     pub translation: [f32; 3],
 }
 
+/// The caller's placement, checked: the core takes one on trust, and a NaN, scaled or
+/// mirrored one would place the rig's lighting wrongly without a word.
 pub(crate) fn read_placement(p: *const aprt_placement) -> Result<Placement, aprt_status> {
     let p = ffi_ptr::read(p)?;
+    if !is_rotation(&p.rotation) {
+        return Err(aprt_status::BadRotation);
+    }
+    if !p.translation.iter().all(|t| t.is_finite()) {
+        return Err(aprt_status::NonFinitePosition);
+    }
     Ok(Placement {
         rotation: p.rotation,
         translation: p.translation,
     })
+}
+
+/// Whether `r` is a proper rotation: columns unit and orthogonal within 1e-3 (the core's
+/// tolerance for bone rotations) and a positive determinant. NaN fails every comparison.
+fn is_rotation(r: &[[f32; 3]; 3]) -> bool {
+    let col = |j: usize| [r[0][j], r[1][j], r[2][j]];
+    let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let unit = |i: usize, j: usize| if i == j { 1.0 } else { 0.0 };
+    let orthonormal =
+        (0..3).all(|i| (0..3).all(|j| (dot(col(i), col(j)) - unit(i, j)).abs() <= 1e-3));
+    let [a, b, c] = [col(0), col(1), col(2)];
+    let cross = [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ];
+    orthonormal && dot(cross, c) > 0.0
 }
 
 /// Writes the model's rig vectors for this frame to `out_rgb` (`out_count` RGB triples, at
@@ -61,7 +88,8 @@ pub extern "C" fn aprt_rig_vectors(
             let lights = Lights::convert(lights)?;
             let rig = m.rig().ok_or(aprt_status::NoIrradianceRig)?;
             let order = m.info().order();
-            Ok(rig.vectors_from_lights(order, &place, lights.as_slice(), environment, out)?)
+            rig.vectors_from_lights(order, &place, lights.as_slice(), environment, out)?;
+            finite(out.as_flattened())
         })
     })
 }
@@ -70,7 +98,9 @@ pub extern "C" fn aprt_rig_vectors(
 /// `aprt_shade_lights`) to 1 (the rig), for the character at `placement`: 0 nearer than the
 /// distance where the rig's error exceeds `target` grey levels, 1 beyond `(1 + band)` times
 /// it, linear between so nothing pops (the core's `IrradianceRig::share_of`; 0.25 is the
-/// default band). Directional lights are always 1.
+/// default band). Directional lights are always 1. `APRT_STATUS_BAD_LIGHT` for an invalid
+/// light, `APRT_STATUS_BAD_LIGHT_WEIGHT` for a `target` or `band` that is negative, NaN or
+/// infinite.
 #[unsafe(no_mangle)]
 pub extern "C" fn aprt_rig_share(
     model: *const aprt_model,
@@ -86,9 +116,15 @@ pub extern "C" fn aprt_rig_share(
         let place = read_placement(placement)?;
         let s = with_model(model, |m| {
             let light = to_core(&light)?;
+            light.validate().map_err(|_| aprt_status::BadLight)?;
+            let fine = |x: f32| x >= 0.0 && x.is_finite();
+            if !fine(target) || !fine(band) {
+                return Err(aprt_status::BadLightWeight);
+            }
             let rig = m.rig().ok_or(aprt_status::NoIrradianceRig)?;
             Ok(rig.share_of(&light, &place, target, band))
         })?;
+        finite(&[s])?;
         ffi_ptr::write(share, s)
     })
 }
@@ -148,6 +184,7 @@ pub extern "C" fn aprt_shade_rig(
         with_model(model, |m| {
             let lit = frame.rig.as_ref().ok_or(aprt_status::WeightsNotSet)?;
             Ok(m.shade_rig(lit, &place, range)?)
-        })
+        })?;
+        finite(ffi_ptr::triples(out_rgb, count)?.as_flattened())
     })
 }

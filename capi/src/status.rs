@@ -53,7 +53,8 @@ pub enum aprt_status {
     HeaderMalformed = 105,
     /// Bytes follow the header encoding or the last section.
     TrailingBytes = 106,
-    /// A header dimension is zero, too large or inconsistent.
+    /// A header dimension is zero, too large or inconsistent, or an `order` argument is
+    /// outside 1..=6.
     BadDimension = 107,
     /// A section lies outside the blob or inside the header.
     SectionOutOfRange = 108,
@@ -132,6 +133,10 @@ pub enum aprt_status {
     Source = 218,
     /// The triangle is past the last one whose corner UVs the texel atlas records.
     TriangleRange = 219,
+    /// A result overflowed to infinity or NaN (inputs, or a blob's values, too large for
+    /// f32): the call's outputs are not to be used. No call returns OK with a non-finite
+    /// output.
+    Overflow = 220,
     /// An error of a newer core than this table knows.
     Unknown = 999,
 }
@@ -192,7 +197,7 @@ impl From<Error> for aprt_status {
 }
 
 /// Every status, for the table of messages and the tests.
-pub const ALL: [aprt_status; 56] = {
+pub const ALL: [aprt_status; 57] = {
     use aprt_status as S;
     [
         S::Ok,
@@ -251,6 +256,7 @@ pub const ALL: [aprt_status; 56] = {
         S::WeightsForOtherModel,
         S::Source,
         S::TriangleRange,
+        S::Overflow,
     ]
 };
 
@@ -314,6 +320,7 @@ pub(crate) fn message(status: aprt_status) -> &'static CStr {
         S::WeightsForOtherModel => c"the frame's weights were computed for another model",
         S::Source => c"the read callback failed",
         S::TriangleRange => c"the triangle is past the atlas's last",
+        S::Overflow => c"a result overflowed: an input or a blob value is too large",
         S::Unknown => c"an error this ABI version does not name",
     }
 }
@@ -327,6 +334,16 @@ pub extern "C" fn aprt_status_message(status: i32) -> *const c_char {
     match known.into_iter().find(|s| *s as i32 == status) {
         Some(s) => message(s).as_ptr(),
         None => c"unknown status".as_ptr(),
+    }
+}
+
+/// `Ok` when every output is finite, else [`aprt_status::Overflow`]: the boundary's promise
+/// that no call returns OK with a NaN or an infinity, whatever finite inputs (or blob
+/// values) overflowed on the way. A scan of the output costs little beside computing it.
+pub(crate) fn finite(out: &[f32]) -> Result<(), aprt_status> {
+    match out.iter().all(|x| x.is_finite()) {
+        true => Ok(()),
+        false => Err(aprt_status::Overflow),
     }
 }
 

@@ -8,6 +8,8 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use crate::common::{have, repo, staticlib};
+
 use aprt_core::{
     DirectionalLight, Light, LightMap, LitWeights, Model, Placement, PointLight, PoseWeights,
     ProxyFrame, RigLitWeights, Rotation, Skinning, SphereLight, StreamedModel, project_directional,
@@ -210,27 +212,6 @@ fn expected(blob: &[u8]) -> String {
         line(&mut out, "streamed_occluded_transfer", &transfer);
     }
     out
-}
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-/// The staticlib cargo built beside this test: `cargo test` builds the library's every crate
-/// type into `deps/` (a plain `cargo build` also copies it one level up).
-fn staticlib() -> PathBuf {
-    let exe = std::env::current_exe().unwrap();
-    let deps = exe.parent().unwrap();
-    [deps.join("libaprt_capi.a"), deps.join("../libaprt_capi.a")]
-        .into_iter()
-        .find(|p| p.exists())
-        .expect("libaprt_capi.a next to the test binary (cargo builds it with the tests)")
-}
-
-/// Whether `tool` runs; CI (`.ci/run`) checks for `cc` and `c++` loudly first and sets
-/// `APRT_REQUIRE_CC`, so there a missing compiler fails the test instead of skipping it.
-fn have(tool: &str) -> bool {
-    Command::new(tool).arg("--version").output().is_ok()
 }
 
 /// Builds `source` against the staticlib, or with `shared` against the cdylib beside it.

@@ -7,5 +7,6 @@ mod abi;
 mod examples;
 mod header;
 mod hostile;
+mod hostile_c;
 mod proxies;
 mod unsafe_confined;

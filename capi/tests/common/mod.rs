@@ -5,6 +5,7 @@
 
 use std::ffi::c_void;
 use std::path::{Path, PathBuf};
+use std::process::Command;
 use std::ptr::{null, null_mut};
 
 use aprt_capi::frame::*;
@@ -31,6 +32,35 @@ pub fn ptr(s: &mut [Block]) -> *mut c_void {
 
 pub fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// The staticlib cargo built beside this test: `cargo test` builds the library's every crate
+/// type into `deps/` (a plain `cargo build` also copies it one level up).
+pub fn staticlib() -> PathBuf {
+    let exe = std::env::current_exe().unwrap();
+    let deps = exe.parent().unwrap();
+    [deps.join("libaprt_capi.a"), deps.join("../libaprt_capi.a")]
+        .into_iter()
+        .find(|p| p.exists())
+        .expect("libaprt_capi.a next to the test binary (cargo builds it with the tests)")
+}
+
+/// Whether `tool` runs; CI (`.ci/run`) checks for `cc` and `c++` loudly first and sets
+/// `APRT_REQUIRE_CC`, so there a missing compiler fails the test instead of skipping it.
+pub fn have(tool: &str) -> bool {
+    Command::new(tool).arg("--version").output().is_ok()
+}
+
+/// Says on stderr why part of a test is skipped (the harness hides a passing test's
+/// `eprintln!`, so the line is written to the stream itself), or fails when `required` (an
+/// environment variable CI sets) says it may not be.
+pub fn skip(required: &str, why: &str) {
+    assert!(
+        std::env::var_os(required).is_none(),
+        "{required} is set, but {why}"
+    );
+    let line = format!("skipped: {why}\n");
+    std::io::Write::write_all(&mut std::io::stderr(), line.as_bytes()).unwrap();
 }
 
 pub fn golden(kind: &str) -> Vec<u8> {
