@@ -9,8 +9,8 @@
 //! It holds nothing between calls and allocates nothing.
 
 use crate::blob::{Dim, Error, Input};
-use crate::eval::check_positions;
 use crate::eval::kernels::{self, texel};
+use crate::eval::{check_positions, finite_output};
 use crate::irradiance_rig::{IrradianceRig, Placement};
 use crate::light::{Light, Rgb};
 use crate::sh::{MAX_COEFFS, MAX_ORDER, coeff_count};
@@ -90,7 +90,7 @@ impl LightMap {
         self.check_maps(maps, out.len())?;
         let lighting = self.check_lighting(lighting)?;
         kernels::compose(maps, lighting, out);
-        Ok(())
+        finite_output(out.as_flattened_mut())
     }
 
     /// Each texel lit by `lights` seen from its own world position (`positions`, one per texel
@@ -138,7 +138,7 @@ impl LightMap {
             }
             *o = texel(t, l);
         }
-        Ok(())
+        finite_output(out.as_flattened_mut())
     }
 
     /// Each texel lit by an irradiance rig's lighting at its own world position
@@ -188,7 +188,7 @@ impl LightMap {
             rig.lighting_at(vectors, placement, p, &mut l[..n2]);
             *o = texel(t, &l[..n2]);
         }
-        Ok(())
+        finite_output(out.as_flattened_mut())
     }
 
     /// The maps hold n² finite values for each of `texels` texels.

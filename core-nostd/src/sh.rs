@@ -32,6 +32,8 @@ pub enum ShError {
     OutputTooSmall,
     /// The direction has zero length, or a NaN or infinite component.
     BadDirection,
+    /// A light's intensity is negative, NaN or infinite.
+    BadIntensity,
 }
 
 impl core::fmt::Display for ShError {
@@ -40,6 +42,7 @@ impl core::fmt::Display for ShError {
             ShError::BadOrder => "SH order must be in 1..=6",
             ShError::OutputTooSmall => "output slice shorter than order squared",
             ShError::BadDirection => "direction is zero, NaN or infinite",
+            ShError::BadIntensity => "intensity is negative, NaN or infinite",
         })
     }
 }
@@ -317,7 +320,9 @@ fn basis_column<V: Lanes, const N: usize, const M: usize>(
 }
 
 /// Projects a directional light of `intensity` arriving from `dir` (pointing toward the light):
-/// a delta function, so `L_c = intensity · y_c(dir)`.
+/// a delta function, so `L_c = intensity · y_c(dir)`. The intensity is finite and at least 0
+/// (a light adds radiance); every `|y_c|` is below 1 up to order 6 (the addition theorem
+/// bounds it by `√((2l + 1) / 4π)`), so the projection stays finite.
 ///
 /// ```
 /// let mut sun = [0.0; 9];
@@ -333,6 +338,9 @@ pub fn project_directional(
     out: &mut [f32],
 ) -> Result<(), ShError> {
     let n2 = check(order, out.len())?;
+    if !(intensity >= 0.0 && intensity.is_finite()) {
+        return Err(ShError::BadIntensity);
+    }
     eval_basis(order, dir, out)?;
     for c in &mut out[..n2] {
         *c *= intensity;
@@ -380,6 +388,24 @@ mod tests {
     use super::*;
 
     const PI: f64 = core::f64::consts::PI;
+
+    #[test]
+    fn a_directional_light_needs_a_finite_non_negative_intensity() {
+        let mut out = [0.0f32; 36];
+        for bad in [f32::NAN, f32::INFINITY, -1.0, -1e-30] {
+            assert_eq!(
+                project_directional(6, [0.0, 0.0, 1.0], bad, &mut out),
+                Err(ShError::BadIntensity),
+                "{bad}"
+            );
+            assert!(out.iter().all(|c| c.is_finite()), "{bad}: {out:?}");
+        }
+        project_directional(6, [0.0, 0.6, 0.8], 0.0, &mut out).unwrap();
+        assert!(out.iter().all(|&c| c == 0.0));
+        // Along +z, `y_50 = √(11 / 4π)`, the largest value of the basis.
+        project_directional(6, [0.0, 0.0, 1.0], f32::MAX, &mut out).unwrap();
+        assert!(out.iter().all(|c| c.is_finite()));
+    }
 
     #[test]
     fn compile_time_norms_match_the_runtime_formula() {

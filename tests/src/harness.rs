@@ -177,8 +177,11 @@ pub fn exercise(blob: &[u8], probe: &Probe) -> Result<Evaluation, Error> {
 
     check_refusals(&model, probe);
     let inputs = probe.sanitised();
-    let eval = evaluate(&mut { model }, &inputs)
-        .expect("a valid model evaluates finite inputs from a resident blob");
+    let eval = match evaluate(&mut { model }, &inputs) {
+        // Values near f32's limit in a valid blob: refused, never non-finite output.
+        Err(Error::Overflow) => return Err(Error::Overflow),
+        evaluated => evaluated.expect("a valid model evaluates finite inputs from a resident blob"),
+    };
     let len = least.saturating_add_signed(inputs.scratch_delta as isize);
     check_streamed(blob, &inputs, &eval, len);
     check_range(&model, probe, &eval);
@@ -245,19 +248,22 @@ fn exercise_proxies(model: &Model, blob: &[u8], probe: &Probe, eval: &Evaluation
         ));
         return;
     }
-    result.expect("finite inputs occlude");
+    if !ok_or_overflow(result, "finite inputs occlude") {
+        return;
+    }
     assert!(shading.iter().all(|x| !x.is_nan()), "NaN occluded shading");
     let mut transfer = eval.transfer.clone();
-    model
-        .occlude_transfer(
-            &frame,
-            &eval.rotations,
-            &positions,
-            &normals,
-            0,
-            &mut transfer,
-        )
-        .expect("finite inputs occlude the transfer");
+    let occluded = model.occlude_transfer(
+        &frame,
+        &eval.rotations,
+        &positions,
+        &normals,
+        0,
+        &mut transfer,
+    );
+    if !ok_or_overflow(occluded, "finite inputs occlude the transfer") {
+        return;
+    }
     assert!(
         transfer.iter().all(|x| !x.is_nan()),
         "NaN occluded transfer"
@@ -404,7 +410,9 @@ fn exercise_rig(model: &Model, rig: &IrradianceRig<'_>, probe: &Probe, eval: &Ev
         assert!(lit_ok.is_err(), "non-finite rig vectors accepted");
         return;
     }
-    lit_ok.expect("finite rig vectors light a valid model");
+    if !ok_or_overflow(lit_ok, "finite rig vectors light a valid model") {
+        return;
+    }
     let mut out = vec![[0.0f32; 3]; info.vertices()];
     let finite = positions.iter().flatten().all(|x| x.is_finite());
     let shaded = model.shade_rig(&lit, rig, &place, &positions, 0, &mut out);
@@ -419,8 +427,10 @@ fn exercise_rig(model: &Model, rig: &IrradianceRig<'_>, probe: &Probe, eval: &Ev
         &mut out,
     );
     if finite {
-        shaded.expect("finite positions shade");
-        near.expect("finite positions shade per vertex");
+        let shaded = ok_or_overflow(shaded, "finite positions shade");
+        if !(ok_or_overflow(near, "finite positions shade per vertex") && shaded) {
+            return;
+        }
         assert!(out.iter().flatten().all(|x| !x.is_nan()), "NaN shading");
     } else {
         assert!(matches!(shaded, Err(Error::NonFinitePosition { .. })));
@@ -521,7 +531,9 @@ fn check_refusals(model: &Model, probe: &Probe) {
         assert_eq!(set, Err(Error::NonFiniteAngle { index }));
         return;
     }
-    set.unwrap();
+    if !ok_or_overflow(set, "finite angles set a pose") {
+        return;
+    }
     // The first bone whose matrix is not a rotation: all of them when skewed, else the first
     // whose turn overflowed.
     let bad_bone = match probe.skew {
@@ -554,7 +566,9 @@ fn check_refusals(model: &Model, probe: &Probe) {
         );
         return;
     }
-    lit_result.unwrap();
+    if !ok_or_overflow(lit_result, "finite lighting lights a pose") {
+        return;
+    }
     if info.frame() == Frame::World {
         // A world-frame model ignores bone rotations, however many.
         let mut ignoring = Box::new(LitWeights::new());
@@ -564,8 +578,8 @@ fn check_refusals(model: &Model, probe: &Probe) {
             .unwrap();
         let shade = |lit: &LitWeights| {
             let mut out = vec![0.0f32; info.vertices()];
-            model.shade(lit, 0, &mut out).unwrap();
-            out.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+            let shaded = model.shade(lit, 0, &mut out);
+            (shaded, out.iter().map(|x| x.to_bits()).collect::<Vec<_>>())
         };
         assert!(
             shade(&ignoring) == shade(&lit),
@@ -605,12 +619,26 @@ fn check_streamed(blob: &[u8], inputs: &Probe, resident: &Evaluation, len: usize
     }
 }
 
+/// `true` for `Ok`, `false` for [`Error::Overflow`] (a valid blob's values, with finite
+/// inputs, beyond f32: the caller stops checking what depends on the result); any other
+/// error panics with `what` was expected.
+fn ok_or_overflow(result: Result<(), Error>, what: &str) -> bool {
+    match result {
+        Ok(()) => true,
+        Err(Error::Overflow) => false,
+        Err(e) => panic!("{what}: {e}"),
+    }
+}
+
 /// `check_streamed` for every scratch length in `lens`, against one resident evaluation of
 /// the valid blob `blob` at the probe's inputs made finite.
 pub fn check_streaming(blob: &[u8], probe: &Probe, lens: impl IntoIterator<Item = usize>) {
     let mut model = Model::parse(blob).expect("a valid blob");
     let inputs = probe.sanitised();
-    let resident = evaluate(&mut model, &inputs).unwrap();
+    let resident = match evaluate(&mut model, &inputs) {
+        Err(Error::Overflow) => return,
+        evaluated => evaluated.unwrap(),
+    };
     for len in lens {
         check_streamed(blob, &inputs, &resident, len);
     }
@@ -634,7 +662,10 @@ fn check_range(model: &Model, probe: &Probe, whole: &Evaluation) {
     let count = probe.count as usize % (v + 9);
     let inside = first.checked_add(count).is_some_and(|end| end <= v);
     let n2 = model.info().coeffs();
-    let Lit { pose, lit, .. } = set_and_light(&mut { *model }, &probe.sanitised()).unwrap();
+    let Lit { pose, lit, .. } = match set_and_light(&mut { *model }, &probe.sanitised()) {
+        Err(Error::Overflow) => return,
+        lit => lit.unwrap(),
+    };
     let refused = Err(Error::VertexRange { first, count });
     let (mut shading, mut transfer, mut bones) = (
         vec![0.0f32; count],

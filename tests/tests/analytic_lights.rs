@@ -604,13 +604,16 @@ fn hostile_inputs_are_refused_or_finite() {
         }
         on(r * (1.0 - eps));
     }
-    // Colours and weights near f32's limit: saturate, never NaN.
+    // Colours and weights near f32's limit: refused as overflowing, the output zeroed, never
+    // Inf or NaN.
     let blaze = Light::Point(PointLight {
         position: [p[0] + 1e-3, p[1], p[2]],
         intensity: [3e38; 3],
     });
     let mut out = vec![[0.0f32; 3]; v];
-    core.shade_lights(&pose, rot, &[blaze, blaze], &[3e38, 3e38], pos, 0, &mut out)
-        .unwrap();
-    assert!(out.iter().flatten().all(|x| !x.is_nan()), "{out:?}");
+    assert_eq!(
+        core.shade_lights(&pose, rot, &[blaze, blaze], &[3e38, 3e38], pos, 0, &mut out),
+        Err(Error::Overflow)
+    );
+    assert!(out.iter().flatten().all(|&x| x == 0.0), "{out:?}");
 }

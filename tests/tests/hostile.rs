@@ -857,3 +857,62 @@ fn damaged_corner_uvs_are_refused() {
         );
     }
 }
+
+/// Values near f32's limit in every per-vertex and per-pose array of a valid, sealed blob
+/// (3e38 in a basis row, as a hostile exporter might write): every call returns finite
+/// outputs or `Overflow` with its outputs zeroed, never `Ok` with Inf or NaN.
+#[test]
+fn huge_finite_blob_values_never_give_non_finite_output() {
+    use aprt_core::{LitWeights, PoseWeights};
+    type Edit = fn(&mut aprt_trainer::LinearModel);
+    let edits: [(&str, Edit); 4] = [
+        ("basis", |m| {
+            if let aprt_trainer::VertexBasis::Stored { data, .. } = &mut m.basis {
+                data[5] = 3e38;
+            }
+        }),
+        ("weights", |m| m.weights[2] = 3e38),
+        ("projection", |m| m.pose_projection[1] = 3e38),
+        ("mean", |m| m.pose_mean[0] = -3e38),
+    ];
+    let mut overflowed = 0;
+    for (what, edit) in edits {
+        let mut model = random_model(3, 19, 3, 2, Some(4));
+        edit(&mut model);
+        let blob = encode_model(&model, Precision::F32).unwrap();
+        let core = Model::parse(&blob).unwrap();
+        let info = *core.info();
+        let (mut pose, mut lit) = (PoseWeights::new(), LitWeights::new());
+        let pose_result = core.set_pose(&[1.0, -2.0, 0.5], &mut pose);
+        if pose_result == Err(Error::Overflow) {
+            overflowed += 1;
+            continue;
+        }
+        pose_result.unwrap();
+        let lighting = [1e30f32; 9];
+        let mut out = vec![7.0f32; info.vertices()];
+        match core.light(&pose, &lighting, &[], &mut lit) {
+            Err(Error::Overflow) => overflowed += 1,
+            Err(e) => panic!("{what}: {e}"),
+            Ok(()) => match core.shade(&lit, 0, &mut out) {
+                Ok(()) => assert!(out.iter().all(|x| x.is_finite()), "{what}: {out:?}"),
+                Err(e) => {
+                    assert_eq!(e, Error::Overflow, "{what}");
+                    assert!(out.iter().all(|&x| x == 0.0), "{what}: {out:?}");
+                    overflowed += 1;
+                }
+            },
+        }
+        let mut transfer = vec![7.0f32; info.vertices() * 9];
+        match core.transfer(&pose, 0, &mut transfer) {
+            Ok(()) => assert!(transfer.iter().all(|x| x.is_finite()), "{what}"),
+            Err(e) => {
+                assert_eq!(e, Error::Overflow, "{what}");
+                assert!(transfer.iter().all(|&x| x == 0.0), "{what}");
+                overflowed += 1;
+            }
+        }
+    }
+    // Each edit overflows somewhere: the test reaches the checks it is about.
+    assert!(overflowed >= 4, "{overflowed} overflows");
+}

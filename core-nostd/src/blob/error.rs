@@ -219,7 +219,8 @@ pub enum Error {
         /// Index of the vertex in the call's range.
         index: usize,
     },
-    /// A bone rotation is not orthonormal (within 10⁻³) or holds NaN or infinity.
+    /// A bone rotation is not a proper rotation (orthonormal within 10⁻³, determinant +1) or
+    /// holds NaN or infinity.
     BadRotation {
         /// Index of the bone.
         bone: usize,
@@ -257,6 +258,10 @@ pub enum Error {
     WeightsForOtherModel,
     /// The [`BlobSource`](super::BlobSource) failed to read.
     Source,
+    /// A result overflowed to infinity or NaN: the inputs, or the blob's values, are too
+    /// large for f32. The call's outputs are zeroed (weights are left unset); no call returns
+    /// `Ok` with a non-finite output.
+    Overflow,
 }
 
 impl core::fmt::Display for Error {
@@ -295,7 +300,10 @@ impl core::fmt::Display for Error {
                 write!(f, "vertex position {index} is NaN or infinite")
             }
             Error::BadRotation { bone } => {
-                write!(f, "rotation of bone {bone} is not orthonormal")
+                write!(
+                    f,
+                    "rotation of bone {bone} is not a rotation (orthonormal, not mirrored)"
+                )
             }
             Error::BadLight { index, reason } => write!(f, "light {index} is invalid: {reason}"),
             Error::BadLightWeight { index } => {
@@ -314,6 +322,10 @@ impl core::fmt::Display for Error {
             Error::WeightsNotSet => write!(f, "weights were not computed (or their call failed)"),
             Error::WeightsForOtherModel => write!(f, "weights were computed for another model"),
             Error::Source => write!(f, "blob source read failed"),
+            Error::Overflow => write!(
+                f,
+                "a result overflowed f32 (inputs or blob values too large)"
+            ),
             _ => self.fmt_blob_error(f),
         }
     }

@@ -8,8 +8,8 @@
 //! frame it is the same bands about the rotated direction. Rotating that one direction costs
 //! nine multiplies per vertex and light, where rotating the SH vector would cost O(n³).
 
-use super::PoseWeights;
 use super::rig::check_positions;
+use super::{PoseWeights, finite_output};
 use crate::blob::format::{Frame, VERTEX_BLOCK};
 use crate::blob::{Error, Input, ModelInfo, Reader};
 use crate::light::Light;
@@ -78,7 +78,8 @@ impl ModelInfo {
                     *o += a as f32;
                 }
             }
-        })
+        })?;
+        finite_output(out.as_flattened_mut())
     }
 }
 

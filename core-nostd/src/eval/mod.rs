@@ -50,6 +50,17 @@ pub(crate) fn first_non_finite(xs: &[f32]) -> Option<usize> {
     }
 }
 
+/// `Ok` when every value of a call's output is finite; else the output is zeroed (nothing
+/// non-finite reaches the caller) and [`Error::Overflow`] says why: a blob may hold values,
+/// and a caller may pass inputs, whose sums exceed f32 however each was checked.
+pub(crate) fn finite_output(out: &mut [f32]) -> Result<(), Error> {
+    if all_finite(out) {
+        return Ok(());
+    }
+    out.fill(0.0);
+    Err(Error::Overflow)
+}
+
 /// Whether every value is finite: no value has every exponent bit set, found with integer
 /// masks, adds and ors over eight independent lanes (a full exponent carries into the sign
 /// bit), which vectorise on every target, SSE2 included; a search stopping at the first
@@ -168,6 +179,8 @@ impl ModelInfo {
             })?;
         }
         self.fold_row_scales(r, pose)?;
+        finite_output(&mut pose.z[..=ka])?;
+        finite_output(&mut pose.w[..self.pose_weights_len()])?;
         pose.pose_dims = ka;
         pose.stamp = Some(self.id);
         Ok(())
@@ -231,7 +244,9 @@ impl ModelInfo {
         self.check_sh_lighting(lighting)?;
         check_capacity(self.lit_weights_len(), L)?;
         self.check_rotations(bones)?;
-        self.light_checked(pose, lighting, bones, &mut lit.q[..self.lit_weights_len()]);
+        let q = &mut lit.q[..self.lit_weights_len()];
+        self.light_checked(pose, lighting, bones, q);
+        finite_output(q)?;
         lit.stamp = Some(self.id);
         Ok(())
     }
@@ -286,8 +301,8 @@ impl ModelInfo {
         Ok(())
     }
 
-    /// Every bone rotation finite and orthonormal within 10⁻³; a world-frame model ignores
-    /// them.
+    /// Every bone rotation finite and a proper rotation (orthonormal within 10⁻³, not
+    /// mirrored); a world-frame model ignores them.
     fn check_rotations(&self, bones: &[Rotation]) -> Result<(), Error> {
         if self.frame == Frame::World {
             return Ok(());
@@ -441,7 +456,8 @@ impl ModelInfo {
                     dst.copy_from_slice(&lanes[lo - v0..hi - v0]);
                 }
             })
-        })
+        })?;
+        finite_output(out)
     }
 
     /// The transfer of one streamed block's eight vertices into `t` (`8 n²` values,
@@ -480,6 +496,7 @@ impl ModelInfo {
             let (lo, hi) = (v0.max(first), (v0 + VERTEX_BLOCK).min(end));
             out[(lo - first) * n2..(hi - first) * n2]
                 .copy_from_slice(&t[(lo - v0) * n2..(hi - v0) * n2]);
-        })
+        })?;
+        finite_output(out)
     }
 }

@@ -2,8 +2,8 @@
 //! vertex loses what the spheres of other parts block, `D_j`, computed from the vertex's
 //! posed position and normal (the caller's skinned mesh, as for `shade_rig`).
 
-use super::first_non_finite;
 use super::rig::check_positions;
+use super::{finite_output, first_non_finite};
 use crate::blob::format::VERTEX_BLOCK;
 use crate::blob::{Error, Input, ModelInfo, Reader};
 use crate::proxies::{Block, Output, ProxyFrame, block_occlusion};
@@ -156,7 +156,8 @@ impl ModelInfo {
             {
                 out[v0 + l - first] -= s;
             }
-        })
+        })?;
+        finite_output(out)
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -193,6 +194,7 @@ impl ModelInfo {
                     *t -= d;
                 }
             },
-        )
+        )?;
+        finite_output(&mut out[..count * n2])
     }
 }

@@ -7,7 +7,7 @@
 
 use super::kernels::shade_bytes;
 use super::weights::{check_capacity, check_stamp};
-use super::{PoseWeights, first_non_finite};
+use super::{PoseWeights, finite_output, first_non_finite};
 use crate::blob::format::VERTEX_BLOCK;
 use crate::blob::{Error, Input, ModelInfo, Reader};
 use crate::irradiance_rig::{
@@ -59,6 +59,7 @@ impl ModelInfo {
             }
             self.light_checked(pose, &channel[..n2], bones, q);
         }
+        finite_output(&mut lit.q[..3 * k * lit_len])?;
         lit.vectors = k;
         lit.stamp = Some(self.id);
         Ok(())
@@ -121,7 +122,8 @@ impl ModelInfo {
                 }
             }
             out[lo - first..hi - first].copy_from_slice(&acc[lo - v0..hi - v0]);
-        })
+        })?;
+        finite_output(out.as_flattened_mut())
     }
 }
 

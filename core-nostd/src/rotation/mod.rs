@@ -18,15 +18,22 @@ pub type Rotation = [[f32; 3]; 3];
 /// The rotation that turns nothing.
 pub(crate) const IDENTITY: Rotation = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
-/// Whether `r` is a rotation within `tol`: its columns unit and orthogonal. Guards callers
-/// that pass a blended (non-orthogonal) skinning matrix; the angle-preserving part is all a
-/// rotation of SH needs.
+/// Whether `r` is a proper rotation within `tol`: its columns unit and orthogonal, and its
+/// determinant positive. Guards callers that pass a blended (non-orthogonal) skinning matrix
+/// or a mirrored one (determinant −1), whose SH rotation is not the one built here.
 pub(crate) fn is_rotation(r: &Rotation, tol: f32) -> bool {
     let col = |j: usize| [r[0][j], r[1][j], r[2][j]];
     let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    (0..3).all(|i| {
+    let orthonormal = (0..3).all(|i| {
         (0..3).all(|j| math::abs(dot(col(i), col(j)) - if i == j { 1.0 } else { 0.0 }) <= tol)
-    })
+    });
+    let [a, b, c] = [col(0), col(1), col(2)];
+    let cross = [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ];
+    orthonormal && dot(cross, c) > 0.0
 }
 
 /// `D(Rx(90°))` for every band, built at compile time.
@@ -275,6 +282,24 @@ impl ShRotation {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn mirrored_and_scaled_matrices_are_not_rotations() {
+        let r = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
+        assert!(is_rotation(&r, 1e-3));
+        // Any column negated, or all three: orthonormal, determinant −1.
+        for column in 0..3 {
+            let mut mirrored = r;
+            for row in &mut mirrored {
+                row[column] = -row[column];
+            }
+            assert!(!is_rotation(&mirrored, 1e-3), "{mirrored:?}");
+        }
+        let minus = r.map(|row| row.map(|x| -x));
+        assert!(!is_rotation(&minus, 1e-3));
+        let scaled = r.map(|row| row.map(|x| 1.01 * x));
+        assert!(!is_rotation(&scaled, 1e-3));
+    }
 
     /// The rotation by `angle` about the unit `axis` (Rodrigues), row-major.
     fn axis_angle(axis: [f64; 3], angle: f64) -> [[f64; 3]; 3] {
