@@ -96,6 +96,20 @@ pub fn skinning_of(m: &Mat4) -> Skinning {
     ]
 }
 
+/// The skinning matrices that pose the proxies of a model of `bones` bones: the first `bones`
+/// of a pose's joint matrices. A model's bones end at the highest joint that weights a vertex
+/// ([`Skin::joint_count`](crate::rig::skin::Skin::joint_count)); the joints past it, such as
+/// the unweighted end joints many exports carry, move nothing the model sees.
+pub fn bone_skinning(joints: &[Mat4], bones: usize) -> Result<Vec<Skinning>> {
+    let Some(joints) = joints.get(..bones) else {
+        bail!(
+            "the model has {bones} bones, the character {} joints",
+            joints.len()
+        );
+    };
+    Ok(joints.iter().map(skinning_of).collect())
+}
+
 /// The occlusion `D` of every vertex of `posed` (posed by `joints`, the rig's joint
 /// matrices), world frame, `v × n²` vertex-major: what the proxies of `section` block.
 pub fn occlusion(
@@ -107,7 +121,7 @@ pub fn occlusion(
 ) -> Result<Vec<f32>> {
     let set = ProxySet::parse(section, bones.count)
         .map_err(|e| anyhow::anyhow!("occluder proxies: {e}"))?;
-    let skinning: Vec<Skinning> = joints.iter().map(skinning_of).collect();
+    let skinning = bone_skinning(joints, bones.count)?;
     let mut frame = ProxyFrame::new();
     set.pose(&skinning, &mut frame)
         .map_err(|e| anyhow::anyhow!("posing the occluder proxies: {e}"))?;

@@ -14,7 +14,7 @@ use crate::bake::{BakeSettings, bake_poses};
 use crate::model::ModelFrame;
 use crate::model::export::{ExportError, Precision, encode_model};
 use crate::model::fit::{Alpha, CoefDims, Dims, Features, Fit, FitError, FitOptions, Local, Prior};
-use crate::model::occluders::{DEFAULT_CULL, Occluders, occlusion, rig_section, skinning_of};
+use crate::model::occluders::{DEFAULT_CULL, Occluders, bone_skinning, occlusion, rig_section};
 use crate::model::predict::predict_world;
 use crate::pipeline::train::{ClipSet, Selection, fit_clip};
 use crate::progress::{Reporter, Silent};
@@ -559,7 +559,7 @@ pub(crate) fn time_core(
     let full_us = transfer_us(blob, angles)?;
     let proxies = match geometry.filter(|_| info.has_proxies()) {
         Some((joints, mesh)) => {
-            let skinning: Vec<_> = joints.iter().map(skinning_of).collect();
+            let skinning = bone_skinning(joints, info.bones())?;
             let mut frame = Box::new(ProxyFrame::new());
             let seconds = median_seconds(|| {
                 result = result
