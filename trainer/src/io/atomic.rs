@@ -13,6 +13,7 @@
 //!   same output, which removes the temporaries of that output whose process is gone. Files
 //!   of any other name are never touched.
 
+use std::collections::BTreeMap;
 use std::ffi::OsStr;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -207,26 +208,47 @@ pub fn temporary_owner(file_name: &str) -> Option<u32> {
 }
 
 /// Removes the temporaries of the output called `name` in `dir` that an ended process left
-/// behind. Best effort: what cannot be removed stays, and nothing else is touched.
+/// behind. Best effort: what cannot be removed stays, and nothing else is touched. A directory
+/// is listed on this process's first write into it only, and the stale temporaries found are
+/// kept for the writes of their outputs: listing it on every write made a checkpoint of
+/// thousands of pose files cost the square of their count.
 fn remove_stale_temporaries(dir: &Path, name: &OsStr) {
+    static STALE: Mutex<BTreeMap<PathBuf, Vec<PathBuf>>> = Mutex::new(BTreeMap::new());
+    let mut stale = STALE
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
+    let found = stale
+        .entry(dir.to_path_buf())
+        .or_insert_with(|| stale_temporaries(dir));
     let start = format!(".{}{MARK}", name_part(name));
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return;
-    };
-    for entry in entries.flatten() {
-        let file_name = entry.file_name();
-        let Some(pid) = file_name
-            .to_str()
+    found.retain(|path| {
+        let of_this_output = path
+            .file_name()
+            .and_then(OsStr::to_str)
             .and_then(|n| n.strip_prefix(&start))
             .and_then(owner_of_tail)
-        else {
-            continue;
-        };
-        let is_file = entry.file_type().is_ok_and(|t| t.is_file());
-        if is_file && process_gone(pid, &entry) {
-            let _ = std::fs::remove_file(entry.path());
+            .is_some();
+        if of_this_output {
+            let _ = std::fs::remove_file(path);
         }
-    }
+        !of_this_output
+    });
+}
+
+/// The temporaries in `dir`, of any output, whose process has ended.
+fn stale_temporaries(dir: &Path) -> Vec<PathBuf> {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Vec::new();
+    };
+    entries
+        .flatten()
+        .filter(|entry| {
+            let pid = entry.file_name().to_str().and_then(temporary_owner);
+            let is_file = entry.file_type().is_ok_and(|t| t.is_file());
+            pid.is_some_and(|pid| is_file && process_gone(pid, entry))
+        })
+        .map(|entry| entry.path())
+        .collect()
 }
 
 /// Whether the process that wrote a temporary has ended. Where `/proc` lists the live

@@ -862,23 +862,29 @@ fn bake_checkpointed(
     settings: &TrainSettings,
     reporter: &dyn Reporter,
 ) -> Result<(Vec<Vec<f32>>, Option<Checkpoint>)> {
-    if !settings.bake.shadows {
+    let baked = if settings.bake.shadows {
+        let mut checkpoint = Checkpoint::open(
+            &settings.checkpoint,
+            settings.existing,
+            &settings.bake,
+            meshes,
+        )?;
+        if settings.existing == OnExisting::Resume && checkpoint.is_new() {
+            reporter.note(&format!(
+                "note: nothing to resume: {} held no checkpoint, so every pose is baked",
+                settings.checkpoint.display()
+            ));
+        }
+        let transfer = checkpoint.bake(meshes, name, reporter)?;
+        (transfer, Some(checkpoint))
+    } else {
         // Closed form, milliseconds a pose: nothing worth saving for a resume.
-        let transfer = crate::bake::bake_poses(meshes, &settings.bake, reporter)?;
-        return Ok((transfer, None));
-    }
-    let mut checkpoint = Checkpoint::open(
-        &settings.checkpoint,
-        settings.existing,
-        &settings.bake,
-        meshes,
-    )?;
-    if settings.existing == OnExisting::Resume && checkpoint.is_new() {
-        reporter.note(&format!(
-            "note: nothing to resume: {} held no checkpoint, so every pose is baked",
-            settings.checkpoint.display()
-        ));
-    }
-    let transfer = checkpoint.bake(meshes, name, reporter)?;
-    Ok((transfer, Some(checkpoint)))
+        (
+            crate::bake::bake_poses(meshes, &settings.bake, reporter)?,
+            None,
+        )
+    };
+    // What follows takes time and memory linear in the poses (model/fit/ridge.rs).
+    reporter.note(&format!("baked {} poses; fitting the model", meshes.len()));
+    Ok(baked)
 }

@@ -14,11 +14,14 @@
 //! The fit is a linear smoother `Ŷ = H Y` with `H = 11ᵀ/p + U F Uᵀ` (`H = U F Uᵀ` when
 //! anchored), `F = diag(s²/(s²+α²))`, so held-out residuals follow from the in-sample ones
 //! without refits: for a held-out set S, `e_S = (I − H_SS)⁻¹ r_S` (leave-one-out is the case
-//! |S| = 1). All that is needed of Y is its `p × p` Gram `K = Y_c Y_cᵀ`: the residual Gram is
-//! `(I − H) K (I − H)`, and expanding it in `K' = Uᵀ K` and `M = Uᵀ K U` makes each α cost
-//! `O(p·L·r²)` (segment length L, rank r) whatever the output width — the full model has
-//! ~400k outputs per pose. The Gram belongs to the outputs ([`RidgeOutputs`]), so problems on
-//! different pose dimensions share it.
+//! |S| = 1). All that is needed of Y is its Gram `K = Y_c Y_cᵀ`, through products with a few
+//! columns: the residual Gram is `(I − H) K (I − H)`, and `H_SS = Q D Qᵀ` has rank r + 1
+//! (`Q = [U_S, 1/√p]`), so by Woodbury each held-out run reduces to `(r+1) × (r+1)` matrices
+//! formed once ([`RunProducts`]) and each α costs `O(runs·r³)`, whatever the output width
+//! (the full model has ~400k outputs per pose) and the run length (a tenth of the poses: a
+//! solve of the run's own `L × L` system made the search cubic in the pose count). The Gram
+//! is stored when it is no larger than the outputs (`p ≤ q`) and otherwise applied through
+//! `Y_c`, so that time and memory stay linear in the pose count of a long sequence.
 //! The price of the Gram form is resolution: residuals below about `√ε · ‖Y_c‖` cancel in
 //! `K` and read as zero, which only matters once the fit is already exact to ~1e-8.
 
@@ -43,37 +46,46 @@ const REFINE_LOG_WIDTH: f64 = 1e-4;
 /// Output columns per block of the Gram product, summed in a fixed order for determinism.
 const GRAM_COLUMNS_PER_BLOCK: usize = 4096;
 
-/// The outputs of a ridge problem, centred on their column means, with their Gram.
+/// The outputs of a ridge problem, centred on their column means, and their Gram when it is
+/// the smaller of the two.
 #[derive(Clone, Debug)]
 pub struct RidgeOutputs {
     /// The mean output.
     mean: DVector<f64>,
     /// `p × q` outputs minus their mean.
     y_centred: DMatrix<f64>,
-    /// `K = Y_c Y_cᵀ`, `p × p`.
-    gram: DMatrix<f64>,
+    /// `K = Y_c Y_cᵀ`, `p × p`, when `p ≤ q`; else `None` and `K` is applied through `Y_c`.
+    gram: Option<DMatrix<f64>>,
 }
 
 impl RidgeOutputs {
     /// `y` (`p × q`, taken by value and centred in place: for the full model it is the largest
     /// array of the fit).
-    pub fn new(mut y: DMatrix<f64>) -> Self {
+    pub fn new(y: DMatrix<f64>) -> Self {
+        let stored = y.nrows() <= y.ncols();
+        Self::with_gram(y, stored)
+    }
+
+    /// [`Self::new`], with the Gram stored or not as asked (the tests try both forms).
+    fn with_gram(mut y: DMatrix<f64>, stored: bool) -> Self {
         let mean = DVector::from_fn(y.ncols(), |j, _| y.column(j).mean());
         for (mut col, m) in y.column_iter_mut().zip(mean.iter()) {
             col.add_scalar_mut(-m);
         }
-        let (p, q) = y.shape();
-        let starts: Vec<usize> = (0..q).step_by(GRAM_COLUMNS_PER_BLOCK).collect();
-        let parts: Vec<DMatrix<f64>> = starts
-            .par_iter()
-            .map(|&c| {
-                let block = y.columns(c, GRAM_COLUMNS_PER_BLOCK.min(q - c));
-                block * block.transpose()
-            })
-            .collect();
-        let gram = parts
-            .into_iter()
-            .fold(DMatrix::zeros(p, p), |acc, part| acc + part);
+        let gram = stored.then(|| {
+            let (p, q) = y.shape();
+            let starts: Vec<usize> = (0..q).step_by(GRAM_COLUMNS_PER_BLOCK).collect();
+            let parts: Vec<DMatrix<f64>> = starts
+                .par_iter()
+                .map(|&c| {
+                    let block = y.columns(c, GRAM_COLUMNS_PER_BLOCK.min(q - c));
+                    block * block.transpose()
+                })
+                .collect();
+            parts
+                .into_iter()
+                .fold(DMatrix::zeros(p, p), |acc, part| acc + part)
+        });
         Self {
             mean,
             y_centred: y,
@@ -83,13 +95,7 @@ impl RidgeOutputs {
 
     /// The fit with an unpenalised intercept: a huge α tends to the mean output.
     pub fn around_mean(&self) -> RidgeTarget<'_> {
-        RidgeTarget {
-            outputs: self,
-            centre: self.mean.clone(),
-            shift: DVector::zeros(self.mean.len()),
-            gram: self.gram.clone(),
-            anchored: false,
-        }
+        self.around(self.mean.clone(), false)
     }
 
     /// The fit through an anchor whose output is `y0`: a huge α tends to `y0`. The outputs
@@ -97,20 +103,24 @@ impl RidgeOutputs {
     /// centred one without another copy of the outputs.
     pub fn around_anchor(&self, y0: &DVector<f64>) -> RidgeTarget<'_> {
         assert_eq!(y0.len(), self.mean.len(), "ridge: anchor output shape");
-        let shift = &self.mean - y0;
-        let p = self.gram.nrows();
-        let yd = &self.y_centred * &shift;
-        let ones = DVector::from_element(p, 1.0);
-        let gram = &self.gram
-            + &yd * ones.transpose()
-            + &ones * yd.transpose()
-            + DMatrix::from_element(p, p, shift.norm_squared());
+        self.around(y0.clone(), true)
+    }
+
+    fn around(&self, centre: DVector<f64>, anchored: bool) -> RidgeTarget<'_> {
+        let shift = &self.mean - &centre;
+        let y_shift = &self.y_centred * &shift;
+        let norm = shift.norm_squared();
+        // `‖y_i + d‖² = ‖y_i‖² + 2 y_i·d + ‖d‖²`: the diagonal of the Gram relative to the centre.
+        let row_norms = DVector::from_fn(self.y_centred.nrows(), |i, _| {
+            self.y_centred.row(i).norm_squared() + 2.0 * y_shift[i] + norm
+        });
         RidgeTarget {
             outputs: self,
-            centre: y0.clone(),
+            centre,
             shift,
-            gram,
-            anchored: true,
+            y_shift,
+            row_norms,
+            anchored,
         }
     }
 }
@@ -123,13 +133,37 @@ pub struct RidgeTarget<'a> {
     centre: DVector<f64>,
     /// `ȳ − centre`: the outputs relative to the centre are `Y_c + 1 shiftᵀ`.
     shift: DVector<f64>,
-    /// Gram of the outputs relative to the centre.
-    gram: DMatrix<f64>,
+    /// `Y_c shift`, `p`.
+    y_shift: DVector<f64>,
+    /// Each pose's squared norm relative to the centre: the diagonal of their Gram.
+    row_norms: DVector<f64>,
     /// Whether the intercept is given (the anchor) rather than fitted.
     anchored: bool,
 }
 
 impl RidgeTarget<'_> {
+    /// `K_SS X` for the poses `rows` (S) and `x` with one row per pose of S, `K` the Gram of
+    /// the outputs relative to the centre, `(Y_c + 1 dᵀ)(Y_c + 1 dᵀ)ᵀ`: from the stored Gram
+    /// (`O(|S|²)` a column of `x`), or through `Y_c` (`O(|S|·q)`).
+    fn gram_times(&self, rows: Range<usize>, x: &DMatrix<f64>) -> DMatrix<f64> {
+        let (start, len) = (rows.start, rows.len());
+        let ones = DVector::from_element(len, 1.0);
+        let sums = x.row_sum();
+        match &self.outputs.gram {
+            Some(k) => {
+                let yd = self.y_shift.rows(start, len);
+                k.view((start, start), (len, len)) * x
+                    + yd * &sums
+                    + &ones * (yd.transpose() * x + &sums * self.shift.norm_squared())
+            }
+            None => {
+                let y = self.outputs.y_centred.rows(start, len);
+                let w = y.tr_mul(x) + &self.shift * &sums;
+                y * &w + ones * self.shift.tr_mul(&w)
+            }
+        }
+    }
+
     /// `Uᵀ (Y − 1 centreᵀ)` for `u` with one row per pose.
     fn project(&self, u: &DMatrix<f64>) -> DMatrix<f64> {
         let ones = DVector::from_element(u.nrows(), 1.0);
@@ -484,61 +518,111 @@ fn train_sum(m: &DMatrix<f64>, k_trace: f64, f: &DVector<f64>) -> f64 {
 /// Everything cross validation needs, independent of α: the output Gram's projections.
 struct GramCv<'a, 'b> {
     problem: &'b RidgeProblem<'a>,
-    runs: &'b [Range<usize>],
-    /// `K' = Uᵀ K`, `r × p`.
-    ku: DMatrix<f64>,
+    /// One per held-out run.
+    runs: Vec<RunProducts>,
     /// `M = Uᵀ K U`, `r × r`.
     m: DMatrix<f64>,
+    /// `tr K`.
+    k_trace: f64,
     /// `p·q`, the error normalisation.
     entries: f64,
 }
 
+/// One held-out run S's products, independent of α, with `Q = [U_S, 1/√p]` (`U_S` alone when
+/// the fit is anchored: no mean to hold out): `H_SS = Q D Qᵀ`, `D = diag(F, 1)`.
+struct RunProducts {
+    /// `QᵀQ`; its first r columns are `Qᵀ U_S`.
+    qq: DMatrix<f64>,
+    /// `Qᵀ K_SS Q`.
+    qkq: DMatrix<f64>,
+    /// `Qᵀ (K U)_S`.
+    qku: DMatrix<f64>,
+    /// `tr K_SS`.
+    trace: f64,
+}
+
+impl RunProducts {
+    fn new(
+        target: &RidgeTarget<'_>,
+        run: Range<usize>,
+        (u, ku): (&DMatrix<f64>, &DMatrix<f64>),
+        mean: Option<f64>,
+    ) -> Self {
+        let (start, len, r) = (run.start, run.len(), u.ncols());
+        let mut q =
+            DMatrix::from_element(len, r + usize::from(mean.is_some()), mean.unwrap_or(0.0));
+        q.columns_mut(0, r).copy_from(&u.rows(start, len));
+        Self {
+            qq: q.tr_mul(&q),
+            qkq: q.tr_mul(&target.gram_times(run.clone(), &q)),
+            qku: q.tr_mul(&ku.rows(start, len)),
+            trace: target.row_norms.rows(start, len).sum(),
+        }
+    }
+
+    /// `Σ‖e_S‖²` at filter factors `f`, `e_S = (I − H_SS)⁻¹ r_S` with `r_S = R_S`, the run's
+    /// in-sample residuals `Y_S − U_S F B` (`B = Uᵀ Y`). With `W = Q D^½`, `H_SS = W Wᵀ` and
+    /// `(I − WWᵀ)⁻¹ = I + W C Wᵀ`, `C = (I − WᵀW)⁻¹`, so `Σ‖e_S‖² = ‖R_S‖² + tr((C + C²) T Tᵀ)`
+    /// with `T = Wᵀ R_S`; `Qᵀ R_S = A − G F B` (`A = Qᵀ Y_S`, `G = Qᵀ U_S`) makes `T Tᵀ` and
+    /// `‖R_S‖²` sums of the products. Infinite when `I − H_SS` is singular: a run the others
+    /// cannot predict.
+    fn held_out_sum(&self, f: &DVector<f64>, m: &DMatrix<f64>) -> f64 {
+        let r = f.len();
+        let g = self.qq.columns(0, r);
+        let gf = DMatrix::from_fn(g.nrows(), r, |i, j| g[(i, j)] * f[j]);
+        let zfg = &self.qku * gf.transpose();
+        let aa = &self.qkq - &zfg - zfg.transpose() + &gf * m * gf.transpose();
+        // ‖R_S‖² = tr K_SS − 2 tr(F (K U)_Sᵀ U_S) + tr(F U_SᵀU_S F M).
+        let gfu = gf.rows(0, r);
+        let residual = self.trace - 2.0 * (0..r).map(|i| f[i] * self.qku[(i, i)]).sum::<f64>()
+            + (0..r)
+                .map(|i| f[i] * gfu.row(i).dot(&m.column(i).transpose()))
+                .sum::<f64>();
+        let half = DVector::from_fn(self.qq.nrows(), |i, _| f.get(i).map_or(1.0, |x| x.sqrt()));
+        let scale = |x: &DMatrix<f64>| {
+            DMatrix::from_fn(x.nrows(), x.ncols(), |i, j| half[i] * x[(i, j)] * half[j])
+        };
+        let tt = scale(&aa);
+        let i_minus_n = DMatrix::identity(half.len(), half.len()) - scale(&self.qq);
+        match i_minus_n.cholesky() {
+            Some(chol) => {
+                let c_tt = chol.solve(&tt);
+                residual + c_tt.trace() + chol.solve(&c_tt).trace()
+            }
+            None => f64::INFINITY,
+        }
+    }
+}
+
 impl<'a, 'b> GramCv<'a, 'b> {
-    fn new(problem: &'b RidgeProblem<'a>, runs: &'b [Range<usize>]) -> Self {
+    fn new(problem: &'b RidgeProblem<'a>, runs: &[Range<usize>]) -> Self {
         let (p, q) = problem.target.shape();
-        let ku = problem.u.tr_mul(&problem.target.gram);
-        let m = &ku * &problem.u;
+        let u = &problem.u;
+        let ku = problem.target.gram_times(0..p, u);
+        let m = u.tr_mul(&ku);
+        // The mean's column `1/√p` of Q, unless the fit has no intercept.
+        let mean = (!problem.target.anchored).then(|| (p as f64).sqrt().recip());
+        let runs = runs
+            .iter()
+            .map(|run| RunProducts::new(problem.target, run.clone(), (u, &ku), mean))
+            .collect();
         Self {
             problem,
             runs,
-            ku,
             m,
+            k_trace: problem.target.row_norms.sum(),
             entries: (p * q.max(1)) as f64,
         }
     }
 
     fn evaluate(&self, alpha: f64) -> CvPoint {
-        let (u, k) = (&self.problem.u, &self.problem.target.gram);
-        let p = u.nrows();
         let f = filter(&self.problem.s, alpha);
-        let mut uf = u.clone();
-        for (mut col, fk) in uf.column_iter_mut().zip(f.iter()) {
-            col *= *fk;
-        }
-        let mean_part = if self.problem.target.anchored {
-            0.0
-        } else {
-            1.0 / p as f64
-        };
-        let mut cv = 0.0;
-        for run in self.runs {
-            let (start, len) = (run.start, run.len());
-            let (u_s, uf_s) = (u.rows(start, len), uf.rows(start, len));
-            // Residual Gram of the run: [(I − H) K (I − H)]_SS with H = 11ᵀ/p + U F Uᵀ
-            // (H = U F Uᵀ when anchored); the 11ᵀ/p part vanishes against the centred K.
-            let cross = uf_s * self.ku.columns(start, len);
-            let g = k.view((start, start), (len, len)) - &cross - cross.transpose()
-                + uf_s * &self.m * uf_s.transpose();
-            let i_minus_h = DMatrix::identity(len, len)
-                - DMatrix::from_element(len, len, mean_part)
-                - uf_s * u_s.transpose();
-            cv += match i_minus_h.cholesky() {
-                // e_S = (I − H_SS)⁻¹ r_S, so Σ‖e_S‖² = tr((I − H_SS)⁻¹ G (I − H_SS)⁻¹).
-                Some(chol) => chol.solve(&chol.solve(&g).transpose()).trace(),
-                None => f64::INFINITY,
-            };
-        }
-        let train = train_sum(&self.m, k.trace(), &f);
+        let cv: f64 = self
+            .runs
+            .iter()
+            .map(|run| run.held_out_sum(&f, &self.m))
+            .sum();
+        let train = train_sum(&self.m, self.k_trace, &f);
         // Cancellation in the Gram expansion can leave tiny negative values.
         CvPoint {
             alpha,
@@ -559,10 +643,8 @@ struct HeldOutScore {
     aeb: DMatrix<f64>,
     /// `AᵀA`, `r × r`.
     ata: DMatrix<f64>,
-    /// `B Bᵀ`, `r × r`.
+    /// `B Bᵀ = Uᵀ K U`, `r × r`, which with `tr K` gives the in-sample error.
     bbt: DMatrix<f64>,
-    /// `M = Uᵀ K U` and `tr K`, for the in-sample error.
-    m: DMatrix<f64>,
     k_trace: f64,
     entries: f64,
     train_entries: f64,
@@ -592,15 +674,13 @@ impl HeldOutScore {
             rows += h.y.nrows();
         }
         let (p, q) = target.shape();
-        let ku = problem.u.tr_mul(&target.gram);
         Self {
             s: problem.s.clone(),
             e_sq,
             aeb,
             ata,
             bbt,
-            m: &ku * &problem.u,
-            k_trace: target.gram.trace(),
+            k_trace: target.row_norms.sum(),
             entries: (rows * q.max(1)).max(1) as f64,
             train_entries: (p * q.max(1)).max(1) as f64,
         }
@@ -616,7 +696,7 @@ impl HeldOutScore {
                 err += g[i] * self.ata[(i, j)] * g[j] * self.bbt[(j, i)];
             }
         }
-        let train = train_sum(&self.m, self.k_trace, &filter(&self.s, alpha));
+        let train = train_sum(&self.bbt, self.k_trace, &filter(&self.s, alpha));
         CvPoint {
             alpha,
             cv_error: err.max(0.0) / self.entries,
@@ -677,37 +757,41 @@ mod tests {
     #[test]
     fn closed_form_loo_equals_refits() {
         let (z, y) = problem(17, 4, 6, 1);
-        let outputs = RidgeOutputs::new(y.clone());
-        let target = outputs.around_mean();
-        let ridge = RidgeProblem::new(&z, None, &target);
-        for alpha in [1e-3, 0.05, 0.4, 3.0] {
-            let closed =
-                ridge.cv_point(alpha, &segments(&[z.nrows()], 1)).cv_error * (17 * 6) as f64;
-            let brute = brute_force_cv(&z, &y, alpha, 1);
-            assert!(
-                (closed - brute).abs() <= 1e-9 * brute,
-                "α = {alpha}: {closed} vs {brute}"
-            );
+        for stored in [false, true] {
+            let outputs = RidgeOutputs::with_gram(y.clone(), stored);
+            let target = outputs.around_mean();
+            let ridge = RidgeProblem::new(&z, None, &target);
+            for alpha in [1e-3, 0.05, 0.4, 3.0] {
+                let closed =
+                    ridge.cv_point(alpha, &segments(&[z.nrows()], 1)).cv_error * (17 * 6) as f64;
+                let brute = brute_force_cv(&z, &y, alpha, 1);
+                assert!(
+                    (closed - brute).abs() <= 1e-9 * brute,
+                    "Gram stored {stored}, α = {alpha}: {closed} vs {brute}"
+                );
+            }
         }
     }
 
     #[test]
     fn closed_form_loso_equals_refits() {
         let (z, y) = problem(23, 5, 4, 7);
-        let outputs = RidgeOutputs::new(y.clone());
-        let target = outputs.around_mean();
-        let ridge = RidgeProblem::new(&z, None, &target);
-        for segment in [2, 5, 7] {
-            for alpha in [1e-2, 0.3, 2.0] {
-                let closed = ridge
-                    .cv_point(alpha, &segments(&[z.nrows()], segment))
-                    .cv_error
-                    * (23 * 4) as f64;
-                let brute = brute_force_cv(&z, &y, alpha, segment);
-                assert!(
-                    (closed - brute).abs() <= 1e-9 * brute,
-                    "L = {segment}, α = {alpha}: {closed} vs {brute}"
-                );
+        for stored in [false, true] {
+            let outputs = RidgeOutputs::with_gram(y.clone(), stored);
+            let target = outputs.around_mean();
+            let ridge = RidgeProblem::new(&z, None, &target);
+            for segment in [2, 5, 7] {
+                for alpha in [1e-2, 0.3, 2.0] {
+                    let closed = ridge
+                        .cv_point(alpha, &segments(&[z.nrows()], segment))
+                        .cv_error
+                        * (23 * 4) as f64;
+                    let brute = brute_force_cv(&z, &y, alpha, segment);
+                    assert!(
+                        (closed - brute).abs() <= 1e-9 * brute,
+                        "Gram stored {stored}, L = {segment}, α = {alpha}: {closed} vs {brute}"
+                    );
+                }
             }
         }
     }
@@ -884,30 +968,32 @@ mod tests {
     fn anchored_closed_form_cv_equals_refits() {
         let (z, y) = problem(19, 4, 5, 41);
         let (z0, y0) = anchor(4, 5);
-        let outputs = RidgeOutputs::new(y.clone());
-        let target = outputs.around_anchor(&y0);
-        let ridge = RidgeProblem::new(&z, Some(&z0), &target);
-        for segment in [1, 3, 6] {
-            for alpha in [1e-2, 0.3, 2.0] {
-                let mut brute = 0.0;
-                for start in (0..19).step_by(segment) {
-                    let held: Vec<usize> = (start..(start + segment).min(19)).collect();
-                    let kept: Vec<usize> = (0..19).filter(|i| !held.contains(i)).collect();
-                    let (zk, yk) = (z.select_rows(&kept), y.select_rows(&kept));
-                    let x = anchored_reference(&zk, &yk, &z0, &y0, alpha);
-                    for &i in &held {
-                        let prediction = y0.transpose() + (z.row(i) - z0.transpose()) * &x;
-                        brute += (y.row(i) - prediction).norm_squared();
+        for stored in [false, true] {
+            let outputs = RidgeOutputs::with_gram(y.clone(), stored);
+            let target = outputs.around_anchor(&y0);
+            let ridge = RidgeProblem::new(&z, Some(&z0), &target);
+            for segment in [1, 3, 6] {
+                for alpha in [1e-2, 0.3, 2.0] {
+                    let mut brute = 0.0;
+                    for start in (0..19).step_by(segment) {
+                        let held: Vec<usize> = (start..(start + segment).min(19)).collect();
+                        let kept: Vec<usize> = (0..19).filter(|i| !held.contains(i)).collect();
+                        let (zk, yk) = (z.select_rows(&kept), y.select_rows(&kept));
+                        let x = anchored_reference(&zk, &yk, &z0, &y0, alpha);
+                        for &i in &held {
+                            let prediction = y0.transpose() + (z.row(i) - z0.transpose()) * &x;
+                            brute += (y.row(i) - prediction).norm_squared();
+                        }
                     }
+                    let closed = ridge
+                        .cv_point(alpha, &segments(&[z.nrows()], segment))
+                        .cv_error
+                        * (19 * 5) as f64;
+                    assert!(
+                        (closed - brute).abs() <= 1e-9 * brute,
+                        "Gram stored {stored}, L = {segment}, α = {alpha}: {closed} vs {brute}"
+                    );
                 }
-                let closed = ridge
-                    .cv_point(alpha, &segments(&[z.nrows()], segment))
-                    .cv_error
-                    * (19 * 5) as f64;
-                assert!(
-                    (closed - brute).abs() <= 1e-9 * brute,
-                    "L = {segment}, α = {alpha}: {closed} vs {brute}"
-                );
             }
         }
     }
