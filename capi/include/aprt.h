@@ -146,7 +146,8 @@ typedef enum {
   APRT_STATUS_NON_FINITE_LIGHT_MAP = 210,
   // A position is NaN or infinite.
   APRT_STATUS_NON_FINITE_POSITION = 211,
-  // A bone rotation is not orthonormal (within 1e-3) or not finite.
+  // A bone rotation is not a proper rotation (orthonormal within 1e-3, determinant +1: not
+  // mirrored) or not finite.
   APRT_STATUS_BAD_ROTATION = 212,
   // A light is invalid (non-finite, negative, zero radius or direction).
   APRT_STATUS_BAD_LIGHT = 213,
@@ -542,7 +543,7 @@ aprt_status aprt_occlude(const aprt_model *model,
 //
 // `APRT_STATUS_NO_PROXIES` when the model has none; `APRT_STATUS_WEIGHTS_NOT_SET` before
 // `aprt_pose_proxies`; `APRT_STATUS_WEIGHTS_FOR_OTHER_MODEL` for proxies posed by another
-// model; `APRT_STATUS_BAD_ROTATION` for a rotation that is not orthonormal;
+// model; `APRT_STATUS_BAD_ROTATION` for a matrix that is not a proper rotation;
 // `APRT_STATUS_WRONG_LENGTH` (`out_len`, `bone_count`), `APRT_STATUS_VERTEX_RANGE`,
 // `APRT_STATUS_NON_FINITE_POSITION` and `APRT_STATUS_NON_FINITE_NORMAL` for bad inputs.
 aprt_status aprt_occlude_transfer(const aprt_model *model,

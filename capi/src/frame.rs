@@ -14,7 +14,7 @@ use std::ffi::c_void;
 use aprt_core::{LitWeights, PoseWeights, RigLitWeights};
 
 use crate::ffi_ptr::{self, Handle};
-use crate::model::{aprt_model, with_model};
+use crate::model::{aprt_model, check_bone_count, with_model};
 use crate::status::{aprt_status, finite, guard};
 
 /// One character's per-frame state in the caller's storage. Opaque; see `aprt_frame_init`.
@@ -116,6 +116,7 @@ pub extern "C" fn aprt_light_sh(
         let frame = ffi_ptr::handle_mut(frame)?;
         frame.lit_current = false;
         with_model(model, |m| {
+            check_bone_count(m, bones)?;
             Ok(m.light(&frame.pose, lighting, bones, &mut frame.lit)?)
         })?;
         frame.lit_current = true;

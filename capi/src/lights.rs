@@ -11,7 +11,7 @@ use aprt_core::{
 
 use crate::ffi_ptr;
 use crate::frame::aprt_frame;
-use crate::model::{LightSet, Range, aprt_model, with_model};
+use crate::model::{LightSet, Range, aprt_model, check_bone_count, with_model};
 use crate::status::{aprt_status, finite, guard};
 
 /// A sphere of uniform emitted radiance: `position`, `radius` > 0, `colour` = radiance.
@@ -149,6 +149,7 @@ pub extern "C" fn aprt_shade_lights(
             weights,
         };
         with_model(model, |m| {
+            check_bone_count(m, bones)?;
             Ok(m.shade_lights(&frame.pose, &light_set, range)?)
         })?;
         finite(ffi_ptr::triples(out_rgb, count)?.as_flattened())

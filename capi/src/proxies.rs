@@ -159,7 +159,7 @@ pub extern "C" fn aprt_occlude(
 ///
 /// `APRT_STATUS_NO_PROXIES` when the model has none; `APRT_STATUS_WEIGHTS_NOT_SET` before
 /// `aprt_pose_proxies`; `APRT_STATUS_WEIGHTS_FOR_OTHER_MODEL` for proxies posed by another
-/// model; `APRT_STATUS_BAD_ROTATION` for a rotation that is not orthonormal;
+/// model; `APRT_STATUS_BAD_ROTATION` for a matrix that is not a proper rotation;
 /// `APRT_STATUS_WRONG_LENGTH` (`out_len`, `bone_count`), `APRT_STATUS_VERTEX_RANGE`,
 /// `APRT_STATUS_NON_FINITE_POSITION` and `APRT_STATUS_NON_FINITE_NORMAL` for bad inputs.
 #[allow(clippy::too_many_arguments)]

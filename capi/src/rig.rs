@@ -11,7 +11,7 @@ use aprt_core::{Placement, RigLitWeights};
 use crate::ffi_ptr;
 use crate::frame::aprt_frame;
 use crate::lights::{Lights, aprt_light, to_core, too_many};
-use crate::model::{Range, aprt_model, with_model};
+use crate::model::{Range, aprt_model, check_bone_count, with_model};
 use crate::status::{aprt_status, finite, guard};
 
 /// Where the character's root frame is in the world this frame: `world = rotation · p +
@@ -155,6 +155,7 @@ pub extern "C" fn aprt_light_rig(
         let buffer = ffi_ptr::slice_mut(buffer, buffer_len)?;
         let mut lit = RigLitWeights::new(buffer);
         with_model(model, |m| {
+            check_bone_count(m, bones)?;
             Ok(m.light_rig(&frame.pose, vectors, bones, &mut lit)?)
         })?;
         frame.rig = Some(lit);

@@ -117,7 +117,8 @@ pub enum aprt_status {
     NonFiniteLightMap = 210,
     /// A position is NaN or infinite.
     NonFinitePosition = 211,
-    /// A bone rotation is not orthonormal (within 1e-3) or not finite.
+    /// A bone rotation is not a proper rotation (orthonormal within 1e-3, determinant +1: not
+    /// mirrored) or not finite.
     BadRotation = 212,
     /// A light is invalid (non-finite, negative, zero radius or direction).
     BadLight = 213,
@@ -191,6 +192,7 @@ impl From<Error> for aprt_status {
             Error::WeightsForOtherModel => S::WeightsForOtherModel,
             Error::Source => S::Source,
             Error::TriangleRange { .. } => S::TriangleRange,
+            Error::Overflow => S::Overflow,
             _ => S::Unknown,
         }
     }
@@ -312,7 +314,7 @@ pub(crate) fn message(status: aprt_status) -> &'static CStr {
         S::NonFiniteLighting => c"a lighting coefficient is NaN or infinite",
         S::NonFiniteLightMap => c"a light-map coefficient is NaN or infinite",
         S::NonFinitePosition => c"a position is NaN or infinite",
-        S::BadRotation => c"a bone rotation is not orthonormal",
+        S::BadRotation => c"a bone rotation is not a rotation (orthonormal, not mirrored)",
         S::BadLight => c"a light is invalid",
         S::BadLightWeight => c"a light weight is negative, NaN or infinite",
         S::VertexRange => c"the vertex range is out of bounds",
