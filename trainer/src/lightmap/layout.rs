@@ -71,14 +71,28 @@ pub fn layout_for(
     }
 }
 
-/// The rig's texture UV layout, or the error that says the character has none.
+/// The rig's texture UV layout, or the error that says the character has none or why a light
+/// map cannot lie on it: a corner outside `[0, 1]²` (the atlas does not wrap repeating
+/// textures) or a triangle whose UVs have no area though it has. No texel stands for such a
+/// surface, so its vertices would read no transfer (a bake went through, and read 11.7 % and
+/// 18.8 % error against 2.55 %).
 pub fn texture_layout<'r>(rig: &'r dyn Rig, what: &str) -> Result<&'r UvLayout> {
-    match rig.uv_layout() {
-        Some(layout) => Ok(layout),
-        None => bail!(
-            "{what} has no texture coordinates (glTF TEXCOORD_0, OBJ vt): bake its light map on generated UVs (--uv generate)"
-        ),
+    let fix = "bake its light map on generated UVs (--uv generate, the default)";
+    let Some(layout) = rig.uv_layout() else {
+        bail!("{what} has no texture coordinates (glTF TEXCOORD_0, OBJ vt): {fix}");
+    };
+    if let Some((t, k, _)) = layout.outside_unit_square() {
+        let [u, v] = layout.corners[t][k];
+        bail!(
+            "{what}: corner {k} of triangle {t} has texture UV ({u}, {v}) (v down, as glTF's), outside [0, 1]² (a light map does not wrap repeating textures): {fix}"
+        );
     }
+    if let Some(t) = layout.first_flat_triangle(rig.bind_mesh()) {
+        bail!(
+            "{what}: the texture UVs of triangle {t} have no area though the triangle has: no texel would stand for its surface; {fix}"
+        );
+    }
+    Ok(layout)
 }
 
 /// The layout maps read back from a file (called `name`) lie on: the UVs it stores, which

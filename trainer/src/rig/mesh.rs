@@ -35,24 +35,36 @@ impl Mesh {
     /// test is the angles, not the size. Triangles naming a vertex that does not exist are not
     /// counted (the bake refuses them).
     pub fn degenerate_triangles(&self) -> usize {
+        (0..self.triangles.len())
+            .filter(|&t| self.is_degenerate(t))
+            .count()
+    }
+
+    /// Whether triangle `t` has no area, as [`Mesh::degenerate_triangles`] counts them.
+    pub fn is_degenerate(&self, t: usize) -> bool {
         let corner = |i: u32| {
             self.positions
                 .get(i as usize)
                 .map(|&p| glam::Vec3::from(p).as_dvec3())
         };
-        self.triangles
-            .iter()
-            .filter(|t| {
-                let (Some(a), Some(b), Some(c)) = (corner(t[0]), corner(t[1]), corner(t[2])) else {
-                    return false;
-                };
-                let twice_area = (b - a).cross(c - a).length();
-                let mut edges = [(b - a).length(), (c - a).length(), (c - b).length()];
-                edges.sort_by(f64::total_cmp);
-                twice_area <= 4.0 * f64::from(f32::EPSILON) * edges[0] * edges[1]
-            })
-            .count()
+        let t = self.triangles[t];
+        let (Some(a), Some(b), Some(c)) = (corner(t[0]), corner(t[1]), corner(t[2])) else {
+            return false;
+        };
+        let twice_area = (b - a).cross(c - a).length();
+        is_flat(
+            twice_area,
+            [(b - a).length(), (c - a).length(), (c - b).length()],
+        )
     }
+}
+
+/// Whether a triangle of `twice_area` and these `edges` has no area to f32 precision: the sine
+/// of every angle at most four f32 epsilons, that is twice the area at most that times the
+/// product of the two shorter edges.
+pub(crate) fn is_flat(twice_area: f64, mut edges: [f64; 3]) -> bool {
+    edges.sort_by(f64::total_cmp);
+    twice_area.abs() <= 4.0 * f64::from(f32::EPSILON) * edges[0] * edges[1]
 }
 
 /// The note for `mesh` (called `name` in it) when it has degenerate triangles

@@ -39,6 +39,10 @@ mod surface;
 #[cfg(test)]
 mod tests;
 
+use glam::DVec2;
+
+use crate::rig::mesh::Mesh;
+
 pub use pack::{Placement, shelf_pack};
 pub use sample::sample_bilinear;
 
@@ -87,6 +91,15 @@ impl UvLayout {
                     .map(|&x| (t, k, x))
             })
         })
+    }
+
+    /// The first triangle of `mesh` that has area while its UVs have none (to f32 precision,
+    /// as the rasteriser tests): no texel stands for its surface.
+    pub fn first_flat_triangle(&self, mesh: &Mesh) -> Option<usize> {
+        let flat =
+            |c: &[[f32; 2]; 3]| raster::is_flat_uv(c.map(|uv| DVec2::from(uv.map(f64::from))));
+        (0..self.corners.len().min(mesh.triangles.len()))
+            .find(|&t| flat(&self.corners[t]) && !mesh.is_degenerate(t))
     }
 
     /// The layout of a mesh with one UV per vertex (as glTF stores them). A corner naming a
@@ -230,7 +243,7 @@ impl Atlas {
     /// # Panics
     /// If `mesh` does not have the triangle count the atlas was built for, or its triangles
     /// name vertices it lacks: posed meshes come from the same rig as the layout.
-    pub fn surface(&self, mesh: &crate::rig::mesh::Mesh) -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
+    pub fn surface(&self, mesh: &Mesh) -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
         assert_eq!(
             mesh.triangles.len(),
             self.triangle_count,

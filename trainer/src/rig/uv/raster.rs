@@ -6,6 +6,7 @@ use glam::DVec2;
 use rayon::prelude::*;
 
 use super::TexelSample;
+use crate::rig::mesh::is_flat;
 
 /// How far outside a triangle (in texel widths) a texel centre may lie and still count as on
 /// its edge: f32 UVs of a shared edge rounded differently in each triangle, or a centre
@@ -83,6 +84,17 @@ pub(super) fn rasterise(corners: &[[[f32; 2]; 3]], resolution: usize) -> Coverag
     }
 }
 
+/// Whether a UV triangle has no area to f32 precision ([`is_flat`]): it covers no texel.
+pub(super) fn is_flat_uv(v: [DVec2; 3]) -> bool {
+    let twice_area = (v[1] - v[0]).perp_dot(v[2] - v[0]);
+    let edges = [
+        v[0].distance(v[1]),
+        v[1].distance(v[2]),
+        v[2].distance(v[0]),
+    ];
+    is_flat(twice_area, edges)
+}
+
 /// A UV triangle in texel units with a nonzero area.
 struct UvTriangle {
     v: [DVec2; 3],
@@ -96,14 +108,7 @@ impl UvTriangle {
     /// three corners on a line cover nothing whatever their rounding.
     fn new(v: [DVec2; 3]) -> Option<UvTriangle> {
         let twice_area = (v[1] - v[0]).perp_dot(v[2] - v[0]);
-        let mut edges = [
-            v[0].distance(v[1]),
-            v[1].distance(v[2]),
-            v[2].distance(v[0]),
-        ];
-        edges.sort_by(f64::total_cmp);
-        let degenerate = twice_area.abs() <= 4.0 * f64::from(f32::EPSILON) * edges[0] * edges[1];
-        (!degenerate && twice_area.is_finite()).then_some(UvTriangle { v, twice_area })
+        (!is_flat_uv(v) && twice_area.is_finite()).then_some(UvTriangle { v, twice_area })
     }
 
     /// Barycentric coordinates of `p` and its signed distance (texels, positive inside) to
