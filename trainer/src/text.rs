@@ -17,15 +17,69 @@ pub fn excerpt(text: &str) -> String {
     }
 }
 
-/// `text` with its control characters (line breaks, tabs, escapes) written as Rust escapes
-/// (`\n`, `\u{1b}`): a name or message quoted from a file keeps an error on one line.
+/// Names from a file a list shows before it says how many more there are.
+pub const LISTED: usize = 8;
+
+/// `c` as a message shows it: itself, or [`char::escape_debug`]'s escape when it is a control
+/// character (line breaks, tabs, escapes), a bidirectional mark or another invisible one, and,
+/// with `quotes`, a double quote or a backslash.
+fn escaped(c: char, quotes: bool) -> String {
+    match c {
+        '"' | '\\' if !quotes => c.to_string(),
+        '\'' => c.to_string(),
+        _ => c.escape_debug().collect(),
+    }
+}
+
+/// `text` with its control and invisible characters escaped ([`escaped`]): text quoted from a
+/// file keeps an error on one line, and can neither recolour the terminal nor reverse the line.
 pub fn escape_controls(text: &str) -> String {
-    text.chars()
-        .map(|c| match c.is_control() {
-            true => c.escape_default().to_string(),
-            false => c.to_string(),
-        })
-        .collect()
+    text.chars().map(|c| escaped(c, false)).collect()
+}
+
+/// At most about [`EXCERPT_CHARS`] characters of `text` escaped as `quotes` asks ([`escaped`]),
+/// with `…` where it was cut.
+fn escaped_excerpt(text: &str, quotes: bool) -> String {
+    let mut out = String::new();
+    let mut shown = 0;
+    for c in text.chars() {
+        let piece = escaped(c, quotes);
+        shown += piece.chars().count();
+        if shown > EXCERPT_CHARS {
+            out.push('…');
+            break;
+        }
+        out += &piece;
+    }
+    out
+}
+
+/// A name or token from a file, a blob or the command line as a message quotes it: in double
+/// quotes, escaped as `{:?}` escapes it (control characters, bidirectional marks, quotes) and
+/// cut with `…` after about [`EXCERPT_CHARS`] characters, so a 100 KB token gives a short line.
+/// A plain name reads as `{:?}` shows it.
+pub fn quote(text: &str) -> String {
+    format!("\"{}\"", escaped_excerpt(text, true))
+}
+
+/// A name from a file or a blob as a listing shows it: [`quote`]'s escapes and cut, without
+/// the quotes.
+pub fn shown(text: &str) -> String {
+    escaped_excerpt(text, false)
+}
+
+/// Names from a file as a message lists them: each [`shown`], joined with `, `, at most
+/// [`LISTED`] of them and then how many more, so the list stays one short line.
+pub fn shown_list<S: AsRef<str>>(names: &[S]) -> String {
+    let mut list: Vec<String> = names
+        .iter()
+        .take(LISTED)
+        .map(|n| shown(n.as_ref()))
+        .collect();
+    if names.len() > LISTED {
+        list.push(format!("and {} more", names.len() - LISTED));
+    }
+    list.join(", ")
 }
 
 /// A TOML syntax or schema error as one line: where (line and column) and what, quoting at
@@ -65,6 +119,23 @@ mod tests {
         let cut = excerpt(&long);
         assert_eq!(cut.chars().count(), EXCERPT_CHARS + 1);
         assert!(cut.ends_with('…'));
+    }
+
+    /// A quoted name is escaped as `{:?}` escapes it and cut to one short line; a list of
+    /// names says how many it leaves out.
+    #[test]
+    fn a_quoted_name_is_escaped_and_short() {
+        assert_eq!(quote("hip.x"), format!("{:?}", "hip.x"));
+        assert_eq!(quote("a\"b\\c"), format!("{:?}", "a\"b\\c"));
+        let hostile = "\u{1b}[31mred\r\u{202e}txt\u{200f}";
+        assert_eq!(quote(hostile), r#""\u{1b}[31mred\r\u{202e}txt\u{200f}""#);
+        assert_eq!(shown("a\"b"), "a\"b");
+        let long = quote(&"\u{1b}".repeat(100_000));
+        assert!(long.chars().count() <= EXCERPT_CHARS + 3, "{long}");
+        assert!(long.ends_with("…\""), "{long}");
+        let names: Vec<String> = (0..20).map(|i| format!("n{i}")).collect();
+        assert_eq!(shown_list(&names[..2]), "n0, n1");
+        assert!(shown_list(&names).ends_with("n7, and 12 more"));
     }
 
     /// A TOML error says where and what, without echoing the offending line.

@@ -265,7 +265,7 @@ fn model_limits_are_checked_before_the_bake() {
         "wide",
         &command(&["train"], "--obj-seq", &seq, &["--angles", &s(&csv)]),
         &inputs,
-        &["ok/seq", "513 pose entries (one per column of angles)"],
+        &["wide.csv: row 1 has 513 angles", "512 pose entries"],
     );
 
     // 200 bones, one of them moving: a bone-frame model lights 200 × k_v weights per frame.

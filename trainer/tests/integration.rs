@@ -8,6 +8,7 @@ mod run;
 mod bake_farm;
 mod browser;
 mod cli;
+mod cli_refusals;
 mod extrapolation;
 mod gltf;
 mod hostile_gltf;

@@ -4,6 +4,7 @@
 use anyhow::{Context, Result, bail};
 
 use crate::cli::args::RigArgs;
+use crate::cli::stdout::outln;
 use crate::cli::terminal::Terminal;
 use crate::io::outputs::{Input, check};
 use crate::irradiance_rig::fit::fitting_meshes;
@@ -95,12 +96,12 @@ pub fn run(args: &RigArgs) -> Result<()> {
         us_per_frame,
     };
     if args.json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&report).context("writing JSON")?
-        );
+        )?;
     } else {
-        print_report(&report);
+        print_report(&report)?;
     }
     Ok(())
 }
@@ -114,35 +115,47 @@ struct RigReport {
     us_per_frame: FrameCost,
 }
 
-fn print_report(report: &RigReport) {
+fn print_report(report: &RigReport) -> Result<()> {
     let r = &report.evaluation;
-    println!(
+    outln!(
         "rig {}: {} SH vectors from {} surface samples, order {}, {} vertices, radius {:.3}",
-        r.rig, r.sh_vectors, r.samples, r.order, r.vertices, r.radius
-    );
+        r.rig,
+        r.sh_vectors,
+        r.samples,
+        r.order,
+        r.vertices,
+        r.radius
+    )?;
     for l in &r.lights {
         let distance = l
             .distance
             .map_or("at infinity".into(), |d| format!("at {d:.3}"));
-        println!(
+        outln!(
             "  light {} ({}) {distance}: {} (rig share {:.2}, transition distance {:.3})",
-            l.index, l.kind, l.mode, l.rig_share, l.transition_distance
-        );
+            l.index,
+            l.kind,
+            l.mode,
+            l.rig_share,
+            l.transition_distance
+        )?;
     }
     let g = |e: crate::irradiance_rig::GreyError| format!("mean {:.3}, max {:.3}", e.mean, e.max);
-    println!(
+    outln!(
         "  error against exact, grey levels (target {}):",
         r.target_error
-    );
-    println!("    as chosen            {}", g(r.error_grey));
-    println!("    every light in rig   {}", g(r.error_grey_all_rig));
-    println!(
+    )?;
+    outln!("    as chosen            {}", g(r.error_grey))?;
+    outln!("    every light in rig   {}", g(r.error_grey_all_rig))?;
+    outln!(
         "    every light per vertex (SH floor) {}",
         g(r.error_grey_per_vertex)
-    );
+    )?;
     let c = report.us_per_frame;
-    println!(
+    outln!(
         "  aprt-core per frame: {:.1} us rig vectors + {:.1} us rig shading + {:.1} us per-vertex lights = {:.1} us",
-        c.rig_vectors, c.shade, c.analytic, c.total
-    );
+        c.rig_vectors,
+        c.shade,
+        c.analytic,
+        c.total
+    )
 }

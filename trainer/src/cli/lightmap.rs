@@ -11,6 +11,7 @@ use crate::bake::checkpoint::{Checkpoint, OnExisting};
 use crate::bake::shard::Shard;
 use crate::cli::args::{BakeArgs, FitArgs, PrecisionArg};
 use crate::cli::source::SourceArgs;
+use crate::cli::stdout::outln;
 use crate::cli::terminal::Terminal;
 use crate::cli::{read_file, shard_done, write_npy};
 use crate::input::InputKind;
@@ -410,11 +411,11 @@ fn eval(args: &LightmapEvalArgs) -> Result<()> {
     write_npy(&args.npy, &shape, &flat)?;
     if let (Some(path), Some((_, truth))) = (&args.against, truth) {
         let error = crate::report::evaluate::relative_error(&[flat], &[truth]);
-        println!(
+        outln!(
             "relative transfer error against {}: {:.2}%",
             path.display(),
             100.0 * error
-        );
+        )?;
     }
     Ok(())
 }
@@ -451,33 +452,35 @@ fn inspect(args: &LightmapInspectArgs) -> Result<()> {
     let summary =
         summarize(&bytes).with_context(|| format!("{}: invalid sequence", args.input.display()))?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&summary)?);
+        outln!("{}", serde_json::to_string_pretty(&summary)?)?;
         return Ok(());
     }
     let s = &summary;
-    println!("{}", args.input.display());
-    println!(
+    outln!("{}", args.input.display())?;
+    outln!(
         "  {} frames, {r}x{r} texels ({} filled), SH order {}",
         s.frames,
         s.filled_texels,
         s.order,
         r = s.resolution
-    );
-    println!(
+    )?;
+    outln!(
         "  {} bytes, {:.1}:1 against {} bytes of f32 maps",
-        s.bytes, s.ratio, s.raw_bytes
-    );
-    println!("  codec: {}", s.codec);
+        s.bytes,
+        s.ratio,
+        s.raw_bytes
+    )?;
+    outln!("  codec: {}", s.codec)?;
     match s.uv_triangles {
-        0 => println!("  UVs: the character's texture UVs"),
-        t => println!("  UVs: generated light-map UVs of {t} triangles, stored in the file"),
+        0 => outln!("  UVs: the character's texture UVs")?,
+        t => outln!("  UVs: generated light-map UVs of {t} triangles, stored in the file")?,
     }
-    println!(
+    outln!(
         "  decode: {:.3} ms per frame ({:.1}x a copy of the frame's f32 maps, {:.3} ms)",
         s.decode_ms_per_frame,
         s.decode_ms_per_frame / s.memcpy_ms_per_frame.max(1e-9),
         s.memcpy_ms_per_frame
-    );
+    )?;
     Ok(())
 }
 

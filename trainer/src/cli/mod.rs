@@ -6,6 +6,7 @@ mod args;
 mod irradiance_rig;
 mod lightmap;
 mod source;
+mod stdout;
 mod terminal;
 
 use std::path::Path;
@@ -19,10 +20,12 @@ pub use args::{
     RigStudyArgs, SimulateArgs, TrainArgs, TransferArgs,
 };
 pub use source::SourceArgs;
+pub use stdout::StdoutClosed;
 pub use terminal::Terminal;
 
 use crate::bake::budget::Workload;
 use crate::bake::checkpoint::{Checkpoint, OnExisting, ShardBaked};
+use crate::cli::stdout::outln;
 use crate::input::{InputKind, read_input};
 use crate::io::atomic::write_atomic;
 use crate::io::outputs::{Input, Output, check};
@@ -105,10 +108,18 @@ pub fn error_line(err: &anyhow::Error) -> String {
     line
 }
 
-/// Runs one command. An interrupted run (SIGINT, SIGTERM, SIGHUP) leaves no temporary file.
+/// Runs one command. An interrupted run (SIGINT, SIGTERM, SIGHUP) leaves no temporary file; a
+/// command whose standard output is closed ends there, quietly ([`StdoutClosed`]).
 pub fn run(cli: Cli) -> Result<()> {
     crate::io::atomic::clean_up_on_signals().context("cannot install the signal handler")?;
-    match cli.command {
+    match command(cli.command) {
+        Err(e) if e.is::<StdoutClosed>() => Ok(()),
+        done => done,
+    }
+}
+
+fn command(command: Command) -> Result<()> {
+    match command {
         Command::Demo(args) => demo(&args),
         Command::Transfer(args) => transfer(&args),
         Command::Train(args) => train(&args),
@@ -146,11 +157,11 @@ fn light_irradiance(args: &IrradianceArgs) -> Result<()> {
         format!("{}: at {x},{y},{z}", args.lights.display())
     })?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?)?;
         return Ok(());
     }
     let rgb = |c: [f32; 3]| format!("{:.6} {:.6} {:.6}", c[0], c[1], c[2]);
-    println!(
+    outln!(
         "{} light(s) at {:?}, normal {:?}, SH order {}{}",
         report.lights.len(),
         report.at,
@@ -160,15 +171,17 @@ fn light_irradiance(args: &IrradianceArgs) -> Result<()> {
             .window
             .map(|w| format!(", {w} window"))
             .unwrap_or_default()
-    );
-    println!("  irradiance, SH path  {}", rgb(report.sh));
-    println!("  irradiance, exact    {}", rgb(report.exact));
-    println!("  |SH - exact|         {}", rgb(report.abs_error));
+    )?;
+    outln!("  irradiance, SH path  {}", rgb(report.sh))?;
+    outln!("  irradiance, exact    {}", rgb(report.exact))?;
+    outln!("  |SH - exact|         {}", rgb(report.abs_error))?;
     let g = report.grey_levels;
-    println!(
+    outln!(
         "  8-bit grey levels    {:.2} {:.2} {:.2}  (white Lambertian surface, 255 |SH - exact| / pi)",
-        g[0], g[1], g[2]
-    );
+        g[0],
+        g[1],
+        g[2]
+    )?;
     Ok(())
 }
 
@@ -201,19 +214,19 @@ fn light_env(args: &EnvArgs) -> Result<()> {
             height: image.height,
             coefficients,
         };
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?)?;
         return Ok(());
     }
-    println!(
+    outln!(
         "{}: {}x{} equirectangular, SH order {order} ({} RGB coefficients, {ENV_FRAME})",
         args.file.display(),
         image.width,
         image.height,
         coefficients.len()
-    );
+    )?;
     let bands = (0..order as i32).flat_map(|l| (-l..=l).map(move |m| (l, m)));
     for ((l, m), [r, g, b]) in bands.zip(&coefficients) {
-        println!("  l={l} m={m:+}  {r:.6} {g:.6} {b:.6}");
+        outln!("  l={l} m={m:+}  {r:.6} {g:.6} {b:.6}")?;
     }
     Ok(())
 }
@@ -222,7 +235,7 @@ fn demo(args: &DemoArgs) -> Result<()> {
     // The demo reads no file of the user's (its character and scene are built in).
     check(&[Output::directory(&args.out, "--out", &[])], &[])?;
     let markdown = crate::report::demo::run(&args.settings()?, &Terminal)?;
-    print!("{markdown}");
+    stdout::print(&markdown)?;
     eprintln!(
         "wrote {}/{{model.aprt, report.md, report.json, novel_pose.png, baselines.png, rig_frame.png, sweep/}}",
         args.out.display()
@@ -245,9 +258,9 @@ fn inspect(args: &InspectArgs) -> Result<()> {
     let info = crate::model::runtime::describe(&blob)
         .with_context(|| format!("{}: invalid model", args.model.display()))?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&info)?);
+        outln!("{}", serde_json::to_string_pretty(&info)?)?;
     } else {
-        print!("{info}");
+        stdout::print(&info.to_string())?;
     }
     Ok(())
 }

@@ -34,6 +34,19 @@ pub enum AnglesError {
         /// Line of the first data row.
         first_row: usize,
     },
+    /// A row has more cells than a model has pose entries.
+    #[error(
+        "{path}: row {row} has {found} angles, more than the {max} pose entries aprt-core takes",
+        max = aprt_core::MAX_POSE_LEN
+    )]
+    Columns {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number.
+        row: usize,
+        /// Cells found.
+        found: usize,
+    },
     /// A row has a different number of cells than the model has pose entries.
     #[error("{path}: row {row} has {found} angles, the model takes {expected}")]
     Width {
@@ -84,6 +97,13 @@ pub fn parse_angles(
             first_row = usize::MAX; // a header row: names, not numbers
             continue;
         }
+        if cells.len() > aprt_core::MAX_POSE_LEN {
+            return Err(AnglesError::Columns {
+                path: path.into(),
+                row: i + 1,
+                found: cells.len(),
+            });
+        }
         let mut row = Vec::with_capacity(cells.len());
         for (j, (cell, value)) in cells.iter().zip(parsed).enumerate() {
             let bad = |reason: String| AnglesError::Cell {
@@ -92,16 +112,19 @@ pub fn parse_angles(
                 column: j + 1,
                 reason,
             };
+            // Escaped and cut: a 100 KB cell gives a short line.
+            let cell = || crate::text::shown(cell);
             match value {
                 // Larger angles overflow the fit's squares and the runtime's f32 pose vector.
                 Ok(x) if x.abs() > f64::from(f32::MAX) && x.is_finite() => {
                     return Err(bad(format!(
-                        "'{cell}' is beyond ±3.4e38, the largest angle the runtime's f32 pose vector holds"
+                        "'{}' is beyond ±3.4e38, the largest angle the runtime's f32 pose vector holds",
+                        cell()
                     )));
                 }
                 Ok(x) if x.is_finite() => row.push(x),
-                Ok(_) => return Err(bad(format!("'{cell}' is not finite"))),
-                Err(_) => return Err(bad(format!("'{cell}' is not a number"))),
+                Ok(_) => return Err(bad(format!("'{}' is not finite", cell()))),
+                Err(_) => return Err(bad(format!("'{}' is not a number", cell()))),
             }
         }
         if let Some(expected) = pose_len.filter(|&n| n != row.len()) {
@@ -182,5 +205,21 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert_eq!(err, "a.csv: row 2 has 2 angles, the model takes 3");
+        let wide = vec!["0"; aprt_core::MAX_POSE_LEN + 1].join(",");
+        let err = parse_angles(Path::new("a.csv"), &wide, None)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("a.csv: row 1 has 513 angles, more than"),
+            "{err}"
+        );
+        let err = parse_angles(
+            Path::new("a.csv"),
+            &format!("0\n{}y", "x".repeat(100_000)),
+            None,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(err.len() < 200, "{err}");
     }
 }

@@ -53,10 +53,10 @@ pub enum ObjError {
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum LineError {
     /// A coordinate or index is not a number.
-    #[error("malformed number {0:?}")]
+    #[error("malformed number {}", crate::text::quote(.0))]
     MalformedNumber(String),
     /// A coordinate is NaN or infinite (including values that overflow f32).
-    #[error("coordinate {0:?} is not finite")]
+    #[error("coordinate {} is not finite", crate::text::quote(.0))]
     NonFinite(String),
     /// A `v` or `vn` statement has fewer than three coordinates.
     #[error("expected 3 coordinates, found {0}")]
@@ -68,7 +68,7 @@ pub enum LineError {
     #[error("a face needs at least 3 corners, found {0}")]
     TooFewCorners(usize),
     /// A face corner has more than three `/`-separated parts or no vertex index.
-    #[error("malformed face corner {0:?}")]
+    #[error("malformed face corner {}", crate::text::quote(.0))]
     MalformedCorner(String),
     /// An index of 0 (OBJ indices start at 1; negative ones count back from the end).
     #[error("index 0 is invalid (OBJ indices start at 1)")]

@@ -310,7 +310,8 @@ impl LoadedRig {
                 path.display()
             ),
             (LoadedRig::Mannequin(..), ClipSpec::Named(name)) => bail!(
-                "clip {name:?}: a BVH file's one clip is its motion (choose frames with A..B)"
+                "clip {}: a BVH file's one clip is its motion (choose frames with A..B)",
+                crate::text::quote(name)
             ),
         }
     }

@@ -15,6 +15,7 @@ use crate::model::export::{Precision, encode_model_with_rig};
 use crate::model::{LinearModel, VertexBasis};
 use crate::rig::bone_frames::BoneFrames;
 use crate::rig::mesh::Mesh;
+use crate::text::shown;
 
 /// Per-vertex transfer (`v × n²`, vertex-major) for each pose, through `aprt-core`, in the
 /// model's frame (world, or each vertex's bone).
@@ -274,7 +275,9 @@ impl std::fmt::Display for BlobInfo {
             self.scratch_bytes, self.pose_weights, self.lit_weights
         )?;
         if !self.angle_names.is_empty() {
-            writeln!(f, "  pose entries    {}", self.angle_names.join(" "))?;
+            // Escaped and cut: the names are the blob's, whatever bytes it holds.
+            let names: Vec<String> = self.angle_names.iter().map(|n| shown(n)).collect();
+            writeln!(f, "  pose entries    {}", names.join(" "))?;
         }
         if let Some(rig) = &self.irradiance_rig {
             writeln!(

@@ -57,7 +57,7 @@ pub enum MeshSequenceError {
         error: PoseError,
     },
     /// A clip other than the sequence's one.
-    #[error("{sequence}: no clip {name:?}: an OBJ sequence is one clip, its files in order")]
+    #[error("{sequence}: no clip {}: an OBJ sequence is one clip, its files in order", crate::text::quote(.name))]
     UnknownClip {
         /// The sequence.
         sequence: String,

@@ -84,7 +84,7 @@ impl PoseLayout {
         if !missing.is_empty() {
             bail!(
                 "the model takes pose entries this character does not have: {}",
-                missing.join(", ")
+                crate::text::shown_list(&missing)
             );
         }
         Ok(PoseLayout {

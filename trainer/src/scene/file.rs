@@ -482,8 +482,10 @@ fn clip_lists(
                     return Err((
                         CLIP_KEYS[j],
                         format!(
-                            "clip {b:?} shares {frames} with {} clip {a:?}: train, validate and test clips must share no frame",
-                            CLIP_KEYS[i]
+                            "clip {} shares {frames} with {} clip {}: train, validate and test clips must share no frame",
+                            crate::text::quote(b),
+                            CLIP_KEYS[i],
+                            crate::text::quote(a)
                         ),
                     ));
                 }

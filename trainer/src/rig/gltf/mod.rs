@@ -153,7 +153,7 @@ pub enum GltfError {
         path: PathBuf,
     },
     /// No clip has the requested name.
-    #[error("{path}: no clip named {name:?}; available: {available}", path = path.display())]
+    #[error("{path}: no clip named {}; available: {available}", crate::text::quote(.name), path = path.display())]
     UnknownClip {
         /// The file.
         path: PathBuf,
@@ -163,7 +163,7 @@ pub enum GltfError {
         available: String,
     },
     /// A clip would have too many frames, or a frame index is past its end.
-    #[error("{path}: clip {clip:?}: {problem}", path = path.display())]
+    #[error("{path}: clip {}: {problem}", crate::text::quote(.clip), path = path.display())]
     Frames {
         /// The file.
         path: PathBuf,
@@ -319,7 +319,7 @@ impl GltfRig {
             .ok_or_else(|| GltfError::UnknownClip {
                 path: self.path.clone(),
                 name: name.to_owned(),
-                available: self.clip_names().join(", "),
+                available: crate::text::shown_list(&self.clip_names()),
             })?;
         let end = animation.end();
         // The tolerance keeps an end that is a whole number of frames up to rounding (e.g.

@@ -155,7 +155,7 @@ pub enum MocapRigError {
         source_clip: String,
     },
     /// No clip has the requested name.
-    #[error("no clip named {name:?}; available: {available}")]
+    #[error("no clip named {}; available: {available}", crate::text::quote(.name))]
     UnknownClip {
         /// The name asked for.
         name: String,
@@ -537,7 +537,7 @@ impl Rig for MocapRig {
         if name != self.clip_name {
             return Err(MocapRigError::UnknownClip {
                 name: name.into(),
-                available: self.clip_name.clone(),
+                available: crate::text::shown(&self.clip_name),
             }
             .into());
         }

@@ -21,7 +21,7 @@ pub enum CharacterError {
     #[error(transparent)]
     Pose(#[from] PoseError),
     /// No clip has the requested name.
-    #[error("no clip named {name:?}; available: {available}")]
+    #[error("no clip named {}; available: {available}", crate::text::quote(.name))]
     UnknownClip {
         /// The name asked for.
         name: String,
