@@ -164,8 +164,7 @@ typedef enum {
   // The triangle is past the last one whose corner UVs the texel atlas records.
   APRT_STATUS_TRIANGLE_RANGE = 219,
   // A result overflowed to infinity or NaN (inputs, or a blob's values, too large for
-  // f32): the call's outputs are not to be used. No call returns OK with a non-finite
-  // output.
+  // f32): the call's outputs are zeroed. No call returns OK with a non-finite output.
   APRT_STATUS_OVERFLOW = 220,
   // An error of a newer core than this table knows.
   APRT_STATUS_UNKNOWN = 999,
@@ -386,7 +385,7 @@ aprt_status aprt_lightmap_compose_rig(const aprt_model *model,
 // 1 for all of it, `1 − aprt_rig_share` when a rig carries the rest), through the vertex's
 // posed transfer: lights near the character stay self-shadowed. `bones` as in `aprt_light_sh`.
 // Needs `aprt_set_pose` first (not `aprt_light_sh`). Everything is checked before anything is
-// written, but for `APRT_STATUS_OVERFLOW`, which is found in the sums.
+// written, but for `APRT_STATUS_OVERFLOW`, found in the sums (the outputs are then 0).
 aprt_status aprt_shade_lights(const aprt_model *model,
                               const aprt_frame *frame,
                               const float *bones,
@@ -523,7 +522,7 @@ aprt_status aprt_pose_proxies(const aprt_model *model,
 // proxies posed by another model; `APRT_STATUS_WRONG_LENGTH`, `APRT_STATUS_VERTEX_RANGE`,
 // `APRT_STATUS_NON_FINITE_LIGHTING`, `APRT_STATUS_NON_FINITE_POSITION` and
 // `APRT_STATUS_NON_FINITE_NORMAL` for bad inputs (`out` is then unchanged);
-// `APRT_STATUS_OVERFLOW` when inputs too large overflowed it.
+// `APRT_STATUS_OVERFLOW` when inputs too large overflowed it (`out` is then 0).
 aprt_status aprt_occlude(const aprt_model *model,
                          const aprt_proxy_frame *proxies,
                          const float *lighting,

@@ -15,7 +15,7 @@ use aprt_core::{LitWeights, PoseWeights, RigLitWeights};
 
 use crate::ffi_ptr::{self, Handle};
 use crate::model::{aprt_model, check_bone_count, with_model};
-use crate::status::{aprt_status, finite, guard};
+use crate::status::{aprt_status, guard};
 
 /// One character's per-frame state in the caller's storage. Opaque; see `aprt_frame_init`.
 // `repr(C)` puts the tag first, where every handle check reads (a Rust layout put it last, so
@@ -143,8 +143,7 @@ pub extern "C" fn aprt_shade(
             if !frame.lit_current {
                 return Err(aprt_status::WeightsNotSet);
             }
-            m.shade(&frame.lit, first, out)?;
-            finite(out)
+            Ok(m.shade(&frame.lit, first, out)?)
         })
     })
 }
@@ -163,10 +162,7 @@ pub extern "C" fn aprt_transfer(
     guard(|| {
         let out = ffi_ptr::slice_mut(out, out_len).map_err(ffi_ptr::past_vertices)?;
         let frame = ffi_ptr::handle(frame)?;
-        with_model(model, |m| {
-            m.transfer(&frame.pose, first, out)?;
-            finite(out)
-        })
+        with_model(model, |m| Ok(m.transfer(&frame.pose, first, out)?))
     })
 }
 

@@ -12,7 +12,7 @@ use crate::ffi_ptr;
 use crate::lights::{Lights, aprt_light, too_many};
 use crate::model::{aprt_model, with_model};
 use crate::rig::{aprt_placement, read_placement};
-use crate::status::{aprt_status, finite, guard};
+use crate::status::{aprt_status, guard};
 
 /// Writes `out_rgb[t] = Σ_c lighting[c] · maps[t · n² + c]` for `texels` texels: `maps` holds
 /// `maps_len` = texels · order² floats, `lighting_rgb` `coeffs` = order² RGB triples, `order`
@@ -31,8 +31,7 @@ pub extern "C" fn aprt_lightmap_compose(
         let maps = ffi_ptr::slice(maps, maps_len)?;
         let lighting = ffi_ptr::triples(lighting_rgb, coeffs)?;
         let out = ffi_ptr::triples_mut(out_rgb, texels)?;
-        LightMap::new(order as usize)?.compose(maps, lighting, out)?;
-        finite(out.as_flattened())
+        Ok(LightMap::new(order as usize)?.compose(maps, lighting, out)?)
     })
 }
 
@@ -62,8 +61,7 @@ pub extern "C" fn aprt_lightmap_compose_lights(
         let out = ffi_ptr::triples_mut(out_rgb, texels)?;
         let lights = Lights::convert(lights)?;
         let map = LightMap::new(order as usize)?;
-        map.compose_lights(maps, positions, lights.as_slice(), environment, out)?;
-        finite(out.as_flattened())
+        Ok(map.compose_lights(maps, positions, lights.as_slice(), environment, out)?)
     })
 }
 
@@ -92,8 +90,7 @@ pub extern "C" fn aprt_lightmap_compose_rig(
         with_model(model, |m| {
             let rig = m.rig().ok_or(aprt_status::NoIrradianceRig)?;
             let map = LightMap::new(m.info().order())?;
-            map.compose_rig(maps, &rig, vectors, &place, positions, out)?;
-            finite(out.as_flattened())
+            Ok(map.compose_rig(maps, &rig, vectors, &place, positions, out)?)
         })
     })
 }

@@ -12,7 +12,7 @@ use aprt_core::{
 use crate::ffi_ptr;
 use crate::frame::aprt_frame;
 use crate::model::{LightSet, Range, aprt_model, check_bone_count, with_model};
-use crate::status::{aprt_status, finite, guard};
+use crate::status::{aprt_status, guard};
 
 /// A sphere of uniform emitted radiance: `position`, `radius` > 0, `colour` = radiance.
 pub const APRT_LIGHT_SPHERE: u32 = 1;
@@ -120,7 +120,7 @@ impl Lights {
 /// 1 for all of it, `1 − aprt_rig_share` when a rig carries the rest), through the vertex's
 /// posed transfer: lights near the character stay self-shadowed. `bones` as in `aprt_light_sh`.
 /// Needs `aprt_set_pose` first (not `aprt_light_sh`). Everything is checked before anything is
-/// written, but for `APRT_STATUS_OVERFLOW`, which is found in the sums.
+/// written, but for `APRT_STATUS_OVERFLOW`, found in the sums (the outputs are then 0).
 #[allow(clippy::too_many_arguments)]
 #[unsafe(no_mangle)]
 pub extern "C" fn aprt_shade_lights(
@@ -151,8 +151,7 @@ pub extern "C" fn aprt_shade_lights(
         with_model(model, |m| {
             check_bone_count(m, bones)?;
             Ok(m.shade_lights(&frame.pose, &light_set, range)?)
-        })?;
-        finite(ffi_ptr::triples(out_rgb, count)?.as_flattened())
+        })
     })
 }
 

@@ -413,8 +413,6 @@ impl Eval for Streamed {
     }
 }
 
-/// Runs `f` on the model behind `model`: a copy of a resident one, or the streamed one
-/// borrowed for the call.
 /// Refuses bone rotations the model does not take: one per bone, and none at all for a
 /// world-frame model. The Rust API ignores a world-frame model's rotations (an engine may pass
 /// its skeleton's); the C header promises `NULL, 0`, so a count there is a caller's mistake
@@ -426,6 +424,8 @@ pub(crate) fn check_bone_count(m: &dyn Eval, bones: &[Rotation]) -> Result<(), a
     }
 }
 
+/// Runs `f` on the model behind `model`: a copy of a resident one, or the streamed one
+/// borrowed for the call.
 pub(crate) fn with_model<R>(
     model: *const aprt_model,
     f: impl FnOnce(&mut dyn Eval) -> Result<R, aprt_status>,

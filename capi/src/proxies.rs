@@ -16,7 +16,7 @@ use aprt_core::ProxyFrame;
 
 use crate::ffi_ptr::{self, Handle};
 use crate::model::{aprt_model, with_model};
-use crate::status::{aprt_status, finite, guard};
+use crate::status::{aprt_status, guard};
 
 /// One frame's posed occluder proxies in the caller's storage (about 4 KiB, any model's).
 /// Opaque; see `aprt_proxy_frame_init`.
@@ -119,7 +119,7 @@ fn pose(
 /// proxies posed by another model; `APRT_STATUS_WRONG_LENGTH`, `APRT_STATUS_VERTEX_RANGE`,
 /// `APRT_STATUS_NON_FINITE_LIGHTING`, `APRT_STATUS_NON_FINITE_POSITION` and
 /// `APRT_STATUS_NON_FINITE_NORMAL` for bad inputs (`out` is then unchanged);
-/// `APRT_STATUS_OVERFLOW` when inputs too large overflowed it.
+/// `APRT_STATUS_OVERFLOW` when inputs too large overflowed it (`out` is then 0).
 #[allow(clippy::too_many_arguments)]
 #[unsafe(no_mangle)]
 pub extern "C" fn aprt_occlude(
@@ -144,8 +144,7 @@ pub extern "C" fn aprt_occlude(
             if !m.info().has_proxies() {
                 return Err(aprt_status::NoProxies);
             }
-            m.occlude(frame, lighting, positions, normals, first, out)?;
-            finite(out)
+            Ok(m.occlude(frame, lighting, positions, normals, first, out)?)
         })
     })
 }
@@ -187,8 +186,7 @@ pub extern "C" fn aprt_occlude_transfer(
             if !m.info().has_proxies() {
                 return Err(aprt_status::NoProxies);
             }
-            m.occlude_transfer(frame, bones, positions, normals, first, out)?;
-            finite(out)
+            Ok(m.occlude_transfer(frame, bones, positions, normals, first, out)?)
         })
     })
 }

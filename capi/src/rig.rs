@@ -12,7 +12,7 @@ use crate::ffi_ptr;
 use crate::frame::aprt_frame;
 use crate::lights::{Lights, aprt_light, to_core, too_many};
 use crate::model::{Range, aprt_model, check_bone_count, with_model};
-use crate::status::{aprt_status, finite, guard};
+use crate::status::{aprt_status, guard};
 
 /// Where the character's root frame is in the world this frame: `world = rotation · p +
 /// translation`, the rotation row-major and a proper rotation (orthonormal within 1e-3, not
@@ -88,8 +88,7 @@ pub extern "C" fn aprt_rig_vectors(
             let lights = Lights::convert(lights)?;
             let rig = m.rig().ok_or(aprt_status::NoIrradianceRig)?;
             let order = m.info().order();
-            rig.vectors_from_lights(order, &place, lights.as_slice(), environment, out)?;
-            finite(out.as_flattened())
+            Ok(rig.vectors_from_lights(order, &place, lights.as_slice(), environment, out)?)
         })
     })
 }
@@ -124,7 +123,6 @@ pub extern "C" fn aprt_rig_share(
             let rig = m.rig().ok_or(aprt_status::NoIrradianceRig)?;
             Ok(rig.share_of(&light, &place, target, band))
         })?;
-        finite(&[s])?;
         ffi_ptr::write(share, s)
     })
 }
@@ -185,7 +183,6 @@ pub extern "C" fn aprt_shade_rig(
         with_model(model, |m| {
             let lit = frame.rig.as_ref().ok_or(aprt_status::WeightsNotSet)?;
             Ok(m.shade_rig(lit, &place, range)?)
-        })?;
-        finite(ffi_ptr::triples(out_rgb, count)?.as_flattened())
+        })
     })
 }

@@ -135,8 +135,7 @@ pub enum aprt_status {
     /// The triangle is past the last one whose corner UVs the texel atlas records.
     TriangleRange = 219,
     /// A result overflowed to infinity or NaN (inputs, or a blob's values, too large for
-    /// f32): the call's outputs are not to be used. No call returns OK with a non-finite
-    /// output.
+    /// f32): the call's outputs are zeroed. No call returns OK with a non-finite output.
     Overflow = 220,
     /// An error of a newer core than this table knows.
     Unknown = 999,
@@ -336,16 +335,6 @@ pub extern "C" fn aprt_status_message(status: i32) -> *const c_char {
     match known.into_iter().find(|s| *s as i32 == status) {
         Some(s) => message(s).as_ptr(),
         None => c"unknown status".as_ptr(),
-    }
-}
-
-/// `Ok` when every output is finite, else [`aprt_status::Overflow`]: the boundary's promise
-/// that no call returns OK with a NaN or an infinity, whatever finite inputs (or blob
-/// values) overflowed on the way. A scan of the output costs little beside computing it.
-pub(crate) fn finite(out: &[f32]) -> Result<(), aprt_status> {
-    match out.iter().all(|x| x.is_finite()) {
-        true => Ok(()),
-        false => Err(aprt_status::Overflow),
     }
 }
 
