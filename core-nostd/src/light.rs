@@ -28,14 +28,24 @@ pub struct SphereLight {
     pub radiance: Rgb,
 }
 
-/// A point light.
+/// A point light: a sphere of radius [`POINT_LIGHT_RADIUS`] of the same radiant intensity,
+/// so that its light stays finite, and continuous, as a surface reaches it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PointLight {
     /// Position.
     pub position: [f32; 3],
-    /// Radiant intensity `I`: the irradiance at distance `d`, at normal incidence, is `I / d²`.
+    /// Radiant intensity `I`: the irradiance at distance `d`, at normal incidence, is `I / d²`
+    /// (to `(r/d)²` of it, `r` the radius above).
     pub intensity: Rgb,
 }
+
+/// The radius of the sphere a [`PointLight`] is, in scene units (a millimetre in metres): a
+/// point's `I / d²` is infinite at the light, and its SH projection (a delta) rings to
+/// unbounded negative values nearby. As that sphere (radiance `I / πr²`) a point light's
+/// irradiance is `I max(cos θ, 0) / d²` to `(r/d)²` of it (a part in a million a metre away),
+/// to `0.85 r/d` of `I / d²` where the horizon cuts the sphere, and at most `I / r²`, reached
+/// continuously from `d = r` down to `d = 0`.
+pub const POINT_LIGHT_RADIUS: f32 = 1e-3;
 
 /// A light at infinity.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -57,6 +67,17 @@ pub enum Light {
     Directional(DirectionalLight),
 }
 
+/// A light as its SH and irradiance are computed: a sphere of uniform `radiance` per unit of
+/// the light's colour, or a direction.
+enum Shape {
+    Sphere {
+        centre: [f32; 3],
+        radius: f32,
+        radiance: f32,
+    },
+    Directional([f32; 3]),
+}
+
 /// Why a light function refused its input.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LightError {
@@ -68,8 +89,6 @@ pub enum LightError {
     NegativeEmission,
     /// A direction or normal has zero length.
     ZeroDirection,
-    /// The point is on a point light (or so near that `I / d²` overflows f32).
-    AtPointLight,
     /// A distance or result is beyond the f32 range.
     Overflow,
     /// The SH order is not in 1..=6 or an SH slice is shorter than the order squared.
@@ -83,9 +102,6 @@ impl core::fmt::Display for LightError {
             LightError::BadRadius => f.write_str("the radius must be greater than 0"),
             LightError::NegativeEmission => f.write_str("a colour component is negative"),
             LightError::ZeroDirection => f.write_str("a direction or normal has zero length"),
-            LightError::AtPointLight => {
-                f.write_str("the point is on a point light, where I / d^2 is infinite")
-            }
             LightError::Overflow => f.write_str("a distance or result exceeds the f32 range"),
             LightError::Sh(e) => write!(f, "{e}"),
         }
@@ -217,6 +233,25 @@ impl Light {
         }
     }
 
+    /// What the light is geometrically: a point light is the sphere of [`POINT_LIGHT_RADIUS`]
+    /// and intensity `colour`.
+    fn shape(&self) -> Shape {
+        const POINT_RADIANCE: f32 = 1.0 / (PI * POINT_LIGHT_RADIUS * POINT_LIGHT_RADIUS);
+        match self {
+            Light::Sphere(s) => Shape::Sphere {
+                centre: s.position,
+                radius: s.radius,
+                radiance: 1.0,
+            },
+            Light::Point(p) => Shape::Sphere {
+                centre: p.position,
+                radius: POINT_LIGHT_RADIUS,
+                radiance: POINT_RADIANCE,
+            },
+            Light::Directional(d) => Shape::Directional(d.direction),
+        }
+    }
+
     /// The light's zonal bands seen from `at` and the direction they are centred on: the
     /// light's SH radiance is `colour · bands[l] · y_lm(dir)`. `None` as direction means only
     /// band 0 is non-zero (inside a sphere light).
@@ -228,35 +263,30 @@ impl Light {
 
     /// [`Light::zonal`] for a light that passed [`Light::validate`] and a finite `at`, without
     /// checking them again: per-vertex shading asks it once per light and vertex. Still an
-    /// error on a point light (`AtPointLight`) or when the offset overflows f32 (`Overflow`).
+    /// error when the offset overflows f32 (`Overflow`).
     pub(crate) fn zonal_at(
         &self,
         at: [f32; 3],
     ) -> Result<([f32; MAX_ORDER], Option<[f32; 3]>), LightError> {
-        match self {
-            Light::Sphere(s) => {
-                let (d, dir) = towards(s.position, at)?;
-                Ok((
-                    sphere_light_bands(s.radius, d)?,
-                    dir.filter(|_| d >= s.radius),
-                ))
+        match self.shape() {
+            Shape::Sphere {
+                centre,
+                radius,
+                radiance,
+            } => {
+                let (d, dir) = towards(centre, at)?;
+                let bands = sphere_light_bands(radius, d)?.map(|b| b * radiance);
+                Ok((bands, dir.filter(|_| d >= radius)))
             }
-            Light::Point(p) => {
-                let (d, dir) = towards(p.position, at)?;
-                let w = 1.0 / (d * d);
-                match dir {
-                    Some(dir) if w.is_finite() => Ok((delta_bands(w), Some(dir))),
-                    _ => Err(LightError::AtPointLight),
-                }
-            }
-            Light::Directional(l) => Ok((delta_bands(1.0), Some(normalise(l.direction)?))),
+            Shape::Directional(direction) => Ok((delta_bands(1.0), Some(normalise(direction)?))),
         }
     }
 
     /// Adds the light's SH radiance as seen from `at` into `out` (`order²` entries): a sphere
-    /// light's ZH ([`sphere_light_bands`]) rotated towards its centre, a point light as a delta
-    /// of weight `I / d²`, a directional light as a delta of weight `E`. Inside a sphere light
-    /// the radiance is uniform (band 0 only). Nothing is written when an error is returned.
+    /// light's ZH ([`sphere_light_bands`]) rotated towards its centre, a point light as the
+    /// sphere of [`POINT_LIGHT_RADIUS`] (a delta of weight `I / d²` to `(r/d)²` of it), a
+    /// directional light as a delta of weight `E`. Inside a sphere the radiance is uniform
+    /// (band 0 only). Nothing is written when an error is returned.
     ///
     /// ```
     /// use aprt_core::{Light, SphereLight, irradiance_sh};
@@ -296,12 +326,12 @@ impl Light {
     /// `L(at + δ) ≈ L(at) + δ_x G_x + δ_y G_y + δ_z G_z` (*Irradiance Rigs*, appendix A2).
     ///
     /// In the frame `Z'` = towards the light, `X'`, `Y'` perpendicular: along `Z'` the
-    /// derivative is zonal, a sphere light's [`sphere_light_derivative_bands`] (eq. 3) or a
-    /// point light's `d/dd` of `I / d²`, `2I/d³`; across, the distance does not change to first
+    /// derivative is zonal, a sphere's [`sphere_light_derivative_bands`] (eq. 3; a point light's
+    /// sphere's tends to `2I/d³`); across, the distance does not change to first
     /// order and the direction turns by `−δ/d`, whose effect on `y_lm` is taken by a
     /// fourth-order difference of step [`GRADIENT_STEP`] (about 2e-5 of the largest
     /// coefficient). The frame is orthonormal, so the solve of A2 is its transpose. Directional
-    /// lights and the inside of a sphere light have zero gradient.
+    /// lights and the inside of a sphere have zero gradient.
     pub fn add_gradient_sh(
         &self,
         order: usize,
@@ -311,15 +341,16 @@ impl Light {
         let [gx, gy, gz] = gradient;
         let n2 = check(order, gx.len().min(gy.len()).min(gz.len()))?;
         let (bands, dir) = self.zonal(at)?;
-        let (along, d) = match self {
-            Light::Directional(_) => return Ok(()),
-            Light::Sphere(s) => {
-                let (d, _) = towards(s.position, at)?;
-                (sphere_light_derivative_bands(s.radius, d)?, d)
-            }
-            Light::Point(p) => {
-                let (d, _) = towards(p.position, at)?;
-                (delta_bands(2.0 / (d * d * d)), d)
+        let (along, d) = match self.shape() {
+            Shape::Directional(_) => return Ok(()),
+            Shape::Sphere {
+                centre,
+                radius,
+                radiance,
+            } => {
+                let (d, _) = towards(centre, at)?;
+                let along = sphere_light_derivative_bands(radius, d)?.map(|b| b * radiance);
+                (along, d)
             }
         };
         let Some(z) = dir else {
@@ -363,20 +394,28 @@ impl Light {
     /// Real-Time Graphics*, as in Lagarde and de Rousiers, *Moving Frostbite to PBR*,
     /// `illuminanceSphereOrDisk`): `π L sin²α cos θ` while the whole cap is above the horizon
     /// (`cos²θ > sin²α`), else an expression in `acos` and `atan`, evaluated in f64 because it
-    /// cancels to `O(α³)` for small lights. Inside the sphere it is `π L`. A point light gives
-    /// `I/d² max(cos θ, 0)`, a directional light `E max(cos θ, 0)`.
+    /// cancels to `O(α³)` for small lights. Inside the sphere it is `π L`. A point light is its
+    /// sphere ([`POINT_LIGHT_RADIUS`]): `I/d² max(cos θ, 0)` away from the horizon and the
+    /// light; a directional light gives `E max(cos θ, 0)`.
     pub fn irradiance(&self, at: [f32; 3], normal: [f32; 3]) -> Result<Rgb, LightError> {
         let n = normalise(finite3(normal)?)?;
         let (bands, dir) = self.zonal(at)?;
         let rgb = self.colour();
-        let scale = match (self, dir) {
-            (Light::Sphere(_), None) => PI,
-            (Light::Sphere(s), Some(w)) => {
-                let (d, _) = towards(s.position, at)?;
-                sphere_irradiance(s.radius, d, dot(n, w))
+        let scale = match (self.shape(), dir) {
+            (Shape::Sphere { radiance, .. }, None) => PI * radiance,
+            (
+                Shape::Sphere {
+                    centre,
+                    radius,
+                    radiance,
+                },
+                Some(w),
+            ) => {
+                let (d, _) = towards(centre, at)?;
+                sphere_irradiance(radius, d, dot(n, w)) * radiance
             }
-            (_, Some(w)) => bands[0] * dot(n, w).max(0.0), // a delta of weight bands[0]
-            (_, None) => return Err(LightError::AtPointLight),
+            // A delta of weight bands[0], whose direction is never `None`.
+            (Shape::Directional(_), w) => bands[0] * w.map_or(0.0, |w| dot(n, w).max(0.0)),
         };
         let e = rgb.map(|c| c * scale);
         finite3(e).map_err(|_| LightError::Overflow)
@@ -767,30 +806,47 @@ mod tests {
     }
 
     #[test]
-    fn point_light_at_the_point_is_an_error_not_nan() {
+    fn a_point_light_stays_finite_non_negative_and_continuous_down_to_zero_distance() {
+        let r = POINT_LIGHT_RADIUS;
         let p = Light::Point(PointLight {
             position: [1.0, 2.0, 3.0],
             intensity: [1.0; 3],
         });
+        let at = |d: f32| [1.0, 2.0, 3.0 - d];
         let mut sh = [[0.0f32; 3]; 9];
-        let (mut a, mut b, mut c) = ([[0.0f32; 3]; 9], [[0.0f32; 3]; 9], [[0.0f32; 3]; 9]);
-        assert_eq!(
-            p.add_radiance_sh(3, [1.0, 2.0, 3.0], &mut sh),
-            Err(LightError::AtPointLight)
+        // From d = r (the sphere touches the point) to 0: the irradiance of every normal is
+        // finite, non-negative and at most I / r² (facing the light at d = r, or inside).
+        let mut last = [0.0f32; 3];
+        for k in 0..=64 {
+            let d = r * (1.0 - k as f32 / 64.0);
+            for normal in [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]] {
+                let e = p.irradiance(at(d), normal).unwrap()[0];
+                assert!(
+                    e.is_finite() && e >= 0.0 && e <= 1.0001 / (r * r),
+                    "d {d}: {e}"
+                );
+            }
+            sh.fill([0.0; 3]);
+            p.add_radiance_sh(3, at(d), &mut sh).unwrap();
+            let band0 = sh[0];
+            assert!(band0.iter().all(|c| c.is_finite() && *c > 0.0), "{band0:?}");
+            if d < r {
+                // Inside, uniform: the same values all the way down to 0.
+                assert!(k == 1 || band0 == last, "d {d}: {band0:?} vs {last:?}");
+            }
+            last = band0;
+        }
+        // Approaching d = r from outside, facing the light: continuous onto I / r².
+        let facing = |d: f32| p.irradiance(at(d), [0.0, 0.0, 1.0]).unwrap()[0] * r * r;
+        assert!(
+            (facing(r * 1.0001) - 1.0).abs() < 1e-3,
+            "{}",
+            facing(r * 1.0001)
         );
-        assert_eq!(
-            p.irradiance([1.0, 2.0, 3.0], [0.0, 0.0, 1.0]),
-            Err(LightError::AtPointLight)
-        );
-        assert_eq!(
-            p.add_gradient_sh(3, [1.0, 2.0, 3.0], [&mut a, &mut b, &mut c]),
-            Err(LightError::AtPointLight)
-        );
-        // So near that 1/d² overflows f32.
-        assert_eq!(
-            p.add_radiance_sh(3, [1.0, 2.0, 3.0 + 1e-20], &mut sh),
-            Err(LightError::AtPointLight)
-        );
+        assert!((facing(0.5 * r) - 1.0).abs() < 1e-6);
+        // A metre away, within (r/d)² of I cos θ / d².
+        let e = p.irradiance(at(1.0), [0.0, 0.6, 0.8]).unwrap()[0];
+        assert!((e - 0.8).abs() <= 0.8 * 2e-6, "{e}");
         // Far apart positions whose difference overflows f32.
         let far = Light::Point(PointLight {
             position: [3e38, 0.0, 0.0],

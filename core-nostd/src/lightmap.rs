@@ -97,9 +97,8 @@ impl LightMap {
     /// of the chunk) plus a uniform `environment` (n² RGB coefficients, or empty): the exact
     /// per-texel path, for lights near the character. A texel's lighting is the environment
     /// plus [`Light::add_radiance_sh`] of every light at its position, so a light costs one SH
-    /// basis evaluation per texel; a texel on a point light (or whose offset to a light
-    /// overflows f32) gets nothing from that light, whose radiance there has no finite SH
-    /// projection. Every light is validated first ([`Error::BadLight`]).
+    /// basis evaluation per texel; a texel whose offset to a light overflows f32 gets nothing
+    /// from that light (a texel on a point light is inside its sphere, [`Light`]). Every light is validated first ([`Error::BadLight`]).
     ///
     /// The dot product stays one texel at a time: each texel's own lighting costs about ten
     /// times the product (one directional light: 21.6 ms for a 512 × 512 map at order 3
@@ -133,7 +132,7 @@ impl LightMap {
                 false => l.copy_from_slice(environment),
             }
             for light in lights {
-                // Nothing is added on an error: the texel is on a point light.
+                // Nothing is added on an error: the texel's offset to the light overflows f32.
                 let _ = light.add_radiance_sh(self.order, p, l);
             }
             *o = texel(t, l);

@@ -424,8 +424,8 @@ impl<'a> Model<'a> {
     /// Lights near the character vary too fast for a rig; evaluated per vertex against its
     /// transfer they stay self-shadowed (*Irradiance Rigs*). Each vertex costs its transfer
     /// once, then per light its bands, one rotated direction and one SH basis evaluation. A
-    /// weight of 0 skips the light; a vertex on a point light gets nothing from that light
-    /// (its radiance there is unbounded). Everything is checked before anything is written.
+    /// weight of 0 skips the light; a vertex on a point light is inside the small sphere it is
+    /// ([`POINT_LIGHT_RADIUS`](crate::POINT_LIGHT_RADIUS)). Everything is checked before anything is written.
     ///
     /// ```
     /// use aprt_core::{Light, Model, PointLight, PoseWeights};

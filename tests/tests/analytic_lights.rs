@@ -550,21 +550,26 @@ fn hostile_inputs_are_refused_or_finite() {
         assert!(out.iter().flatten().all(|x| x.is_finite()), "{out:?}");
         out
     };
-    // A vertex exactly on a point light, or so near that I/d² overflows: that light is
-    // skipped there (the same bits as without it); a vertex one ulp away is lit finitely.
+    // A vertex on a point light or anywhere inside its sphere (`POINT_LIGHT_RADIUS`) sees the
+    // sphere's uniform radiance: the same finite bits at every distance down to 0, where a
+    // delta's `I / d²` at 1.2e-7 added -8e12.
     let p = pos[3];
-    for (at, skipped) in [
-        (p, true),
-        ([p[0], p[1], p[2] + 1e-20], true),
-        ([p[0].next_up(), p[1], p[2]], false),
-    ] {
+    let lit_at = |at: [f32; 3]| {
         let lamp = Light::Point(PointLight {
             position: at,
             intensity: [1.0; 3],
         });
-        let with: Vec<Light> = lights.iter().copied().chain([lamp]).collect();
-        let (a, b) = (shade(&with, pos), shade(lights, pos));
-        assert_eq!(a[3] == b[3], skipped, "lamp at {at:?}");
+        shade(&[lamp], pos)[3]
+    };
+    let on = lit_at(p);
+    let half = 0.5 * aprt_core::POINT_LIGHT_RADIUS;
+    for at in [
+        [p[0], p[1], p[2] + 1e-20],
+        [p[0].next_up(), p[1], p[2]],
+        [p[0], p[1] + 1.2e-7, p[2]],
+        [p[0] + half, p[1], p[2]],
+    ] {
+        assert_eq!(lit_at(at), on, "lamp at {at:?}");
     }
     // Inside a sphere light: uniform radiance, 4π L y_00 t_0 (the reference, band 0 only).
     let bulb = Light::Sphere(SphereLight {

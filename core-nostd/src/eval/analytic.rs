@@ -94,10 +94,9 @@ struct Block<'a> {
 
 impl Block<'_> {
     /// Each vertex's shading under every light of non-zero weight, in f64 so that colours,
-    /// weights and `1/d²` near f32's limits multiply without overflow (the result saturates to
-    /// ±∞ only when converted back). A light whose bands fail at a vertex (the vertex is on a
-    /// point light, or its offset to the light overflows f32) adds nothing there: its radiance
-    /// has no finite SH projection.
+    /// weights and radiances near f32's limits multiply without overflow (a result beyond f32
+    /// is refused as `Overflow` by the caller). A light whose bands fail at a vertex (its
+    /// offset to the light overflows f32) adds nothing there.
     fn shade(&self, lights: &[Light], weights: &[f32]) -> [[f64; 3]; VERTEX_BLOCK] {
         let mut acc = [[0.0f64; 3]; VERTEX_BLOCK];
         for (light, &weight) in lights.iter().zip(weights) {

@@ -280,7 +280,7 @@ impl<'a> IrradianceRig<'a> {
 
     /// The rig's K SH vectors for `lights` and a uniform `environment` (n² RGB radiance
     /// coefficients, or empty): each light projected at every sample ([`Light::add_radiance_sh`];
-    /// a sample exactly on a point light skips that light), then mapped by the fit matrix
+    /// a sample whose offset to a light overflows f32 skips that light), then mapped by the fit matrix
     /// ([`IrradianceRig::vectors_from`]). Every light is validated first
     /// ([`Error::BadLight`]). What an engine calls once per frame; the vectors go to
     /// [`Model::light_rig`](crate::Model::light_rig) or to a shader.

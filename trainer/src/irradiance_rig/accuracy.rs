@@ -145,7 +145,7 @@ fn per_vertex(lights: &[Light], weights: &[f32], order: usize, p: [f32; 3], n: [
     let mut l = [[0.0f32; 3]; MAX_COEFFS];
     for (light, &w) in lights.iter().zip(weights) {
         if w > 0.0 {
-            // A vertex on a point light sees nothing finite from it: that light is skipped.
+            // A vertex whose offset to a light overflows f32 sees nothing from it: skipped.
             let _ = light
                 .scaled(w)
                 .add_radiance_sh(order, p, &mut l[..order * order]);
