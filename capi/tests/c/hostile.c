@@ -776,6 +776,11 @@ static void lengths_of_the_stream(fixture *f) {
          aprt_model_stream_init(&s, scratch, f->scratch_len - 1, &needed, mem, ms, &m));
   EXPECT(OK, aprt_model_stream_init(&s, scratch, f->scratch_len, &needed, mem, ms, &m));
   EXPECT(WRONG_LENGTH, aprt_model_stream_init(&s, scratch, SIZE_MAX, &needed, mem, ms, &m));
+  size_t storage[] = {0, 1, ms - 1, SIZE_MAX};
+  for (int i = 0; i < 4; i++) {
+    EXPECT(storage[i] < ms ? APRT_STATUS_STORAGE_TOO_SMALL : OK,
+           aprt_model_stream_init(&s, scratch, f->scratch_len, &needed, mem, storage[i], &m));
+  }
   uint64_t lens[] = {0, 1, (uint64_t)f->src.len - 1, (uint64_t)f->src.len + 1, UINT64_MAX};
   aprt_status want[] = {APRT_STATUS_TRUNCATED, APRT_STATUS_TRUNCATED, 0, 0, 0};
   for (int i = 0; i < 5; i++) {
