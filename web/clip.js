@@ -25,10 +25,12 @@ export async function loadClip(base) {
   return { manifest, arrays, blob };
 }
 
-/** The frame shown at `seconds` into the clip, looping. */
+/** The frame shown at `seconds` (finite) into the clip, looping: the time is wrapped into
+ *  the clip's length first, so that huge times (1e308 s) still give a frame. */
 export function frameAt(manifest, seconds) {
-  const f = Math.floor(seconds * manifest.fps + 1e-9);
-  return ((f % manifest.frames) + manifest.frames) % manifest.frames;
+  const length = manifest.frames / manifest.fps;
+  const wrapped = ((seconds % length) + length) % length;
+  return Math.min(Math.floor(wrapped * manifest.fps + 1e-9), manifest.frames - 1);
 }
 
 /** Skins frame `f`'s positions and normals into `positions` and `normals` (vertices × 3,

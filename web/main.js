@@ -8,7 +8,11 @@ import { frameAt, loadClip, poseOf, skinFrame } from './clip.js';
 import { Renderer, camera } from './render.js';
 
 const params = new URLSearchParams(location.search);
-const startSeconds = Number(params.get('t') ?? 0);
+/** `?t=`, seconds into the clip: a finite number at least 0, else the clip's start (with a
+ *  notice on the page). */
+const asked = params.get('t');
+const startSeconds = asked === null || (Number.isFinite(Number(asked)) && Number(asked) >= 0) ? Number(asked ?? 0) : 0;
+const notice = startSeconds === Number(asked ?? 0) ? null : `?t=${asked.slice(0, 32)} is not a time in seconds: playing from 0`;
 const frozen = params.get('freeze') === '1';
 const dataDir = new URL(params.get('data') ?? 'data/', location.href);
 
@@ -53,7 +57,7 @@ async function main() {
   const shadeMean = new Mean(120);
   const proxiesMean = new Mean(120);
   const frameMean = new Mean(120);
-  const page = { ready: false, frame: -1, core, manifest: m, shading: null, lighting: null };
+  const page = { ready: false, frame: -1, core, manifest: m, shading: null, lighting: null, notice };
   window.aprtPage = page;
 
   /** One frame: skin the mesh into the core, pose and light it, shade and correct by the
@@ -113,8 +117,16 @@ async function main() {
     frameMean.push(now - last);
     last = now;
     const seconds = frozen ? startSeconds : startSeconds + (now - started) / 1000;
-    if (!frozen || page.frame < 0) render(frameAt(m, seconds));
+    try {
+      if (!frozen || page.frame < 0) render(frameAt(m, seconds));
+    } catch (err) {
+      // A frame the core refuses stops the page with its message, never silently.
+      stats.textContent = `error: ${err.message}`;
+      page.error = err.message;
+      return;
+    }
     stats.textContent = [
+      ...(notice ? [notice] : []),
       `clip ${m.clip}: frame ${page.frame + 1} of ${m.frames} at ${m.fps} fps`,
       `${m.vertices} vertices, order ${core.info.order}, ${core.info.bones} bones` +
         (core.info.proxies ? ', occluder proxies' : ''),

@@ -102,6 +102,28 @@ async function runPage(browser, url, flavour) {
   return state;
 }
 
+/** Bad `?t=` queries: the page still shows a frame, with no uncaught error, and says when it
+ *  ignored the time. Returns the failures. */
+async function checkBadQueries(browser, url) {
+  const failures = [];
+  for (const [t, noticed] of [['NaN', true], ['-3', true], ['1e999', true], ['1e308', false]]) {
+    const page = await browser.newPage();
+    const errors = [];
+    page.on('pageerror', (e) => errors.push(e.message));
+    await page.goto(`${url}?t=${t}&freeze=1&wasm=scalar`);
+    await page.waitForFunction(() => window.aprtPage?.ready || window.aprtPage?.error, null, { timeout: 60000 });
+    const state = await page.evaluate(() => {
+      const p = window.aprtPage;
+      return { ready: p.ready, error: p.error, frame: p.frame, frames: p.manifest?.frames, notice: p.notice };
+    });
+    await page.close();
+    if (!state.ready || errors.length) failures.push(`?t=${t}: ${state.error ?? errors.join('; ')}`);
+    else if (!(state.frame >= 0 && state.frame < state.frames)) failures.push(`?t=${t}: frame ${state.frame}`);
+    else if (Boolean(state.notice) !== noticed) failures.push(`?t=${t}: notice ${state.notice}`);
+  }
+  return failures;
+}
+
 /** Largest |`shading` − `aprt eval` of `frame`| relative to the largest |eval|. */
 function compareShading(state, npy, frame = state.frame, shading = state.shading) {
   const expected = evalShading(npy, frame, state.lighting);
@@ -191,6 +213,7 @@ async function main() {
         (posed ? `posed mesh ${mismatches} coordinates off the trainer's, ` : '') +
         `${pixels} pixels differ from reference.png (≤ ${MAX_DIFF_PIXELS})`);
     }
+    failures.push(...(await checkBadQueries(browser, server.url)));
   } finally {
     await browser.close();
     server.close();
