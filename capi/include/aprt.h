@@ -28,7 +28,9 @@
 // A sphere of uniform emitted radiance: `position`, `radius` > 0, `colour` = radiance.
 #define APRT_LIGHT_SPHERE 1
 
-// A point light: `position`, `colour` = radiant intensity (irradiance I / d² at distance d).
+// A point light: `position`, `colour` = radiant intensity (irradiance I / d² at distance d),
+// a sphere of radius 1e-3 of that intensity, so its light stays finite as a surface reaches
+// it (at most I / 1e-6, at d = 0).
 #define APRT_LIGHT_POINT 2
 
 // A light at infinity: `direction` towards the light, `colour` = irradiance at normal
