@@ -31,8 +31,8 @@ fn escaped(c: char, quotes: bool) -> String {
     }
 }
 
-/// `text` with its control and invisible characters escaped ([`escaped`]): text quoted from a
-/// file keeps an error on one line, and can neither recolour the terminal nor reverse the line.
+/// `text` with its control and invisible characters escaped, as `escaped` does: text quoted
+/// from a file keeps an error on one line, and can neither recolour the terminal nor reverse it.
 pub fn escape_controls(text: &str) -> String {
     text.chars().map(|c| escaped(c, false)).collect()
 }
