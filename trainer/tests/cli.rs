@@ -247,7 +247,7 @@ fn builtin_creature_simulates_and_character_is_refused_without_builtin() {
         &[
             "simulate",
             "--obj-seq",
-            dir.path().to_str().unwrap(),
+            dir.path().join("seq").to_str().unwrap(),
             "--character",
             "creature",
             "--npy",

@@ -9,7 +9,7 @@ use std::process::{Command, Stdio};
 use aprt_core::SectionKind;
 use aprt_core::format::{Header, PREAMBLE_LEN, crc32};
 
-use crate::run::{refuse, succeed};
+use crate::run::{self, refuse, succeed};
 
 fn s(path: &Path) -> &str {
     path.to_str().unwrap()
@@ -187,4 +187,190 @@ fn a_blobs_names_reach_the_terminal_escaped_and_short() {
         &["names.aprt", "does not fit", "hip.x"],
     );
     clean("eval", &line);
+}
+
+/// Flags that cannot apply were once ignored without a word: `--proxies on` wrote a model
+/// without proxies for a world-frame model, an OBJ sequence (by flag or scene) or a light-map
+/// model; `--confine` and `--report` without `--scene` trained as if absent (clap drops their
+/// `requires` once a source flag is given); `eval` read nothing of an `--obj-seq` folder, even
+/// one that does not exist. Each is refused now, naming the flags at fault.
+#[test]
+fn flags_that_cannot_apply_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (seq, csv) = fixture_sequence();
+    let model = dir.path().join("m.aprt");
+    let o = ["-o", s(&model)];
+    let wave = ["--builtin", "--clip", "wave", "--rays", "8"];
+    let on = ["--proxies", "on"];
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../fixtures/scenes/obj-sequence.toml"
+    );
+    for (args, fragments) in [
+        (
+            [&["train", "--world-frame"], &wave[..], &on, &o].concat(),
+            &["--proxies on", "--world-frame"][..],
+        ),
+        (
+            [&["train", "--obj-seq", &seq, "--angles", &csv], &on[..], &o].concat(),
+            &["--proxies on", "--obj-seq", "ok/seq", "no bones"],
+        ),
+        (
+            [&["train", "--scene", scene], &on[..], &o].concat(),
+            &["--proxies on", "obj-sequence.toml", "[source] obj_seq"],
+        ),
+        (
+            [&["lightmap", "train"], &wave[..], &on, &o].concat(),
+            &["--proxies on", "light-map"],
+        ),
+        (
+            [&["train", "--confine"], &wave[..], &o].concat(),
+            &["--confine", "--scene"],
+        ),
+        (
+            [&["train", "--report", "r.json"], &wave[..], &o].concat(),
+            &["--report", "--scene"],
+        ),
+    ] {
+        refuse(&args, fragments);
+    }
+    let golden = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../fixtures/golden/v1-world.aprt"
+    );
+    let angles = dir.path().join("a.csv");
+    std::fs::write(&angles, "0,0,0,0\n0.1,0.2,0.3,0.4\n").unwrap();
+    let npy = dir.path().join("e.npy");
+    let missing = dir.path().join("no-such-folder");
+    refuse(
+        &[
+            "eval",
+            golden,
+            "--obj-seq",
+            s(&missing),
+            "--angles",
+            s(&angles),
+            "--npy",
+            s(&npy),
+        ],
+        &["--obj-seq", "no-such-folder"],
+    );
+    assert!(!model.exists() && !npy.exists());
+}
+
+/// `lightmap bake -o` once wrote its `.shlm` into the OBJ sequence folder it read (only
+/// `--checkpoint` was guarded), which broke the next `train` on that folder: an output inside
+/// an input directory is refused now, whatever it is called.
+#[test]
+fn no_output_lands_inside_the_obj_sequence_it_reads() {
+    let dir = tempfile::tempdir().unwrap();
+    let (fixture, csv) = fixture_sequence();
+    let seq = dir.path().join("seq");
+    std::fs::create_dir(&seq).unwrap();
+    for entry in std::fs::read_dir(&fixture).unwrap() {
+        let path = entry.unwrap().path();
+        std::fs::copy(&path, seq.join(path.file_name().unwrap())).unwrap();
+    }
+    let checkpoint = dir.path().join("bake");
+    for name in ["maps.shlm", "next.obj"] {
+        let out = seq.join(name);
+        refuse(
+            &[
+                "lightmap",
+                "bake",
+                "--obj-seq",
+                s(&seq),
+                "--angles",
+                &csv,
+                "--resolution",
+                "16",
+                "--rays",
+                "8",
+                "--checkpoint",
+                s(&checkpoint),
+                "-o",
+                s(&out),
+            ],
+            &["-o", name, "inside the OBJ sequence directory"],
+        );
+    }
+    assert_eq!(std::fs::read_dir(&seq).unwrap().count(), 3);
+}
+
+/// Runs `aprt args`, asserts clap refuses it (exit code 2, no panic) naming every fragment.
+fn refused_by_clap(args: &[&str], fragments: &[&str]) {
+    let out = run::aprt(args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{args:?}:\n{stderr}");
+    assert!(!stderr.contains("panicked"), "{args:?}:\n{stderr}");
+    for fragment in fragments {
+        assert!(
+            stderr.contains(fragment),
+            "{args:?}: {fragment:?} missing from\n{stderr}"
+        );
+    }
+}
+
+/// Refusals that once blamed the wrong thing name the file, flag or key at fault now:
+/// `--resolution 0` blamed `--margin`, `--rays 0` named no flag, an angles CSV of 600 columns
+/// named no file (`lightmap train`) or the OBJ folder (`train`), `irradiance-rig --obj-seq`
+/// asked for a mesh or a character, and `report --stride 1000000` blamed the character.
+#[test]
+fn refusals_name_what_is_at_fault() {
+    let dir = tempfile::tempdir().unwrap();
+    let (seq, csv) = fixture_sequence();
+    let out = dir.path().join("out");
+    let o = ["-o", s(&out)];
+    let source = ["--obj-seq", seq.as_str(), "--angles", csv.as_str()];
+    for cmd in [&["lightmap", "bake"][..], &["lightmap", "train"]] {
+        let args = [cmd, &source[..], &["--resolution", "0"], &o].concat();
+        refused_by_clap(&args, &["--resolution", "0", "texels"]);
+    }
+    let rays = ["--rays", "0"];
+    for args in [
+        [&["train"][..], &source, &rays, &o].concat(),
+        [&["lightmap", "bake"][..], &source, &rays, &o].concat(),
+        [&["simulate", "--npy", s(&out)][..], &source, &rays].concat(),
+    ] {
+        refused_by_clap(&args, &["--rays", "0"]);
+    }
+
+    let wide = dir.path().join("wide.csv");
+    let row = |r: usize| {
+        (0..600)
+            .map(|c| format!("0.{r}{c}"))
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    std::fs::write(&wide, format!("{}\n{}\n{}\n", row(1), row(2), row(3))).unwrap();
+    for cmd in [&["train"][..], &["lightmap", "train"]] {
+        let args = [cmd, &["--obj-seq", &seq, "--angles", s(&wide)], &o].concat();
+        refuse(&args, &["wide.csv", "600 angles", "512"]);
+    }
+
+    let lights = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../fixtures/lights/three-lights.toml"
+    );
+    let rig = ["irradiance-rig", "--lights", lights, "--rig", "constant"];
+    refuse(
+        &[&rig[..], &source].concat(),
+        &["--obj-seq", "ok/seq", "one mesh"],
+    );
+    let mesh = format!("{seq}/pose_0.obj");
+    refuse(
+        &[&rig[..], &[&mesh, "--frame", "2"]].concat(),
+        &["--frame 2"],
+    );
+
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../fixtures/scenes/builtin.toml"
+    );
+    let line = refuse(
+        &["report", scene, "--stride", "1000000", "--out", s(&out)],
+        &["--stride 1000000", "training frames"],
+    );
+    assert!(!line.contains("character"), "{line}");
+    assert!(!out.exists());
 }

@@ -28,7 +28,7 @@ pub struct ResultsArgs {
     #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u8).range(1..=6))]
     pub order: u8,
     /// Directions per vertex for the ground-truth bakes.
-    #[arg(long, default_value_t = 128)]
+    #[arg(long, default_value_t = 128, value_parser = parse_rays)]
     pub rays: usize,
 }
 
@@ -79,7 +79,7 @@ pub struct DemoArgs {
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=6))]
     pub order: Option<u8>,
     /// Directions per vertex for the ground-truth bakes (default: the built-in scene's, 128).
-    #[arg(long)]
+    #[arg(long, value_parser = parse_rays)]
     pub rays: Option<usize>,
     /// Use every k-th frame of the clips (1 = all 250 training frames; larger is faster).
     #[arg(long, default_value_t = 2)]
@@ -93,7 +93,7 @@ pub struct BakeArgs {
     #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u8).range(1..=6))]
     pub order: u8,
     /// Directions per vertex (low-discrepancy, cosine-weighted).
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 256, value_parser = parse_rays)]
     pub rays: usize,
     /// Inter-reflection bounces (0 = direct shadowed transfer only).
     #[arg(long, default_value_t = 0)]
@@ -441,6 +441,30 @@ impl From<DeringArg> for aprt_core::Window {
     }
 }
 
+/// `--rays`: directions per vertex, 1 to [`MAX_RAYS`] (0 was refused by the bake, naming no
+/// flag).
+///
+/// [`MAX_RAYS`]: crate::limits::MAX_RAYS
+pub fn parse_rays(text: &str) -> std::result::Result<usize, String> {
+    let max = crate::limits::MAX_RAYS;
+    match text.parse::<usize>() {
+        Ok(rays) if (1..=max).contains(&rays) => Ok(rays),
+        _ => Err(format!("expected 1 to {max} directions per vertex")),
+    }
+}
+
+/// `--resolution`: a light-map atlas of 1 to [`MAX_RESOLUTION`] texels a side (0 was refused
+/// blaming `--margin`).
+///
+/// [`MAX_RESOLUTION`]: crate::rig::uv::MAX_RESOLUTION
+pub fn parse_resolution(text: &str) -> std::result::Result<usize, String> {
+    let max = crate::rig::uv::MAX_RESOLUTION;
+    match text.parse::<usize>() {
+        Ok(texels) if (1..=max).contains(&texels) => Ok(texels),
+        _ => Err(format!("expected 1 to {max} texels a side")),
+    }
+}
+
 /// Three finite numbers separated by commas.
 fn parse_vec3(text: &str) -> std::result::Result<[f32; 3], String> {
     let parts: Vec<&str> = text.split(',').map(str::trim).collect();
@@ -516,6 +540,16 @@ impl BakeArgs {
 }
 
 impl FitArgs {
+    /// Refuses `--proxies on` where the model cannot carry occluder proxies: `without` says
+    /// why, naming the flag or key at fault. Left alone, the model was written without them and
+    /// without a word.
+    pub fn check_proxies(&self, without: Option<String>) -> Result<()> {
+        match (self.proxies, without) {
+            (Some(ProxiesArg::On), Some(why)) => bail!("--proxies on: {why}"),
+            _ => Ok(()),
+        }
+    }
+
     /// The fit options these flags ask for; unset flags keep the defaults.
     pub fn options(&self) -> Result<FitOptions> {
         let mut options = if self.paper {

@@ -15,6 +15,22 @@ use crate::rig::mesh::Mesh;
 
 /// The meshes the rig is fitted over and the mesh it is evaluated on.
 fn meshes(args: &RigArgs) -> Result<(Vec<Mesh>, Mesh)> {
+    let sequence = [
+        ("--obj-seq", &args.source.obj_seq),
+        ("--angles", &args.source.angles),
+    ];
+    if let Some((flag, Some(path))) = sequence.iter().find(|(_, path)| path.is_some()) {
+        bail!(
+            "{flag} {}: irradiance-rig fits a rig to one mesh (give one OBJ file of the sequence) or to a character (--builtin, --gltf, --bvh), not to an OBJ sequence",
+            path.display()
+        );
+    }
+    if args.mesh.is_some() && args.frame != 0 {
+        bail!(
+            "--frame {}: a mesh has one pose; --frame picks a frame of a character's clip",
+            args.frame
+        );
+    }
     match (&args.mesh, args.source.names_rig()) {
         (Some(_), true) => bail!("give a mesh or a character (--builtin, --gltf, --bvh), not both"),
         (Some(path), false) => {

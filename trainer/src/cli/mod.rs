@@ -36,7 +36,7 @@ use crate::pipeline::scene::{SceneOutcome, SceneTrainOptions, SceneTrainReport, 
 use crate::pipeline::train::{Outcome, TrainSettings};
 use crate::progress::Reporter;
 use crate::rig::mesh::degenerate_note;
-use crate::scene::file::{CLIP_KEYS, Environment, Scene, read_scene};
+use crate::scene::file::{CLIP_KEYS, Environment, Scene, SceneSource, read_scene};
 use crate::scene::lighting::SceneLighting;
 
 /// Pose-driven precomputed radiance transfer for skinned characters.
@@ -266,6 +266,12 @@ fn inspect(args: &InspectArgs) -> Result<()> {
 }
 
 fn eval(args: &EvalArgs) -> Result<()> {
+    if let Some(dir) = &args.source.obj_seq {
+        bail!(
+            "--obj-seq {}: eval reads no meshes (the model holds its own): give the poses with --angles FILE alone, or a clip of the model's character",
+            dir.display()
+        );
+    }
     let mut inputs = vec![Input::new(&args.model, "the model")];
     inputs.extend(args.source.inputs());
     check(&[Output::file(&args.npy, "--npy")], &inputs)?;
@@ -428,8 +434,48 @@ fn shard_done(baked: &ShardBaked, command: &str) {
     );
 }
 
+/// Why `aprt train` cannot fit occluder proxies, which ride the bones of a character's
+/// bone-frame model: an OBJ sequence (no bones) or a model learnt in world space, by flag or
+/// by `scene`'s keys.
+fn proxies_without(args: &TrainArgs, scene: Option<&Scene>) -> Option<String> {
+    const RIDE: &str = "occluder proxies ride the bones of a bone-frame model";
+    let Some(scene) = scene else {
+        return match &args.source.obj_seq {
+            Some(dir) => Some(format!(
+                "--obj-seq {}: an OBJ sequence has no bones, and {RIDE}",
+                dir.display()
+            )),
+            None => args.world_frame.then(|| {
+                format!("--world-frame learns in world space, and {RIDE}: give one of the two")
+            }),
+        };
+    };
+    let file = scene.path.display();
+    match (&scene.source, scene.effects.frame) {
+        (SceneSource::ObjSeq { .. }, _) => Some(format!(
+            "{file}: [source] obj_seq: an OBJ sequence has no bones, and {RIDE}"
+        )),
+        (_, ModelFrame::World) => Some(format!(
+            "{file}: [effects] frame = \"world\" learns in world space, and {RIDE}"
+        )),
+        _ => None,
+    }
+}
+
 fn train(args: &TrainArgs) -> Result<()> {
+    // Clap drops a flag's `requires` when its target conflicts with a flag given (`--scene`
+    // conflicts with the source flags), so these are checked here.
+    for (flag, given) in [
+        ("--confine", args.confine),
+        ("--report", args.report.is_some()),
+    ] {
+        if given && args.scene.is_none() {
+            bail!("{flag} applies to --scene only: give a scene file, or leave {flag} out");
+        }
+    }
     let scene = args.scene.as_deref().map(read_scene).transpose()?;
+    args.fit
+        .check_proxies(proxies_without(args, scene.as_ref()))?;
     if let Some(scene) = &scene
         && args.confine
     {
@@ -618,6 +664,19 @@ fn print_scene_report(report: &SceneTrainReport, json: Option<&Path>) -> Result<
     Ok(())
 }
 
+/// Refuses a `--stride` that leaves fewer than two of the training clips' frames, which no
+/// model can be fitted to: the fit's error blamed the character instead.
+fn check_stride(stride: usize, clips: &[crate::rig::Clip]) -> Result<()> {
+    let frames: usize = clips.iter().map(|c| c.frames.len()).sum();
+    let kept: usize = clips.iter().map(|c| c.frames.len().div_ceil(stride)).sum();
+    if stride > 1 && kept < 2 {
+        bail!(
+            "--stride {stride} keeps {kept} of the {frames} training frames; a model needs two at least: give a smaller stride"
+        );
+    }
+    Ok(())
+}
+
 fn report(args: &ReportArgs) -> Result<()> {
     use crate::report::sweep::{ReportSettings, SceneClips, document, run};
     if let Some(us) = args.budget_us
@@ -644,6 +703,7 @@ fn report(args: &ReportArgs) -> Result<()> {
         );
     }
     let (rig, [clips, validation, tests]) = source.load_scene(&scene, &Terminal)?;
+    check_stride(args.stride as usize, &clips)?;
     let lighting = SceneLighting::of(&scene, rig.up())?;
     let settings = ReportSettings {
         budget_us: args.budget_us,

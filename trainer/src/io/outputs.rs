@@ -120,16 +120,16 @@ pub enum GuardError {
         /// The input as given.
         input: PathBuf,
     },
-    /// An output directory lies inside an input directory.
+    /// An output lies inside an input directory.
     #[error(
-        "{flag} {}: that is inside {role} {}; the command would write among the files it reads, so give an output directory outside it",
+        "{flag} {}: that is inside {role} {}; the command would write among the files it reads, so give a path outside it",
         output.display(),
         input.display()
     )]
     InsideInput {
-        /// The output directory's flag.
+        /// The output's flag.
         flag: String,
-        /// The output directory as given.
+        /// The output as given.
         output: PathBuf,
         /// What the input is.
         role: String,
@@ -215,6 +215,7 @@ pub fn check(outputs: &[Output], inputs: &[Input]) -> Result<(), GuardError> {
                 input: input.path.clone(),
             });
         }
+        check_outside(output, &inputs)?;
         if output.kind == OutputKind::Directory {
             check_directory(output, &inputs)?;
         }
@@ -243,21 +244,27 @@ fn input_at<'a>(path: &Path, inputs: &[(&'a Input, Identity)]) -> Option<&'a Inp
         .map(|(input, _)| *input)
 }
 
-/// A directory output neither lies inside an input directory nor receives a file that is an
-/// input.
-fn check_directory(output: &Output, inputs: &[(&Input, Identity)]) -> Result<(), GuardError> {
+/// An output does not lie inside an input directory, whose files the command reads by listing
+/// them: a `.shlm` written into the OBJ sequence it was baked from broke the next `train` on
+/// that folder.
+fn check_outside(output: &Output, inputs: &[(&Input, Identity)]) -> Result<(), GuardError> {
     let place = location(&output.path);
-    if let Some((input, _)) = inputs
+    match inputs
         .iter()
         .find(|(_, i)| i.is_dir && place.starts_with(&i.canonical))
     {
-        return Err(GuardError::InsideInput {
+        Some((input, _)) => Err(GuardError::InsideInput {
             flag: output.flag.clone(),
             output: output.path.clone(),
             role: input.role.clone(),
             input: input.path.clone(),
-        });
+        }),
+        None => Ok(()),
     }
+}
+
+/// No file a directory output receives is an input.
+fn check_directory(output: &Output, inputs: &[(&Input, Identity)]) -> Result<(), GuardError> {
     for file in &output.files {
         let written = output.path.join(file);
         if let Some(input) = input_at(&written, inputs) {
