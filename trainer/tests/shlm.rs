@@ -717,3 +717,83 @@ fn a_character_without_uvs_bakes_on_generated_uvs_only() {
     ]);
     assert!(std::fs::metadata(&npy).unwrap().len() > 96 * 4);
 }
+
+/// `blob` with its texel atlas claiming `resolution`² texels (its rows' texels kept), the
+/// section's and the header's checksums made valid again.
+fn with_atlas_resolution(blob: &[u8], resolution: u32) -> Vec<u8> {
+    use aprt_core::SectionKind;
+    use aprt_core::format::{Header, PREAMBLE_LEN, crc32};
+    let header_len = u32::from_le_bytes(blob[12..16].try_into().unwrap()) as usize;
+    let mut header: Header =
+        postcard::from_bytes(&blob[PREAMBLE_LEN..PREAMBLE_LEN + header_len]).unwrap();
+    let entry = header
+        .sections
+        .iter_mut()
+        .find(|e| e.kind == SectionKind::TexelAtlas.tag())
+        .unwrap();
+    let at = entry.offset as usize;
+    let mut out = blob.to_vec();
+    out[at..at + 4].copy_from_slice(&resolution.to_le_bytes());
+    entry.crc32 = crc32(&out[at..at + entry.len as usize]);
+    let bytes = postcard::to_allocvec(&header).unwrap();
+    assert_eq!(bytes.len(), header_len, "the header keeps its length");
+    out[PREAMBLE_LEN..PREAMBLE_LEN + header_len].copy_from_slice(&bytes);
+    out[16..20].copy_from_slice(&crc32(&bytes).to_le_bytes());
+    out
+}
+
+/// A light-map model whose atlas claims 8192² texels (a small model: 669 rows): `eval` reads
+/// its rows at the vertices frame by frame, never a frame's whole map, within 1 GiB of address
+/// space (it allocated every frame's 8192² map, 3.2 GB for these three frames, and aborted on
+/// the first that failed); `compose`, which draws the whole map, estimates it first and is
+/// refused, naming the file and the bytes (4.8 GB at order 2; it took 21 s and 1.9 GB).
+#[cfg(unix)]
+#[test]
+fn a_light_map_model_claiming_a_huge_atlas_is_read_in_bounded_memory() {
+    let dir = tempfile::tempdir().unwrap();
+    let fixtures = concat!(env!("CARGO_MANIFEST_DIR"), "/../fixtures/malformed/ok");
+    let (seq, csv) = (format!("{fixtures}/seq"), format!("{fixtures}/angles.csv"));
+    let source = ["--obj-seq", seq.as_str(), "--angles", csv.as_str()];
+    let model = dir.path().join("small.aprt");
+    let mut args = vec!["shlm", "train", "--resolution", "32", "-o", path(&model)];
+    args.extend(["--order", "2", "--rays", "16"]);
+    args.extend(source);
+    succeed(&args);
+    let huge = dir.path().join("huge.aprt");
+    std::fs::write(
+        &huge,
+        with_atlas_resolution(&std::fs::read(&model).unwrap(), 8192),
+    )
+    .unwrap();
+    let info: serde_json::Value =
+        serde_json::from_slice(&succeed(&["inspect", path(&huge), "--json"])).unwrap();
+    assert_eq!(info["texel_atlas"]["resolution"], 8192, "{info}");
+
+    // Under 1 GiB of address space, as the probe ran it (untouched pages of a zeroed map cost
+    // no resident memory, so only a limit on the allocations shows them); two threads and two
+    // malloc arenas, so that the limit does not depend on the machine's cores.
+    let npy = dir.path().join("huge.npy");
+    let out = std::process::Command::new("sh")
+        .args(["-c", "ulimit -v 1048576 && exec \"$0\" \"$@\""])
+        .arg(env!("CARGO_BIN_EXE_aprt"))
+        .args(["shlm", "eval", path(&huge), "--npy", path(&npy)])
+        .args(source)
+        .env("RAYON_NUM_THREADS", "2")
+        .env("MALLOC_ARENA_MAX", "2")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "eval under 1 GiB: {stderr}");
+    assert_eq!(run::read_npy(&npy).0, vec![3, 7, 4]);
+
+    let lights = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../fixtures/lights/three-lights.toml"
+    );
+    let png = dir.path().join("huge.png");
+    let mut args = vec!["shlm", "compose", path(&huge), "--frame", "0"];
+    args.extend(["--lights", lights, "--png", path(&png)]);
+    args.extend(source);
+    refuse(&args, &["huge.aprt", "8192x8192", "4.8 GB", "--resolution"]);
+    assert!(!png.exists());
+}

@@ -9,7 +9,7 @@ use clap::{Args, Subcommand};
 
 use crate::bake::checkpoint::{Checkpoint, OnExisting};
 use crate::bake::shard::Shard;
-use crate::cli::args::{BakeArgs, FitArgs, PrecisionArg, parse_rays, parse_resolution};
+use crate::cli::args::{BakeArgs, FitArgs, PrecisionArg};
 use crate::cli::source::SourceArgs;
 use crate::cli::stdout::outln;
 use crate::cli::terminal::Terminal;
@@ -20,17 +20,14 @@ use crate::io::outputs::{Input, Output, check};
 use crate::lightmap::bake::{
     CheckpointSettings, bake_light_map_shard, bake_light_maps, check_atlas,
 };
-use crate::lightmap::codec::{CodecSettings, ShlmFile, encode};
-use crate::lightmap::layout::{AtlasSpec, LightMapUvs, stored_or_texture};
-use crate::lightmap::model::{
-    LightMapFit, LightMapTraining, model_layout, predict_maps, train_light_maps,
-};
-use crate::lightmap::sample::maps_at_vertices;
+use crate::lightmap::codec::{CodecSettings, encode};
+use crate::lightmap::eval::eval_at_vertices;
+use crate::lightmap::layout::{AtlasSpec, LightMapUvs};
+use crate::lightmap::model::{LightMapFit, LightMapTraining, train_light_maps};
 use crate::lightmap::summary::summarize;
 use crate::model::ModelFrame;
 use crate::progress::Reporter;
 use crate::report::lightmap_preview::{ComposeSource, save_preview};
-use crate::rig::uv::UvLayout;
 use crate::rig::uv::generate::{DEFAULT_HARD_ANGLE_DEG, DEFAULT_MARGIN_TEXELS};
 
 /// `aprt lightmap`.
@@ -70,7 +67,7 @@ pub struct LightmapStudyArgs {
     #[arg(long)]
     pub assets: Option<PathBuf>,
     /// Atlas width and height in texels.
-    #[arg(long, default_value_t = 256, value_parser = parse_resolution)]
+    #[arg(long, default_value_t = 256)]
     pub resolution: usize,
     /// Simulation settings.
     #[command(flatten)]
@@ -81,7 +78,7 @@ pub struct LightmapStudyArgs {
 #[derive(Debug, Args)]
 pub struct AtlasArgs {
     /// Atlas width and height in texels.
-    #[arg(long, default_value_t = 256, value_parser = parse_resolution)]
+    #[arg(long, default_value_t = 256)]
     pub resolution: usize,
     /// Checkpoint directory: every baked frame is saved there until the output is written
     /// (default: OUTPUT.bake beside it).
@@ -203,7 +200,7 @@ pub struct LightmapComposeArgs {
     #[arg(long)]
     pub png: PathBuf,
     /// Rays per vertex of the per-vertex reference panel.
-    #[arg(long, default_value_t = 256, value_parser = parse_rays)]
+    #[arg(long, default_value_t = 256)]
     pub rays: usize,
 }
 
@@ -349,42 +346,6 @@ fn bake(args: &LightmapBakeArgs) -> Result<()> {
     Ok(())
 }
 
-/// A sequence's or a model's maps of every frame of the source's clip, and the layout they
-/// lie on: (resolution, order, maps, layout).
-fn maps_of(
-    input: &std::path::Path,
-    bytes: &[u8],
-    rig: &dyn crate::rig::Rig,
-    clip: &crate::rig::Clip,
-) -> Result<(usize, usize, Vec<Vec<f32>>, UvLayout)> {
-    let name = input.display().to_string();
-    if bytes.starts_with(crate::lightmap::codec::MAGIC) {
-        check_atlas(&name, bytes, rig, &Terminal)?;
-        let file = ShlmFile::parse(bytes).with_context(|| format!("{name}: invalid sequence"))?;
-        if file.frames() != clip.frames.len() {
-            bail!(
-                "{name} holds {} frames, clip {} has {}: give the clip the sequence was baked from",
-                file.frames(),
-                clip.name,
-                clip.frames.len()
-            );
-        }
-        let maps = file
-            .decode_all()
-            .with_context(|| format!("{name}: decoding"))?;
-        let layout = stored_or_texture(file.layout(), rig, &name)?;
-        return Ok((file.resolution(), file.order(), maps, layout));
-    }
-    let (r, order, maps) = predict_maps(bytes, &name, rig, clip)?;
-    let stored = model_layout(bytes, &name)?;
-    Ok((
-        r,
-        order,
-        maps,
-        stored_or_texture(stored.as_ref(), rig, &name)?,
-    ))
-}
-
 fn eval(args: &LightmapEvalArgs) -> Result<()> {
     let mut inputs = vec![Input::new(&args.input, "the light maps")];
     inputs.extend(args.source.inputs());
@@ -396,10 +357,8 @@ fn eval(args: &LightmapEvalArgs) -> Result<()> {
     let truth = args.against.as_deref().map(read_truth).transpose()?;
     let bytes = read_file(&args.input, InputKind::LightMap)?;
     let (rig, clip) = args.source.light_map_rig(&Terminal)?;
-    let (r, order, maps, layout) = maps_of(&args.input, &bytes, rig.as_ref(), &clip)?;
-    let n2 = order * order;
-    let flat: Vec<f32> = maps_at_vertices(rig.as_ref(), &layout, &maps, r, n2).concat();
-    let shape = [maps.len(), rig.bind_mesh().vertex_count(), n2];
+    let name = args.input.display().to_string();
+    let (flat, shape) = eval_at_vertices(&name, &bytes, rig.as_ref(), &clip, &Terminal)?;
     if let (Some(path), Some((truth_shape, _))) = (&args.against, &truth)
         && truth_shape != &shape
     {
@@ -518,8 +477,6 @@ fn compose(args: &LightmapComposeArgs) -> Result<()> {
 
 fn train(args: &LightmapTrainArgs) -> Result<()> {
     let (checkpoint, settings) = prepare(&args.atlas, &args.output, &args.source, &args.bake)?;
-    args.fit
-        .check_proxies(Some("light-map models carry no occluder proxies".into()))?;
     let fit = args.fit.options()?;
     let (rig, clips) = args.source.light_map_source(&Terminal)?;
     let what = &subject(&args.source);

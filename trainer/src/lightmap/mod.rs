@@ -5,6 +5,7 @@
 
 pub mod bake;
 pub mod codec;
+pub mod eval;
 pub mod layout;
 pub mod model;
 pub mod sample;

@@ -8,9 +8,11 @@
 //! An irradiance rig, when asked for, is fitted over the surface the texels stand for, as
 //! `aprt train --rig` fits one over the vertices, and stored in the blob.
 
+use std::ops::Range;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
+use glam::DMat3;
 use nalgebra::DMatrix;
 
 use super::bake::{BakedMaps, CheckpointSettings, bake_light_maps};
@@ -214,41 +216,77 @@ pub fn model_layout(blob: &[u8], model_name: &str) -> Result<Option<UvLayout>> {
     Ok(Some(UvLayout { corners }))
 }
 
+/// A light-map model `blob` ready to predict the frames of a clip of `rig`: which texel each
+/// row stands for, and each frame's pose vector and bone rotations.
+pub struct ModelFrames<'b> {
+    blob: &'b [u8],
+    /// The texel index of each row, ascending.
+    pub texels: Vec<usize>,
+    /// The atlas is `resolution`² texels.
+    pub resolution: usize,
+    /// SH order n.
+    pub order: usize,
+    angles: Vec<Vec<f64>>,
+    rotations: Vec<Vec<DMat3>>,
+}
+
+impl<'b> ModelFrames<'b> {
+    /// Reads `blob` (called `model_name` in errors) for `clip` of `rig`: refused when it is not a
+    /// light-map model or does not fit the character.
+    pub fn new(blob: &'b [u8], model_name: &str, rig: &dyn Rig, clip: &Clip) -> Result<Self> {
+        let info = describe(blob).with_context(|| format!("{model_name}: invalid model"))?;
+        let model = aprt_core::Model::parse(blob)?;
+        let Some(atlas) = model.texel_atlas() else {
+            bail!("{model_name} is not a light-map model (it has no texel atlas): use aprt eval");
+        };
+        let layout = PoseLayout::from_names(&rig.angle_names(), &info.angle_names)
+            .with_context(|| format!("{model_name} does not fit this character"))?;
+        let texels = (0..atlas.rows())
+            .map(|row| atlas.texel(row).map(|t| t as usize))
+            .collect::<Result<Vec<usize>, _>>()?;
+        Ok(ModelFrames {
+            blob,
+            texels,
+            resolution: atlas.resolution() as usize,
+            order: info.order,
+            angles: clip.frames.iter().map(|p| layout.reduce(p)).collect(),
+            rotations: all_rotations(rig, &clip.frames)?,
+        })
+    }
+
+    /// Each of `frames`' rows (`n²` values per row, world frame), through aprt-core (a
+    /// bone-frame model's rows turned by their bones' rotations in each frame).
+    pub fn predict(&self, frames: Range<usize>) -> Result<Vec<Vec<f32>>> {
+        let rotations = &self.rotations[frames.clone()];
+        crate::model::predict::predict_world(self.blob, &self.angles[frames], rotations, None)
+    }
+}
+
 /// The light maps (`resolution`² texels × n², texel-major, zero at unfilled texels) a
-/// light-map model `blob` predicts for every frame of `clip` of `rig`, through aprt-core (a
-/// bone-frame model's rows turned by their bones' rotations in each frame), with the
-/// resolution and the SH order.
+/// light-map model `blob` predicts for every frame of `clip` of `rig` ([`ModelFrames`]), with
+/// the resolution and the SH order. Holds every frame's whole map: for a few frames.
 pub fn predict_maps(
     blob: &[u8],
     model_name: &str,
     rig: &dyn Rig,
     clip: &Clip,
 ) -> Result<(usize, usize, Vec<Vec<f32>>)> {
-    let info = describe(blob).with_context(|| format!("{model_name}: invalid model"))?;
-    let model = aprt_core::Model::parse(blob)?;
-    let Some(atlas) = model.texel_atlas() else {
-        bail!("{model_name} is not a light-map model (it has no texel atlas): use aprt eval");
-    };
-    let layout = PoseLayout::from_names(&rig.angle_names(), &info.angle_names)
-        .with_context(|| format!("{model_name} does not fit this character"))?;
-    let angles: Vec<Vec<f64>> = clip.frames.iter().map(|p| layout.reduce(p)).collect();
-    let rotations = all_rotations(rig, &clip.frames)?;
-    let rows = crate::model::predict::predict_world(blob, &angles, &rotations, None)?;
-    let texels = (0..atlas.rows())
-        .map(|row| atlas.texel(row))
-        .collect::<Result<Vec<u32>, _>>()?;
-    let r = atlas.resolution() as usize;
-    let n2 = info.order * info.order;
-    let maps = rows.iter().map(|v| to_map(v, &texels, r, n2)).collect();
-    Ok((r, info.order, maps))
+    let model = ModelFrames::new(blob, model_name, rig, clip)?;
+    let (r, n2) = (model.resolution, model.order * model.order);
+    let maps = model
+        .predict(0..clip.frames.len())?
+        .iter()
+        .map(|v| to_map(v, &model.texels, r, n2))
+        .collect();
+    Ok((r, model.order, maps))
 }
 
 /// A model's per-row output (`n2` values per row) scattered onto an `resolution`² map, zero at
 /// texels no row stands for.
-pub fn to_map(values: &[f32], texels: &[u32], resolution: usize, n2: usize) -> Vec<f32> {
+pub fn to_map(values: &[f32], texels: &[usize], resolution: usize, n2: usize) -> Vec<f32> {
     let mut map = vec![0.0f32; resolution * resolution * n2];
     for (&t, v) in texels.iter().zip(values.chunks_exact(n2)) {
-        map[t as usize * n2..][..n2].copy_from_slice(v);
+        map[t * n2..][..n2].copy_from_slice(v);
     }
     map
 }
@@ -420,7 +458,8 @@ mod tests {
         let expect: Vec<f32> = (0..r * r)
             .map(|t| if filled[t] { frame[t] } else { 0.0 })
             .collect();
-        assert_eq!(to_map(&transfers[0], &rows, r, 1), expect);
+        let texels: Vec<usize> = rows.iter().map(|&t| t as usize).collect();
+        assert_eq!(to_map(&transfers[0], &texels, r, 1), expect);
         let two = to_map(&[1.0, 2.0, 3.0, 4.0], &[0, 2], r, 2);
         assert_eq!(&two[..6], &[1.0, 2.0, 0.0, 0.0, 3.0, 4.0]);
         assert!(two[6..].iter().all(|&v| v == 0.0));

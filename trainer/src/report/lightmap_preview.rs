@@ -14,8 +14,9 @@ use crate::lighting::luminance;
 use crate::lightmap::bake::texel_positions;
 use crate::lightmap::codec::{MAGIC, ShlmFile};
 use crate::lightmap::layout::stored_or_texture;
-use crate::lightmap::model::{model_layout, predict_maps};
+use crate::lightmap::model::{ModelFrames, model_layout, to_map};
 use crate::lightmap::sample::at_vertices;
+use crate::limits::MAX_BYTES;
 use crate::report::figures::{FOUR_X_ERROR, PICTURE_VIEW, captioned, upright};
 use crate::report::render::{Colormap, render_scalar, render_with, save_png_atomic};
 use crate::rig::mesh::Mesh;
@@ -55,6 +56,27 @@ struct FrameMaps<'a> {
     rig: Option<IrradianceRig<'a>>,
 }
 
+/// Bytes a texel costs the preview beside its `n²` f32 transfer values: its filled flag, lit
+/// RGB (f32), luminance, the atlas's ring, sample and bind position (a model's), and the
+/// picture's RGB twice (the map's panel and the captioned figure).
+const PREVIEW_BYTES_PER_TEXEL: u64 = 1 + 12 + 4 + 1 + 20 + 12 + 3 + 3;
+
+/// Refuses a preview of a `resolution`² map at SH order `order` (of the input called `name`)
+/// that would hold more than the run's budget, before any of it is allocated: the preview
+/// holds the whole map, several times over.
+fn check_preview_memory(name: &str, resolution: usize, order: usize) -> Result<()> {
+    let per_texel = 4 * (order * order) as u64 + PREVIEW_BYTES_PER_TEXEL;
+    let needed = (resolution as u64).pow(2).saturating_mul(per_texel);
+    if needed > MAX_BYTES {
+        bail!(
+            "{name}: composing its {resolution}x{resolution} light map at SH order {order} would hold {}; one run holds at most {}: bake or train at a lower --resolution",
+            crate::bake::budget::bytes(needed),
+            crate::bake::budget::bytes(MAX_BYTES)
+        );
+    }
+    Ok(())
+}
+
 /// Frame `frame` of a sequence file.
 fn sequence_frame(name: &str, bytes: &[u8], frame: usize) -> Result<FrameMaps<'static>> {
     let file = ShlmFile::parse(bytes).with_context(|| format!("{name}: invalid sequence"))?;
@@ -62,6 +84,7 @@ fn sequence_frame(name: &str, bytes: &[u8], frame: usize) -> Result<FrameMaps<'s
         bail!("--frame {frame}: {name} holds {} frames", file.frames());
     }
     let (r, order) = (file.resolution(), file.order());
+    check_preview_memory(name, r, order)?;
     let mut map = vec![0.0f32; r * r * order * order];
     file.decode_frame(frame, &mut map)?;
     Ok(FrameMaps {
@@ -95,8 +118,11 @@ fn model_frame<'a>(
         frames: vec![pose.clone()],
         ..clip.clone()
     };
-    let (r, order, mut maps) = predict_maps(bytes, name, rig, &one)?;
-    let map = maps.pop().unwrap_or_default();
+    let model = ModelFrames::new(bytes, name, rig, &one)?;
+    let (r, order) = (model.resolution, model.order);
+    check_preview_memory(name, r, order)?;
+    let rows = model.predict(0..1)?;
+    let map = to_map(&rows[0], &model.texels, r, order * order);
     let stored = model_layout(bytes, name)?;
     let layout = stored_or_texture(stored.as_ref(), rig, name)?;
     let atlas = Atlas::build(&layout, &rig.bind_mesh().triangles, r)?;

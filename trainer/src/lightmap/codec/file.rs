@@ -239,22 +239,20 @@ impl<'a> ShlmFile<'a> {
             .collect()
     }
 
-    /// Decodes frame `k` into `out` (`R² · n²`, texel-major, zero where not filled).
-    pub fn decode_frame(&self, k: usize, out: &mut [f32]) -> Result<(), CodecError> {
+    /// The texel index of each filled texel, ascending: what each of [`Self::decode_rows`]'s
+    /// rows stands for.
+    pub fn texels(&self) -> &[usize] {
+        &self.texels
+    }
+
+    /// Decodes frame `k`'s filled texels only (`n²` values each, in [`Self::texels`] order):
+    /// a frame without the `R²` map, for readers that need only some texels.
+    pub fn decode_rows(&self, k: usize) -> Result<Vec<f32>, CodecError> {
         let h = &self.header;
         if k >= h.frames {
             return Err(CodecError::FrameOutOfRange {
                 index: k,
                 frames: h.frames,
-            });
-        }
-        let n2 = h.n2();
-        let expected = h.resolution * h.resolution * n2;
-        if out.len() != expected {
-            return Err(CodecError::SizeMismatch {
-                what: "output frame",
-                expected: expected as u64,
-                got: out.len() as u64,
             });
         }
         let compact = self.decode_compact(k)?;
@@ -264,6 +262,22 @@ impl<'a> ShlmFile<'a> {
                 message: format!("frame {k} decodes to a non-finite value"),
             });
         }
+        Ok(compact)
+    }
+
+    /// Decodes frame `k` into `out` (`R² · n²`, texel-major, zero where not filled).
+    pub fn decode_frame(&self, k: usize, out: &mut [f32]) -> Result<(), CodecError> {
+        let h = &self.header;
+        let n2 = h.n2();
+        let expected = h.resolution * h.resolution * n2;
+        if out.len() != expected {
+            return Err(CodecError::SizeMismatch {
+                what: "output frame",
+                expected: expected as u64,
+                got: out.len() as u64,
+            });
+        }
+        let compact = self.decode_rows(k)?;
         out.fill(0.0);
         for (&t, values) in self.texels.iter().zip(compact.chunks_exact(n2)) {
             out[t * n2..(t + 1) * n2].copy_from_slice(values);

@@ -44,7 +44,7 @@ use glam::DVec2;
 use crate::rig::mesh::Mesh;
 
 pub use pack::{Placement, shelf_pack};
-pub use sample::sample_bilinear;
+pub use sample::{sample_bilinear, sample_bilinear_by};
 
 /// Rings of texels filled around the covered ones. One ring is what bilinear sampling needs at
 /// full resolution: a point on an island's edge lies in a covered texel (coverage is
