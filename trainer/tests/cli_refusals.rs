@@ -374,3 +374,46 @@ fn refusals_name_what_is_at_fault() {
     assert!(!line.contains("character"), "{line}");
     assert!(!out.exists());
 }
+
+/// A `.shlm` stripped of its light-map UVs (a version 4 file whose UV fields say none) reads
+/// as one baked on the character's texture UVs; with a character that has none, the refusal
+/// blamed the character alone ("has no texture coordinates"). It names the file now.
+#[test]
+fn a_sequence_without_its_uvs_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let (seq, csv) = fixture_sequence();
+    let shlm = dir.path().join("seq.shlm");
+    let source = ["--obj-seq", seq.as_str(), "--angles", csv.as_str()];
+    let bake = [
+        "lightmap",
+        "bake",
+        "--resolution",
+        "16",
+        "--rays",
+        "8",
+        "-o",
+        s(&shlm),
+    ];
+    succeed(&[&bake[..], &source].concat());
+    let bytes = std::fs::read(&shlm).unwrap();
+    let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()) as usize;
+    assert!(word(56) > 0, "the bake stores its generated UVs");
+    // The UV section follows the mask, positions and shared sections, which start at 64.
+    let uvs = 64 + word(40) + word(44) + word(48);
+    let mut stripped = [&bytes[..uvs], &bytes[uvs + word(60)..bytes.len() - 4]].concat();
+    stripped[56..64].fill(0);
+    let crc = crc32(&stripped);
+    stripped.extend(crc.to_le_bytes());
+    let bare = dir.path().join("bare.shlm");
+    std::fs::write(&bare, stripped).unwrap();
+    let npy = dir.path().join("out.npy");
+    let line = refuse(
+        &[
+            &["lightmap", "eval", s(&bare), "--npy", s(&npy)][..],
+            &source,
+        ]
+        .concat(),
+        &["bare.shlm", "stores no light-map UVs"],
+    );
+    assert!(!npy.exists(), "{line}");
+}

@@ -9,7 +9,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 
 use super::codec::{MapSequence, atlas_record};
-use super::layout::{AtlasSpec, layout_for, texture_layout};
+use super::layout::{AtlasSpec, layout_for, texture_of_file};
 use crate::bake::budget::Workload;
 use crate::bake::checkpoint::{BakeTarget, Checkpoint, OnExisting, ShardBaked};
 use crate::bake::clip::pose_all;
@@ -110,7 +110,7 @@ pub fn check_atlas(name: &str, bytes: &[u8], rig: &dyn Rig, reporter: &dyn Repor
         ));
         return Ok(());
     };
-    let ours = texture_layout(rig, "the character")?.fingerprint();
+    let ours = texture_of_file(rig, name)?.fingerprint();
     if recorded != ours {
         bail!(
             "{name} was baked on UVs of atlas fingerprint {recorded:08x}, the character's UVs are {ours:08x}: give the character the light map was baked from"

@@ -95,6 +95,19 @@ pub fn texture_layout<'r>(rig: &'r dyn Rig, what: &str) -> Result<&'r UvLayout> 
     Ok(layout)
 }
 
+/// The character's texture UVs, which the maps read back from a file (called `name`) lie on
+/// when it stores no UVs of its own. A character without them is refused naming the file too:
+/// its missing UVs send the reader to the character's ("the character has no texture
+/// coordinates" alone blamed the character for a file stripped of its UVs).
+pub fn texture_of_file<'r>(rig: &'r dyn Rig, name: &str) -> Result<&'r UvLayout> {
+    if rig.uv_layout().is_none() {
+        bail!(
+            "{name} stores no light-map UVs, so its maps lie on the character's texture UVs, and the character has none (glTF TEXCOORD_0, OBJ vt): give the character it was baked from"
+        );
+    }
+    texture_layout(rig, "the character")
+}
+
 /// The layout maps read back from a file (called `name`) lie on: the UVs it stores, which
 /// must have one entry per triangle of `rig`'s bind mesh, or else the character's texture UVs.
 pub fn stored_or_texture(stored: Option<&UvLayout>, rig: &dyn Rig, name: &str) -> Result<UvLayout> {
@@ -105,6 +118,6 @@ pub fn stored_or_texture(stored: Option<&UvLayout>, rig: &dyn Rig, name: &str) -
             "{name} stores light-map UVs for {} triangles, the character has {triangles}: give the character the light map was baked from",
             layout.corners.len()
         ),
-        None => Ok(texture_layout(rig, "the character")?.clone()),
+        None => Ok(texture_of_file(rig, name)?.clone()),
     }
 }
