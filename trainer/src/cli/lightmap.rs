@@ -9,7 +9,7 @@ use clap::{Args, Subcommand};
 
 use crate::bake::checkpoint::{Checkpoint, OnExisting};
 use crate::bake::shard::Shard;
-use crate::cli::args::{BakeArgs, FitArgs, PrecisionArg};
+use crate::cli::args::{BakeArgs, FitArgs, PrecisionArg, parse_rays, parse_resolution};
 use crate::cli::source::SourceArgs;
 use crate::cli::stdout::outln;
 use crate::cli::terminal::Terminal;
@@ -67,7 +67,7 @@ pub struct LightmapStudyArgs {
     #[arg(long)]
     pub assets: Option<PathBuf>,
     /// Atlas width and height in texels.
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 256, value_parser = parse_resolution)]
     pub resolution: usize,
     /// Simulation settings.
     #[command(flatten)]
@@ -78,7 +78,7 @@ pub struct LightmapStudyArgs {
 #[derive(Debug, Args)]
 pub struct AtlasArgs {
     /// Atlas width and height in texels.
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 256, value_parser = parse_resolution)]
     pub resolution: usize,
     /// Checkpoint directory: every baked frame is saved there until the output is written
     /// (default: OUTPUT.bake beside it).
@@ -200,7 +200,7 @@ pub struct LightmapComposeArgs {
     #[arg(long)]
     pub png: PathBuf,
     /// Rays per vertex of the per-vertex reference panel.
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 256, value_parser = parse_rays)]
     pub rays: usize,
 }
 
@@ -477,6 +477,8 @@ fn compose(args: &LightmapComposeArgs) -> Result<()> {
 
 fn train(args: &LightmapTrainArgs) -> Result<()> {
     let (checkpoint, settings) = prepare(&args.atlas, &args.output, &args.source, &args.bake)?;
+    args.fit
+        .check_proxies(Some("light-map models carry no occluder proxies".into()))?;
     let fit = args.fit.options()?;
     let (rig, clips) = args.source.light_map_source(&Terminal)?;
     let what = &subject(&args.source);
