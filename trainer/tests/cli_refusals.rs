@@ -417,3 +417,84 @@ fn a_sequence_without_its_uvs_is_named() {
     );
     assert!(!npy.exists(), "{line}");
 }
+
+/// A light-map model of the fixture sequence with a gradient irradiance rig, in `dir`.
+fn rigged_light_map_model(dir: &Path) -> std::path::PathBuf {
+    let (seq, csv) = fixture_sequence();
+    let model = dir.join("rigged.aprt");
+    succeed(&[
+        "lightmap",
+        "train",
+        "--obj-seq",
+        &seq,
+        "--angles",
+        &csv,
+        "--resolution",
+        "16",
+        "--order",
+        "2",
+        "--rays",
+        "8",
+        "--rig",
+        "gradient",
+        "-o",
+        s(&model),
+    ]);
+    model
+}
+
+/// A light-map model whose irradiance rig holds 3e38 (finite, so the core's checks pass) once
+/// passed `inspect` and then failed `compose` naming neither the file nor the rig (huge
+/// weights: "lighting coefficient 0 is NaN or infinite"), or composed shading off by 10³⁸ (a
+/// huge centre). Both commands refuse it now, naming the file and the rig.
+#[test]
+fn a_rig_of_huge_values_is_refused_by_inspect_as_by_compose() {
+    let dir = tempfile::tempdir().unwrap();
+    let blob = std::fs::read(rigged_light_map_model(dir.path())).unwrap();
+    let (seq, csv) = fixture_sequence();
+    let lights = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../fixtures/lights/three-lights.toml"
+    );
+    let png = dir.path().join("out.png");
+    // Every weight of the fit matrix (after the prelude, the error table and the samples),
+    // and the centre's x.
+    let weights = |rig: &mut Vec<u8>| {
+        let word = |at: usize| u32::from_le_bytes(rig[at..at + 4].try_into().unwrap()) as usize;
+        44 + 8 * word(12) + 12 * word(4)..rig.len()
+    };
+    for (name, fragment, range) in [
+        ("weights.aprt", "SH vector 0", None),
+        ("centre.aprt", "centre", Some(16..20)),
+    ] {
+        let huge = edited(&blob, SectionKind::IrradianceRig, |rig| {
+            for at in range.clone().unwrap_or_else(|| weights(rig)).step_by(4) {
+                rig[at..at + 4].copy_from_slice(&3e38f32.to_le_bytes());
+            }
+        });
+        let model = dir.path().join(name);
+        std::fs::write(&model, huge).unwrap();
+        let expected = [name, "irradiance rig", fragment];
+        refuse(&["inspect", s(&model)], &expected);
+        refuse(&["inspect", s(&model), "--json"], &expected);
+        refuse(
+            &[
+                "lightmap",
+                "compose",
+                s(&model),
+                "--obj-seq",
+                &seq,
+                "--angles",
+                &csv,
+                "--lights",
+                lights,
+                "--rays",
+                "8",
+                "--png",
+                s(&png),
+            ],
+            &expected,
+        );
+        assert!(!png.exists());
+    }
+}

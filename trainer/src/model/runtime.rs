@@ -11,6 +11,7 @@ use aprt_core::{
 };
 
 use crate::irradiance_rig::fit::{FittedRig, rig_vectors};
+use crate::limits::MAX_EXTENT;
 use crate::model::export::{Precision, encode_model_with_rig};
 use crate::model::{LinearModel, VertexBasis};
 use crate::rig::bone_frames::BoneFrames;
@@ -44,15 +45,99 @@ pub fn proxies_section(blob: &[u8]) -> Result<Option<&[u8]>, aprt_core::Error> {
     if !model.info().has_proxies() {
         return Ok(None);
     }
+    section(blob, SectionKind::Proxies)
+}
+
+/// The bytes of the section of `kind` of a blob the core validated, when it has one.
+fn section(blob: &[u8], kind: SectionKind) -> Result<Option<&[u8]>, aprt_core::Error> {
     let header = read_header(blob)?;
     Ok(header
         .sections
         .iter()
-        .find(|e| e.kind == SectionKind::Proxies.tag())
+        .find(|e| e.kind == kind.tag())
         .and_then(|e| {
             let start = usize::try_from(e.offset).ok()?;
             blob.get(start..start.checked_add(usize::try_from(e.len).ok()?)?)
         }))
+}
+
+/// Largest gain of an irradiance rig's SH vector, `Σ_i |L_ki|` over its samples' weights: far
+/// beyond a fitted rig's (about 1 for a constant rig, the inverse of the character's size for
+/// a gradient), and small enough that lighting of any radiance below 10²⁶ maps to finite
+/// vectors.
+pub const MAX_RIG_GAIN: f64 = 1e12;
+
+/// Why [`describe`] refused a blob.
+#[derive(Debug, thiserror::Error)]
+pub enum BlobError {
+    /// The core refused it.
+    #[error(transparent)]
+    Core(#[from] aprt_core::Error),
+    /// An irradiance rig point (centre, half-width, radius or sample) beyond any character.
+    #[error(
+        "irradiance rig: its {what} holds {value:e}, beyond the {MAX_EXTENT:e} of any character"
+    )]
+    RigExtent {
+        /// Which value.
+        what: String,
+        /// The value.
+        value: f32,
+    },
+    /// An irradiance rig vector whose weights could turn plain lighting into infinities.
+    #[error(
+        "irradiance rig: the weights of its SH vector {vector} sum to {gain:e} in magnitude, beyond {MAX_RIG_GAIN:e}: lighting it maps would overflow"
+    )]
+    RigGain {
+        /// The vector.
+        vector: usize,
+        /// `Σ_i |L_ki|`.
+        gain: f64,
+    },
+}
+
+/// Refuses an irradiance rig whose values, finite as the core requires, no fit makes: a point
+/// beyond [`MAX_EXTENT`] or a vector's gain beyond [`MAX_RIG_GAIN`]. The core maps lighting
+/// through them to infinities (`compose` failed "lighting coefficient 0 is NaN or infinite",
+/// naming neither the file nor the rig) or to shading off by 10³⁸.
+fn check_rig_range(blob: &[u8], rig: &aprt_core::IrradianceRig<'_>) -> Result<(), BlobError> {
+    let beyond = |p: [f32; 3]| p.into_iter().find(|v| f64::from(v.abs()) > MAX_EXTENT);
+    let fixed = [
+        ("centre", rig.centre()),
+        ("half-widths", rig.half()),
+        ("radius", [rig.radius(); 3]),
+    ];
+    for (what, point) in fixed {
+        if let Some(value) = beyond(point) {
+            return Err(BlobError::RigExtent {
+                what: what.into(),
+                value,
+            });
+        }
+    }
+    for i in 0..rig.samples() {
+        if let Some(value) = beyond(rig.sample(i)) {
+            return Err(BlobError::RigExtent {
+                what: format!("sample {i}"),
+                value,
+            });
+        }
+    }
+    let bytes = section(blob, SectionKind::IrradianceRig)?.unwrap_or_default();
+    let n = rig.samples();
+    // The fit matrix follows the 44-byte prelude, the error table and the samples (FORMAT.md).
+    let matrix = bytes
+        .get(44 + 8 * rig.table_len() + 12 * n..)
+        .unwrap_or_default();
+    for (vector, row) in matrix.chunks_exact(4 * n).enumerate() {
+        let gain: f64 = row
+            .chunks_exact(4)
+            .map(|w| f64::from(f32::from_le_bytes([w[0], w[1], w[2], w[3]]).abs()))
+            .sum();
+        if gain > MAX_RIG_GAIN {
+            return Err(BlobError::RigGain { vector, gain });
+        }
+    }
+    Ok(())
 }
 
 /// The bone of each vertex, for bone-frame models; `None` for world-frame models.
@@ -180,9 +265,13 @@ impl RigInfo {
     }
 }
 
-/// Validates `blob` completely and describes it.
-pub fn describe(blob: &[u8]) -> Result<BlobInfo, aprt_core::Error> {
+/// Validates `blob` completely (the core's checks, and an irradiance rig's range) and
+/// describes it.
+pub fn describe(blob: &[u8]) -> Result<BlobInfo, BlobError> {
     let model = Model::parse(blob)?;
+    if let Some(rig) = model.irradiance_rig() {
+        check_rig_range(blob, &rig)?;
+    }
     let info = model.info();
     let header = read_header(blob)?;
     let sections = header
