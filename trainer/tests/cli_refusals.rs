@@ -314,7 +314,8 @@ fn refused_by_clap(args: &[&str], fragments: &[&str]) {
 /// Refusals that once blamed the wrong thing name the file, flag or key at fault now:
 /// `--resolution 0` blamed `--margin`, `--rays 0` named no flag, an angles CSV of 600 columns
 /// named no file (`lightmap train`) or the OBJ folder (`train`), `irradiance-rig --obj-seq`
-/// asked for a mesh or a character, and `report --stride 1000000` blamed the character.
+/// asked for a mesh or a character, and `report --stride 1000000` blamed the character
+/// (`demo --stride` named no flag).
 #[test]
 fn refusals_name_what_is_at_fault() {
     let dir = tempfile::tempdir().unwrap();
@@ -372,7 +373,10 @@ fn refusals_name_what_is_at_fault() {
         &["--stride 1000000", "training frames"],
     );
     assert!(!line.contains("character"), "{line}");
-    assert!(!out.exists());
+    refuse(
+        &["demo", "--stride", "1000000", "--out", s(&out)],
+        &["--stride 1000000", "training frames"],
+    );
 }
 
 /// A `.shlm` stripped of its light-map UVs (a version 4 file whose UV fields say none) reads

@@ -664,19 +664,6 @@ fn print_scene_report(report: &SceneTrainReport, json: Option<&Path>) -> Result<
     Ok(())
 }
 
-/// Refuses a `--stride` that leaves fewer than two of the training clips' frames, which no
-/// model can be fitted to: the fit's error blamed the character instead.
-fn check_stride(stride: usize, clips: &[crate::rig::Clip]) -> Result<()> {
-    let frames: usize = clips.iter().map(|c| c.frames.len()).sum();
-    let kept: usize = clips.iter().map(|c| c.frames.len().div_ceil(stride)).sum();
-    if stride > 1 && kept < 2 {
-        bail!(
-            "--stride {stride} keeps {kept} of the {frames} training frames; a model needs two at least: give a smaller stride"
-        );
-    }
-    Ok(())
-}
-
 fn report(args: &ReportArgs) -> Result<()> {
     use crate::report::sweep::{ReportSettings, SceneClips, document, run};
     if let Some(us) = args.budget_us
@@ -703,7 +690,8 @@ fn report(args: &ReportArgs) -> Result<()> {
         );
     }
     let (rig, [clips, validation, tests]) = source.load_scene(&scene, &Terminal)?;
-    check_stride(args.stride as usize, &clips)?;
+    // Before `run`, whose errors are the character's.
+    crate::report::sweep::check_stride(&clips, args.stride as usize)?;
     let lighting = SceneLighting::of(&scene, rig.up())?;
     let settings = ReportSettings {
         budget_us: args.budget_us,

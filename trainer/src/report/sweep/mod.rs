@@ -200,6 +200,19 @@ pub struct Reference {
     pub fitting: Vec<Mesh>,
 }
 
+/// Refuses a `stride` (`--stride`) that keeps fewer than two frames of the training clips
+/// `train`: no model can be fitted to them, and the fit's error blamed the character.
+pub fn check_stride(train: &[Clip], stride: usize) -> Result<()> {
+    let frames: usize = train.iter().map(|c| c.frames.len()).sum();
+    let kept: usize = train.iter().map(|c| c.frames.len().div_ceil(stride)).sum();
+    if stride > 1 && kept < 2 {
+        bail!(
+            "--stride {stride} keeps {kept} of the {frames} training frames; a model needs two at least: give a smaller stride"
+        );
+    }
+    Ok(())
+}
+
 /// Bakes `clips` (every `stride`-th frame) at the scene's effects and SH order 6, under
 /// `lighting` (the scene's, read by the caller, whose errors name the scene file).
 pub fn bake_reference(
@@ -218,6 +231,7 @@ pub fn bake_reference(
     let rig = clips.rig;
     let stride = stride.max(1);
     let (train, validation) = strided_clips(clips, stride);
+    check_stride(clips.train, stride)?;
     let frames: Vec<Vec<f64>> = train.iter().flat_map(|c| c.frames.clone()).collect();
     let layout = PoseLayout::from_training(&rig.angle_names(), &frames)?;
     let plan = plan_bake(scene, &lighting, rig.bind_mesh(), frames.len())?;
