@@ -134,7 +134,7 @@ fn a_closed_standard_output_ends_every_command_quietly() {
 /// A model's pose-entry names once reached the terminal raw through `inspect` and the error of
 /// a clip that does not fit: an escape sequence recoloured it, a carriage return and a
 /// right-to-left mark rewrote the line, and a 60,000-character name gave a 60 KB line. They are
-/// escaped and cut now, as every reader's quotes are.
+/// escaped and cut now, as every reader's quotes are (a BVH joint name's too).
 #[test]
 fn a_blobs_names_reach_the_terminal_escaped_and_short() {
     let dir = tempfile::tempdir().unwrap();
@@ -187,6 +187,25 @@ fn a_blobs_names_reach_the_terminal_escaped_and_short() {
         &["names.aprt", "does not fit", "hip.x"],
     );
     clean("eval", &line);
+
+    // A BVH joint name of 60,000 characters with an escape sequence, declared twice.
+    let name = format!("\u{1b}[31m{}", "j".repeat(60_000));
+    let joint = format!(
+        "JOINT {name}\n{{\nOFFSET 0 1 0\nCHANNELS 3 Zrotation Xrotation Yrotation\nEnd Site\n{{\nOFFSET 0 1 0\n}}\n}}\n"
+    );
+    let bvh = dir.path().join("names.bvh");
+    std::fs::write(
+        &bvh,
+        format!(
+            "HIERARCHY\nROOT hips\n{{\nOFFSET 0 0 0\nCHANNELS 3 Zrotation Xrotation Yrotation\n{joint}{joint}}}\nMOTION\nFrames: 1\nFrame Time: 0.1\n0 0 0 0 0 0 0 0 0\n"
+        ),
+    )
+    .unwrap();
+    let line = refuse(
+        &["simulate", "--bvh", s(&bvh), "--npy", s(&npy)],
+        &["names.bvh", "used twice", "\\u{1b}[31mjjj"],
+    );
+    clean("simulate", &line);
 }
 
 /// Flags that cannot apply were once ignored without a word: `--proxies on` wrote a model

@@ -201,7 +201,7 @@ fn check_scales(
             let scale = rest[n].scale;
             if scale.abs().min_element() < f64::from(f32::MIN_POSITIVE) {
                 return Err((
-                    format!("node {n} {:?}", node_names[n]),
+                    format!("node {n} {}", crate::text::quote(&node_names[n])),
                     format!(
                         "has scale {:?}: a zero scale collapses the skinned mesh",
                         scale.to_array()
@@ -248,9 +248,10 @@ fn inverse_binds(
         };
         return Err(invalid(
             format!(
-                "{} accessor {} matrix {k} (joint {joint:?})",
+                "{} accessor {} matrix {k} (joint {})",
                 item("skin", skin.index(), skin.name()),
-                accessor.index()
+                accessor.index(),
+                crate::text::quote(joint)
             ),
             format!("{problem}: {:?}", m.to_cols_array()),
         ));
@@ -343,10 +344,10 @@ fn animations(
         for channel in animation.channels() {
             let node = channel.target().node();
             let channel_item = format!(
-                "{} channel {} (node {:?})",
+                "{} channel {} (node {})",
                 item("animation", animation.index(), animation.name()),
                 channel.index(),
-                node_names[node.index()]
+                crate::text::quote(&node_names[node.index()])
             );
             if let Some(track) = read_track(&channel, get)
                 .map_err(|problem| invalid(channel_item.clone(), problem))?

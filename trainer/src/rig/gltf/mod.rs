@@ -69,7 +69,7 @@ use skeleton::{Skeleton, Trs};
 /// `kind index "name"`, the way every error names an item.
 pub fn item(kind: &str, index: usize, name: Option<&str>) -> String {
     match name {
-        Some(name) => format!("{kind} {index} {name:?}"),
+        Some(name) => format!("{kind} {index} {}", crate::text::quote(name)),
         None => format!("{kind} {index}"),
     }
 }

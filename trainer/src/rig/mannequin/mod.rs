@@ -77,15 +77,16 @@ pub enum MocapRigError {
     #[error(transparent)]
     Mocap(#[from] MocapError),
     /// The skeleton has no bone of nonzero length to put a surface around.
-    #[error("the skeleton of {clip:?} has no bone of nonzero length")]
+    #[error("the skeleton of {} has no bone of nonzero length", crate::text::quote(.clip))]
     NoBones {
         /// The clip (file stem).
         clip: String,
     },
     /// The rest skeleton reaches farther from the origin than a bake can represent.
     #[error(
-        "the skeleton of {clip:?} reaches {extent:e} from the origin at rest, beyond the \
-         {MAX_EXTENT:e} a bake can represent"
+        "the skeleton of {} reaches {extent:e} from the origin at rest, beyond the \
+         {MAX_EXTENT:e} a bake can represent",
+        crate::text::quote(.clip)
     )]
     Extent {
         /// The clip (file stem).
@@ -94,7 +95,7 @@ pub enum MocapRigError {
         extent: f64,
     },
     /// A requested frame range is empty or runs past the end of the motion.
-    #[error("frames {start}..{end} of {clip:?}: the motion has {count} frames (0..{count})")]
+    #[error("frames {start}..{end} of {}: the motion has {count} frames (0..{count})", crate::text::quote(.clip))]
     FrameRange {
         /// The motion's name.
         clip: String,
@@ -107,7 +108,8 @@ pub enum MocapRigError {
     },
     /// A skeleton with more joints than a mannequin is built for.
     #[error(
-        "the skeleton of {clip:?} has {joints} joints; a mannequin is built for at most {MAX_JOINTS} (aprt-core's bone limit; a CMU skeleton has 31)"
+        "the skeleton of {} has {joints} joints; a mannequin is built for at most {MAX_JOINTS} (aprt-core's bone limit; a CMU skeleton has 31)",
+        crate::text::quote(.clip)
     )]
     TooManyJoints {
         /// The clip (file stem).
@@ -117,7 +119,8 @@ pub enum MocapRigError {
     },
     /// A skeleton whose mannequin would have more vertices than a model may have.
     #[error(
-        "the mannequin of {clip:?} would have {vertices} vertices, more than the {} a model may have (its bones are very long for its height, which sets the ring spacing)",
+        "the mannequin of {} would have {vertices} vertices, more than the {} a model may have (its bones are very long for its height, which sets the ring spacing)",
+        crate::text::quote(.clip),
         body::MAX_VERTICES
     )]
     TooManyVertices {
@@ -129,7 +132,8 @@ pub enum MocapRigError {
     /// A clip (at the rate asked for) of more frames than one run bakes or evaluates,
     /// refused before any frame is sampled.
     #[error(
-        "{clip:?} at {fps} fps would have {frames:.0} frames, more than the {MAX_FRAMES} one run bakes or evaluates: take fewer frames or a lower frame rate"
+        "{} at {fps} fps would have {frames:.0} frames, more than the {MAX_FRAMES} one run bakes or evaluates: take fewer frames or a lower frame rate",
+        crate::text::quote(.clip)
     )]
     TooManyFrames {
         /// The clip.
@@ -149,7 +153,7 @@ pub enum MocapRigError {
     #[error(transparent)]
     Pose(#[from] PoseError),
     /// Retargeting found no joint name shared by the two skeletons.
-    #[error("no joint of {source_clip:?} has the name of a joint of this mannequin")]
+    #[error("no joint of {} has the name of a joint of this mannequin", crate::text::quote(.source_clip))]
     NoCommonJoint {
         /// The motion being retargeted.
         source_clip: String,

@@ -36,7 +36,7 @@ pub enum MocapError {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum Problem {
     /// A token other than the grammar allows here.
-    #[error("expected {expected}, found {found:?}")]
+    #[error("expected {expected}, found {}", crate::text::quote(.found))]
     Expected {
         /// What the grammar allows.
         expected: &'static str,
@@ -54,20 +54,21 @@ pub enum Problem {
     },
     /// A `CHANNELS` entry that is not one of the six BVH channels.
     #[error(
-        "unknown channel {name:?} (expected Xposition, Yposition, Zposition, Xrotation, Yrotation or Zrotation)"
+        "unknown channel {} (expected Xposition, Yposition, Zposition, Xrotation, Yrotation or Zrotation)",
+        crate::text::quote(.name)
     )]
     UnknownChannel {
         /// The token.
         name: String,
     },
     /// `CHANNELS` not followed by a count from 0 to 6.
-    #[error("CHANNELS must be followed by a count from 0 to 6, found {found:?}")]
+    #[error("CHANNELS must be followed by a count from 0 to 6, found {}", crate::text::quote(.found))]
     BadChannelCount {
         /// The token.
         found: String,
     },
     /// A joint lists the same channel twice.
-    #[error("joint {joint:?} lists {channel:?} twice")]
+    #[error("joint {} lists {channel:?} twice", crate::text::quote(.joint))]
     RepeatedChannel {
         /// The joint.
         joint: String,
@@ -75,7 +76,7 @@ pub enum Problem {
         channel: Channel,
     },
     /// A joint or End Site has two `OFFSET`s, or a joint two `CHANNELS`.
-    #[error("{what} given twice in {joint:?}")]
+    #[error("{what} given twice in {}", crate::text::quote(.joint))]
     Repeated {
         /// `OFFSET` or `CHANNELS`.
         what: &'static str,
@@ -83,19 +84,19 @@ pub enum Problem {
         joint: String,
     },
     /// A joint or End Site closed without an `OFFSET`.
-    #[error("{joint:?} has no OFFSET")]
+    #[error("{} has no OFFSET", crate::text::quote(.joint))]
     MissingOffset {
         /// The joint (or `End Site of <joint>`).
         joint: String,
     },
     /// A number was expected.
-    #[error("{token:?} is not a number")]
+    #[error("{} is not a number", crate::text::quote(.token))]
     NotANumber {
         /// The token.
         token: String,
     },
     /// A number is NaN or infinite.
-    #[error("{token:?} is not a finite number")]
+    #[error("{} is not a finite number", crate::text::quote(.token))]
     NonFinite {
         /// The token.
         token: String,
@@ -109,7 +110,7 @@ pub enum Problem {
         value: f64,
     },
     /// Two joints share a name (joint names identify channels and retargeting).
-    #[error("joint name {name:?} is used twice (first on line {first_line})")]
+    #[error("joint name {} is used twice (first on line {first_line})", crate::text::quote(.name))]
     DuplicateJoint {
         /// The name.
         name: String,
@@ -117,7 +118,7 @@ pub enum Problem {
         first_line: usize,
     },
     /// A `{` never closed before `MOTION` or the end of the file.
-    #[error("the '{{' of {joint:?} on line {opened} is never closed")]
+    #[error("the '{{' of {} on line {opened} is never closed", crate::text::quote(.joint))]
     UnclosedBrace {
         /// The joint (or `End Site of <joint>`) whose brace is open.
         joint: String,
