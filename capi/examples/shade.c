@@ -230,7 +230,7 @@ int main(int argc, char **argv) {
     print("lightmap_rig", rgb, 3 * n);
   }
 
-  /* The same frame streamed: the scratch grows until the model stops asking. */
+  /* The same frame streamed: the first call asks for the scratch (from the header). */
   memory mem = {blob, blob_len};
   aprt_source source = {read_at, &mem, blob_len};
   aprt_model *streamed;

@@ -449,18 +449,16 @@ aprt_status aprt_model_init(const uint8_t *blob,
 // `storage` and its address to `*out`.
 //
 // `scratch` (`scratch_len` bytes) belongs to the model from then on: it must stay valid and
-// untouched while the handle is used. It needs `info.scratch_bytes`. When it is too small
-// the call returns `APRT_STATUS_BUFFER_TOO_SMALL` and writes the bytes it needs to
-// `*scratch_needed`; call again with that many (a model with an irradiance rig may ask
-// twice: first for its blocks, then with the rig's bytes too).
+// untouched while the handle is used. It needs `info.scratch_bytes` (one block of vertex
+// rows, plus the irradiance rig when there is one). When it is too small the call returns
+// `APRT_STATUS_BUFFER_TOO_SMALL` and writes the bytes it needs to `*scratch_needed`; call
+// again with that many.
 //
-// Asking is not cheap: the size is known only once the blob is validated, so every call,
-// a query with a scratch of 0 included, reads and checks the whole blob through `read_at`,
-// and a model with a rig is read twice by a call whose scratch suffices (once to learn where
-// the rig goes). From a scratch of 0, a model without a rig opens after 2 whole reads, one
-// with a rig after 4; given `info.scratch_bytes` at once (kept from an earlier run with the
-// same blob), after 1 and 2. A streamed handle must not be used by two threads at once, nor
-// from its own read callback (`APRT_STATUS_BUSY`).
+// Asking is cheap: the size is read from the blob's header and section table (a few hundred
+// bytes through `read_at`) before anything is validated, so the blob may still be refused
+// by the call that has scratch enough. That call reads the whole blob once to validate it
+// (and the rig's bytes once more, into the scratch). A streamed handle must not be used by
+// two threads at once, nor from its own read callback (`APRT_STATUS_BUSY`).
 aprt_status aprt_model_stream_init(const aprt_source *source,
                                    uint8_t *scratch,
                                    size_t scratch_len,

@@ -66,8 +66,8 @@ class Model {
 
   // A model streamed from `blob` through the read callback, copying as a read from flash
   // would; a real source reads a file or flash. The scratch starts at `scratch_bytes` and
-  // grows until the model stops asking (at most twice). Each ask reads the whole blob once
-  // more: pass info().scratch_bytes of an earlier run to open it with one validation.
+  // grows to what the model asks for (an ask reads only the blob's header): pass
+  // info().scratch_bytes of an earlier run to skip the ask.
   static Model streamed(std::vector<std::uint8_t> blob, std::size_t scratch_bytes = 0) {
     return Model(std::move(blob), true, scratch_bytes);
   }

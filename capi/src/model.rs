@@ -482,18 +482,16 @@ pub extern "C" fn aprt_model_init(
 /// `storage` and its address to `*out`.
 ///
 /// `scratch` (`scratch_len` bytes) belongs to the model from then on: it must stay valid and
-/// untouched while the handle is used. It needs `info.scratch_bytes`. When it is too small
-/// the call returns `APRT_STATUS_BUFFER_TOO_SMALL` and writes the bytes it needs to
-/// `*scratch_needed`; call again with that many (a model with an irradiance rig may ask
-/// twice: first for its blocks, then with the rig's bytes too).
+/// untouched while the handle is used. It needs `info.scratch_bytes` (one block of vertex
+/// rows, plus the irradiance rig when there is one). When it is too small the call returns
+/// `APRT_STATUS_BUFFER_TOO_SMALL` and writes the bytes it needs to `*scratch_needed`; call
+/// again with that many.
 ///
-/// Asking is not cheap: the size is known only once the blob is validated, so every call,
-/// a query with a scratch of 0 included, reads and checks the whole blob through `read_at`,
-/// and a model with a rig is read twice by a call whose scratch suffices (once to learn where
-/// the rig goes). From a scratch of 0, a model without a rig opens after 2 whole reads, one
-/// with a rig after 4; given `info.scratch_bytes` at once (kept from an earlier run with the
-/// same blob), after 1 and 2. A streamed handle must not be used by two threads at once, nor
-/// from its own read callback (`APRT_STATUS_BUSY`).
+/// Asking is cheap: the size is read from the blob's header and section table (a few hundred
+/// bytes through `read_at`) before anything is validated, so the blob may still be refused
+/// by the call that has scratch enough. That call reads the whole blob once to validate it
+/// (and the rig's bytes once more, into the scratch). A streamed handle must not be used by
+/// two threads at once, nor from its own read callback (`APRT_STATUS_BUSY`).
 #[unsafe(no_mangle)]
 pub extern "C" fn aprt_model_stream_init(
     source: *const aprt_source,
@@ -528,41 +526,30 @@ pub extern "C" fn aprt_model_stream_init(
     })
 }
 
-/// Opens the stream through the whole scratch (`lend` lends it), and when the model has a
-/// rig opens it again through the head of the scratch with the rig read into the tail. A
-/// scratch too small sets `needed`.
+/// Opens the stream through the head of the scratch (`lend` lends it) and reads a rig, when
+/// the model has one, into the tail. A scratch too small for both sets `needed`.
 fn open_streamed(
     src: impl Fn() -> CSource,
-    lend: impl Fn() -> Result<&'static mut [u8], aprt_status>,
+    lend: impl FnOnce() -> Result<&'static mut [u8], aprt_status>,
     needed: &mut usize,
 ) -> Result<Streamed, aprt_status> {
-    let mut too_small = |e: Error| {
-        if let Error::BufferTooSmall { needed: n } = e {
-            *needed = n;
-        }
-        aprt_status::from(e)
-    };
-    let model = StreamedModel::open(src(), lend()?).map_err(&mut too_small)?;
-    let info = *model.info();
-    let rig_bytes = info.irradiance_rig_bytes();
-    if rig_bytes == 0 {
-        return Ok(Streamed { model, rig: None });
-    }
-    let head = info.scratch_bytes();
+    // The sizes come from the header: a query costs a few hundred bytes of reads, and the
+    // call that opens streams the blob once (and the rig once more, into its part).
+    let needs = StreamedModel::needs(src())?;
+    let (head, rig_bytes) = (needs.scratch_bytes, needs.irradiance_rig_bytes);
     let whole = lend()?;
-    if whole.len() < head + rig_bytes {
-        return Err(too_small(Error::BufferTooSmall {
-            needed: head + rig_bytes,
-        }));
+    let total = head.saturating_add(rig_bytes);
+    if whole.len() < total {
+        *needed = total;
+        return Err(aprt_status::BufferTooSmall);
     }
-    // The first model is not used again, so the scratch may be lent once more, split in two.
     let (head, tail) = whole.split_at_mut(head);
     let mut model = StreamedModel::open(src(), head)?;
-    let rig = model.irradiance_rig(tail)?;
-    Ok(Streamed {
-        model,
-        rig: Some(rig),
-    })
+    let rig = match rig_bytes {
+        0 => None,
+        _ => Some(model.irradiance_rig(tail)?),
+    };
+    Ok(Streamed { model, rig })
 }
 
 /// Writes the model's dimensions and needs to `*out`.

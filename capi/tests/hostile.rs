@@ -34,10 +34,7 @@ fn exercise(blob: &[u8]) -> bool {
     } else {
         assert!(model.is_null(), "a refused blob leaves *out NULL");
     }
-    let mut memory = Memory {
-        bytes: blob.to_vec(),
-        fail: false,
-    };
+    let mut memory = Memory::new(blob.to_vec());
     let (mut scratch, mut streamed_mem) = (Vec::new(), storage(aprt_model_size()));
     let (status, streamed) = stream(&mut memory, &mut scratch, &mut streamed_mem);
     // Both readers validate the same way: they accept and refuse the same blobs.

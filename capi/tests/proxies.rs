@@ -63,10 +63,7 @@ fn rotation(b: usize) -> Rotation {
 
 fn subject(blob: &[u8], streamed: bool) -> Subject {
     let mut mem = storage(aprt_model_size());
-    let mut memory = Box::new(Memory {
-        bytes: blob.to_vec(),
-        fail: false,
-    });
+    let mut memory = Box::new(Memory::new(blob.to_vec()));
     let mut scratch = Vec::new();
     let model = match streamed {
         false => {

@@ -79,7 +79,7 @@ pub use light::{
     sphere_light_derivative_bands,
 };
 pub use lightmap::LightMap;
-pub use model::{Model, StreamedModel};
+pub use model::{Model, StreamNeeds, StreamedModel};
 pub use proxies::{MAX_PROXIES, ProxyFrame, ProxySet, Skinning};
 pub use rotation::{Rotation, ShRotation};
 pub use sh::{

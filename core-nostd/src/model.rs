@@ -490,6 +490,20 @@ pub struct StreamedModel<'s, S> {
     info: ModelInfo,
 }
 
+/// The buffers a streamed model's calls need, as [`StreamedModel::needs`] reads them from a
+/// blob's header: each the [`ModelInfo`] method of the same name once the model is open.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StreamNeeds {
+    /// The scratch [`StreamedModel::open`] takes.
+    pub scratch_bytes: usize,
+    /// The buffer of [`StreamedModel::irradiance_rig`] (0 without a rig).
+    pub irradiance_rig_bytes: usize,
+    /// The buffer of [`StreamedModel::texel_atlas`] (0 without an atlas).
+    pub texel_atlas_bytes: usize,
+    /// The buffer of [`StreamedModel::angle_names`] (0 without names).
+    pub angle_names_bytes: usize,
+}
+
 /// The dimensions and the blob's length, not its bytes.
 impl core::fmt::Debug for Model<'_> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
@@ -514,24 +528,59 @@ impl<'s, S: BlobSource> StreamedModel<'s, S> {
     /// Validates the blob in `src` completely, as [`Model::parse`] does, streaming it through
     /// `scratch`, which the model keeps for its calls. `scratch` must hold
     /// [`ModelInfo::scratch_bytes`] (one block of eight vertex rows; `aprt inspect` prints
-    /// it): a valid blob with a smaller one gives [`Error::BufferTooSmall`] with that size.
+    /// it). The size is read from the header first: a smaller buffer gives
+    /// [`Error::BufferTooSmall`] with that size before the sections are read, so asking
+    /// costs what [`StreamedModel::needs`] does, and only a call that can open the model
+    /// streams the whole blob.
     pub fn open(mut src: S, scratch: &'s mut [u8]) -> Result<StreamedModel<'s, S>, Error> {
+        let len = scratch.len();
         // Validation reads items of at most 4 bytes: a buffer too small even for that is
         // replaced by one on the stack, so the error names what evaluation needs.
         let mut fallback = [0u8; 64];
-        let validation = match scratch.len() < fallback.len() {
-            true => &mut fallback[..],
-            false => &mut *scratch,
-        };
-        let info = ModelInfo::open(&mut Streaming {
+        let mut reader = Streaming {
             src: &mut src,
-            scratch: validation,
-        })?;
-        let needed = info.scratch_bytes();
-        if scratch.len() < needed {
+            scratch: match len < fallback.len() {
+                true => &mut fallback[..],
+                false => &mut *scratch,
+            },
+        };
+        let layout = ModelInfo::layout(&mut reader)?;
+        let needed = layout.info.scratch_bytes();
+        if len < needed {
             return Err(Error::BufferTooSmall { needed });
         }
+        let info = layout.verify(&mut reader)?;
         Ok(StreamedModel { src, scratch, info })
+    }
+
+    /// What opening the blob in `src` takes, read from its header and section table (a few
+    /// hundred bytes, and the pose features' flags when it has them) without streaming the
+    /// sections. The blob is not validated: [`open`](Self::open) may still refuse it, but
+    /// never for a buffer of these sizes.
+    ///
+    /// ```
+    /// use aprt_core::StreamedModel;
+    ///
+    /// let blob: &[u8] = include_bytes!("../../fixtures/golden/v1-bones.aprt");
+    /// let needs = StreamedModel::needs(blob)?;
+    /// let mut scratch = vec![0u8; needs.scratch_bytes];
+    /// let model = StreamedModel::open(blob, &mut scratch)?;
+    /// assert_eq!(model.info().scratch_bytes(), needs.scratch_bytes);
+    /// # Ok::<(), aprt_core::Error>(())
+    /// ```
+    pub fn needs(mut src: S) -> Result<StreamNeeds, Error> {
+        let mut buf = [0u8; 64];
+        let info = ModelInfo::layout(&mut Streaming {
+            src: &mut src,
+            scratch: &mut buf,
+        })?
+        .info;
+        Ok(StreamNeeds {
+            scratch_bytes: info.scratch_bytes(),
+            irradiance_rig_bytes: info.irradiance_rig_bytes(),
+            texel_atlas_bytes: info.texel_atlas_bytes(),
+            angle_names_bytes: info.angle_names_bytes(),
+        })
     }
 
     fn reader(&mut self) -> Streaming<'_, S> {

@@ -153,19 +153,27 @@ pub struct Evaluation {
 /// the reader's error, or the evaluation of every vertex at the probe's inputs made finite.
 pub fn exercise(blob: &[u8], probe: &Probe) -> Result<Evaluation, Error> {
     let parsed = Model::parse(blob).map(|m| *m.info());
-    let least = parsed.map_or(4, |info| info.scratch_bytes());
+    // The sizes read from the header are those of the model, and a header refused is the
+    // blob refused.
+    let needs = StreamedModel::needs(Streamed::new(blob));
+    match (parsed, needs) {
+        (Ok(info), needs) => assert_eq!(needs.map(|n| n.scratch_bytes), Ok(info.scratch_bytes())),
+        (Err(e), Err(refused)) => assert_eq!(refused, e, "the header's verdict"),
+        (Err(_), Ok(_)) => {}
+    }
+    let least = needs.map_or(4, |n| n.scratch_bytes);
     let streamed =
         StreamedModel::open(Streamed::new(blob), &mut vec![0u8; least]).map(|m| *m.info());
     assert_eq!(streamed, parsed, "streamed and resident readers disagree");
     let mut scratch = vec![0u8; probe.open_scratch as usize % 64];
     let opened = StreamedModel::open(Streamed::new(blob), &mut scratch).map(|m| *m.info());
-    // Any blob is validated whatever the buffer; a valid one is then refused a buffer too
-    // small for evaluation, with the size it needs.
-    let expected = match parsed {
-        Ok(info) if scratch.len() < least => Err(Error::BufferTooSmall {
-            needed: info.scratch_bytes(),
+    // A buffer smaller than the header asks for is refused with that size before the
+    // sections are read; one that suffices gets the blob validated.
+    let expected = match needs {
+        Ok(n) if scratch.len() < n.scratch_bytes => Err(Error::BufferTooSmall {
+            needed: n.scratch_bytes,
         }),
-        verdict => verdict,
+        _ => parsed,
     };
     assert_eq!(
         opened,

@@ -281,6 +281,18 @@ pub struct Memory {
     pub bytes: Vec<u8>,
     /// Set to make every read fail.
     pub fail: bool,
+    /// Bytes read so far.
+    pub read: std::cell::Cell<usize>,
+}
+
+impl Memory {
+    pub fn new(bytes: Vec<u8>) -> Memory {
+        Memory {
+            bytes,
+            fail: false,
+            read: Default::default(),
+        }
+    }
 }
 
 #[allow(unsafe_code)]
@@ -303,6 +315,7 @@ pub unsafe extern "C" fn read_memory(
         return 1;
     }
     unsafe { std::ptr::copy_nonoverlapping(src.as_ptr(), buf, len) };
+    m.read.set(m.read.get() + len);
     0
 }
 

@@ -29,11 +29,41 @@ fn product(factors: &[usize]) -> Result<u64, Error> {
         .ok_or(Error::LengthOverflow)
 }
 
+/// A blob's header and section table, read and checked by [`ModelInfo::layout`].
+pub(crate) struct Layout {
+    /// The dimensions and spans, not yet verified against the sections' bytes.
+    pub(crate) info: ModelInfo,
+    sections: heapless::Vec<SectionEntry, MAX_SECTIONS>,
+    header_end: u64,
+    found: [Option<Span>; SectionKind::KNOWN_COUNT],
+}
+
+impl Layout {
+    /// The rest of [`ModelInfo::open`], on the blob the layout was read from: every
+    /// section's checksum and values, the bone indices and the pose bounds.
+    pub(crate) fn verify<R: Reader>(self, r: &mut R) -> Result<ModelInfo, Error> {
+        let info = self.info;
+        let sizes = (info.vertices, info.pose_len, info.frame.bones());
+        verify_sections(r, (&self.sections, self.header_end), &self.found, sizes)?;
+        info.verify_bones(r)?;
+        info.verify_bounds(r)?;
+        Ok(info)
+    }
+}
+
 impl ModelInfo {
     /// Validates a whole blob: header, dimensions, section table, checksums, finiteness of
     /// every value, bone indices and angle names. A streaming reader's buffer must hold at
     /// least 4 bytes.
     pub(crate) fn open<R: Reader>(r: &mut R) -> Result<ModelInfo, Error> {
+        Self::layout(r)?.verify(r)
+    }
+
+    /// What [`open`](Self::open) checks before it reads a section's bytes: the header, the
+    /// dimensions and where each section lies (the few bytes of the pose features are read
+    /// and checked), so the scratch a streamed model needs is known without streaming the
+    /// blob. Its info is not to be trusted until [`Layout::verify`] has passed.
+    pub(crate) fn layout<R: Reader>(r: &mut R) -> Result<Layout, Error> {
         let decoded = decode_header(r)?;
         let h = &decoded.header;
         let order = dim(Dim::Order, h.order as u64, 1, MAX_ORDER as u64)?;
@@ -79,13 +109,7 @@ impl ModelInfo {
             })
         };
 
-        let found = read_sections(
-            r,
-            &h.sections,
-            decoded.end,
-            &expected_elems,
-            (vertices, pose_len, h.frame.bones()),
-        )?;
+        let found = locate_sections(&h.sections, &expected_elems)?;
         let get = |kind: SectionKind| kind.known_index().and_then(|i| found[i]);
         let need = |kind: SectionKind| get(kind).ok_or(Error::MissingSection { section: kind });
         let (weights, rows) = match h.basis {
@@ -123,9 +147,12 @@ impl ModelInfo {
             texel_atlas: get(SectionKind::TexelAtlas),
             proxies: get(SectionKind::Proxies),
         };
-        info.verify_bones(r)?;
-        info.verify_bounds(r)?;
-        Ok(info)
+        Ok(Layout {
+            info,
+            sections: decoded.header.sections,
+            header_end: decoded.end,
+            found,
+        })
     }
 
     /// Checks every block's bone row: integers below the bone count.
@@ -271,7 +298,7 @@ fn check_crc<R: Reader>(
 /// The irradiance rig: checksummed and its contents validated as they stream past
 /// ([`RigCheck`], which the resident `IrradianceRig::parse` runs too); a length its prelude
 /// does not announce is a section-length error. Its encoding byte carries no meaning.
-fn check_irradiance_rig<R: Reader>(r: &mut R, e: &SectionEntry) -> Result<Span, Error> {
+fn check_irradiance_rig<R: Reader>(r: &mut R, e: &SectionEntry) -> Result<(), Error> {
     let mut rig = RigCheck::new();
     check_crc(r, e, |bytes| rig.feed(bytes))?;
     rig.finish().map_err(|failure| match failure {
@@ -282,22 +309,14 @@ fn check_irradiance_rig<R: Reader>(r: &mut R, e: &SectionEntry) -> Result<Span, 
             found: e.len,
         },
     })?;
-    Ok(Span {
-        offset: e.offset,
-        len: e.len,
-        encoding: Encoding::F32,
-    })
+    Ok(())
 }
 
 /// The texel atlas: one `u32` texel per row after the resolution, then optionally the corner
 /// UVs, checksummed and validated as it streams past ([`AtlasCheck`], which the resident
 /// `TexelAtlas::parse` runs too). A length that is not the row count's, nor that plus a
 /// trailer's, is a section-length error. Its encoding byte carries no meaning.
-fn check_texel_atlas<R: Reader>(
-    r: &mut R,
-    e: &SectionEntry,
-    vertices: usize,
-) -> Result<Span, Error> {
+fn check_texel_atlas<R: Reader>(r: &mut R, e: &SectionEntry, vertices: usize) -> Result<(), Error> {
     let section = SectionKind::TexelAtlas;
     let base = atlas_len(vertices).ok_or(Error::LengthOverflow)?;
     let wrong_length = |expected| Error::SectionLength {
@@ -315,45 +334,29 @@ fn check_texel_atlas<R: Reader>(
         AtlasFailure::Content => Error::BadTexelAtlas,
         AtlasFailure::Length { expected } => wrong_length(expected),
     })?;
-    Ok(Span {
-        offset: e.offset,
-        len: e.len,
-        encoding: Encoding::F32,
-    })
+    Ok(())
 }
 
 /// The occluder proxies: checksummed and validated as they stream past ([`ProxyCheck`]), for
 /// a bone-frame model only (`bones` is 0 for a world-frame one, which no proxy fits). Their
 /// encoding byte carries no meaning.
-fn check_proxies<R: Reader>(r: &mut R, e: &SectionEntry, bones: usize) -> Result<Span, Error> {
+fn check_proxies<R: Reader>(r: &mut R, e: &SectionEntry, bones: usize) -> Result<(), Error> {
     if bones == 0 {
         return Err(Error::BadProxies);
     }
     let mut proxies = ProxyCheck::new(bones);
     check_crc(r, e, |bytes| proxies.feed(bytes))?;
     proxies.finish()?;
-    Ok(Span {
-        offset: e.offset,
-        len: e.len,
-        encoding: Encoding::F32,
-    })
+    Ok(())
 }
 
 /// The angle names: checksummed, then one UTF-8 line per pose entry. Their encoding byte
 /// carries no meaning and is not checked.
-fn check_angle_names<R: Reader>(
-    r: &mut R,
-    e: &SectionEntry,
-    pose_len: usize,
-) -> Result<Span, Error> {
+fn check_angle_names<R: Reader>(r: &mut R, e: &SectionEntry, pose_len: usize) -> Result<(), Error> {
     let mut names = NamesCheck::default();
     check_crc(r, e, |bytes| names.feed(bytes))?;
     names.finish(pose_len)?;
-    Ok(Span {
-        offset: e.offset,
-        len: e.len,
-        encoding: Encoding::F32,
-    })
+    Ok(())
 }
 
 /// Where an array section lies, once its encoding is allowed for its kind and its length is
@@ -414,28 +417,21 @@ fn verify_array<R: Reader>(r: &mut R, e: &SectionEntry, span: Span) -> Result<()
     Ok(())
 }
 
-/// Checks every section of the table but the pose features (read first by `pose_features`):
-/// unknown optional ones by their CRC, known ones by [`check_section`], each at most once, and
-/// no bytes after the last. Returns each known section's span by [`SectionKind::known_index`].
-/// `expected_elems` gives the element count of each array section the basis uses.
-fn read_sections<R: Reader>(
-    r: &mut R,
+/// Finds the known sections other than the pose features (read first by `pose_features`),
+/// without reading their bytes: each array section's encoding and length, no duplicates and
+/// no required section of an unknown kind. `expected_elems` gives the element count an array
+/// section of this basis must hold, `None` for one it does not use (left unlocated).
+fn locate_sections(
     sections: &[SectionEntry],
-    end_of_header: u64,
     expected_elems: &dyn Fn(SectionKind) -> Option<Result<u64, Error>>,
-    sizes: (usize, usize, usize),
 ) -> Result<[Option<Span>; SectionKind::KNOWN_COUNT], Error> {
     let mut found: [Option<Span>; SectionKind::KNOWN_COUNT] = [None; SectionKind::KNOWN_COUNT];
-    let mut end_of_data = end_of_header;
     for e in sections {
-        end_of_data = end_of_data.max(e.offset + e.len); // no overflow: checked by the caller
         let kind = SectionKind::from_tag(e.kind);
         let Some(slot) = kind.known_index() else {
             if e.required {
                 return Err(Error::UnknownRequiredSection { section: kind });
             }
-            // An optional section from a newer writer, or metadata for tools.
-            check_crc(r, e, |_| {})?;
             continue;
         };
         if kind == SectionKind::PoseFeatures {
@@ -444,42 +440,56 @@ fn read_sections<R: Reader>(
         if found[slot].is_some() {
             return Err(Error::DuplicateSection { section: kind });
         }
-        found[slot] = check_section(r, e, kind, expected_elems(kind), sizes)?;
+        found[slot] = match kind {
+            SectionKind::IrradianceRig
+            | SectionKind::TexelAtlas
+            | SectionKind::Proxies
+            | SectionKind::AngleNames => Some(Span {
+                offset: e.offset,
+                len: e.len,
+                encoding: Encoding::F32,
+            }),
+            _ => expected_elems(kind)
+                .map(|elems| array_span(e, kind, elems?))
+                .transpose()?,
+        };
+    }
+    Ok(found)
+}
+
+/// Reads every section but the pose features (checked with the layout), checking its CRC,
+/// so a flipped bit anywhere in a blob is caught, and its values: an array's finiteness
+/// (`found` holds the span of each array this basis uses), the rig, the atlas, the proxies
+/// and the names by their own checks (`(vertices, pose_len, bones)` size the last three).
+/// Then no byte may follow the last section (whose lengths are now all checked).
+fn verify_sections<R: Reader>(
+    r: &mut R,
+    (sections, end_of_header): (&[SectionEntry], u64),
+    found: &[Option<Span>; SectionKind::KNOWN_COUNT],
+    (vertices, pose_len, bones): (usize, usize, usize),
+) -> Result<(), Error> {
+    let mut end_of_data = end_of_header;
+    for e in sections {
+        end_of_data = end_of_data.max(e.offset + e.len); // no overflow: checked by the layout
+        let kind = SectionKind::from_tag(e.kind);
+        match kind {
+            SectionKind::PoseFeatures => {}
+            SectionKind::IrradianceRig => check_irradiance_rig(r, e)?,
+            SectionKind::TexelAtlas => check_texel_atlas(r, e, vertices)?,
+            SectionKind::Proxies => check_proxies(r, e, bones)?,
+            SectionKind::AngleNames => check_angle_names(r, e, pose_len)?,
+            // An array of this basis, or one it does not use, or an optional section from
+            // a newer writer or metadata for tools: checksummed all the same.
+            _ => match kind.known_index().and_then(|slot| found[slot]) {
+                Some(span) => verify_array(r, e, span)?,
+                None => check_crc(r, e, |_| {})?,
+            },
+        }
     }
     if r.len() > end_of_data {
         return Err(Error::TrailingBytes {
             extra: r.len() - end_of_data,
         });
     }
-    Ok(found)
-}
-
-/// Validates one known section other than the pose features (read first by
-/// `pose_features`): its span, or `None` for a section this basis does not use (its CRC is
-/// still checked). `elems` is the element count an array section of this basis must hold;
-/// `(vertices, pose_len, bones)` size the atlas, the angle names and the proxies.
-fn check_section<R: Reader>(
-    r: &mut R,
-    e: &SectionEntry,
-    kind: SectionKind,
-    elems: Option<Result<u64, Error>>,
-    (vertices, pose_len, bones): (usize, usize, usize),
-) -> Result<Option<Span>, Error> {
-    Ok(Some(match kind {
-        SectionKind::IrradianceRig => check_irradiance_rig(r, e)?,
-        SectionKind::TexelAtlas => check_texel_atlas(r, e, vertices)?,
-        SectionKind::Proxies => check_proxies(r, e, bones)?,
-        SectionKind::AngleNames => check_angle_names(r, e, pose_len)?,
-        _ => match elems {
-            Some(elems) => {
-                let span = array_span(e, kind, elems?)?;
-                verify_array(r, e, span)?;
-                span
-            }
-            None => {
-                check_crc(r, e, |_| {})?;
-                return Ok(None);
-            }
-        },
-    }))
+    Ok(())
 }
