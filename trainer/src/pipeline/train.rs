@@ -25,8 +25,9 @@ use crate::irradiance_rig::fit::{FIT_POSES, fit_irradiance_rig, rig_fitting_surf
 use crate::limits::MAX_FRAMES;
 use crate::model::export::{ExportError, Precision, check_alpha};
 use crate::model::fit::{
-    Alpha, Anchor, Choice, CoefDims, Dims, Fit, FitInput, FitOptions, FitReport, HeldOutKind,
-    LOCALITY_RADIUS, Local, PriorKind, Validation, fit, fit_input, rest_distance_sentence,
+    Alpha, Anchor, Choice, CoefDims, Decision, Dims, Fit, FitInput, FitOptions, FitReport,
+    HeldOutKind, LOCALITY_RADIUS, Local, Offer, PriorKind, Validation, choose, fit, fit_input,
+    rest_distance_sentence,
 };
 use crate::model::locality::locality;
 use crate::model::occluders::{
@@ -92,7 +93,24 @@ pub fn fit_clip(
     let occluded = fit_with(Some(&section))?;
     let held_out = |f: &Fit| f.report.chosen.held_out_error;
     let without = plain.as_ref().map(held_out);
-    let used = without.is_none_or(|w| held_out(&occluded) < w);
+    // Without the proxies first, the simpler: they win a tie, as they cost nothing a frame.
+    fn offer(f: &Fit, complexity: usize) -> Offer<'_> {
+        Offer {
+            error: f.report.chosen.held_out_error,
+            rows: f.report.chosen_rows(),
+            complexity,
+        }
+    }
+    let offers: Vec<Offer<'_>> = plain
+        .iter()
+        .map(|p| offer(p, 0))
+        .chain([offer(&occluded, 1)])
+        .collect();
+    let verdict = choose(&offers).expect("the fit with proxies is offered");
+    let used = verdict.chosen == offers.len() - 1;
+    let names = ["without proxies", "with proxies"];
+    let decision =
+        (offers.len() > 1).then(|| Decision::of("proxies", &verdict, |i| names[i].into()));
     let choice = OccluderChoice {
         spheres: proxy_fit.proxies.len(),
         volume_error: proxy_fit.volume_error,
@@ -111,6 +129,7 @@ pub fn fit_clip(
         },
     };
     fitted.report.occluders = Some(choice);
+    fitted.report.decisions.extend(decision);
     Ok(fitted)
 }
 
@@ -147,11 +166,11 @@ fn fit_targets(
         (Some(rest), Some(_)) => Some((in_frame(rest)?.remove(0), rest.angles[0].clone())),
         _ => None,
     };
-    let held: Vec<(DMatrix<f64>, Vec<Vec<f32>>)> = clips
+    let held = clips
         .validation
         .iter()
-        .map(|v| Ok((matrix(v), in_frame(v)?)))
-        .collect::<Result<_>>()?;
+        .map(|v| Ok((v.name.as_str(), matrix(v), in_frame(v)?)))
+        .collect::<Result<Vec<_>>>()?;
     // The local model's groups, from the rig's geometry over a sample of the training poses.
     let locality = match (options.local, bones, &rest) {
         (Local::Auto | Local::Only, Some(_), Some(_)) => {
@@ -171,7 +190,11 @@ fn fit_targets(
             .map(|(transfer, angles)| Anchor { angles, transfer }),
         validation: held
             .iter()
-            .map(|(angles, transfers)| Validation { angles, transfers })
+            .map(|(name, angles, transfers)| Validation {
+                name,
+                angles,
+                transfers,
+            })
             .collect(),
         locality: locality.as_ref(),
     };
@@ -449,6 +472,54 @@ pub struct Selection {
     pub choices: Vec<Choice>,
     /// What the occluder proxies did, when they were tried.
     pub occluders: Option<OccluderChoice>,
+    /// How each stage chose (candidates, features, proxies), and by how much.
+    pub decisions: Vec<Decision>,
+    /// The validation sets (empty for held-out runs) and what each alone would choose.
+    pub validation_sets: Vec<ValidationSet>,
+}
+
+/// One validation set of a selection: a clip (`--validate`) or the validation poses.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ValidationSet {
+    /// The clip's name.
+    pub name: String,
+    /// Its poses.
+    pub poses: usize,
+    /// Each candidate's mean error on this set alone, as `choices`.
+    pub errors: Vec<f64>,
+    /// The candidate of lowest error on this set alone.
+    pub lowest: String,
+}
+
+impl ValidationSet {
+    /// Each set of `report` with its candidates' errors on it.
+    fn of(report: &FitReport) -> Vec<Self> {
+        let mut start = 0;
+        let mut sets = Vec::new();
+        for (name, poses) in &report.validation_sets {
+            let range = start..start + poses;
+            start += poses;
+            let errors: Vec<f64> = report
+                .choice_rows
+                .iter()
+                .map(|rows| {
+                    let part = rows.as_ref().and_then(|r| r.get(range.clone()));
+                    part.map_or(f64::NAN, |p| p.iter().sum::<f64>() / p.len().max(1) as f64)
+                })
+                .collect();
+            let lowest = (0..errors.len())
+                .filter(|&i| errors[i].is_finite())
+                .min_by(|&a, &b| errors[a].total_cmp(&errors[b]))
+                .map_or_else(String::new, |i| report.choices[i].label());
+            sets.push(Self {
+                name: name.clone(),
+                poses: *poses,
+                errors,
+                lowest,
+            });
+        }
+        sets
+    }
 }
 
 impl Selection {
@@ -461,16 +532,29 @@ impl Selection {
             rest_distance: report.rest_distance,
             choices: report.choices.clone(),
             occluders: report.occluders,
+            decisions: report.decisions.clone(),
+            validation_sets: ValidationSet::of(report),
+        }
+    }
+
+    /// What the selection held out, as its first line names it.
+    fn held_out_phrase(&self) -> String {
+        match self.held_out {
+            HeldOutKind::Segments(n) => format!("held-out runs of {n} poses"),
+            HeldOutKind::Clips(_) => {
+                let sets: Vec<String> = self
+                    .validation_sets
+                    .iter()
+                    .map(|s| format!("{} ({} poses)", crate::text::quote(&s.name), s.poses))
+                    .collect();
+                format!("validation on {}", sets.join(" and "))
+            }
         }
     }
 
     /// One line per candidate, the chosen one marked: the held-out curve over k_a and prior.
     pub fn lines(&self) -> Vec<String> {
-        let held = match self.held_out {
-            HeldOutKind::Segments(n) => format!("held-out runs of {n} poses"),
-            HeldOutKind::Clips(1) => "1 validation clip".to_owned(),
-            HeldOutKind::Clips(n) => format!("{n} validation clips"),
-        };
+        let held = self.held_out_phrase();
         let c = &self.chosen;
         let shape = if c.is_prior() {
             c.shape()
@@ -499,7 +583,17 @@ impl Selection {
                 if o.used { "proxies'" } else { "plain" },
             ));
         }
-        lines.extend(self.choices.iter().map(|c| {
+        lines.extend(self.decisions.iter().map(|d| format!("  {}", d.sentence())));
+        if self.decisions.iter().any(|d| d.poses > 0) {
+            lines.push(format!("  (the rule: {})", crate::model::fit::RULE));
+        }
+        if self.validation_sets.len() > 1 {
+            lines.extend(self.validation_sets.iter().map(|s| {
+                let name = crate::text::quote(&s.name);
+                format!("  {name} alone would choose {}", s.lowest)
+            }));
+        }
+        lines.extend(self.choices.iter().enumerate().map(|(i, c)| {
             let mark = if *c == self.chosen { " <- chosen" } else { "" };
             let alpha = if c.is_prior() {
                 String::new()
@@ -507,15 +601,29 @@ impl Selection {
                 format!("alpha {:.3e}, ", c.alpha)
             };
             format!(
-                "  {:<7} prior {:<4} {}: {alpha}held-out {:.4e}, train {:.4e}{mark}",
+                "  {:<7} prior {:<4} {}: {alpha}held-out {:.4e}{}, train {:.4e}{mark}",
                 features_name(c.cosines),
                 c.prior.name(),
                 c.shape(),
                 c.held_out_error,
+                self.per_set(i),
                 c.train_error
             )
         }));
         lines
+    }
+
+    /// Candidate `i`'s error on each validation set, when there are several.
+    fn per_set(&self, i: usize) -> String {
+        if self.validation_sets.len() < 2 {
+            return String::new();
+        }
+        let parts: Vec<String> = self
+            .validation_sets
+            .iter()
+            .map(|s| format!("{} {:.4e}", crate::text::quote(&s.name), s.errors[i]))
+            .collect();
+        format!(" ({})", parts.join(", "))
     }
 }
 

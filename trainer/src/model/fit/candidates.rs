@@ -5,6 +5,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use super::choose::{Offer, Verdict, choose};
 use super::local::{LocalScoring, fit_local};
 use super::local_model::LocalModel;
 use super::report::Choice;
@@ -115,34 +116,44 @@ pub(super) fn local_readiness(
     }
 }
 
-/// Every candidate scored so far, in order, and the best with its α curve.
+/// Every candidate scored so far, in order, with its α curve and its error on each
+/// validation pose (when scored on them).
 #[derive(Default)]
 pub(super) struct Tally {
     pub choices: Vec<Choice>,
-    best: Option<(Choice, Vec<CvPoint>)>,
+    pub rows: Vec<Option<Vec<f64>>>,
+    curves: Vec<Vec<CvPoint>>,
 }
 
 impl Tally {
-    /// Records a candidate and keeps it as the best when its held-out error is lower (the
-    /// first candidate stands until a finite, lower one comes).
-    pub fn consider(&mut self, choice: Choice, curve: Vec<CvPoint>) {
+    /// Records a candidate.
+    pub fn consider(&mut self, choice: Choice, curve: Vec<CvPoint>, rows: Option<Vec<f64>>) {
         self.choices.push(choice);
-        let better = self.best.as_ref().is_none_or(|(b, _)| {
-            choice.held_out_error.is_finite() && choice.held_out_error < b.held_out_error
-        });
-        if better {
-            self.best = Some((choice, curve));
-        }
+        self.curves.push(curve);
+        self.rows.push(rows);
     }
 
-    /// The best candidate and its curve; an error when none was scored, or when the best
-    /// cannot be predicted on what was held out and α was to be chosen by it.
-    pub fn best(&self, alpha: Alpha) -> Result<(Choice, Vec<CvPoint>), FitError> {
-        let (chosen, curve) = self.best.clone().ok_or(FitError::NoFiniteCvError)?;
+    /// The chosen candidate, its curve and how it was chosen ([`choose`]: the lowest
+    /// held-out error, or the simplest within its noise, fewer pose dimensions being
+    /// simpler); an error when none was scored, or when the chosen one cannot be predicted
+    /// on what was held out and α was to be chosen by it.
+    pub fn best(&self, alpha: Alpha) -> Result<(Choice, Vec<CvPoint>, Verdict), FitError> {
+        let offers: Vec<Offer<'_>> = self
+            .choices
+            .iter()
+            .zip(&self.rows)
+            .map(|(c, rows)| Offer {
+                error: c.held_out_error,
+                rows: rows.as_deref(),
+                complexity: c.pose_dims,
+            })
+            .collect();
+        let verdict = choose(&offers).ok_or(FitError::NoFiniteCvError)?;
+        let chosen = self.choices[verdict.chosen];
         if !chosen.held_out_error.is_finite() && !matches!(alpha, Alpha::Fixed(_)) {
             return Err(FitError::NoFiniteCvError);
         }
-        Ok((chosen, curve))
+        Ok((chosen, self.curves[verdict.chosen].clone(), verdict))
     }
 }
 
@@ -180,7 +191,9 @@ impl<'a> Shared<'a> {
     /// The prior alone (α = ∞), scored in closed form: every pose predicted by the anchor's
     /// coordinates, or by the mean of the poses not held out, plus what lies outside the basis.
     pub fn prior_alone(&self, prior: PriorKind, tally: &mut Tally) {
-        let point = self.scoring.prior(&self.target(prior));
+        let target = self.target(prior);
+        let point = self.scoring.prior(&target);
+        let rows = self.scoring.prior_rows(&target);
         let choice = Choice {
             prior,
             pose_dims: 0,
@@ -190,7 +203,11 @@ impl<'a> Shared<'a> {
             held_out_error: self.errors.held_out(&point),
             train_error: self.errors.train(&point),
         };
-        tally.consider(choice, Vec::new());
+        tally.consider(
+            choice,
+            Vec::new(),
+            rows.map(|r| self.errors.held_out_rows(&r)),
+        );
     }
 
     /// The shared map on each k_a of `ladder`, each at its best α (or the fixed one).
@@ -231,7 +248,8 @@ impl<'a> Shared<'a> {
                 held_out_error: self.errors.held_out(&point),
                 train_error: self.errors.train(&point),
             };
-            tally.consider(choice, curve);
+            let rows = self.scoring.rows(&problem, alpha);
+            tally.consider(choice, curve, rows.map(|r| self.errors.held_out_rows(&r)));
         }
         Ok(())
     }
@@ -292,6 +310,16 @@ pub(super) fn local_candidate(
         held_out_error: best_point.cv_error + model.outside_scored,
         train_error: best_point.train_error + model.outside_train,
     };
-    tally.consider(choice, fitted.curve.clone());
+    // Pose by pose, the same sum: the map's error and what its basis misses.
+    let values = (input.transfers[0].len()).max(1) as f64;
+    let rows = (!pairs.is_empty()).then(|| {
+        fitted
+            .held_rows
+            .iter()
+            .zip(&model.outside_rows)
+            .map(|(e, outside)| e / values + outside)
+            .collect()
+    });
+    tally.consider(choice, fitted.curve.clone(), rows);
     Ok(Some(model))
 }

@@ -16,9 +16,11 @@ pub struct Anchor<'a> {
     pub transfer: &'a [f32],
 }
 
-/// A clip held out whole to choose the model by (`--validate`).
+/// A clip held out whole to choose the model by (`--validate`, or the validation poses).
 #[derive(Clone, Copy, Debug)]
 pub struct Validation<'a> {
+    /// Its name, for the selection report.
+    pub name: &'a str,
     /// `p_h × a` pose vectors.
     pub angles: &'a DMatrix<f64>,
     /// Transfer of each pose, in the frame the model learns.
@@ -282,10 +284,7 @@ impl Featured {
                 .validation
                 .iter()
                 .zip(&self.held_x)
-                .map(|(v, angles)| Validation {
-                    angles,
-                    transfers: v.transfers,
-                })
+                .map(|(v, angles)| Validation { angles, ..*v })
                 .collect(),
             anchor: pinned
                 .anchor
@@ -311,10 +310,7 @@ pub(super) fn with_poses<'a>(
             .validation
             .iter()
             .zip(held)
-            .map(|(v, angles)| Validation {
-                angles,
-                transfers: v.transfers,
-            })
+            .map(|(v, angles)| Validation { angles, ..*v })
             .collect(),
         ..input.clone()
     }

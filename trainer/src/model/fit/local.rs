@@ -47,6 +47,9 @@ pub(super) struct LocalFit {
     pub curve: Vec<CvPoint>,
     /// `a × (v·n²)`, column `j·n² + c`; rows of entries a vertex ignores are zero.
     pub delta: DMatrix<f64>,
+    /// Each validation pose's squared error over every transfer value at the chosen α
+    /// (empty when scored on held-out runs).
+    pub held_rows: Vec<f64>,
 }
 
 /// One group's outputs: `p × (|vertices|·n²)`, column `jj·n² + c`.
@@ -77,6 +80,18 @@ pub(super) fn fit_local(
         });
         (z, z0, outputs, y0)
     };
+    let held_of = |group: &EntryGroup| -> Vec<HeldOut> {
+        let LocalScoring::Clips(clips) = scoring else {
+            return Vec::new();
+        };
+        clips
+            .iter()
+            .map(|(a, t)| HeldOut {
+                z: a.select_columns(&group.entries),
+                y: group_rows(t, &group.vertices, n2),
+            })
+            .collect()
+    };
     let alphas = match alpha {
         Alpha::Fixed(alpha) => vec![alpha],
         _ => {
@@ -104,15 +119,11 @@ pub(super) fn fit_local(
                 (problem.cv_points(&alphas, runs), angles.nrows() as f64)
             }
             LocalScoring::Clips(clips) => {
-                let held: Vec<HeldOut> = clips
-                    .iter()
-                    .map(|(a, t)| HeldOut {
-                        z: a.select_columns(&group.entries),
-                        y: group_rows(t, &group.vertices, n2),
-                    })
-                    .collect();
                 let poses = clips.iter().map(|(a, _)| a.nrows()).sum::<usize>();
-                (problem.held_out_points(&alphas, &held), poses as f64)
+                (
+                    problem.held_out_points(&alphas, &held_of(group)),
+                    poses as f64,
+                )
             }
         };
         for (sum, point) in sums.iter_mut().zip(&points) {
@@ -141,10 +152,18 @@ pub(super) fn fit_local(
 
     let vertices = transfers.first().map_or(0, |t| t.len() / n2.max(1));
     let mut delta = DMatrix::zeros(angles.ncols(), vertices * n2);
+    let mut held_rows: Vec<f64> = Vec::new();
     for group in &locality.groups {
         let (z, z0, outputs, y0) = problem_of(group);
         let target = outputs.around_anchor(&y0);
-        let solution = RidgeProblem::new(&z, Some(&z0), &target).solve(best.alpha);
+        let problem = RidgeProblem::new(&z, Some(&z0), &target);
+        let rows = problem.held_out_rows(best.alpha, &held_of(group));
+        held_rows.resize(rows.len(), 0.0);
+        held_rows
+            .iter_mut()
+            .zip(rows)
+            .for_each(|(sum, e)| *sum += e);
+        let solution = problem.solve(best.alpha);
         for (i, &entry) in group.entries.iter().enumerate() {
             for (jj, &j) in group.vertices.iter().enumerate() {
                 for c in 0..n2 {
@@ -157,5 +176,6 @@ pub(super) fn fit_local(
         alpha: best.alpha,
         curve,
         delta,
+        held_rows,
     })
 }

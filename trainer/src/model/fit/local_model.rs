@@ -21,6 +21,8 @@ pub(super) struct LocalModel {
     pub weights: Vec<f64>,
     /// Truncation error per transfer value on the scored poses.
     pub outside_scored: f64,
+    /// The same pose by pose.
+    pub outside_rows: Vec<f64>,
     /// The same on the training poses.
     pub outside_train: f64,
 }
@@ -86,18 +88,25 @@ impl LocalModel {
             let rest = &map - &basis * coords;
             missed += rest.tr_mul(&rest);
         }
-        // Σ over poses of ‖Δaᵀ E‖² = tr(ΔAᵀΔA · EᵀE), per transfer value.
+        // Per pose, ‖Δaᵀ E‖² = Δaᵀ (EᵀE) Δa per transfer value; the mean over a set's poses.
+        let outside_rows = |sets: &[&DMatrix<f64>]| -> Vec<f64> {
+            let values = (vertices * n2).max(1) as f64;
+            sets.iter()
+                .flat_map(|m| {
+                    let d = offsets(m);
+                    (0..d.nrows())
+                        .map(|i| (d.row(i) * &missed * d.row(i).transpose())[(0, 0)] / values)
+                        .collect::<Vec<f64>>()
+                })
+                .collect()
+        };
         let outside = |sets: &[&DMatrix<f64>]| {
-            let (mut sum, mut poses) = (0.0, 0);
-            for m in sets {
-                let d = offsets(m);
-                sum += (d.tr_mul(&d)).component_mul(&missed).sum();
-                poses += m.nrows();
-            }
-            sum / (poses.max(1) * vertices * n2) as f64
+            let rows = outside_rows(sets);
+            rows.iter().sum::<f64>() / rows.len().max(1) as f64
         };
         Self {
             outside_scored: outside(scored),
+            outside_rows: outside_rows(scored),
             outside_train: outside(&[angles]),
             basis,
             energies: residual.energies,

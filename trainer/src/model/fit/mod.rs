@@ -8,6 +8,7 @@
 
 mod assemble;
 mod candidates;
+mod choose;
 mod dims;
 mod error;
 mod input;
@@ -23,13 +24,14 @@ mod vertex_basis;
 #[cfg(test)]
 mod tests;
 
+pub use choose::{Offer, RULE, Verdict, choose};
 pub use dims::Dims;
 pub use error::FitError;
 pub use input::{Anchor, FitInput, Validation};
 pub use local::{EntryGroup, Locality};
 pub use pose_pca::PosePca;
 pub use report::{
-    Choice, FAR_REST_DISTANCE, Fit, FitReport, FitSeconds, HeldOutKind, rest_distance,
+    Choice, Decision, FAR_REST_DISTANCE, Fit, FitReport, FitSeconds, HeldOutKind, rest_distance,
     rest_distance_sentence,
 };
 pub use ridge::{
@@ -281,30 +283,38 @@ pub fn fit_input(input: &FitInput<'_>, options: &FitOptions) -> Result<Fit, FitE
     let rest_distance = input
         .anchor
         .and_then(|a| rest_distance(input.angles, a.angles));
-    let mut best: Option<Fit> = None;
-    let mut choices = Vec::new();
     let mut seconds = FitSeconds {
         validate: clock.elapsed().as_secs_f64(),
         ..Default::default()
     };
+    let mut fits = Vec::new();
     for (i, features) in sets.iter().enumerate() {
         // The priors alone do not depend on the features: scored with the first set only.
         let fit = fit_features(input, options, (vertices, &unused), features, i == 0)?;
-        choices.extend_from_slice(&fit.report.choices);
         seconds.add(&fit.report.seconds);
-        let better = best.as_ref().is_none_or(|b| {
-            let (new, old) = (
-                fit.report.chosen.held_out_error,
-                b.report.chosen.held_out_error,
-            );
-            new.is_finite() && new < old
-        });
-        if better {
-            best = Some(fit);
-        }
+        fits.push(fit);
     }
-    let mut fit = best.expect("every fit has at least one feature set");
+    let (choices, choice_rows) = fits
+        .iter()
+        .flat_map(|f| f.report.choices.iter().zip(&f.report.choice_rows))
+        .map(|(c, r)| (*c, r.clone()))
+        .unzip();
+    // The angles are simpler than the angles with their cosines.
+    let offers: Vec<Offer<'_>> = fits
+        .iter()
+        .map(|f| Offer {
+            error: f.report.chosen.held_out_error,
+            rows: f.report.chosen_rows(),
+            complexity: usize::from(f.report.chosen.cosines),
+        })
+        .collect();
+    let verdict = choose(&offers).expect("every fit has at least one feature set");
+    let features = (fits.len() > 1)
+        .then(|| Decision::of("features", &verdict, |i| fits[i].report.chosen.label()));
+    let mut fit = fits.swap_remove(verdict.chosen);
     fit.report.choices = choices;
+    fit.report.choice_rows = choice_rows;
+    fit.report.decisions.extend(features);
     fit.report.seconds = seconds;
     fit.report.rest_distance = rest_distance;
     Ok(fit)
@@ -430,7 +440,8 @@ fn fit_features(
         runs: &runs,
     };
     let (tally, local) = score_candidates(input, options, &shared, &tried)?;
-    let (chosen, cv_curve) = tally.best(options.alpha)?;
+    let (chosen, cv_curve, verdict) = tally.best(options.alpha)?;
+    let decision = Decision::of("candidates", &verdict, |i| tally.choices[i].label());
     seconds.cross_validation = clock.elapsed().as_secs_f64();
 
     let clock = Instant::now();
@@ -486,6 +497,13 @@ fn fit_features(
         prior: chosen.prior,
         held_out,
         choices: tally.choices,
+        choice_rows: tally.rows,
+        validation_sets: input
+            .validation
+            .iter()
+            .map(|v| (v.name.to_owned(), v.angles.nrows()))
+            .collect(),
+        decisions: vec![decision],
         chosen,
         rest_distance: None,
         seconds,

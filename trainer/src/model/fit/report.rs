@@ -5,6 +5,7 @@ use crate::model::occluders::OccluderChoice;
 use nalgebra::DMatrix;
 
 use super::PriorKind;
+use super::choose::Verdict;
 use super::ridge::CvPoint;
 use crate::model::LinearModel;
 
@@ -45,6 +46,75 @@ impl Choice {
             (true, _, PriorKind::Mean) => "α ∞ (mean training transfer)".to_owned(),
             (false, true, _) => format!("local {:>2}", self.pose_dims),
             (false, false, _) => format!("k_a   {:>2}", self.pose_dims),
+        }
+    }
+
+    /// The candidate in one phrase: features, prior and shape (`angles, prior rest, k_a 4`).
+    pub fn label(&self) -> String {
+        let features = if self.cosines { "cosines" } else { "angles" };
+        let shape = self
+            .shape()
+            .split_whitespace()
+            .collect::<Vec<_>>()
+            .join(" ");
+        format!("{features}, prior {}, {shape}", self.prior.name())
+    }
+}
+
+/// One choice the selection made on validation poses, and by how much (see
+/// [`choose`](super::choose)): among the candidates of one feature set, between feature
+/// sets, or with and without occluder proxies.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Decision {
+    /// `candidates`, `features` or `proxies`.
+    pub stage: &'static str,
+    /// What was chosen.
+    pub chosen: String,
+    /// What had the lowest mean validation error.
+    pub best: String,
+    /// The chosen one's mean error minus the best's; when the best was chosen, its lead
+    /// over the nearest rival. Per transfer value, as the errors.
+    pub margin: f64,
+    /// The standard error of that difference, paired over the validation poses.
+    pub standard_error: f64,
+    /// Validation poses the errors are over (0: no per-pose errors, the lowest mean won).
+    pub poses: usize,
+    /// Whether the rule chose a simpler candidate than the best.
+    pub tie: bool,
+}
+
+impl Decision {
+    /// The decision of `verdict` among candidates named by `label`.
+    pub fn of(stage: &'static str, verdict: &Verdict, label: impl Fn(usize) -> String) -> Self {
+        Self {
+            stage,
+            chosen: label(verdict.chosen),
+            best: label(verdict.best),
+            margin: verdict.margin,
+            standard_error: verdict.standard_error,
+            poses: verdict.poses,
+            tie: verdict.tie,
+        }
+    }
+
+    /// The decision as the selection report says it (the rule is
+    /// [`RULE`](super::choose::RULE)).
+    pub fn sentence(&self) -> String {
+        match (self.poses, self.tie) {
+            (0, _) => format!("{}: {}, the lowest held-out error", self.stage, self.chosen),
+            (n, true) => format!(
+                "{}: {}, simpler than the best ({}) and {:.2e} behind it, within one standard \
+                 error ({:.2e} over {n} poses): a tie",
+                self.stage, self.chosen, self.best, self.margin, self.standard_error
+            ),
+            (n, false) => format!(
+                "{}: {}, the best, ahead of the nearest by {:.2e}: {:.1} standard errors over \
+                 {n} poses",
+                self.stage,
+                self.chosen,
+                self.margin,
+                self.margin / self.standard_error.max(f64::MIN_POSITIVE)
+            ),
         }
     }
 }
@@ -113,12 +183,27 @@ pub struct FitReport {
     pub choices: Vec<Choice>,
     /// The candidate the model is.
     pub chosen: Choice,
+    /// Each candidate's error on each validation pose, as `choices` (`None` when scored on
+    /// held-out runs).
+    pub choice_rows: Vec<Option<Vec<f64>>>,
+    /// The validation sets, in the order of those poses: name and pose count.
+    pub validation_sets: Vec<(String, usize)>,
+    /// How the selection decided, stage by stage.
+    pub decisions: Vec<Decision>,
     /// [`rest_distance`] of the anchor, when the fit has one and some entry moves.
     pub rest_distance: Option<f64>,
     /// Time per stage.
     pub seconds: FitSeconds,
     /// What the occluder proxies did, when they were tried (`pipeline::train::fit_clip`).
     pub occluders: Option<OccluderChoice>,
+}
+
+impl FitReport {
+    /// The chosen candidate's error on each validation pose, when scored on them.
+    pub fn chosen_rows(&self) -> Option<&[f64]> {
+        let i = self.choices.iter().position(|c| *c == self.chosen)?;
+        self.choice_rows.get(i)?.as_deref()
+    }
 }
 
 /// A fitted model and its report.

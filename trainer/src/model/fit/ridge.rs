@@ -217,6 +217,15 @@ impl RidgeTarget<'_> {
         }
     }
 
+    /// Each held-out pose's squared error (summed over the outputs) at α = ∞: its distance
+    /// from the centre. In the order of `held`, pose by pose.
+    pub fn prior_held_out_rows(&self, held: &[HeldOut]) -> Vec<f64> {
+        held.iter()
+            .flat_map(|h| h.y.row_iter())
+            .map(|row| (row.transpose() - &self.centre).norm_squared())
+            .collect()
+    }
+
     /// The limit α → ∞ scored on poses held out whole: each predicted by the centre.
     pub fn prior_held_out(&self, held: &[HeldOut]) -> CvPoint {
         let (p, q) = self.shape();
@@ -369,6 +378,11 @@ impl<'a> RidgeProblem<'a> {
         }
     }
 
+    /// The outputs the problem predicts.
+    pub fn target(&self) -> &RidgeTarget<'a> {
+        self.target
+    }
+
     /// Numerical rank r of the centred inputs: 0 means the outputs cannot depend on the pose.
     pub fn rank(&self) -> usize {
         self.s.len()
@@ -456,6 +470,24 @@ impl<'a> RidgeProblem<'a> {
         curve.sort_by(|l, r| l.alpha.total_cmp(&r.alpha));
         let alpha = curve[argmin(&curve).expect("the grid had a finite point")].alpha;
         Ok(AlphaSelection { alpha, curve })
+    }
+
+    /// Each pose held out whole's squared error (summed over the outputs) at `alpha`, in the
+    /// order of `held`, pose by pose: the solution's prediction compared directly, for the
+    /// spread that [`HeldOutScore`]'s sums do not keep.
+    pub fn held_out_rows(&self, alpha: f64, held: &[HeldOut]) -> Vec<f64> {
+        let solution = self.solve(alpha);
+        let intercept = solution.intercept.transpose();
+        let k = self.v.nrows();
+        let mut rows = Vec::new();
+        for h in held {
+            let predicted = h.z.columns(0, k) * &solution.coefficients;
+            rows.extend(
+                (0..h.y.nrows())
+                    .map(|i| (h.y.row(i) - predicted.row(i) - &intercept).norm_squared()),
+            );
+        }
+        rows
     }
 
     /// Held-out and in-sample error at one α (see [`CvPoint`]) over the held-out `runs`.
@@ -1025,7 +1057,32 @@ mod tests {
                     (closed - direct).abs() <= 1e-9 * direct,
                     "anchored {anchored}, α = {alpha}: {closed} vs {direct}"
                 );
+                // Pose by pose, over two held-out sets: what the sums add up.
+                let halves = [
+                    HeldOut {
+                        z: zh.rows(0, 3).into_owned(),
+                        y: yh.rows(0, 3).into_owned(),
+                    },
+                    HeldOut {
+                        z: zh.rows(3, 4).into_owned(),
+                        y: yh.rows(3, 4).into_owned(),
+                    },
+                ];
+                let rows = ridge.held_out_rows(alpha, &halves);
+                assert_eq!(rows.len(), 7);
+                let pooled = rows.iter().sum::<f64>() / 28.0;
+                assert!(
+                    (pooled - direct).abs() <= 1e-9 * direct,
+                    "{pooled} vs {direct}"
+                );
             }
+            let prior = target.prior_held_out_rows(&held);
+            let pooled = prior.iter().sum::<f64>() / 28.0;
+            let closed = target.prior_held_out(&held).cv_error;
+            assert!(
+                (pooled - closed).abs() <= 1e-12 * closed,
+                "{pooled} vs {closed}"
+            );
         }
     }
 

@@ -44,6 +44,23 @@ impl Scoring<'_> {
             Scoring::Clips(held) => target.prior_held_out(held),
         }
     }
+
+    /// Each validation pose's squared error (summed over the outputs) at `alpha`, for the
+    /// noise of the choice; `None` for held-out runs, whose poses are not independent.
+    pub fn rows(&self, problem: &RidgeProblem<'_>, alpha: f64) -> Option<Vec<f64>> {
+        match self {
+            Scoring::Segments(_) => None,
+            Scoring::Clips(held) => Some(problem.held_out_rows(alpha, held)),
+        }
+    }
+
+    /// [`rows`](Self::rows) of the target's prior alone (α = ∞).
+    pub fn prior_rows(&self, target: &RidgeTarget<'_>) -> Option<Vec<f64>> {
+        match self {
+            Scoring::Segments(_) => None,
+            Scoring::Clips(held) => Some(target.prior_held_out_rows(held)),
+        }
+    }
 }
 
 /// Poses per held-out run: 1 for leave-one-out, the asked length or `⌈p / 10⌉` otherwise.
@@ -78,8 +95,8 @@ pub(super) struct Projected {
     pub anchor: Option<(DVector<f64>, DVector<f64>)>,
     /// The validation clips' pose coordinates and outputs.
     pub held: Vec<HeldOut>,
-    /// What lies outside the basis, summed over the validation poses.
-    pub outside_held: f64,
+    /// What lies outside the basis, per validation pose.
+    pub outside_held: Vec<f64>,
 }
 
 impl Projected {
@@ -102,6 +119,15 @@ impl Projected {
             let rows = PoseRows::from_slices(transfers.to_vec(), n2, vertices);
             (rows.frobenius_sq() - outputs.norm_squared()).max(0.0)
         };
+        // Pose by pose for the validation poses, whose spread the choice weighs.
+        let outside_each = |transfers: &[&[f32]], outputs: &DMatrix<f64>| {
+            let values = |t: &[f32]| t.iter().map(|&x| f64::from(x).powi(2)).sum::<f64>();
+            transfers
+                .iter()
+                .zip(outputs.row_iter())
+                .map(|(t, y)| (values(t) - y.norm_squared()).max(0.0))
+                .collect::<Vec<f64>>()
+        };
         let train_slices: Vec<&[f32]> = input.transfers.iter().map(Vec::as_slice).collect();
         let train_outputs = outputs_of(&train_slices);
         let outside_train = outside(&train_slices, &train_outputs);
@@ -111,11 +137,11 @@ impl Projected {
             (z0.row(0).transpose(), y0.row(0).transpose())
         });
         let mut held = Vec::new();
-        let mut outside_held = 0.0;
+        let mut outside_held = Vec::new();
         for v in &input.validation {
             let slices: Vec<&[f32]> = v.transfers.iter().map(Vec::as_slice).collect();
             let y = outputs_of(&slices);
-            outside_held += outside(&slices, &y);
+            outside_held.extend(outside_each(&slices, &y));
             held.push(HeldOut {
                 z: pca.project(v.angles),
                 y,
@@ -146,6 +172,8 @@ pub(super) struct PerValue {
     outside_train: f64,
     scored_poses: usize,
     outside_scored: f64,
+    /// What lies outside the basis per validation pose (empty for held-out runs).
+    outside_rows: Vec<f64>,
 }
 
 impl PerValue {
@@ -155,7 +183,7 @@ impl PerValue {
         let (scored_poses, outside_scored) = if projected.held.is_empty() {
             (poses, projected.outside_train)
         } else {
-            (projected.held_poses(), projected.outside_held)
+            (projected.held_poses(), projected.outside_held.iter().sum())
         };
         Self {
             outputs: n2 * kv,
@@ -164,6 +192,7 @@ impl PerValue {
             outside_train: projected.outside_train,
             scored_poses,
             outside_scored,
+            outside_rows: projected.outside_held.clone(),
         }
     }
 
@@ -178,6 +207,16 @@ impl PerValue {
     /// The held-out error per transfer value of a point's held-out error per output.
     pub fn held_out(&self, point: &CvPoint) -> f64 {
         self.convert(point.cv_error, self.scored_poses, self.outside_scored)
+    }
+
+    /// Each validation pose's error per transfer value, from its squared error (summed over
+    /// the outputs, as [`Scoring::rows`] gives them): their mean is
+    /// [`held_out`](Self::held_out)'s.
+    pub fn held_out_rows(&self, rows: &[f64]) -> Vec<f64> {
+        rows.iter()
+            .zip(&self.outside_rows)
+            .map(|(e, outside)| (e + outside) / self.values as f64)
+            .collect()
     }
 
     /// The same for the in-sample error.

@@ -1112,6 +1112,7 @@ fn the_priors_alone_are_scored_by_their_plain_mean_squared_errors() {
         transfer: &rest_transfer,
     });
     input.validation = vec![Validation {
+        name: "held",
         angles: &held_angles,
         transfers: &held,
     }];
@@ -1124,4 +1125,66 @@ fn the_priors_alone_are_scored_by_their_plain_mean_squared_errors() {
     let c = alone(&fit, PriorKind::Mean);
     assert!(close(c.held_out_error, mse(&held, &mean)), "{c:?}");
     assert!(close(c.train_error, mse(&train, &mean)), "{c:?}");
+}
+
+/// The per-pose validation errors the noise-aware choice weighs add up to each candidate's
+/// held-out error, and for the model are its own prediction errors pose by pose.
+#[test]
+fn validation_errors_pose_by_pose_are_the_models_own() {
+    let (angles, transfers, locality) = local_problem();
+    let noise = uniform(50, 4, 95);
+    let noisy: Vec<Vec<f32>> = transfers
+        .iter()
+        .chain(&transfers[..10])
+        .enumerate()
+        .map(|(i, t)| {
+            let t = t.iter().enumerate();
+            t.map(|(j, x)| x + 0.05 * noise[(i, j)] as f32).collect()
+        })
+        .collect();
+    let held_angles = DMatrix::from_fn(10, 2, |i, j| angles[(i, j)] * 1.3 + 0.01);
+    let (train, held) = (&noisy[..40], noisy[40..].to_vec());
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs();
+    let mse = |t: &[f32], prediction: &[f64]| {
+        let squares = t
+            .iter()
+            .zip(prediction)
+            .map(|(a, b)| (f64::from(*a) - b).powi(2));
+        squares.sum::<f64>() / t.len() as f64
+    };
+    let rest = [0.0, 0.0];
+    let mut input = local_input(&angles, train, &rest, &locality);
+    input.validation = vec![Validation {
+        name: "held",
+        angles: &held_angles,
+        transfers: &held,
+    }];
+    for local in [Local::Auto, Local::Off] {
+        let options = FitOptions {
+            coef_dims: CoefDims::Count(3),
+            local,
+            bound: None,
+            ..FitOptions::default()
+        };
+        let fit = fit_input(&input, &options).unwrap();
+        let report = &fit.report;
+        assert_eq!(report.validation_sets, vec![("held".to_owned(), 10)]);
+        for (c, rows) in report.choices.iter().zip(&report.choice_rows) {
+            let rows = rows.as_ref().expect("scored on a clip");
+            let mean = rows.iter().sum::<f64>() / rows.len() as f64;
+            assert!(close(mean, c.held_out_error), "{c:?}: {mean}");
+        }
+        let decision = &report.decisions[0];
+        assert_eq!((decision.stage, decision.poses), ("candidates", 10));
+        assert!(!decision.tie || decision.margin <= decision.standard_error);
+        if report.chosen.local {
+            continue;
+        }
+        let rows = report.chosen_rows().unwrap();
+        for (i, t) in held.iter().enumerate() {
+            let pose: Vec<f64> = held_angles.row(i).iter().copied().collect();
+            let direct = mse(t, &fit.model.predict(&pose));
+            assert!(close(rows[i], direct), "pose {i}: {} vs {direct}", rows[i]);
+        }
+    }
 }
