@@ -11,9 +11,16 @@ use run::{aprt, refuse, succeed, tiny_character};
 
 use crate::run;
 
-/// Frames of the clip: with the rest pose (bone-frame models are anchored at it) the
-/// checkpoint holds one more.
+/// Frames of the clip: with the validation poses and the rest pose (bone-frame models are
+/// anchored at it) the checkpoint holds [`POSES`].
 const FRAMES: usize = 8;
+
+/// Validation poses `aprt train` samples (`--validation-poses`): sampled alike by every shard
+/// and the final run, checkpointed like the clip's frames.
+const VALIDATION: usize = 3;
+
+/// Poses of the checkpoint: the frames, the validation poses and the rest pose.
+const POSES: usize = FRAMES + VALIDATION + 1;
 
 fn path(p: &Path) -> &str {
     p.to_str().unwrap()
@@ -37,6 +44,8 @@ fn train(model: &Path, extra: &[&str]) -> Vec<String> {
         "16",
         "--coef-dims",
         "4",
+        "--validation-poses",
+        &VALIDATION.to_string(),
         "-o",
         path(model),
     ]
@@ -69,9 +78,13 @@ fn reference(dir: &Path) -> Vec<u8> {
 fn resume_matches(dir: &Path, ck: &Path, reference: &[u8]) {
     let model = dir.join("merged.aprt");
     let err = succeed_noting(&train(&model, &["--checkpoint", path(ck), "--resume"]));
-    let poses = FRAMES + 1;
     assert!(
-        err.contains(&format!("resumed {poses} of {poses} poses")),
+        err.contains(&format!("resumed {POSES} of {POSES} poses")),
+        "{err}"
+    );
+    // Read back, not baked: this run spent nothing on them.
+    assert!(
+        err.contains(&format!("{VALIDATION} validation poses baked in 0.0 s")),
         "{err}"
     );
     assert!(
@@ -87,16 +100,18 @@ fn three_shards_in_one_checkpoint_resume_to_the_bytes_of_one_run() {
     let reference = reference(dir.path());
     let ck = dir.path().join("ck");
     let model = dir.path().join("model.aprt");
-    let poses = FRAMES + 1;
-    for (i, stored) in [(0, 3), (1, 6), (2, 9)] {
+    assert_eq!(POSES % 3, 0, "each shard holds a third");
+    let share = POSES / 3;
+    for i in 0..3 {
         let shard = format!("{i}/3");
+        let stored = (i + 1) * share;
         let err = succeed_noting(&train(
             &model,
             &["--checkpoint", path(&ck), "--shard", &shard],
         ));
         assert!(
             err.contains(&format!(
-                "shard {shard} baked 3 of its 3 frames (0 were already there); {stored} of {poses} frames are now in"
+                "shard {shard} baked {share} of its {share} frames (0 were already there); {stored} of {POSES} frames are now in"
             )),
             "{err}"
         );
@@ -108,7 +123,9 @@ fn three_shards_in_one_checkpoint_resume_to_the_bytes_of_one_run() {
         &["--checkpoint", path(&ck), "--shard", "1/3"],
     ));
     assert!(
-        err.contains("shard 1/3 baked 0 of its 3 frames (3 were already there)"),
+        err.contains(&format!(
+            "shard 1/3 baked 0 of its {share} frames ({share} were already there)"
+        )),
         "{err}"
     );
     resume_matches(dir.path(), &ck, &reference);
@@ -193,7 +210,11 @@ fn bad_specs_and_other_settings_are_refused() {
     other[rays + 1] = "32".to_owned();
     refuse(&other, &["rays (checkpoint: 16, now: 32)"]);
     let pose_files = std::fs::read_dir(&ck).unwrap().count() - 1;
-    assert_eq!(pose_files, 5, "the refused shard touched the checkpoint");
+    assert_eq!(
+        pose_files,
+        POSES.div_ceil(2),
+        "the refused shard touched the checkpoint"
+    );
 }
 
 /// `shlm bake` of the character in `dir` at a small atlas, writing `output`, then `extra`.

@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use aprt_core::{Model, PoseWeights, StreamedModel};
-use run::{aprt, read_npy, refuse, succeed};
+use run::{aprt, read_npy, refuse, succeed, tiny_character};
 
 use crate::run;
 
@@ -301,6 +301,92 @@ fn sample_poses_adds_that_many_training_poses_and_a_bound_is_refused() {
         &["--sample-poses 10001", "10000"],
     );
     assert!(!Path::new(&refused).exists());
+}
+
+/// `--validation-poses N` samples N poses from a character's training frames and bakes them
+/// with the training frames, saying what they cost, but never trains on them: the model's
+/// poses stay the clip's. 0 bakes exactly what was baked before they existed. An OBJ
+/// sequence, which has no joints to sample, takes none by default and refuses a count naming
+/// the flag; a count past one run's frames is refused.
+#[test]
+fn validation_poses_are_baked_but_never_trained_on_and_an_obj_sequence_refuses_them() {
+    const FRAMES: usize = 8;
+    let dir = tempfile::tempdir().unwrap();
+    let bvh = tiny_character(dir.path(), FRAMES);
+    let model = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let base = [
+        "train",
+        "--bvh",
+        &bvh,
+        "--order",
+        "2",
+        "--rays",
+        "16",
+        "--coef-dims",
+        "4",
+    ];
+    let run = |extra: &[&str], out: &str| -> (String, String, Vec<u8>) {
+        let o = model(out);
+        let out = aprt(&[&base[..], extra, &["-o", &o]].concat());
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(out.status.success(), "{extra:?}: {stderr}");
+        let wrote = stderr
+            .lines()
+            .find(|l| l.starts_with("wrote "))
+            .unwrap_or_else(|| panic!("no `wrote` line in\n{stderr}"))
+            .to_owned();
+        (stderr, wrote, std::fs::read(o).unwrap())
+    };
+    // The clip's frames and the rest pose, as before: nothing else baked, nothing said.
+    let (none, wrote, bytes) = run(&["--validation-poses", "0"], "none.aprt");
+    let baked = |n: usize| format!("baked {n} poses; fitting the model");
+    assert!(none.contains(&baked(FRAMES + 1)), "{none}");
+    assert!(!none.contains("validation pose"), "{none}");
+    assert!(wrote.contains(&format!(": {FRAMES} poses,")), "{wrote}");
+    assert_eq!(run(&["--validation-poses", "0"], "again.aprt").2, bytes);
+    // Eight more baked, none trained on.
+    let (eight, wrote, _) = run(&["--validation-poses", "8"], "eight.aprt");
+    assert!(eight.contains(&baked(FRAMES + 8 + 1)), "{eight}");
+    assert!(wrote.contains(&format!(": {FRAMES} poses,")), "{wrote}");
+    assert!(
+        wrote.contains(", 8 validation poses baked in ") && wrote.ends_with(" s"),
+        "{wrote}"
+    );
+    // The default: 64 of them.
+    let (default, wrote, _) = run(&[], "default.aprt");
+    assert!(default.contains(&baked(FRAMES + 64 + 1)), "{default}");
+    assert!(wrote.contains(", 64 validation poses baked in "), "{wrote}");
+    let refused = model("refused.aprt");
+    refuse(
+        &[&base[..], &["--validation-poses", "10001", "-o", &refused]].concat(),
+        &["--validation-poses 10001", "10000"],
+    );
+    // An OBJ sequence: none by default, a count refused before anything is baked.
+    let (seq, angles) = setup(dir.path(), 5);
+    let obj = dir.path().join("obj.aprt");
+    let cheap = ["--order", "2", "--rays", "16"];
+    refuse(
+        &train(
+            &seq,
+            &angles,
+            &obj,
+            &[&cheap[..], &["--validation-poses", "4"]].concat(),
+        ),
+        &["--validation-poses 4", "--obj-seq"],
+    );
+    assert!(!obj.exists() && !Path::new(&refused).exists());
+    assert!(!dir.path().join("obj.aprt.bake").exists());
+    let out = aprt(&train(&seq, &angles, &obj, &cheap));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains(&baked(5)), "{stderr}");
+    assert!(!stderr.contains("validation pose"), "{stderr}");
+    succeed(&train(
+        &seq,
+        &angles,
+        &dir.path().join("obj0.aprt"),
+        &[&cheap[..], &["--validation-poses", "0"]].concat(),
+    ));
 }
 
 /// An OBJ sequence of `poses` files of 7 vertices (a floor triangle under two moving ones)

@@ -321,7 +321,8 @@ fn runaway_requests_are_refused_with_their_cost() {
                 "one run holds at most 4.0 GB",
             ],
         ),
-        // 6667 frames × 4436 vertices × 65 536 rays.
+        // 6667 frames and the 64 validation poses sampled from them × 4436 vertices × 65 536
+        // rays.
         (
             [
                 command(
@@ -334,8 +335,8 @@ fn runaway_requests_are_refused_with_their_cost() {
             ]
             .concat(),
             &[
-                "ok.bvh: clip ok: baking 6667 frames",
-                "1.9e12 rays, 6668 checkpoint files",
+                "ok.bvh: clip ok: baking 6731 frames",
+                "2.0e12 rays, 6732 checkpoint files",
                 "one bake casts at most 1.0e12 rays",
             ],
         ),
@@ -524,11 +525,12 @@ fn big_inputs_are_refused_in_bounded_time_and_memory() {
             1.0,
             64.0,
         ),
-        // Measured 0.01 s, 6 MB: 6667 frames sampled, then the rays refused.
+        // Measured 0.01 s, 6 MB: 6667 frames sampled, then the rays refused (of those and
+        // the 64 validation poses).
         (
             ok,
             strings(&["--order", "1", "--rays", "65536", "--fps", "100000"]),
-            "1.9e12 rays",
+            "2.0e12 rays",
             2.0,
             256.0,
         ),

@@ -76,9 +76,16 @@ fn a_shadowless_scene_casts_no_rays_and_reports_what_it_skipped() {
     assert!(skipped.contains("visibility rays"), "{skipped}");
     assert!(skipped.contains("bounces = 0"), "{skipped}");
     assert!(skipped.contains("irradiance rig"), "{skipped}");
-    // Shadowed: every vertex of every pose (training frames and the rest pose) casts rays.
+    // Shadowed: every vertex of every pose (training frames, the default's 64 validation
+    // poses and the rest pose) casts rays.
+    for report in [&off, &on] {
+        assert_eq!(report["validation_poses"], 64, "{report}");
+    }
     let rays = on["rays_cast"].as_u64().unwrap();
-    assert!(rays > 0 && rays % 32 == 0 && rays % 9 == 0, "{rays}");
+    assert!(
+        rays > 0 && rays % 32 == 0 && rays % (8 + 64 + 1) == 0,
+        "{rays}"
+    );
     assert!(on["computed"].to_string().contains("shadows"));
     // The smooth environment and a faint sun need order 3 at 4 grey levels, or less.
     assert!(
@@ -88,6 +95,55 @@ fn a_shadowless_scene_casts_no_rays_and_reports_what_it_skipped() {
     );
     let speedup = off["full_simulation"]["speedup"].as_f64().unwrap();
     assert!(speedup > 5.0, "shadowless bake only {speedup}x faster");
+}
+
+/// `aprt train --scene --validation-poses N` bakes N validation poses besides the scene's
+/// frames, says what they cost on the line of what was written, and reports both in
+/// `--report` (`validation_poses`, `validation_bake_s`); 0 bakes the frames and the rest pose
+/// alone.
+#[test]
+fn a_scene_reports_its_validation_poses_and_their_bake() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let file = scene(d, "scene.toml", "shadows = true\nrig = \"none\"\n");
+    let train = |count: &str| {
+        let (model, report) = (
+            d.join(format!("{count}.aprt")),
+            d.join(format!("{count}.json")),
+        );
+        let out = aprt(&[
+            "train",
+            "--scene",
+            &file,
+            "--validation-poses",
+            count,
+            "-o",
+            path(&model),
+            "--report",
+            path(&report),
+        ]);
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(out.status.success(), "{stderr}");
+        (stderr, json(&report))
+    };
+    let (said, eight) = train("8");
+    let wrote = said.lines().find(|l| l.contains(".aprt: ")).unwrap();
+    assert!(wrote.contains(", 8 validation poses baked in "), "{said}");
+    assert_eq!(eight["validation_poses"], 8, "{eight}");
+    let seconds = eight["validation_bake_s"].as_f64().unwrap();
+    assert!(seconds > 0.0, "{eight}");
+    assert!(
+        seconds < eight["stages"]["bake"].as_f64().unwrap(),
+        "{eight}"
+    );
+    let (said, none) = train("0");
+    assert!(!said.contains("validation pose"), "{said}");
+    assert_eq!(none["validation_poses"], 0, "{none}");
+    assert_eq!(none["validation_bake_s"], 0.0, "{none}");
+    // The same rays a pose, over 8 frames and the rest pose, then 8 more.
+    let rays = |r: &serde_json::Value| r["rays_cast"].as_u64().unwrap();
+    assert_eq!(rays(&none) % 9, 0);
+    assert_eq!(rays(&eight), rays(&none) / 9 * 17);
 }
 
 /// The sweep writes its files, every point has the documented keys, the fronts are

@@ -500,7 +500,17 @@ fn several_clips_train_and_validate() {
 
     let model = work.path().join("fox.aprt");
     let stderr = |out: std::process::Output| String::from_utf8_lossy(&out.stderr).into_owned();
-    let clips = ["--clip", "Walk", "--clip", "Run", "--validate", "Survey"];
+    // The --validate clip alone chooses (validation poses are cli.rs's).
+    let clips = [
+        "--clip",
+        "Walk",
+        "--clip",
+        "Run",
+        "--validate",
+        "Survey",
+        "--validation-poses",
+        "0",
+    ];
     let out = aprt(&[&["train"], &fox_args[..], &clips, BAKE, &["-o", s(&model)]].concat());
     let text = stderr(out);
     assert!(
@@ -536,7 +546,7 @@ fn several_clips_train_and_validate() {
             &["train"],
             &bvh[..],
             &ranges,
-            &["--validate", validate],
+            &["--validate", validate, "--validation-poses", "0"],
             BAKE,
         ];
         let out = aprt(&[&args.concat()[..], &["-o", s(&model)]].concat());

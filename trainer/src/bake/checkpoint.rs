@@ -24,6 +24,7 @@
 //! same wherever it was baked.
 
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 use crate::bake::shard::Shard;
 use crate::bake::{BakeError, BakeSettings, bake_pose_progress};
@@ -490,6 +491,18 @@ impl Checkpoint {
         name: impl Fn(usize) -> String,
         reporter: &dyn Reporter,
     ) -> Result<Vec<Vec<f32>>, CheckpointError> {
+        Ok(self.bake_at_timed(meshes, target, name, reporter)?.0)
+    }
+
+    /// [`Checkpoint::bake_at`], with the wall-clock seconds each pose took in this run (its
+    /// bake and storing it): 0 for a pose read back from the checkpoint.
+    pub fn bake_at_timed(
+        &mut self,
+        meshes: &[Mesh],
+        target: &dyn BakeTarget,
+        name: impl Fn(usize) -> String,
+        reporter: &dyn Reporter,
+    ) -> Result<(Vec<Vec<f32>>, Vec<f64>), CheckpointError> {
         let result = self.bake_inner(meshes, target, name, reporter);
         if result.is_err() && !self.holds_poses {
             // Best effort: the original error is the one worth reporting.
@@ -504,18 +517,23 @@ impl Checkpoint {
         target: &dyn BakeTarget,
         name: impl Fn(usize) -> String,
         reporter: &dyn Reporter,
-    ) -> Result<Vec<Vec<f32>>, CheckpointError> {
+    ) -> Result<(Vec<Vec<f32>>, Vec<f64>), CheckpointError> {
         let count = meshes.len();
         let mut out = Vec::with_capacity(count);
+        let mut seconds = Vec::with_capacity(count);
         let all = |_| true;
-        let resumed = self.bake_where(meshes, target, all, name, reporter, |t| out.push(t))?;
+        let keep = |t, s| {
+            out.push(t);
+            seconds.push(s);
+        };
+        let resumed = self.bake_where(meshes, target, all, name, reporter, keep)?;
         if resumed > 0 {
             reporter.note(&format!(
                 "resumed {resumed} of {count} poses from {}",
                 self.dir.display()
             ));
         }
-        Ok(out)
+        Ok((out, seconds))
     }
 
     /// Shard `shard`'s share of the poses of `meshes` at the points of `target` (the meshes
@@ -534,7 +552,7 @@ impl Checkpoint {
         reporter: &dyn Reporter,
     ) -> Result<ShardBaked, CheckpointError> {
         let mine = |i| shard.holds(i);
-        let resumed = self.bake_where(meshes, target, mine, name, reporter, drop)?;
+        let resumed = self.bake_where(meshes, target, mine, name, reporter, |_, _| {})?;
         let frames = meshes.len();
         Ok(ShardBaked {
             shard,
@@ -546,9 +564,9 @@ impl Checkpoint {
         })
     }
 
-    /// The poses of `meshes` that `selected` picks, in order, each handed to `keep`: stored
-    /// ones read back, missing ones baked and stored as soon as each is done. Returns how many
-    /// were read back.
+    /// The poses of `meshes` that `selected` picks, in order, each handed to `keep` with the
+    /// seconds it took: stored ones read back (0 s), missing ones baked and stored as soon as
+    /// each is done. Returns how many were read back.
     fn bake_where(
         &mut self,
         meshes: &[Mesh],
@@ -556,7 +574,7 @@ impl Checkpoint {
         selected: impl Fn(usize) -> bool,
         name: impl Fn(usize) -> String,
         reporter: &dyn Reporter,
-        mut keep: impl FnMut(Vec<f32>),
+        mut keep: impl FnMut(Vec<f32>, f64),
     ) -> Result<usize, CheckpointError> {
         let count = meshes.len();
         self.check_count(count)?;
@@ -576,9 +594,10 @@ impl Checkpoint {
             let len = points * self.settings.order * self.settings.order;
             if let Some(stored) = self.load(i, len, reporter)? {
                 resumed += 1;
-                keep(stored);
+                keep(stored, 0.0);
                 continue;
             }
+            let started = Instant::now();
             let progress = progress.get_or_insert_with(|| {
                 let left = (i..count).filter(|&j| selected(j)).count();
                 reporter.bake_progress(points * left)
@@ -592,7 +611,7 @@ impl Checkpoint {
                 })?;
             self.store(i, &transfer)?;
             self.holds_poses = true;
-            keep(transfer);
+            keep(transfer, started.elapsed().as_secs_f64());
         }
         if let Some(progress) = progress {
             progress.finish();

@@ -378,13 +378,17 @@ fn results(args: &ResultsArgs) -> Result<()> {
             shadows: true,
         },
         alphas: (-6..=3).map(|e| 10f64.powi(e)).collect(),
+        validation_poses: args.validation_poses,
     };
-    let command = format!(
+    let mut command = format!(
         "cargo run --release -p aprt-trainer --bin aprt -- results --out {} --order {} --rays {}",
         args.out.display(),
         args.order,
         args.rays
     );
+    if args.validation_poses != crate::rig::pose_sampler::DEFAULT_VALIDATION_POSES {
+        command += &format!(" --validation-poses {}", args.validation_poses);
+    }
     let path = write_document(&studies, &settings, &args.out, &command, &Terminal)?;
     eprintln!("wrote {}", path.display());
     Ok(())
@@ -524,6 +528,7 @@ fn train(args: &TrainArgs) -> Result<()> {
             existing,
             fit: args.fit.options()?,
             shard: args.shard,
+            validation_poses: args.validation_poses,
         };
         return match source.in_origin(train_scene(scene, &lighting, poses, options, &Terminal))? {
             SceneOutcome::Trained(report) => print_scene_report(&report, args.report.as_deref()),
@@ -547,6 +552,7 @@ fn train(args: &TrainArgs) -> Result<()> {
         irradiance_rig: args.rig,
         shard: args.shard,
         sample_poses: args.sample_poses,
+        validation_poses: args.validation_poses,
     };
     settings.bake.validate()?;
     let poses = args.source.poses(&args.validate, &Terminal)?;
@@ -564,15 +570,26 @@ fn train(args: &TrainArgs) -> Result<()> {
         eprintln!("{line}");
     }
     eprintln!(
-        "wrote {}: {} poses, k_a {}, k_v {}, alpha {:.3e}, {} bytes",
+        "wrote {}: {} poses, k_a {}, k_v {}, alpha {:.3e}, {} bytes{}",
         args.output.display(),
         trained.poses,
         info.pose_dims,
         info.coef_dims,
         info.alpha,
-        info.bytes
+        info.bytes,
+        validation_sentence(trained.validation_poses, trained.validation_bake_s)
     );
     Ok(())
+}
+
+/// `, N validation poses baked in S s` for the line that says what was written; empty
+/// without validation poses.
+fn validation_sentence(poses: usize, seconds: f64) -> String {
+    match poses {
+        0 => String::new(),
+        1 => format!(", 1 validation pose baked in {seconds:.1} s"),
+        n => format!(", {n} validation poses baked in {seconds:.1} s"),
+    }
 }
 
 /// The poses `aprt train --scene` trains on: the scene's OBJ sequence, or its character's
@@ -617,7 +634,7 @@ fn print_scene_report(report: &SceneTrainReport, json: Option<&Path>) -> Result<
         eprintln!("  - {line}");
     }
     eprintln!(
-        "wrote {}: {} bytes, SH order {}, {} rays cast, {} bounce passes, {:.1} s ({:.1} s baking, {:.1} s fitting)",
+        "wrote {}: {} bytes, SH order {}, {} rays cast, {} bounce passes, {:.1} s ({:.1} s baking, {:.1} s fitting){}",
         report.model.display(),
         report.bytes,
         report.sh_order,
@@ -625,7 +642,8 @@ fn print_scene_report(report: &SceneTrainReport, json: Option<&Path>) -> Result<
         report.bounce_passes,
         report.seconds,
         report.stages.bake,
-        report.stages.fit
+        report.stages.fit,
+        validation_sentence(report.validation_poses, report.validation_bake_s)
     );
     match (&report.over_budget, report.within_budget) {
         (Some(miss), _) => eprintln!("{miss}"),

@@ -16,10 +16,11 @@ use crate::io::source::Poses;
 use crate::model::fit::FitOptions;
 use crate::model::precision::PrecisionChoice;
 use crate::pipeline::train::{
-    Outcome, RunSeconds, ShardBaked, TrainSettings, fitting_surfaces, train,
+    Outcome, RunSeconds, ShardBaked, TrainSettings, check_validation_poses, fitting_surfaces, train,
 };
 use crate::progress::{Reporter, Silent};
 use crate::rig::mesh::Mesh;
+use crate::rig::pose_sampler::DEFAULT_VALIDATION_POSES;
 use crate::scene::file::{Choice, Scene};
 use crate::scene::frame_cost::{self, BudgetCheck};
 use crate::scene::irradiance_rig_choice::{CANDIDATES, RigDecision, choose_rig};
@@ -60,6 +61,11 @@ pub struct SceneTrainReport {
     pub seconds: f64,
     /// Seconds by stage.
     pub stages: RunSeconds,
+    /// Validation poses sampled, baked and used to choose the model (`--validation-poses`).
+    pub validation_poses: usize,
+    /// Seconds this run spent baking them (part of `stages.bake`); poses read back from a
+    /// checkpoint cost 0 here.
+    pub validation_bake_s: f64,
     /// The full simulation, timed on a few poses of the same run.
     pub full_simulation: FullSimulation,
     /// Model bytes.
@@ -108,6 +114,9 @@ pub struct SceneTrainOptions<'a> {
     pub fit: FitOptions,
     /// Bake only this shard of the poses into the checkpoint and stop (a bake farm).
     pub shard: Option<Shard>,
+    /// Validation poses to sample and bake (`--validation-poses`; None: the default, see
+    /// [`TrainSettings::validation_poses`]).
+    pub validation_poses: Option<usize>,
 }
 
 /// What `aprt train --scene` did: trained the model, or baked one shard of it.
@@ -131,9 +140,11 @@ pub fn train_scene(
     reporter: &dyn Reporter,
 ) -> Result<SceneOutcome> {
     let started = Instant::now();
+    check_validation_poses(&poses, options.validation_poses)?;
     let fitting = fitting_surfaces(&poses)?;
     let bind = &fitting[0];
-    let baked = baked_pose_count(&poses, scene);
+    let validation_poses = options.validation_poses;
+    let baked = baked_pose_count(&poses, scene, validation_poses);
     // The order and the rig are judged light by light at every vertex: many near lights
     // take long enough to deserve a progress display.
     let progress = reporter.step_progress(1 + CANDIDATES.len());
@@ -180,6 +191,7 @@ pub fn train_scene(
 
         // CLI-only (`aprt train --sample-poses`); a scene samples none.
         sample_poses: 0,
+        validation_poses,
     };
     let (trained, full) = match (train(poses, options.output, &settings, reporter)?, full) {
         (Outcome::Trained(trained), Some(full)) => (trained, full),
@@ -217,6 +229,8 @@ pub fn train_scene(
         skipped,
         seconds: started.elapsed().as_secs_f64(),
         stages: trained.seconds,
+        validation_poses: trained.validation_poses,
+        validation_bake_s: trained.validation_bake_s,
         full_simulation: full,
         bytes: trained.info.bytes,
         us_per_frame: cost.us,
@@ -225,16 +239,18 @@ pub fn train_scene(
     })))
 }
 
-/// Poses the bake covers: training and validation frames, and the rest pose of bone-frame
-/// character models.
-fn baked_pose_count(poses: &Poses, scene: &Scene) -> usize {
+/// Poses the bake covers: training and validation frames, the validation poses
+/// (`validation_poses`, as [`TrainSettings::validation_poses`] resolves it) and the rest pose
+/// of bone-frame character models.
+fn baked_pose_count(poses: &Poses, scene: &Scene, validation_poses: Option<usize>) -> usize {
     match poses {
         Poses::Meshes { meshes, .. } => meshes.len(),
         Poses::Rig {
             clips, validation, ..
         } => {
             let frames: usize = clips.iter().chain(validation).map(|c| c.frames.len()).sum();
-            frames + usize::from(scene.effects.frame == crate::model::ModelFrame::Bone)
+            let sampled = validation_poses.unwrap_or(DEFAULT_VALIDATION_POSES);
+            frames + sampled + usize::from(scene.effects.frame == crate::model::ModelFrame::Bone)
         }
     }
 }

@@ -3,6 +3,7 @@
 //! resumes, fit, write the blob, then remove the checkpoint).
 
 use std::borrow::Cow;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -41,7 +42,7 @@ use crate::rig::bone_frames::BoneFrames;
 use crate::rig::bone_frames::{FrameChange, change_frames, dominant_bones};
 use crate::rig::mesh::Mesh;
 use crate::rig::pose_layout::PoseLayout;
-use crate::rig::pose_sampler::sampled_clip;
+use crate::rig::pose_sampler::{DEFAULT_VALIDATION_POSES, sampled_clip, validation_clip};
 use crate::rig::{Clip, Rig};
 
 /// Training poses sampled for the locality's distances (besides the bind pose).
@@ -56,7 +57,7 @@ pub struct ClipSet<'a> {
     pub train: &'a BakedClip,
     /// The rest pose, baked.
     pub rest: Option<&'a BakedClip>,
-    /// Validation clips (`--validate`).
+    /// Validation clips: `--validate`'s, then the validation poses (`--validation-poses`).
     pub validation: &'a [BakedClip],
 }
 
@@ -232,6 +233,27 @@ pub struct TrainSettings {
     /// the training clips ([`crate::rig::pose_sampler`]), baked and fitted as one more training
     /// clip part, `sampled`. 0: none. Characters only.
     pub sample_poses: usize,
+    /// `--validation-poses`: poses sampled from the training frames as `--sample-poses`
+    /// samples them but with their own seed and reaching [`VALIDATION_MARGIN`] beyond the
+    /// training range ([`crate::rig::pose_sampler::validation_clip`]), baked with the same
+    /// settings and appended to the validation clips as the clip `validation poses`: never
+    /// trained on, only used to choose the model by. None: [`DEFAULT_VALIDATION_POSES`] for a
+    /// character, none for meshes read from files (which have no joints to sample); 0: none,
+    /// today's selection exactly.
+    ///
+    /// [`VALIDATION_MARGIN`]: crate::rig::pose_sampler::VALIDATION_MARGIN
+    pub validation_poses: Option<usize>,
+}
+
+impl TrainSettings {
+    /// The validation poses asked of `poses` ([`TrainSettings::validation_poses`], the default
+    /// resolved): 0 for meshes read from files.
+    pub fn validation_pose_count(&self, poses: &Poses) -> usize {
+        match poses {
+            Poses::Meshes { .. } => 0,
+            Poses::Rig { .. } => self.validation_poses.unwrap_or(DEFAULT_VALIDATION_POSES),
+        }
+    }
 }
 
 /// A model option that no bake could make valid.
@@ -303,6 +325,16 @@ pub enum RequestError {
         "--sample-poses samples a character's joints: meshes read from files (--obj-seq) have none; use a character (--builtin, --gltf, --bvh) or leave it out"
     )]
     SamplePosesMeshes,
+    /// More validation poses than one run bakes.
+    #[error(
+        "--validation-poses {0}: more than the {MAX_FRAMES} frames one run bakes or evaluates; sample fewer poses"
+    )]
+    ValidationPoses(usize),
+    /// Validation poses asked of meshes read from files, which have no joints to sample.
+    #[error(
+        "--validation-poses {0} samples a character's joints: meshes read from files (--obj-seq) have none; use a character (--builtin, --gltf, --bvh), or leave it out (or give 0): an OBJ sequence's model is chosen on held-out runs of its frames"
+    )]
+    ValidationPosesMeshes(usize),
     /// A bake setting is out of range.
     #[error(transparent)]
     Bake(#[from] BakeError),
@@ -374,6 +406,7 @@ pub fn check(poses: &Poses, settings: &TrainSettings) -> Result<(), RequestError
     if settings.sample_poses > MAX_FRAMES {
         return Err(RequestError::SamplePoses(settings.sample_poses));
     }
+    check_validation_poses(poses, settings.validation_poses)?;
     let (what, frames, mesh, entries, bones) = match poses {
         Poses::Meshes {
             files,
@@ -405,7 +438,8 @@ pub fn check(poses: &Poses, settings: &TrainSettings) -> Result<(), RequestError
                 .chain(validation)
                 .map(|c| c.frames.len())
                 .sum::<usize>()
-                + settings.sample_poses;
+                + settings.sample_poses
+                + settings.validation_pose_count(poses);
             (what, frames, rig.bind_mesh(), entries, bones)
         }
     };
@@ -453,6 +487,17 @@ pub fn check(poses: &Poses, settings: &TrainSettings) -> Result<(), RequestError
         .with_checkpoint()
         .check(&what)?;
     Ok(())
+}
+
+/// Checks the validation poses asked of `poses` ([`TrainSettings::validation_poses`]): no
+/// more than one run bakes, and none asked of meshes read from files. Part of [`check`];
+/// `aprt train --scene` runs it before it plans anything.
+pub fn check_validation_poses(poses: &Poses, asked: Option<usize>) -> Result<(), RequestError> {
+    match (poses, asked) {
+        (_, Some(n)) if n > MAX_FRAMES => Err(RequestError::ValidationPoses(n)),
+        (Poses::Meshes { .. }, Some(n)) if n > 0 => Err(RequestError::ValidationPosesMeshes(n)),
+        _ => Ok(()),
+    }
 }
 
 /// The model selection of a fit, for reports and report.json: the chosen candidate, what was
@@ -654,6 +699,13 @@ pub struct Trained {
     pub precision: (Precision, String),
     /// Poses baked (training, validation and the rest pose), resumed ones included.
     pub baked_poses: usize,
+    /// Validation poses sampled, baked and used to choose the model
+    /// ([`TrainSettings::validation_poses`]); 0 when none.
+    pub validation_poses: usize,
+    /// Seconds this run spent baking the validation poses (the bake and checkpointing of each,
+    /// posing left out). Poses read back from a checkpoint cost 0 here: a resumed or merged
+    /// run counts only what it baked itself.
+    pub validation_bake_s: f64,
     /// Seconds spent baking (with posing) and fitting (with the rig and encoding).
     pub seconds: RunSeconds,
 }
@@ -681,6 +733,9 @@ pub fn train(
     reporter: &dyn Reporter,
 ) -> Result<Outcome> {
     check(&poses, settings)?;
+    // Validation poses first, from the user's training frames alone.
+    let n = settings.validation_pose_count(&poses);
+    let (poses, validation_poses) = with_validation_poses(poses, n);
     let poses = with_sampled_poses(poses, settings.sample_poses);
     if let Some(shard) = settings.shard {
         if !settings.bake.shadows {
@@ -706,7 +761,8 @@ pub fn train(
         } => {
             let name = |i: usize| files[i].display().to_string();
             let baking = Instant::now();
-            let (transfers, checkpoint) = bake_checkpointed(&meshes, name, settings, reporter)?;
+            let (transfers, checkpoint, _) =
+                bake_checkpointed(&meshes, name, 0..0, settings, reporter)?;
             let bake_s = baking.elapsed().as_secs_f64();
             let a = DMatrix::from_fn(angles.len(), angles[0].len(), |i, j| angles[i][j]);
             let fitted = fit(&a, &transfers, settings.bake.order, &settings.fit)?;
@@ -717,6 +773,7 @@ pub fn train(
                 poses: angles.len(),
                 baked: meshes.len(),
                 bake_s,
+                validation_bake_s: 0.0,
                 measure_on: angles
                     .iter()
                     .step_by(step)
@@ -728,7 +785,14 @@ pub fn train(
             rig,
             clips,
             validation,
-        } => fit_rig_clips(rig.as_ref(), &clips, &validation, settings, reporter)?,
+        } => fit_rig_clips(
+            rig.as_ref(),
+            &clips,
+            &validation,
+            validation_poses,
+            settings,
+            reporter,
+        )?,
     };
     let chosen = encode_chosen(
         &outcome.fitted.model,
@@ -748,6 +812,8 @@ pub fn train(
         info: describe(&chosen.blob)?,
         precision: (chosen.precision, chosen.reason),
         baked_poses: outcome.baked,
+        validation_poses,
+        validation_bake_s: outcome.validation_bake_s,
         seconds: RunSeconds {
             bake: outcome.bake_s,
             fit: total - outcome.bake_s,
@@ -779,6 +845,34 @@ fn with_sampled_poses(poses: Poses, n: usize) -> Poses {
     }
 }
 
+/// `poses` with `n` validation poses appended to its validation clips as the clip
+/// [`crate::rig::pose_sampler::VALIDATION_CLIP`] (a character's; [`check`] refuses them for
+/// meshes read from files), and how many were appended. Sampled from the training frames
+/// before anything is baked (and before `--sample-poses` adds its own), so they are
+/// checkpointed like every other pose and a resume or a shard samples the very same ones.
+fn with_validation_poses(poses: Poses, n: usize) -> (Poses, usize) {
+    match poses {
+        Poses::Rig {
+            rig,
+            clips,
+            mut validation,
+        } if n > 0 => {
+            let limits = rig.joint_limits();
+            let names = rig.angle_names();
+            let clip = validation_clip(&names, &clips, limits.as_deref(), n);
+            let count = clip.as_ref().map_or(0, |c| c.frames.len());
+            validation.extend(clip);
+            let poses = Poses::Rig {
+                rig,
+                clips,
+                validation,
+            };
+            (poses, count)
+        }
+        poses => (poses, 0),
+    }
+}
+
 /// A fitted model with what it took.
 struct FitOutcome {
     fitted: Fit,
@@ -790,16 +884,20 @@ struct FitOutcome {
     baked: usize,
     /// Seconds posing and baking.
     bake_s: f64,
+    /// Seconds baking the validation poses in this run ([`Trained::validation_bake_s`]).
+    validation_bake_s: f64,
     /// Training poses (angles and bone rotations) to measure the precision on.
     measure_on: Vec<(Vec<f64>, Vec<Rotation>)>,
 }
 
 /// Bakes a character's training and validation clips (and, for bone-frame models, the rest
-/// pose) through one checkpoint and fits the model.
+/// pose) through one checkpoint and fits the model. The last `validation_poses` frames of
+/// `validation` are the validation poses, whose bake is timed on its own.
 fn fit_rig_clips(
     rig: &dyn Rig,
     clips: &[Clip],
     validation: &[Clip],
+    validation_poses: usize,
     settings: &TrainSettings,
     reporter: &dyn Reporter,
 ) -> Result<FitOutcome> {
@@ -821,7 +919,10 @@ fn fit_rig_clips(
     let (mut meshes, names) = rig_poses(rig, &all, anchored.then_some(&rest_pose[..]))?;
     let baked = meshes.len();
     let name = |i: usize| names[i].clone();
-    let (mut transfer, checkpoint) = bake_checkpointed(&meshes, name, settings, reporter)?;
+    let clip_frames: usize = all.iter().map(|c| c.frames.len()).sum();
+    let timed = clip_frames - validation_poses..clip_frames;
+    let (mut transfer, checkpoint, validation_bake_s) =
+        bake_checkpointed(&meshes, name, timed, settings, reporter)?;
     let bake_s = baking.elapsed().as_secs_f64();
     let rest = if anchored {
         let (mesh, t) = (meshes.pop(), transfer.pop());
@@ -884,6 +985,7 @@ fn fit_rig_clips(
         poses: train.poses.len(),
         baked,
         bake_s,
+        validation_bake_s,
         measure_on,
     })
 }
@@ -963,14 +1065,16 @@ fn training_frames(clips: &[Clip]) -> Vec<Vec<f64>> {
 
 /// The transfer of every pose of `meshes`, through the checkpoint of `settings` (opened for
 /// these meshes, so a resume with other inputs is refused); `name(i)` names pose `i` in errors.
-/// A shadowless bake is closed form and keeps no checkpoint.
+/// A shadowless bake is closed form and keeps no checkpoint. Also the seconds this run spent
+/// baking the poses `timed` (those read back from the checkpoint cost 0).
 fn bake_checkpointed(
     meshes: &[Mesh],
     name: impl Fn(usize) -> String,
+    timed: Range<usize>,
     settings: &TrainSettings,
     reporter: &dyn Reporter,
-) -> Result<(Vec<Vec<f32>>, Option<Checkpoint>)> {
-    let baked = if settings.bake.shadows {
+) -> Result<(Vec<Vec<f32>>, Option<Checkpoint>, f64)> {
+    let (transfer, checkpoint, seconds) = if settings.bake.shadows {
         let mut checkpoint = Checkpoint::open(
             &settings.checkpoint,
             settings.existing,
@@ -983,16 +1087,25 @@ fn bake_checkpointed(
                 settings.checkpoint.display()
             ));
         }
-        let transfer = checkpoint.bake(meshes, name, reporter)?;
-        (transfer, Some(checkpoint))
+        let (transfer, seconds) = checkpoint.bake_at_timed(meshes, &Vertices, name, reporter)?;
+        (transfer, Some(checkpoint), seconds[timed].iter().sum())
     } else {
-        // Closed form, milliseconds a pose: nothing worth saving for a resume.
-        (
-            crate::bake::bake_poses(meshes, &settings.bake, reporter)?,
-            None,
-        )
+        // Closed form, milliseconds a pose: nothing worth saving for a resume. Baked in three
+        // runs to time the poses `timed` (each pose's bake is its own, so bit for bit the
+        // same as one run).
+        let bake = |meshes: &[Mesh]| crate::bake::bake_poses(meshes, &settings.bake, reporter);
+        if timed.is_empty() {
+            (bake(meshes)?, None, 0.0)
+        } else {
+            let mut transfer = bake(&meshes[..timed.start])?;
+            let started = Instant::now();
+            transfer.extend(bake(&meshes[timed.clone()])?);
+            let seconds = started.elapsed().as_secs_f64();
+            transfer.extend(bake(&meshes[timed.end..])?);
+            (transfer, None, seconds)
+        }
     };
     // What follows takes time and memory linear in the poses (model/fit/ridge.rs).
     reporter.note(&format!("baked {} poses; fitting the model", meshes.len()));
-    Ok(baked)
+    Ok((transfer, checkpoint, seconds))
 }

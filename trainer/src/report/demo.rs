@@ -48,6 +48,11 @@ pub struct Report {
     pub train_frames: usize,
     /// The clip held out of training to choose the model by, and its frame count.
     pub validation_clip: (String, usize),
+    /// Validation poses sampled from the training frames (as `aprt train --validation-poses`
+    /// samples them) and used with the validation clip to choose each model by.
+    pub validation_poses: usize,
+    /// Seconds their bake took (all cores).
+    pub validation_bake_s: f64,
     /// Novel clips and their frame counts.
     pub test_clips: Vec<(String, usize)>,
     /// Bake seconds per training frame (all cores).
@@ -120,6 +125,9 @@ pub struct DemoSettings {
     pub rays: Option<usize>,
     /// Use every `stride`-th frame of the clips (1 = all).
     pub stride: usize,
+    /// Validation poses sampled from the training frames as `aprt train --validation-poses`
+    /// samples them, baked, and used with the validation clip to choose each model by.
+    pub validation_poses: usize,
 }
 
 /// The built-in scene the demo runs (fixtures/scenes/builtin.toml, compiled in).
@@ -179,11 +187,24 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
     let validation = &baked.validation[0];
     let tests: Vec<BakedClip> = reference.tests.iter().map(|t| t.truncated(order)).collect();
     let lighting = picture_lighting(order, Vec3::new(0.5, -0.8, 0.9));
+    // The validation clip, then the validation poses, as `aprt train` orders them.
+    let mut choose_by = vec![validation.clone()];
+    let poses = experiment::baked_validation_poses(
+        &character,
+        layout,
+        train,
+        args.validation_poses,
+        &settings,
+        reporter,
+    )?;
+    let validation_poses = poses.as_ref().map_or(0, |(c, _)| c.angles.len());
+    let validation_bake_s = poses.as_ref().map_or(0.0, |(_, s)| *s);
+    choose_by.extend(poses.map(|(c, _)| c));
     let result = experiment::run(
         &character,
         layout,
         train,
-        std::slice::from_ref(validation),
+        &choose_by,
         &tests,
         &standard_configs(),
         &settings,
@@ -230,6 +251,8 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
         train_clip: train.name.clone(),
         train_frames: train.angles.len(),
         validation_clip: (validation.name.clone(), validation.angles.len()),
+        validation_poses,
+        validation_bake_s,
         test_clips: tests
             .iter()
             .map(|t| (t.name.clone(), t.angles.len()))
@@ -322,7 +345,7 @@ impl Report {
         let _ = writeln!(s, "# aprt demo report\n");
         let _ = writeln!(
             s,
-            "Character: {}. SH order {} ({} coefficients), {} rays per vertex. Trained on `{}` ({} frames); α, k_a and the prior of every model chosen on `{}` ({} frames, held out of training; it takes the place of the LOSO and LOO selections the rows name); tested on {}.\n",
+            "Character: {}. SH order {} ({} coefficients), {} rays per vertex. Trained on `{}` ({} frames); α, k_a and the prior of every model chosen on `{}` ({} frames, held out of training{}; it takes the place of the LOSO and LOO selections the rows name); tested on {}.\n",
             self.character,
             self.order,
             self.order * self.order,
@@ -331,6 +354,13 @@ impl Report {
             self.train_frames,
             self.validation_clip.0,
             self.validation_clip.1,
+            match self.validation_poses {
+                0 => String::new(),
+                n => format!(
+                    ") and {n} validation poses (sampled from the training frames, baked in {:.1} s",
+                    self.validation_bake_s
+                ),
+            },
             self.test_clips
                 .iter()
                 .map(|(n, f)| format!("`{n}` ({f} frames)"))

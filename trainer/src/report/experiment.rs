@@ -23,7 +23,9 @@ use crate::rig::Rig;
 use crate::rig::bone_frames::dominant_bones;
 use crate::rig::mesh::Mesh;
 use crate::rig::pose_layout::PoseLayout;
-use crate::rig::pose_sampler::{SAMPLED_CLIP, SEED, sample_poses};
+use crate::rig::pose_sampler::{
+    SAMPLED_CLIP, SEED, VALIDATION_CLIP, sample_poses, validation_poses,
+};
 
 /// One model shape the experiment fits.
 #[derive(Clone, Debug)]
@@ -202,10 +204,41 @@ fn with_sampled(
     reporter: &dyn Reporter,
 ) -> Result<BakedClip> {
     let limits = rig.joint_limits();
-    let poses = sample_poses(&rig.angle_names(), &train.poses, limits.as_deref(), n, SEED);
+    let poses = sample_poses(
+        &rig.angle_names(),
+        &train.poses,
+        limits.as_deref(),
+        n,
+        SEED,
+        0.0,
+    );
     reporter.note(&format!("baking {n} sampled training poses"));
     let (sampled, _) = bake_clip(rig, layout, SAMPLED_CLIP, poses, settings, reporter)?;
     Ok(BakedClip::concat(vec![train.clone(), sampled]))
+}
+
+/// The `n` validation poses of `train`'s frames, sampled as `aprt train --validation-poses n`
+/// samples them (same sampler, seed, margin and joint limits; see
+/// [`crate::rig::pose_sampler::validation_poses`]) and baked with `settings` as the clip
+/// [`VALIDATION_CLIP`], with the seconds the bake took (posing left out); None when `n` is 0.
+/// Never trained on: [`run`] takes it among its validation clips.
+pub fn baked_validation_poses(
+    rig: &dyn Rig,
+    layout: &PoseLayout,
+    train: &BakedClip,
+    n: usize,
+    settings: &BakeSettings,
+    reporter: &dyn Reporter,
+) -> Result<Option<(BakedClip, f64)>> {
+    let limits = rig.joint_limits();
+    let poses = validation_poses(&rig.angle_names(), &train.poses, limits.as_deref(), n);
+    if poses.is_empty() {
+        return Ok(None);
+    }
+    reporter.note(&format!("baking {} validation poses", poses.len()));
+    let count = poses.len();
+    let (clip, per_frame) = bake_clip(rig, layout, VALIDATION_CLIP, poses, settings, reporter)?;
+    Ok(Some((clip, per_frame * count as f64)))
 }
 
 /// One row of the table.
@@ -715,6 +748,45 @@ mod tests {
         assert_eq!(all.transfer.len(), frames.len() + 5);
         assert_eq!(all.transfer[..frames.len()], train.transfer[..]);
         assert_eq!(sampled_config(5).name, "default, --sample-poses 5");
+    }
+
+    /// The validation poses are the ones `aprt train --validation-poses` adds to the same
+    /// frames, baked as a clip of their own; none for 0.
+    #[test]
+    fn the_validation_poses_are_the_ones_aprt_train_samples() {
+        use crate::rig::pose_sampler::validation_clip;
+        let rig = Character::builtin();
+        let frames: Vec<Vec<f64>> = rig
+            .clip("walk")
+            .unwrap()
+            .frames
+            .into_iter()
+            .step_by(8)
+            .collect();
+        let layout = PoseLayout::from_training(&rig.angle_names(), &frames).unwrap();
+        let settings = BakeSettings {
+            order: 2,
+            shadows: false,
+            ..BakeSettings::default()
+        };
+        let (train, _) =
+            bake_clip(&rig, &layout, "walk", frames.clone(), &settings, &Silent).unwrap();
+        let none = baked_validation_poses(&rig, &layout, &train, 0, &settings, &Silent);
+        assert!(none.unwrap().is_none());
+        let (clip, seconds) = baked_validation_poses(&rig, &layout, &train, 4, &settings, &Silent)
+            .unwrap()
+            .unwrap();
+        let walk = Clip {
+            name: "walk".into(),
+            fps: 30.0,
+            frames,
+        };
+        let limits = rig.joint_limits();
+        let expected = validation_clip(&rig.angle_names(), &[walk], limits.as_deref(), 4).unwrap();
+        assert_eq!(clip.name, VALIDATION_CLIP);
+        assert_eq!(clip.poses, expected.frames);
+        assert_eq!(clip.transfer.len(), 4);
+        assert!(seconds >= 0.0);
     }
 
     #[test]

@@ -73,6 +73,9 @@ pub struct ResultsSettings {
     pub bake: BakeSettings,
     /// α values of the sweep (Figure 3), besides 0.
     pub alphas: Vec<f64>,
+    /// Validation poses per study (`--validation-poses`): sampled from the training clip as
+    /// `aprt train` samples them, baked and used to choose every model by (0: held-out runs).
+    pub validation_poses: usize,
 }
 
 /// The configuration whose vertex basis is chosen by energy.
@@ -128,6 +131,8 @@ struct Measured {
     tests: Vec<BakedClip>,
     /// Bake seconds per training frame.
     bake_s: f64,
+    /// Validation poses the models were chosen by, and the seconds their bake took.
+    validation: (usize, f64),
     /// The lighting of the renders and timings.
     lighting: Vec<f32>,
     /// The models and the table.
@@ -181,11 +186,23 @@ fn measure(study: &Study, settings: &ResultsSettings, reporter: &dyn Reporter) -
     let to_light = Quat::from_rotation_arc(study.up.normalize(), Vec3::Z).inverse()
         * Vec3::new(0.5, -0.8, 0.9);
     let lighting = picture_lighting(order, to_light);
+    let validation_poses = experiment::baked_validation_poses(
+        rig,
+        &layout,
+        &train,
+        settings.validation_poses,
+        &settings.bake,
+        reporter,
+    )?;
+    let (validation, validation_seconds) = match validation_poses {
+        Some((clip, seconds)) => (vec![clip], seconds),
+        None => (Vec::new(), 0.0),
+    };
     let experiment = experiment::run(
         rig,
         &layout,
         &train,
-        &[],
+        &validation,
         &tests,
         &results_configs(),
         &settings.bake,
@@ -208,6 +225,10 @@ fn measure(study: &Study, settings: &ResultsSettings, reporter: &dyn Reporter) -
         train,
         tests,
         bake_s,
+        validation: (
+            validation.first().map_or(0, |v| v.angles.len()),
+            validation_seconds,
+        ),
         lighting,
         experiment,
         sweep,
@@ -273,7 +294,7 @@ fn section_markdown(study: &Study, measured: &Measured, seconds: f64) -> String 
     let bind = study.rig.bind_mesh();
     let _ = writeln!(
         s,
-        "{} vertices, {} triangles; pose vector of {} entries ({} joints dropped as never moving in training{}). Trained on `{}` ({} frames); tested on {}. Bake {:.3} s per frame; study {:.0} s.\n",
+        "{} vertices, {} triangles; pose vector of {} entries ({} joints dropped as never moving in training{}). Trained on `{}` ({} frames); tested on {}. Bake {:.3} s per frame{}; study {:.0} s.\n",
         bind.vertex_count(),
         bind.triangles.len(),
         layout.names().len(),
@@ -291,6 +312,10 @@ fn section_markdown(study: &Study, measured: &Measured, seconds: f64) -> String 
             .collect::<Vec<_>>()
             .join(", "),
         measured.bake_s,
+        match measured.validation {
+            (0, _) => String::new(),
+            (n, s) => format!(" ({n} validation poses, {s:.1} s)"),
+        },
         seconds,
     );
     s.push_str(&table_markdown(&result.rows, &measured.test_names()));
