@@ -500,7 +500,8 @@ fn several_clips_train_and_validate() {
 
     let model = work.path().join("fox.aprt");
     let stderr = |out: std::process::Output| String::from_utf8_lossy(&out.stderr).into_owned();
-    // The --validate clip alone chooses (validation poses are cli.rs's).
+    // The --validate clip and 8 validation poses choose, and the printout names both, what
+    // each alone would choose, and how the choice was made.
     let clips = [
         "--clip",
         "Walk",
@@ -509,14 +510,21 @@ fn several_clips_train_and_validate() {
         "--validate",
         "Survey",
         "--validation-poses",
-        "0",
+        "8",
     ];
     let out = aprt(&[&["train"], &fox_args[..], &clips, BAKE, &["-o", s(&model)]].concat());
     let text = stderr(out);
-    assert!(
-        text.contains("model selection (1 validation clip)"),
-        "{text}"
-    );
+    for expected in [
+        "model selection (validation on \"Survey\" (",
+        " poses) and \"validation poses\" (8 poses)): ",
+        "\"Survey\" alone would choose",
+        "\"validation poses\" alone would choose",
+        "  candidates: ",
+        "standard error",
+        "(the rule: ",
+    ] {
+        assert!(text.contains(expected), "{expected}: {text}");
+    }
     let poses = format!("{} poses", both_shape[0]);
     assert!(
         text.contains(&poses),
@@ -551,8 +559,9 @@ fn several_clips_train_and_validate() {
         ];
         let out = aprt(&[&args.concat()[..], &["-o", s(&model)]].concat());
         let text = stderr(out);
+        // One set, the clip (named by its file or range), and no validation poses.
         assert!(
-            text.contains("model selection (1 validation clip)"),
+            text.contains("model selection (validation on \"") && !text.contains(") and \""),
             "{validate}: {text}"
         );
         // 60 frames at 120 fps are 5 poses at 10 fps; two ranges, 10.
