@@ -598,3 +598,25 @@ fn several_clips_train_and_validate() {
     );
     assert!(!refused.exists());
 }
+
+/// `aprt results --study` runs a subset of the studies for experiments; an unknown one is
+/// refused before any bake, naming the flag and the studies there are.
+#[test]
+fn results_refuses_a_study_it_does_not_have() {
+    let Some(dir) = common::assets("results_refuses_a_study_it_does_not_have") else {
+        return;
+    };
+    let out = tempfile::tempdir().unwrap();
+    let assets = dir.to_str().unwrap();
+    let args = [
+        "results", "--assets", assets, "--study", "fox", "--study", "cat",
+    ];
+    refuse(
+        &[&args[..], &["--out", out.path().to_str().unwrap()]].concat(),
+        &[
+            "--study \"cat\"",
+            "cesiumman, riggedfigure, riggedsimple, fox, cmu",
+        ],
+    );
+    assert!(std::fs::read_dir(out.path()).unwrap().next().is_none());
+}

@@ -35,6 +35,10 @@ pub struct ResultsArgs {
     /// baked and used to choose each model by (0: held-out runs of the training clip).
     #[arg(long, value_name = "N", default_value_t = DEFAULT_VALIDATION_POSES)]
     pub validation_poses: usize,
+    /// Run only this study (repeatable: `cesiumman`, `riggedfigure`, `riggedsimple`, `fox`,
+    /// `cmu`), for experiments: the document then holds only their sections.
+    #[arg(long, value_name = "ID")]
+    pub study: Vec<String>,
 }
 
 /// `aprt report`.

@@ -367,8 +367,19 @@ fn results(args: &ResultsArgs) -> Result<()> {
         &[Output::directory(&args.out, "--out", &[])],
         &[Input::new(&assets, "the assets directory")],
     )?;
-    let studies = asset_studies(&assets)
+    let mut studies = asset_studies(&assets)
         .with_context(|| format!("loading the assets in {}", assets.display()))?;
+    if !args.study.is_empty() {
+        let ids: Vec<String> = studies.iter().map(|s| s.id.clone()).collect();
+        if let Some(unknown) = args.study.iter().find(|id| !ids.contains(id)) {
+            bail!(
+                "--study {}: no such study (they are {})",
+                crate::text::quote(unknown),
+                ids.join(", ")
+            );
+        }
+        studies.retain(|s| args.study.contains(&s.id));
+    }
     let settings = ResultsSettings {
         bake: crate::bake::BakeSettings {
             order: args.order as usize,
@@ -388,6 +399,9 @@ fn results(args: &ResultsArgs) -> Result<()> {
     );
     if args.validation_poses != crate::rig::pose_sampler::DEFAULT_VALIDATION_POSES {
         command += &format!(" --validation-poses {}", args.validation_poses);
+    }
+    for id in &args.study {
+        command += &format!(" --study {id}");
     }
     let path = write_document(&studies, &settings, &args.out, &command, &Terminal)?;
     eprintln!("wrote {}", path.display());

@@ -43,11 +43,14 @@ pub fn diagonal(mesh: &Mesh) -> f64 {
     f64::from((hi - lo).length()).max(f64::MIN_POSITIVE)
 }
 
-/// For every vertex, the bones with geometry within `radius` of it in any of `meshes`.
-fn near_bones(meshes: &[&Mesh], vertex_bone: &[u16], bones: usize, radius: f32) -> Vec<Bones> {
+/// For every vertex, the bones with geometry within `radius` of it in any of `meshes`:
+/// each vertex is geometry of every bone that moves it (`vertex_bones`, its skin's
+/// influences), so a vertex blended between two bones moves relative to its own bone when
+/// the other turns.
+fn near_bones(meshes: &[&Mesh], vertex_bones: &[Bones], bones: usize, radius: f32) -> Vec<Bones> {
     let words = bones.div_ceil(64);
     let cell = |p: [f32; 3]| p.map(|x| (x / radius).floor() as i32);
-    let mut near = vec![vec![0u64; words]; vertex_bone.len()];
+    let mut near = vec![vec![0u64; words]; vertex_bones.len()];
     for mesh in meshes {
         // A grid of cells one radius wide: every point within the radius is in the 27 cells
         // around a vertex's own. Each cell knows its bones, so cells with none new are skipped.
@@ -56,7 +59,11 @@ fn near_bones(meshes: &[&Mesh], vertex_bone: &[u16], bones: usize, radius: f32) 
             let entry = grid
                 .entry(cell(*p))
                 .or_insert_with(|| (vec![0; words], Vec::new()));
-            set(&mut entry.0, usize::from(vertex_bone[j]));
+            entry
+                .0
+                .iter_mut()
+                .zip(&vertex_bones[j])
+                .for_each(|(cell, b)| *cell |= b);
             entry.1.push(j as u32);
         }
         near.par_iter_mut().enumerate().for_each(|(j, found)| {
@@ -78,11 +85,10 @@ fn near_bones(meshes: &[&Mesh], vertex_bone: &[u16], bones: usize, radius: f32) 
                             continue;
                         }
                         for &u in points {
-                            let bone = usize::from(vertex_bone[u as usize]);
-                            if found[bone / 64] & (1 << (bone % 64)) == 0
-                                && Vec3::from(mesh.positions[u as usize]).distance(p) <= radius
-                            {
-                                set(found, bone);
+                            let moved_by = &vertex_bones[u as usize];
+                            let new = moved_by.iter().zip(found.iter()).any(|(b, f)| b & !f != 0);
+                            if new && Vec3::from(mesh.positions[u as usize]).distance(p) <= radius {
+                                found.iter_mut().zip(moved_by).for_each(|(f, b)| *f |= b);
                             }
                         }
                     }
@@ -153,9 +159,23 @@ pub fn locality(
     let frames = dominant_bones(rig);
     let mut meshes = vec![bind];
     meshes.extend_from_slice(poses);
+    let skin = rig.skin();
+    let words = frames.count.div_ceil(64);
+    let vertex_bones: Vec<Bones> = (0..frames.vertex_bone.len())
+        .map(|j| {
+            let mut bits = vec![0; words];
+            set(&mut bits, usize::from(frames.vertex_bone[j]));
+            for (bone, weight) in skin.influences(j) {
+                if weight > 0.0 && (bone as usize) < frames.count {
+                    set(&mut bits, bone as usize);
+                }
+            }
+            bits
+        })
+        .collect();
     let near = near_bones(
         &meshes,
-        &frames.vertex_bone,
+        &vertex_bones,
         frames.count,
         (radius * scale) as f32,
     );
