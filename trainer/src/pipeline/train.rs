@@ -539,19 +539,12 @@ pub struct ValidationSet {
 impl ValidationSet {
     /// Each set of `report` with its candidates' errors on it.
     fn of(report: &FitReport) -> Vec<Self> {
-        let mut start = 0;
+        let per_choice: Vec<Vec<f64>> = (0..report.choices.len())
+            .map(|i| report.set_errors(i))
+            .collect();
         let mut sets = Vec::new();
-        for (name, poses) in &report.validation_sets {
-            let range = start..start + poses;
-            start += poses;
-            let errors: Vec<f64> = report
-                .choice_rows
-                .iter()
-                .map(|rows| {
-                    let part = rows.as_ref().and_then(|r| r.get(range.clone()));
-                    part.map_or(f64::NAN, |p| p.iter().sum::<f64>() / p.len().max(1) as f64)
-                })
-                .collect();
+        for (s, (name, poses)) in report.validation_sets.iter().enumerate() {
+            let errors: Vec<f64> = per_choice.iter().map(|e| e[s]).collect();
             let lowest = (0..errors.len())
                 .filter(|&i| errors[i].is_finite())
                 .min_by(|&a, &b| errors[a].total_cmp(&errors[b]))

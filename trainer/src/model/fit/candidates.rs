@@ -6,11 +6,11 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::choose::{Offer, Verdict, choose};
-use super::local::{LocalScoring, fit_local};
+use super::local::{LocalScoring, WeightedClip, fit_local};
 use super::local_model::LocalModel;
 use super::report::Choice;
 use super::ridge::{CvPoint, RidgeProblem, RidgeTarget};
-use super::scoring::{PerValue, Projected, Scoring};
+use super::scoring::{PerValue, Projected, Scoring, set_weights};
 use super::{Alpha, CoefDims, Dims, FitError, FitInput, FitOptions, Local, Prior, PriorKind};
 use aprt_core::MAX_POSE_DIMS;
 
@@ -270,10 +270,12 @@ pub(super) fn local_candidate(
     };
     let (angles, transfers) = (input.angles, input.transfers);
     let n2 = input.order * input.order;
-    let pairs: Vec<(&DMatrix<f64>, &[Vec<f32>])> = input
+    let sizes: Vec<usize> = input.validation.iter().map(|v| v.transfers.len()).collect();
+    let pairs: Vec<WeightedClip<'_>> = input
         .validation
         .iter()
-        .map(|v| (v.angles, v.transfers))
+        .zip(set_weights(&sizes))
+        .map(|(v, weight)| (v.angles, v.transfers, weight))
         .collect();
     let scoring = if pairs.is_empty() {
         LocalScoring::Segments(runs)
@@ -289,10 +291,10 @@ pub(super) fn local_candidate(
         &scoring,
         alpha,
     )?;
-    let scored: Vec<&DMatrix<f64>> = if pairs.is_empty() {
-        vec![angles]
+    let scored: Vec<(&DMatrix<f64>, f64)> = if pairs.is_empty() {
+        vec![(angles, 1.0)]
     } else {
-        pairs.iter().map(|(a, _)| *a).collect()
+        pairs.iter().map(|(a, _, weight)| (*a, *weight)).collect()
     };
     let model = LocalModel::new(&fitted, anchor, n2, kv, angles, &scored);
     let best_point = fitted

@@ -32,11 +32,13 @@ pub struct Locality {
     pub groups: Vec<EntryGroup>,
 }
 
-/// How the local fit is scored: held-out runs of the training poses, or whole clips
-/// (pose entries and transfer).
+/// A clip held out whole: its pose entries, its transfer and what each of its poses weighs.
+pub(super) type WeightedClip<'a> = (&'a DMatrix<f64>, &'a [Vec<f32>], f64);
+
+/// How the local fit is scored: held-out runs of the training poses, or whole clips.
 pub(super) enum LocalScoring<'a> {
     Segments(&'a [Range<usize>]),
-    Clips(&'a [(&'a DMatrix<f64>, &'a [Vec<f32>])]),
+    Clips(&'a [WeightedClip<'a>]),
 }
 
 /// The fitted local model: `ŷ(a) = y₀ + deltaᵀ (a − a₀)`.
@@ -86,9 +88,10 @@ pub(super) fn fit_local(
         };
         clips
             .iter()
-            .map(|(a, t)| HeldOut {
+            .map(|(a, t, weight)| HeldOut {
                 z: a.select_columns(&group.entries),
                 y: group_rows(t, &group.vertices, n2),
+                weight: *weight,
             })
             .collect()
     };
@@ -119,7 +122,7 @@ pub(super) fn fit_local(
                 (problem.cv_points(&alphas, runs), angles.nrows() as f64)
             }
             LocalScoring::Clips(clips) => {
-                let poses = clips.iter().map(|(a, _)| a.nrows()).sum::<usize>();
+                let poses = clips.iter().map(|(a, _, _)| a.nrows()).sum::<usize>();
                 (
                     problem.held_out_points(&alphas, &held_of(group)),
                     poses as f64,

@@ -29,14 +29,14 @@ pub(super) struct LocalModel {
 
 impl LocalModel {
     /// Stores `fitted` (anchored at `anchor`) through `kv` basis vectors; `scored` are the
-    /// pose sets the candidates are scored on.
+    /// pose sets the candidates are scored on, with what each of their poses weighs.
     pub fn new(
         fitted: &LocalFit,
         anchor: Anchor<'_>,
         n2: usize,
         kv: usize,
         angles: &DMatrix<f64>,
-        scored: &[&DMatrix<f64>],
+        scored: &[(&DMatrix<f64>, f64)],
     ) -> Self {
         let (a, vertices) = (angles.ncols(), anchor.transfer.len() / n2);
         let a0 = DVector::from_column_slice(anchor.angles);
@@ -89,25 +89,28 @@ impl LocalModel {
             missed += rest.tr_mul(&rest);
         }
         // Per pose, ‖Δaᵀ E‖² = Δaᵀ (EᵀE) Δa per transfer value; the mean over a set's poses.
-        let outside_rows = |sets: &[&DMatrix<f64>]| -> Vec<f64> {
+        let outside_rows = |sets: &[(&DMatrix<f64>, f64)]| -> Vec<f64> {
             let values = (vertices * n2).max(1) as f64;
             sets.iter()
-                .flat_map(|m| {
+                .flat_map(|&(m, weight)| {
                     let d = offsets(m);
                     (0..d.nrows())
-                        .map(|i| (d.row(i) * &missed * d.row(i).transpose())[(0, 0)] / values)
+                        .map(|i| {
+                            let e = (d.row(i) * &missed * d.row(i).transpose())[(0, 0)];
+                            weight * e / values
+                        })
                         .collect::<Vec<f64>>()
                 })
                 .collect()
         };
-        let outside = |sets: &[&DMatrix<f64>]| {
+        let outside = |sets: &[(&DMatrix<f64>, f64)]| {
             let rows = outside_rows(sets);
             rows.iter().sum::<f64>() / rows.len().max(1) as f64
         };
         Self {
             outside_scored: outside(scored),
             outside_rows: outside_rows(scored),
-            outside_train: outside(&[angles]),
+            outside_train: outside(&[(angles, 1.0)]),
             basis,
             energies: residual.energies,
             weights,

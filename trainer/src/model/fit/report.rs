@@ -199,6 +199,25 @@ pub struct FitReport {
 }
 
 impl FitReport {
+    /// Candidate `i`'s mean error on each validation set alone (NaN without per-pose errors),
+    /// its poses' weights in the pooled error undone.
+    pub fn set_errors(&self, i: usize) -> Vec<f64> {
+        let sizes: Vec<usize> = self.validation_sets.iter().map(|(_, n)| *n).collect();
+        let rows = self.choice_rows.get(i).and_then(Option::as_deref);
+        let mut start = 0;
+        sizes
+            .iter()
+            .zip(super::scoring::set_weights(&sizes))
+            .map(|(&n, weight)| {
+                let part = rows.and_then(|r| r.get(start..start + n));
+                start += n;
+                part.map_or(f64::NAN, |p| {
+                    p.iter().sum::<f64>() / (weight * n.max(1) as f64)
+                })
+            })
+            .collect()
+    }
+
     /// The chosen candidate's error on each validation pose, when scored on them.
     pub fn chosen_rows(&self) -> Option<&[f64]> {
         let i = self.choices.iter().position(|c| *c == self.chosen)?;

@@ -221,28 +221,23 @@ impl RidgeTarget<'_> {
     /// from the centre. In the order of `held`, pose by pose.
     pub fn prior_held_out_rows(&self, held: &[HeldOut]) -> Vec<f64> {
         held.iter()
-            .flat_map(|h| h.y.row_iter())
-            .map(|row| (row.transpose() - &self.centre).norm_squared())
+            .flat_map(|h| h.y.row_iter().map(|row| (h.weight, row)))
+            .map(|(w, row)| w * (row.transpose() - &self.centre).norm_squared())
             .collect()
     }
 
     /// The limit α → ∞ scored on poses held out whole: each predicted by the centre.
     pub fn prior_held_out(&self, held: &[HeldOut]) -> CvPoint {
         let (p, q) = self.shape();
-        let (mut err, mut rows) = (0.0, 0);
-        for h in held {
-            for row in h.y.row_iter() {
-                err += (row.transpose() - &self.centre).norm_squared();
-            }
-            rows += h.y.nrows();
-        }
+        let err: f64 = self.prior_held_out_rows(held).iter().sum();
+        let rows: f64 = held.iter().map(|h| h.weight * h.y.nrows() as f64).sum();
         let y = &self.outputs.y_centred;
         let train: f64 = (0..p)
             .map(|i| (y.row(i).transpose() + &self.shift).norm_squared())
             .sum();
         CvPoint {
             alpha: f64::INFINITY,
-            cv_error: err / (rows * q.max(1)).max(1) as f64,
+            cv_error: err / (rows * q.max(1) as f64).max(1.0),
             train_error: train / (p * q.max(1)).max(1) as f64,
         }
     }
@@ -300,6 +295,9 @@ pub struct HeldOut {
     pub z: DMatrix<f64>,
     /// `p_h × q` outputs.
     pub y: DMatrix<f64>,
+    /// What each of its poses weighs in the error (see `scoring::set_weights`): 1 when every
+    /// held-out pose counts alike.
+    pub weight: f64,
 }
 
 /// Contiguous runs of at most `segment` poses inside each of the consecutive clips of
@@ -483,8 +481,9 @@ impl<'a> RidgeProblem<'a> {
         for h in held {
             let predicted = h.z.columns(0, k) * &solution.coefficients;
             rows.extend(
-                (0..h.y.nrows())
-                    .map(|i| (h.y.row(i) - predicted.row(i) - &intercept).norm_squared()),
+                (0..h.y.nrows()).map(|i| {
+                    h.weight * (h.y.row(i) - predicted.row(i) - &intercept).norm_squared()
+                }),
             );
         }
         rows
@@ -689,7 +688,7 @@ impl HeldOutScore {
         let b = target.project(&problem.u);
         let bbt = &b * b.transpose();
         let (mut e_sq, mut aeb, mut ata, mut rows) =
-            (0.0, DMatrix::zeros(r, r), DMatrix::zeros(r, r), 0);
+            (0.0, DMatrix::zeros(r, r), DMatrix::zeros(r, r), 0.0);
         for h in held {
             let mut zc = h.z.columns(0, problem.v.nrows()).into_owned();
             for (mut col, m) in zc.column_iter_mut().zip(problem.z_centre.iter()) {
@@ -700,10 +699,11 @@ impl HeldOutScore {
                 col.add_scalar_mut(-m);
             }
             let a = zc * &problem.v;
-            e_sq += e.norm_squared();
-            aeb += a.tr_mul(&(e * b.transpose()));
-            ata += a.tr_mul(&a);
-            rows += h.y.nrows();
+            let w = h.weight;
+            e_sq += w * e.norm_squared();
+            aeb += a.tr_mul(&(e * b.transpose())) * w;
+            ata += a.tr_mul(&a) * w;
+            rows += w * h.y.nrows() as f64;
         }
         let (p, q) = target.shape();
         Self {
@@ -713,7 +713,7 @@ impl HeldOutScore {
             ata,
             bbt,
             k_trace: target.row_norms.sum(),
-            entries: (rows * q.max(1)).max(1) as f64,
+            entries: (rows * q.max(1) as f64).max(1.0),
             train_entries: (p * q.max(1)).max(1) as f64,
         }
     }
@@ -1046,6 +1046,7 @@ mod tests {
             let held = [HeldOut {
                 z: zh.clone(),
                 y: yh.clone(),
+                weight: 1.0,
             }];
             for alpha in [1e-2, 0.4, 3.0] {
                 let s = ridge.solve(alpha);
@@ -1062,10 +1063,12 @@ mod tests {
                     HeldOut {
                         z: zh.rows(0, 3).into_owned(),
                         y: yh.rows(0, 3).into_owned(),
+                        weight: 1.0,
                     },
                     HeldOut {
                         z: zh.rows(3, 4).into_owned(),
                         y: yh.rows(3, 4).into_owned(),
+                        weight: 1.0,
                     },
                 ];
                 let rows = ridge.held_out_rows(alpha, &halves);

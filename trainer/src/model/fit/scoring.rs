@@ -82,6 +82,19 @@ pub(super) fn held_out_runs(input: &FitInput<'_>, segment: usize) -> Vec<Range<u
     segments(&clips, segment)
 }
 
+/// What each pose of each validation set weighs, for sets of `sizes` poses: every set
+/// weighs the same in the error whatever its length (a 48-frame clip the user held out as
+/// much as 64 sampled poses), and the weights of all poses sum to their count, so that a
+/// single set, or sets of one length, weigh 1 a pose.
+pub(super) fn set_weights(sizes: &[usize]) -> Vec<f64> {
+    let total: usize = sizes.iter().sum();
+    let sets = sizes.iter().filter(|&&n| n > 0).count().max(1);
+    sizes
+        .iter()
+        .map(|&n| total as f64 / (sets * n.max(1)) as f64)
+        .collect()
+}
+
 /// The transfer as the candidates see it: each pose's coordinates in the vertex basis (its
 /// raw values for the identity basis), the anchor's, the validation clips', and the part of
 /// each pose's transfer outside the basis, which is the same for every candidate that
@@ -95,7 +108,7 @@ pub(super) struct Projected {
     pub anchor: Option<(DVector<f64>, DVector<f64>)>,
     /// The validation clips' pose coordinates and outputs.
     pub held: Vec<HeldOut>,
-    /// What lies outside the basis, per validation pose.
+    /// What lies outside the basis, per validation pose, weighted as its set.
     pub outside_held: Vec<f64>,
 }
 
@@ -138,13 +151,15 @@ impl Projected {
         });
         let mut held = Vec::new();
         let mut outside_held = Vec::new();
-        for v in &input.validation {
+        let sizes: Vec<usize> = input.validation.iter().map(|v| v.transfers.len()).collect();
+        for (v, weight) in input.validation.iter().zip(set_weights(&sizes)) {
             let slices: Vec<&[f32]> = v.transfers.iter().map(Vec::as_slice).collect();
             let y = outputs_of(&slices);
-            outside_held.extend(outside_each(&slices, &y));
+            outside_held.extend(outside_each(&slices, &y).iter().map(|o| weight * o));
             held.push(HeldOut {
                 z: pca.project(v.angles),
                 y,
+                weight,
             });
         }
         Self {

@@ -1188,3 +1188,82 @@ fn validation_errors_pose_by_pose_are_the_models_own() {
         }
     }
 }
+
+/// Two validation sets of 3 and 7 poses weigh the same: every candidate's error is the mean
+/// of its two sets' errors, each the plain mean of its poses' prediction errors.
+#[test]
+fn validation_sets_weigh_the_same_whatever_their_length() {
+    let (angles, transfers, locality) = local_problem();
+    let noise = uniform(50, 4, 97);
+    let noisy: Vec<Vec<f32>> = transfers
+        .iter()
+        .chain(&transfers[..10])
+        .enumerate()
+        .map(|(i, t)| {
+            let t = t.iter().enumerate();
+            t.map(|(j, x)| x + 0.05 * noise[(i, j)] as f32).collect()
+        })
+        .collect();
+    let held_angles = DMatrix::from_fn(10, 2, |i, j| angles[(i, j)] * 1.2 - 0.02);
+    let (train, held) = (&noisy[..40], noisy[40..].to_vec());
+    let (a, b) = (
+        held_angles.rows(0, 3).into_owned(),
+        held_angles.rows(3, 7).into_owned(),
+    );
+    let rest = [0.0, 0.0];
+    let mut input = local_input(&angles, train, &rest, &locality);
+    input.validation = vec![
+        Validation {
+            name: "three",
+            angles: &a,
+            transfers: &held[..3],
+        },
+        Validation {
+            name: "seven",
+            angles: &b,
+            transfers: &held[3..],
+        },
+    ];
+    let options = FitOptions {
+        coef_dims: CoefDims::Count(3),
+        bound: None,
+        ..FitOptions::default()
+    };
+    let fit = fit_input(&input, &options).unwrap();
+    let report = &fit.report;
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs();
+    for (i, c) in report.choices.iter().enumerate() {
+        let sets = report.set_errors(i);
+        assert!(
+            close(c.held_out_error, (sets[0] + sets[1]) / 2.0),
+            "{c:?}: {sets:?}"
+        );
+    }
+    let chosen = report
+        .choices
+        .iter()
+        .position(|c| *c == report.chosen)
+        .unwrap();
+    if !report.chosen.local {
+        let sets = report.set_errors(chosen);
+        let mse = |range: std::ops::Range<usize>| {
+            let n = range.len() as f64;
+            range
+                .map(|i| {
+                    let pose: Vec<f64> = held_angles.row(i).iter().copied().collect();
+                    let p = fit.model.predict(&pose);
+                    let d = held[i]
+                        .iter()
+                        .zip(&p)
+                        .map(|(t, p)| (f64::from(*t) - p).powi(2));
+                    d.sum::<f64>() / 4.0
+                })
+                .sum::<f64>()
+                / n
+        };
+        assert!(
+            close(sets[0], mse(0..3)) && close(sets[1], mse(3..10)),
+            "{sets:?}"
+        );
+    }
+}
