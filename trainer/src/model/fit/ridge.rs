@@ -472,7 +472,7 @@ impl<'a> RidgeProblem<'a> {
 
     /// Each pose held out whole's squared error (summed over the outputs) at `alpha`, in the
     /// order of `held`, pose by pose: the solution's prediction compared directly, for the
-    /// spread that [`HeldOutScore`]'s sums do not keep.
+    /// spread that the closed-form held-out sums do not keep.
     pub fn held_out_rows(&self, alpha: f64, held: &[HeldOut]) -> Vec<f64> {
         let solution = self.solve(alpha);
         let intercept = solution.intercept.transpose();
