@@ -708,10 +708,16 @@ mod tests {
     use crate::rig::character::Character;
     use crate::rig::pose_sampler::sampled_clip;
 
-    /// The sampled row trains on the training clip followed by the very poses `aprt train
-    /// --sample-poses` adds to the same frames, as a part of their own, baked like the clip.
-    #[test]
-    fn the_sampled_row_trains_on_the_clip_and_the_poses_aprt_train_samples() {
+    /// Every 8th frame of the built-in character's walk, baked at order 2 without shadows.
+    struct Walk {
+        rig: Character,
+        frames: Vec<Vec<f64>>,
+        layout: PoseLayout,
+        settings: BakeSettings,
+        train: BakedClip,
+    }
+
+    fn walk() -> Walk {
         let rig = Character::builtin();
         let frames: Vec<Vec<f64>> = rig
             .clip("walk")
@@ -728,6 +734,26 @@ mod tests {
         };
         let (train, _) =
             bake_clip(&rig, &layout, "walk", frames.clone(), &settings, &Silent).unwrap();
+        Walk {
+            rig,
+            frames,
+            layout,
+            settings,
+            train,
+        }
+    }
+
+    /// The sampled row trains on the training clip followed by the very poses `aprt train
+    /// --sample-poses` adds to the same frames, as a part of their own, baked like the clip.
+    #[test]
+    fn the_sampled_row_trains_on_the_clip_and_the_poses_aprt_train_samples() {
+        let Walk {
+            rig,
+            frames,
+            layout,
+            settings,
+            train,
+        } = walk();
         let all = with_sampled(&rig, &layout, &train, 5, &settings, &Silent).unwrap();
         let clip = Clip {
             name: "walk".into(),
@@ -755,22 +781,13 @@ mod tests {
     #[test]
     fn the_validation_poses_are_the_ones_aprt_train_samples() {
         use crate::rig::pose_sampler::validation_clip;
-        let rig = Character::builtin();
-        let frames: Vec<Vec<f64>> = rig
-            .clip("walk")
-            .unwrap()
-            .frames
-            .into_iter()
-            .step_by(8)
-            .collect();
-        let layout = PoseLayout::from_training(&rig.angle_names(), &frames).unwrap();
-        let settings = BakeSettings {
-            order: 2,
-            shadows: false,
-            ..BakeSettings::default()
-        };
-        let (train, _) =
-            bake_clip(&rig, &layout, "walk", frames.clone(), &settings, &Silent).unwrap();
+        let Walk {
+            rig,
+            frames,
+            layout,
+            settings,
+            train,
+        } = walk();
         let none = baked_validation_poses(&rig, &layout, &train, 0, &settings, &Silent);
         assert!(none.unwrap().is_none());
         let (clip, seconds) = baked_validation_poses(&rig, &layout, &train, 4, &settings, &Silent)

@@ -209,15 +209,8 @@ pub fn sampled_clip(
     limits: Option<&[(f64, f64)]>,
     n: usize,
 ) -> Option<Clip> {
-    let frames: Vec<Vec<f64>> = clips
-        .iter()
-        .flat_map(|c| c.frames.iter().cloned())
-        .collect();
-    let poses = sample_poses(names, &frames, limits, n, SEED, 0.0);
-    (!poses.is_empty()).then(|| Clip {
-        name: SAMPLED_CLIP.to_owned(),
-        fps: clips.first().map_or(30.0, |c| c.fps),
-        frames: poses,
+    clip_of(clips, SAMPLED_CLIP, |frames| {
+        sample_poses(names, frames, limits, n, SEED, 0.0)
     })
 }
 
@@ -230,13 +223,25 @@ pub fn validation_clip(
     limits: Option<&[(f64, f64)]>,
     n: usize,
 ) -> Option<Clip> {
+    clip_of(clips, VALIDATION_CLIP, |frames| {
+        validation_poses(names, frames, limits, n)
+    })
+}
+
+/// The clip `name` of the poses `sample` draws from all of `clips`' frames, at the first
+/// clip's rate; None when it draws none.
+fn clip_of(
+    clips: &[Clip],
+    name: &str,
+    sample: impl FnOnce(&[Vec<f64>]) -> Vec<Vec<f64>>,
+) -> Option<Clip> {
     let frames: Vec<Vec<f64>> = clips
         .iter()
         .flat_map(|c| c.frames.iter().cloned())
         .collect();
-    let poses = validation_poses(names, &frames, limits, n);
+    let poses = sample(&frames);
     (!poses.is_empty()).then(|| Clip {
-        name: VALIDATION_CLIP.to_owned(),
+        name: name.to_owned(),
         fps: clips.first().map_or(30.0, |c| c.fps),
         frames: poses,
     })

@@ -48,10 +48,11 @@ use std::time::Instant;
 use aprt_core::MAX_POSE_LEN;
 use nalgebra::DMatrix;
 
+use crate::model::LinearModel;
+#[cfg(test)]
+use crate::model::PoseBounds;
 use crate::model::features::PoseFeatures;
 use crate::model::occluders::Occluders;
-#[cfg(test)]
-use crate::model::{LinearModel, PoseBounds};
 use assemble::{Assembly, beside};
 use candidates::{Shared, Tried, score_candidates};
 use input::{Featured, pin_entries, unused_entries, validate, with_poses};
@@ -382,6 +383,28 @@ fn model_basis(
     }
 }
 
+/// The chosen shared candidate (or prior alone) as a model, and whether its α was chosen by
+/// held-out error (false when no pose coordinate moves). Solved again rather than kept from
+/// the selection: the full model's solutions are large.
+fn shared_model(
+    assembly: &Assembly<'_>,
+    shared: &Shared<'_>,
+    pca: &PosePca,
+    chosen: &Choice,
+) -> (LinearModel, bool) {
+    if chosen.is_prior() {
+        let centre = shared.target(chosen.prior).centre().clone();
+        return (assembly.prior_alone(&centre, chosen.prior), true);
+    }
+    let (zk, z0) = shared.inputs(chosen.prior, chosen.pose_dims);
+    let target = shared.target(chosen.prior);
+    let problem = RidgeProblem::new(&zk, z0.as_ref(), &target);
+    let solution = problem.solve(chosen.alpha);
+    let (ka, prior) = (chosen.pose_dims, chosen.prior);
+    let model = assembly.shared(&solution, pca, ka, chosen.alpha, prior);
+    (model, problem.rank() > 0)
+}
+
 /// [`fit_input`] for one set of pose features, of training and validation poses that are
 /// already pinned (`unused` entries held at the anchor's value); `priors_alone`: whether the
 /// priors alone (α = ∞) are scored with this set.
@@ -461,23 +484,9 @@ fn fit_features(
             let model = assembly.local(local, anchor.angles, chosen.alpha);
             (model, true, local.energies.clone())
         }
-        _ if chosen.is_prior() => {
-            let centre = shared.target(chosen.prior).centre().clone();
-            (
-                assembly.prior_alone(&centre, chosen.prior),
-                true,
-                coef_energy,
-            )
-        }
         _ => {
-            // Solved again rather than kept from the loop: the full model's solutions are large.
-            let (zk, z0) = shared.inputs(chosen.prior, chosen.pose_dims);
-            let target = shared.target(chosen.prior);
-            let problem = RidgeProblem::new(&zk, z0.as_ref(), &target);
-            let solution = problem.solve(chosen.alpha);
-            let (ka, prior) = (chosen.pose_dims, chosen.prior);
-            let model = assembly.shared(&solution, &pca, ka, chosen.alpha, prior);
-            (model, problem.rank() > 0, coef_energy)
+            let (model, cross_validated) = shared_model(&assembly, &shared, &pca, &chosen);
+            (model, cross_validated, coef_energy)
         }
     };
     seconds.solve = clock.elapsed().as_secs_f64();

@@ -1127,13 +1127,16 @@ fn the_priors_alone_are_scored_by_their_plain_mean_squared_errors() {
     assert!(close(c.train_error, mse(&train, &mean)), "{c:?}");
 }
 
-/// The per-pose validation errors the noise-aware choice weighs add up to each candidate's
-/// held-out error, and for the model are its own prediction errors pose by pose.
-#[test]
-fn validation_errors_pose_by_pose_are_the_models_own() {
+/// One transfer per pose.
+type Transfers = Vec<Vec<f32>>;
+
+/// [`local_problem`] with noise (seeded by `seed`) on its 40 training transfers, and 10
+/// noisy copies of its first transfers to hold out: angles, groups, training and held-out
+/// transfers.
+fn noisy_local_problem(seed: u64) -> (DMatrix<f64>, Locality, Transfers, Transfers) {
     let (angles, transfers, locality) = local_problem();
-    let noise = uniform(50, 4, 95);
-    let noisy: Vec<Vec<f32>> = transfers
+    let noise = uniform(50, 4, seed);
+    let mut noisy: Vec<Vec<f32>> = transfers
         .iter()
         .chain(&transfers[..10])
         .enumerate()
@@ -1142,8 +1145,17 @@ fn validation_errors_pose_by_pose_are_the_models_own() {
             t.map(|(j, x)| x + 0.05 * noise[(i, j)] as f32).collect()
         })
         .collect();
+    let held = noisy.split_off(40);
+    (angles, locality, noisy, held)
+}
+
+/// The per-pose validation errors the noise-aware choice weighs add up to each candidate's
+/// held-out error, and for the model are its own prediction errors pose by pose.
+#[test]
+fn validation_errors_pose_by_pose_are_the_models_own() {
+    let (angles, locality, train, held) = noisy_local_problem(95);
     let held_angles = DMatrix::from_fn(10, 2, |i, j| angles[(i, j)] * 1.3 + 0.01);
-    let (train, held) = (&noisy[..40], noisy[40..].to_vec());
+    let train = &train[..];
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs();
     let mse = |t: &[f32], prediction: &[f64]| {
         let squares = t
@@ -1193,19 +1205,9 @@ fn validation_errors_pose_by_pose_are_the_models_own() {
 /// of its two sets' errors, each the plain mean of its poses' prediction errors.
 #[test]
 fn validation_sets_weigh_the_same_whatever_their_length() {
-    let (angles, transfers, locality) = local_problem();
-    let noise = uniform(50, 4, 97);
-    let noisy: Vec<Vec<f32>> = transfers
-        .iter()
-        .chain(&transfers[..10])
-        .enumerate()
-        .map(|(i, t)| {
-            let t = t.iter().enumerate();
-            t.map(|(j, x)| x + 0.05 * noise[(i, j)] as f32).collect()
-        })
-        .collect();
+    let (angles, locality, train, held) = noisy_local_problem(97);
     let held_angles = DMatrix::from_fn(10, 2, |i, j| angles[(i, j)] * 1.2 - 0.02);
-    let (train, held) = (&noisy[..40], noisy[40..].to_vec());
+    let train = &train[..];
     let (a, b) = (
         held_angles.rows(0, 3).into_owned(),
         held_angles.rows(3, 7).into_owned(),
