@@ -1,4 +1,4 @@
-//! Fitting stage of the trainer: from poses and baked transfer to a [`LinearModel`](crate::model::LinearModel).
+//! Fitting stage of the trainer: from poses and baked transfer to a [`LinearModel`].
 //!
 //! Pipeline (Nowrouzezahrai et al., *Compact and Efficient Generation of Radiance Transfer for
 //! Dynamically Articulated Characters*): pose PCA (`z = P (a − μ)`) → shared vertex basis over
