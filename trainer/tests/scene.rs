@@ -148,7 +148,8 @@ fn a_scene_reports_its_validation_poses_and_their_bake() {
 
 /// The sweep writes its files, every point has the documented keys, the fronts are
 /// undominated, and the recommendation is the cheapest of the points within `--budget-us`
-/// whose error ties the lowest there (within max(0.05 grey levels, 1 %)).
+/// whose error ties the lowest there (within max(0.05 grey levels, 1 %)); each setting is
+/// chosen by 64 validation poses unless `--validation-poses 0`.
 #[test]
 fn the_report_recommends_the_most_accurate_point_within_the_budget() {
     let dir = tempfile::tempdir().unwrap();
@@ -161,6 +162,18 @@ fn the_report_recommends_the_most_accurate_point_within_the_budget() {
     let all = json(&out.join("report.json"));
     let points = all["points"].as_array().unwrap();
     assert!(points.len() >= 20, "{}", points.len());
+    // Each setting's model is chosen as `train --scene` chooses it: by validation poses.
+    assert_eq!(all["validation_poses"], 64, "{all}");
+    assert!(all["validation_bake_s"].as_f64().unwrap() > 0.0, "{all}");
+    assert!(
+        all["frames"]
+            .to_string()
+            .contains("[\"validation poses\",64]"),
+        "{}",
+        all["frames"]
+    );
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("on 64 validation poses sampled"), "{md}");
     let us: Vec<f64> = points
         .iter()
         .map(|p| p["us_per_frame"].as_f64().unwrap())
@@ -179,8 +192,12 @@ fn the_report_recommends_the_most_accurate_point_within_the_budget() {
         &budget.to_string(),
         "--write-model",
         path(&model),
+        "--validation-poses",
+        "0",
     ]);
     let report = json(&out.join("report.json"));
+    assert_eq!(report["validation_poses"], 0, "{report}");
+    assert!(!report["frames"].to_string().contains("validation poses"));
     let points = report["points"].as_array().unwrap();
     for p in points {
         for key in ["setting", "error", "us_per_frame", "bytes", "pareto"] {

@@ -65,6 +65,11 @@ pub struct ReportArgs {
     /// Use every k-th frame of every clip (1 = all; larger is faster).
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..))]
     pub stride: u64,
+    /// Validation poses sampled from the training frames, baked with every bake of the sweep
+    /// and used to choose each setting's model by, as `aprt train --scene` does (0: the
+    /// scene's validation clips, or held-out runs of the training frames).
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_VALIDATION_POSES)]
+    pub validation_poses: usize,
 }
 
 /// `aprt irradiance-rig-study`.

@@ -729,6 +729,7 @@ fn report(args: &ReportArgs) -> Result<()> {
         budget_us: args.budget_us,
         budget_bytes: args.budget_bytes,
         stride: args.stride as usize,
+        validation_poses: args.validation_poses,
     };
     let scene_clips = SceneClips {
         rig: rig.as_ref(),
@@ -750,6 +751,9 @@ fn report(args: &ReportArgs) -> Result<()> {
     }
     if args.stride != 3 {
         command += &format!(" --stride {}", args.stride);
+    }
+    if args.validation_poses != crate::rig::pose_sampler::DEFAULT_VALIDATION_POSES {
+        command += &format!(" --validation-poses {}", args.validation_poses);
     }
     document::write(&report, &args.out, &command)?;
     match report.recommended {

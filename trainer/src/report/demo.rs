@@ -167,7 +167,13 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
         tests: &test_clips,
     };
     let lighting = SceneLighting::of(&scene, character.up())?;
-    let reference = sweep::bake_reference(&scene, lighting, &clips, args.stride, reporter)?;
+    let sweep_settings = sweep::ReportSettings {
+        budget_us: None,
+        budget_bytes: None,
+        stride: args.stride,
+        validation_poses: args.validation_poses,
+    };
+    let reference = sweep::bake_reference(&scene, lighting, &clips, &sweep_settings, reporter)?;
     let plan = &reference.plan;
     for line in plan.computed.iter().chain(&plan.skipped) {
         reporter.note(line);
@@ -184,27 +190,16 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
     let layout = &reference.layout;
     let baked = sweep::truncated(&reference.base, order);
     let (train, bake_s) = (&baked.train, baked.seconds);
-    let validation = &baked.validation[0];
+    // The validation clip, then the validation poses, as `aprt train` orders them.
+    let (validation, choose_by) = (&baked.validation[0], &baked.validation);
     let tests: Vec<BakedClip> = reference.tests.iter().map(|t| t.truncated(order)).collect();
     let lighting = picture_lighting(order, Vec3::new(0.5, -0.8, 0.9));
-    // The validation clip, then the validation poses, as `aprt train` orders them.
-    let mut choose_by = vec![validation.clone()];
-    let poses = experiment::baked_validation_poses(
-        &character,
-        layout,
-        train,
-        args.validation_poses,
-        &settings,
-        reporter,
-    )?;
-    let validation_poses = poses.as_ref().map_or(0, |(c, _)| c.angles.len());
-    let validation_bake_s = poses.as_ref().map_or(0.0, |(_, s)| *s);
-    choose_by.extend(poses.map(|(c, _)| c));
+    let validation_poses = choose_by[1..].iter().map(|c| c.angles.len()).sum();
     let result = experiment::run(
         &character,
         layout,
         train,
-        &choose_by,
+        choose_by,
         &tests,
         &standard_configs(),
         &settings,
@@ -235,7 +230,15 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
     save_pictures(out, &blob, train, test, frame, &lighting)?;
     let lights = demo_lights(&test.meshes[frame]);
     let rig_frame = save_rig_frame(&out.join("rig_frame.png"), &blob, test, frame, &lights)?;
-    let recommended = cost_sweep(&scene, &clips, &reference, order, out, reporter)?;
+    let recommended = cost_sweep(
+        &scene,
+        &clips,
+        &reference,
+        &sweep_settings,
+        order,
+        out,
+        reporter,
+    )?;
 
     let report = Report {
         character: format!(
@@ -252,7 +255,7 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
         train_frames: train.angles.len(),
         validation_clip: (validation.name.clone(), validation.angles.len()),
         validation_poses,
-        validation_bake_s,
+        validation_bake_s: baked.validation_bake_s,
         test_clips: tests
             .iter()
             .map(|t| (t.name.clone(), t.angles.len()))
@@ -280,17 +283,13 @@ fn cost_sweep(
     scene: &Scene,
     clips: &SceneClips<'_>,
     reference: &sweep::Reference,
+    settings: &sweep::ReportSettings,
     order: usize,
     out: &Path,
     reporter: &dyn Reporter,
 ) -> Result<Option<String>> {
     let list = sweep::candidates(scene, order, sweep::Knobs::OrderAndBasis);
-    let settings = sweep::ReportSettings {
-        budget_us: None,
-        budget_bytes: None,
-        stride: reference.stride,
-    };
-    let report = sweep::sweep(scene, clips, reference, &list, &settings, reporter)?;
+    let report = sweep::sweep(scene, clips, reference, &list, settings, reporter)?;
     sweep::document::write(&report, &out.join("sweep"), "aprt demo")?;
     Ok(report.recommended.map(|i| {
         let p = &report.points[i];

@@ -122,6 +122,13 @@ pub fn markdown(report: &SweepReport, command: &str) -> String {
             .collect::<Vec<_>>()
             .join(", ")
     );
+    if report.validation_poses > 0 {
+        let _ = writeln!(
+            s,
+            "Every setting's model is chosen as `aprt train --scene` chooses it, by its error on the validation clips and on {} validation poses sampled from the training frames (baked in {:.1} s).\n",
+            report.validation_poses, report.validation_bake_s
+        );
+    }
     let _ = writeln!(
         s,
         "The scene's lighting needs SH order {}: {}.\n",

@@ -29,6 +29,7 @@ use crate::model::fit::{CoefDims, Dims, FitOptions};
 use crate::model::occluders::Occluders;
 use crate::pipeline::train::{ClipSet, fit_clip};
 use crate::progress::{Reporter, Silent};
+use crate::report::experiment::baked_validation_poses;
 use crate::rig::mesh::Mesh;
 use crate::rig::pose_layout::PoseLayout;
 use crate::rig::{Clip, Rig};
@@ -48,6 +49,9 @@ pub struct ReportSettings {
     pub budget_bytes: Option<u64>,
     /// Use every `stride`-th frame of every clip.
     pub stride: usize,
+    /// Validation poses sampled from the (strided) training frames and baked with every bake
+    /// of the sweep, as `aprt train --scene` samples them to choose its model by.
+    pub validation_poses: usize,
 }
 
 /// The clips of a scene's character, loaded.
@@ -123,8 +127,14 @@ pub struct SweepReport {
     pub character: String,
     /// The reference the errors are measured against.
     pub reference: String,
-    /// Frames: training, validation, and each test clip's.
+    /// Frames: training, validation (the scene's clips, then the validation poses), and each
+    /// test clip's.
     pub frames: Vec<(String, usize)>,
+    /// Validation poses sampled from the training frames to choose each model by, as
+    /// `aprt train --scene` samples them.
+    pub validation_poses: usize,
+    /// Seconds the reference bake of the validation poses took.
+    pub validation_bake_s: f64,
     /// The order the scene's lighting needs, and why.
     pub scene_order: (usize, String),
     /// The settings, in sweep order.
@@ -170,12 +180,14 @@ enum Data {
 pub struct Baked {
     /// The training clips, joined.
     pub train: BakedClip,
-    /// The validation clips.
+    /// The scene's validation clips, then the validation poses (when any).
     pub validation: Vec<BakedClip>,
     /// The rest pose.
     pub rest: BakedClip,
     /// Seconds per training frame.
     pub seconds: f64,
+    /// Seconds the validation poses' bake took (0 without them).
+    pub validation_bake_s: f64,
 }
 
 /// The reference bake every setting is measured against, and what the scene planned.
@@ -194,6 +206,8 @@ pub struct Reference {
     pub settings: BakeSettings,
     /// Every `stride`-th frame of every clip was baked.
     pub stride: usize,
+    /// Validation poses asked for in every bake ([`ReportSettings::validation_poses`]).
+    pub validation_poses: usize,
     /// The irradiance rig `train --scene` would store for this scene, and why.
     pub irradiance_rig: (Option<RigKind>, RigDecision),
     /// The surfaces that rig is fitted over (the bind pose first).
@@ -213,13 +227,14 @@ pub fn check_stride(train: &[Clip], stride: usize) -> Result<()> {
     Ok(())
 }
 
-/// Bakes `clips` (every `stride`-th frame) at the scene's effects and SH order 6, under
-/// `lighting` (the scene's, read by the caller, whose errors name the scene file).
+/// Bakes `clips` (every `stride`-th frame of `report`) and the validation poses at the
+/// scene's effects and SH order 6, under `lighting` (the scene's, read by the caller, whose
+/// errors name the scene file).
 pub fn bake_reference(
     scene: &Scene,
     lighting: SceneLighting,
     clips: &SceneClips<'_>,
-    stride: usize,
+    report: &ReportSettings,
     reporter: &dyn Reporter,
 ) -> Result<Reference> {
     if clips.tests.is_empty() {
@@ -229,7 +244,7 @@ pub fn bake_reference(
         );
     }
     let rig = clips.rig;
-    let stride = stride.max(1);
+    let stride = report.stride.max(1);
     let (train, validation) = strided_clips(clips, stride);
     check_stride(clips.train, stride)?;
     let frames: Vec<Vec<f64>> = train.iter().flat_map(|c| c.frames.clone()).collect();
@@ -251,7 +266,14 @@ pub fn bake_reference(
     let irradiance_rig = choose_rig(e.rig, lights, &fitting, order, e.error_target, &*progress)?;
     progress.finish();
     reporter.note(&format!("rig: {}", irradiance_rig.1.reason));
-    let base = bake_set(rig, &layout, &train, &validation, &settings)?;
+    let poses = report.validation_poses;
+    let base = bake_set(
+        rig,
+        &layout,
+        (&train, &validation, poses),
+        &settings,
+        reporter,
+    )?;
     let tests = clips
         .tests
         .iter()
@@ -266,6 +288,7 @@ pub fn bake_reference(
         lighting,
         settings,
         stride,
+        validation_poses: poses,
         irradiance_rig,
         fitting,
     })
@@ -280,7 +303,7 @@ pub fn run(
     reporter: &dyn Reporter,
 ) -> Result<SweepReport> {
     let started = Instant::now();
-    let reference = bake_reference(scene, lighting, clips, settings.stride, reporter)?;
+    let reference = bake_reference(scene, lighting, clips, settings, reporter)?;
     let list = candidates(scene, reference.plan.order.order, Knobs::All);
     let mut report = sweep(scene, clips, &reference, &list, settings, reporter)?;
     report.seconds = started.elapsed().as_secs_f64();
@@ -332,8 +355,9 @@ pub fn sweep(
                         Data::Reference => unreachable!("handled above"),
                     };
                     let (train, validation) = strided_clips(clips, reference.stride);
-                    let layout = &reference.layout;
-                    extra = Some((other, bake_set(rig, layout, &train, &validation, &bake)?));
+                    let (layout, poses) = (&reference.layout, reference.validation_poses);
+                    let clips = (&train[..], &validation[..], poses);
+                    extra = Some((other, bake_set(rig, layout, clips, &bake, &Silent)?));
                 }
                 let (_, baked) = extra.as_ref().expect("baked above");
                 truncated(baked, candidate.order)
@@ -377,6 +401,8 @@ pub fn sweep(
             reference.stride
         ),
         frames,
+        validation_poses: reference.validation_poses,
+        validation_bake_s: base.validation_bake_s,
         scene_order: (plan.order.order, plan.order.reason.clone()),
         presets: presets(&costs),
         points,
@@ -522,13 +548,14 @@ fn not_swept(scene: &Scene) -> Vec<String> {
     out
 }
 
-/// Bakes the training clips (joined), each validation clip and the rest pose with `settings`.
+/// Bakes the training clips (joined), each validation clip, `poses` validation poses sampled
+/// from the training frames (as `aprt train` samples them) and the rest pose with `settings`.
 fn bake_set(
     rig: &dyn Rig,
     layout: &PoseLayout,
-    train: &[Clip],
-    validation: &[Clip],
+    (train, validation, poses): (&[Clip], &[Clip], usize),
     settings: &BakeSettings,
+    reporter: &dyn Reporter,
 ) -> Result<Baked> {
     let mut seconds = 0.0;
     let mut frames = 0usize;
@@ -546,15 +573,20 @@ fn bake_set(
         frames += clip.frames.len();
         parts.push(baked);
     }
-    let validation = validation
+    let train = BakedClip::concat(parts);
+    let mut validation = validation
         .iter()
         .map(|c| Ok(bake_clip(rig, layout, &c.name, c.frames.clone(), settings, &Silent)?.0))
         .collect::<Result<Vec<_>>>()?;
+    let sampled = baked_validation_poses(rig, layout, &train, poses, settings, reporter)?;
+    let validation_bake_s = sampled.as_ref().map_or(0.0, |(_, s)| *s);
+    validation.extend(sampled.map(|(clip, _)| clip));
     Ok(Baked {
-        train: BakedClip::concat(parts),
+        train,
         validation,
         rest: bake_rest(rig, layout, settings, &Silent)?,
         seconds: seconds / frames.max(1) as f64,
+        validation_bake_s,
     })
 }
 
@@ -569,6 +601,7 @@ pub fn truncated(baked: &Baked, order: usize) -> Baked {
             .collect(),
         rest: baked.rest.truncated(order),
         seconds: baked.seconds,
+        validation_bake_s: baked.validation_bake_s,
     }
 }
 
