@@ -6,7 +6,7 @@
 use crate::blob::{
     AngleNames, BlobSource, Error, ModelInfo, Reader, Resident, Streaming, TexelAtlas,
 };
-use crate::eval::{LitWeights, PoseWeights};
+use crate::eval::{LitWeights, PoseWeights, VertexRows};
 use crate::irradiance_rig::{IrradianceRig, Placement, RigLitWeights};
 use crate::light::Light;
 use crate::proxies::{ProxyFrame, Skinning};
@@ -97,6 +97,13 @@ impl<'a> Model<'a> {
     /// The blob it reads.
     pub fn blob(&self) -> &'a [u8] {
         self.blob
+    }
+
+    /// The per-vertex rows as stored, for a device that runs the per-vertex loops itself (a
+    /// GPU): with [`ModelInfo::lit_values`] they give [`Model::shade`], with
+    /// [`ModelInfo::transfer_weights`] [`Model::transfer`].
+    pub fn vertex_rows(&self) -> VertexRows<'a> {
+        self.info.vertex_rows(self.blob)
     }
 
     /// The names of the pose-vector entries, to bind an engine's joints by name (empty when

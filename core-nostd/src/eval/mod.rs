@@ -19,8 +19,10 @@
 
 mod analytic;
 mod bounds;
+mod device;
 mod features;
 pub(crate) mod kernels;
+pub use device::VertexRows;
 pub use kernels::use_portable_kernels;
 mod occlude;
 mod rig;
