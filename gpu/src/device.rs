@@ -178,7 +178,8 @@ impl Gpu {
             }))
     }
 
-    /// A storage buffer for `len` values of `T` that a kernel writes and the CPU may read back.
+    /// A storage buffer for `len` values of `T` that a kernel writes, an engine may bind as a
+    /// vertex buffer and the CPU may read back.
     pub(crate) fn output<T: Pod>(
         &self,
         label: &'static str,
@@ -189,12 +190,15 @@ impl Gpu {
         Ok(self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(label),
             size: bytes.max(4),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::VERTEX
+                | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         }))
     }
 
-    fn check_size(&self, buffer: &'static str, bytes: u64) -> Result<(), GpuError> {
+    /// Refuses a buffer of `bytes` the device cannot bind.
+    pub(crate) fn check_size(&self, buffer: &'static str, bytes: u64) -> Result<(), GpuError> {
         let limits = self.device.limits();
         let limit = limits
             .max_storage_buffer_binding_size

@@ -11,12 +11,27 @@ pub struct Shader {
     pub source: &'static str,
 }
 
-/// Widens packed f16 pairs and scaled i8 quads to f32 (entry point `main`); see
-/// [`unpack`](crate::unpack).
-pub const UNPACK: Shader = Shader {
-    name: "unpack.wgsl",
-    source: include_str!("unpack.wgsl"),
+/// The vertex rows as aprt-core stores them and how a kernel reads one value (`row_value`),
+/// a vertex's bone (`vertex_bone`) and its own index (`invocation`); the kernels below are
+/// this file followed by their own.
+pub const ROWS: Shader = Shader {
+    name: "rows.wgsl",
+    source: include_str!("rows.wgsl"),
+};
+
+/// Per-vertex shading from the lighting weights (entry point `shade`); see
+/// [`GpuModel::shade`](crate::GpuModel::shade).
+pub const SHADE: Shader = Shader {
+    name: "shade.wgsl",
+    source: concat!(include_str!("rows.wgsl"), include_str!("shade.wgsl")),
+};
+
+/// Per-vertex transfer from the transfer weights (entry point `transfer_values`); see
+/// [`GpuModel::transfer`](crate::GpuModel::transfer).
+pub const TRANSFER: Shader = Shader {
+    name: "transfer.wgsl",
+    source: concat!(include_str!("rows.wgsl"), include_str!("transfer.wgsl")),
 };
 
 /// Every shader of the crate.
-pub const ALL: &[Shader] = &[UNPACK];
+pub const ALL: &[Shader] = &[ROWS, SHADE, TRANSFER];

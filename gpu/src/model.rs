@@ -1,0 +1,256 @@
+//! A validated aprt-core model on the device: its vertex rows uploaded once as the blob stores
+//! them (blocks of eight vertices; f16 pairs and i8 quads widened in the shader), and each
+//! frame's small weights, computed by aprt-core on the CPU exactly as for the CPU path,
+//! written before the kernels run over the vertices. The outputs stay on the device, in
+//! storage buffers an engine can bind as vertex buffers, or are read back.
+
+use std::fmt;
+
+use aprt_core::{Basis, Encoding, LitWeights, Model, ModelInfo, PoseWeights};
+
+use crate::device::{Gpu, GpuError};
+use crate::shaders::{SHADE, Shader, TRANSFER};
+
+/// Threads per workgroup, as `@workgroup_size` in the kernels.
+const WORKGROUP: u32 = 64;
+
+/// The uniform block `Rows` of `rows.wgsl`, field for field.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct RowsLayout {
+    vertices: u32,
+    encoding: u32,
+    lead_rows: u32,
+    row_width: u32,
+    block_words: u32,
+    bones: u32,
+    coeffs: u32,
+    identity: u32,
+}
+
+/// Why a frame was not computed.
+#[derive(Debug)]
+pub enum FrameError {
+    /// aprt-core refused the frame's inputs (weights of another model, or not set): nothing
+    /// was uploaded.
+    Core(aprt_core::Error),
+    /// The device failed.
+    Gpu(GpuError),
+}
+
+impl From<GpuError> for FrameError {
+    fn from(e: GpuError) -> Self {
+        FrameError::Gpu(e)
+    }
+}
+
+impl From<aprt_core::Error> for FrameError {
+    fn from(e: aprt_core::Error) -> Self {
+        FrameError::Core(e)
+    }
+}
+
+/// One kernel bound to a model's buffers.
+struct Kernel {
+    pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    /// Invocations of a frame.
+    invocations: u32,
+}
+
+impl Kernel {
+    /// `shader`'s `entry` over `invocations`, with `buffers` bound in their binding order.
+    fn new(
+        gpu: &Gpu,
+        (shader, entry): (&Shader, &str),
+        buffers: &[&wgpu::Buffer],
+        invocations: u32,
+    ) -> Kernel {
+        let pipeline = gpu.pipeline(shader, entry);
+        let entries: Vec<_> = (0..)
+            .zip(buffers)
+            .map(|(binding, buffer)| wgpu::BindGroupEntry {
+                binding,
+                resource: buffer.as_entire_binding(),
+            })
+            .collect();
+        let bind_group = gpu.device().create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(shader.name),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &entries,
+        });
+        Kernel {
+            pipeline,
+            bind_group,
+            invocations,
+        }
+    }
+
+    /// Records the kernel into `encoder`: rows of at most the device's workgroups per
+    /// dimension, which the kernels turn back into one index (`invocation` in `rows.wgsl`).
+    fn record(&self, gpu: &Gpu, encoder: &mut wgpu::CommandEncoder) {
+        let groups = self.invocations.div_ceil(WORKGROUP);
+        let max = gpu.device().limits().max_compute_workgroups_per_dimension;
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.dispatch_workgroups(groups.min(max), groups.div_ceil(max), 1);
+    }
+}
+
+/// A model's vertex rows on the device and the kernels bound to them. Each frame, compute the
+/// pose and lighting weights with aprt-core's [`Model::set_pose`] and [`Model::light`] (the
+/// same calls, the same bits as on the CPU), then call [`GpuModel::shade`] or
+/// [`GpuModel::transfer`]; the results are in [`GpuModel::shading`] and
+/// [`GpuModel::transfer_values`].
+pub struct GpuModel {
+    info: ModelInfo,
+    lit: wgpu::Buffer,
+    weights: wgpu::Buffer,
+    shading: wgpu::Buffer,
+    transfer: wgpu::Buffer,
+    shade_kernel: Kernel,
+    transfer_kernel: Kernel,
+}
+
+impl GpuModel {
+    /// Uploads `model`'s vertex rows (validated by [`Model::parse`]) and builds its kernels.
+    /// Refused before anything is uploaded when a buffer exceeds the device's binding limit.
+    pub fn upload(gpu: &Gpu, model: &Model<'_>) -> Result<GpuModel, GpuError> {
+        let info = *model.info();
+        let rows = model.vertex_rows();
+        let n2 = info.coeffs();
+        let vertices = info.vertices();
+        let storage = wgpu::BufferUsages::STORAGE;
+        let frame_input = storage | wgpu::BufferUsages::COPY_DST;
+        // Sizes first: nothing is uploaded unless every buffer fits.
+        gpu.check_size("transfer", 4 * (vertices * n2) as u64)?;
+        gpu.check_size("vertex rows", rows.bytes.len() as u64)?;
+        // A section's length is whole blocks of 8 values of 4, 2 or 1 bytes: whole words.
+        let words: Vec<u32> = rows
+            .bytes
+            .chunks_exact(4)
+            .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]))
+            .collect();
+        let layout = RowsLayout {
+            vertices: vertices as u32,
+            encoding: match rows.encoding {
+                Encoding::F32 => 0,
+                Encoding::F16 => 1,
+                Encoding::I8 => 2,
+            },
+            lead_rows: rows.lead_rows as u32,
+            row_width: rows.row_width as u32,
+            block_words: (rows.bytes.len() / 4 / rows.blocks.max(1)) as u32,
+            bones: info.bones().max(1) as u32,
+            coeffs: n2 as u32,
+            identity: u32::from(info.basis() == Basis::Identity),
+        };
+        let layout = gpu.buffer("rows layout", &[layout], wgpu::BufferUsages::UNIFORM)?;
+        let rows = gpu.buffer("vertex rows", &words, storage)?;
+        let lit = gpu.buffer(
+            "lit weights",
+            &vec![0f32; info.lit_weights_len()],
+            frame_input,
+        )?;
+        let weights = gpu.buffer(
+            "transfer weights",
+            &vec![0f32; info.transfer_weights_len()],
+            frame_input,
+        )?;
+        let shading = gpu.output::<f32>("shading", vertices)?;
+        let transfer = gpu.output::<f32>("transfer", vertices * n2)?;
+        let shade_kernel = Kernel::new(
+            gpu,
+            (&SHADE, "shade"),
+            &[&layout, &rows, &lit, &shading],
+            vertices as u32,
+        );
+        let transfer_kernel = Kernel::new(
+            gpu,
+            (&TRANSFER, "transfer_values"),
+            &[&layout, &rows, &weights, &transfer],
+            (vertices * n2) as u32,
+        );
+        Ok(GpuModel {
+            info,
+            lit,
+            weights,
+            shading,
+            transfer,
+            shade_kernel,
+            transfer_kernel,
+        })
+    }
+
+    /// The model's dimensions.
+    pub fn info(&self) -> &ModelInfo {
+        &self.info
+    }
+
+    /// Shades every vertex under the lighting weights `lit` of [`Model::light`] into
+    /// [`GpuModel::shading`]. Weights of another model, or never set, are refused before
+    /// anything is written.
+    pub fn shade<const L: usize>(&self, gpu: &Gpu, lit: &LitWeights<L>) -> Result<(), FrameError> {
+        let q = self.info.lit_values(lit)?;
+        gpu.queue()
+            .write_buffer(&self.lit, 0, bytemuck::cast_slice(q));
+        self.submit(gpu, &self.shade_kernel);
+        Ok(())
+    }
+
+    /// Every vertex's n² transfer values for the pose of [`Model::set_pose`] into
+    /// [`GpuModel::transfer_values`], vertex-major, in its bone's frame for a bone-frame model
+    /// (as [`Model::transfer`]). Weights of another model are refused before anything is
+    /// written.
+    pub fn transfer<const P: usize>(
+        &self,
+        gpu: &Gpu,
+        pose: &PoseWeights<P>,
+    ) -> Result<(), FrameError> {
+        let mut w = vec![0f32; self.info.transfer_weights_len()];
+        self.info.transfer_weights(pose, &mut w)?;
+        gpu.queue()
+            .write_buffer(&self.weights, 0, bytemuck::cast_slice(&w));
+        self.submit(gpu, &self.transfer_kernel);
+        Ok(())
+    }
+
+    fn submit(&self, gpu: &Gpu, kernel: &Kernel) {
+        let mut encoder = gpu.device().create_command_encoder(&Default::default());
+        kernel.record(gpu, &mut encoder);
+        gpu.queue().submit([encoder.finish()]);
+    }
+
+    /// The last shading, one f32 per vertex: bind it as a vertex buffer (`Float32`), or
+    /// read it back with [`GpuModel::read_shading`].
+    pub fn shading(&self) -> &wgpu::Buffer {
+        &self.shading
+    }
+
+    /// The last transfer, n² f32 per vertex.
+    pub fn transfer_values(&self) -> &wgpu::Buffer {
+        &self.transfer
+    }
+
+    /// The last shading, read back (a blocking wait).
+    pub fn read_shading(&self, gpu: &Gpu) -> Result<Vec<f32>, GpuError> {
+        gpu.read_back(&self.shading, self.info.vertices())
+    }
+
+    /// The last transfer, read back (a blocking wait).
+    pub fn read_transfer(&self, gpu: &Gpu) -> Result<Vec<f32>, GpuError> {
+        gpu.read_back(&self.transfer, self.info.vertices() * self.info.coeffs())
+    }
+}
+
+impl fmt::Display for FrameError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            FrameError::Core(e) => write!(f, "refused on the CPU: {e}"),
+            FrameError::Gpu(e) => e.fmt(f),
+        }
+    }
+}
+
+impl std::error::Error for FrameError {}
