@@ -67,7 +67,9 @@ pub use blob::{
     AngleNames, BlobSource, Dim, Error, Input, MAX_ATLAS_RESOLUTION, MAX_ATLAS_TRIANGLES,
     ModelInfo, SourceError, TexelAtlas,
 };
-pub use eval::{LitWeights, MAX_POSE_WEIGHTS, PoseWeights, VertexRows, use_portable_kernels};
+pub use eval::{
+    LitWeights, MAX_POSE_WEIGHTS, PoseWeights, ProxyView, VertexRows, use_portable_kernels,
+};
 pub use irradiance_rig::{
     AxisKind, DEFAULT_BAND, IrradianceRig, MAX_LATTICE, MAX_RIG_SAMPLES, MAX_RIG_TABLE,
     MAX_RIG_VECTORS, Placement, RIG_SUPPORT, RigLayout, RigLitWeights, RigShape, RigWeights,

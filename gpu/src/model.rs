@@ -6,9 +6,10 @@
 
 use std::fmt;
 
-use aprt_core::{Basis, Encoding, LitWeights, Model, ModelInfo, PoseWeights};
+use aprt_core::{Basis, Encoding, LitWeights, Model, ModelInfo, PoseWeights, ProxyFrame, Rotation};
 
 use crate::device::{Gpu, GpuError};
+use crate::proxies::{GpuProxies, Shared};
 use crate::shaders::{SHADE, Shader, TRANSFER};
 
 /// Threads per workgroup, as `@workgroup_size` in the kernels.
@@ -50,8 +51,11 @@ impl From<aprt_core::Error> for FrameError {
     }
 }
 
+/// The caller's skinned mesh this frame: world positions and normals, one per vertex.
+pub type Vertices<'a> = (&'a [[f32; 3]], &'a [[f32; 3]]);
+
 /// One kernel bound to a model's buffers.
-struct Kernel {
+pub(crate) struct Kernel {
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
     /// Invocations of a frame.
@@ -59,17 +63,17 @@ struct Kernel {
 }
 
 impl Kernel {
-    /// `shader`'s `entry` over `invocations`, with `buffers` bound in their binding order.
-    fn new(
+    /// `shader`'s `entry` over `invocations`, with each buffer of `bindings` at its binding.
+    pub(crate) fn new(
         gpu: &Gpu,
         (shader, entry): (&Shader, &str),
-        buffers: &[&wgpu::Buffer],
+        bindings: &[(u32, &wgpu::Buffer)],
         invocations: u32,
     ) -> Kernel {
         let pipeline = gpu.pipeline(shader, entry);
-        let entries: Vec<_> = (0..)
-            .zip(buffers)
-            .map(|(binding, buffer)| wgpu::BindGroupEntry {
+        let entries: Vec<_> = bindings
+            .iter()
+            .map(|&(binding, buffer)| wgpu::BindGroupEntry {
                 binding,
                 resource: buffer.as_entire_binding(),
             })
@@ -96,6 +100,13 @@ impl Kernel {
         pass.set_bind_group(0, &self.bind_group, &[]);
         pass.dispatch_workgroups(groups.min(max), groups.div_ceil(max), 1);
     }
+
+    /// Records the kernel alone and submits it.
+    pub(crate) fn submit(&self, gpu: &Gpu) {
+        let mut encoder = gpu.device().create_command_encoder(&Default::default());
+        self.record(gpu, &mut encoder);
+        gpu.queue().submit([encoder.finish()]);
+    }
 }
 
 /// A model's vertex rows on the device and the kernels bound to them. Each frame, compute the
@@ -112,6 +123,7 @@ pub struct GpuModel {
     transfer: wgpu::Buffer,
     shade_kernel: Kernel,
     transfer_kernel: Kernel,
+    proxies: Option<GpuProxies>,
 }
 
 impl GpuModel {
@@ -164,15 +176,25 @@ impl GpuModel {
         let shade_kernel = Kernel::new(
             gpu,
             (&SHADE, "shade"),
-            &[&layout, &rows, &lit, &shading],
+            &[(0, &layout), (1, &rows), (2, &lit), (3, &shading)],
             vertices as u32,
         );
         let transfer_kernel = Kernel::new(
             gpu,
             (&TRANSFER, "transfer_values"),
-            &[&layout, &rows, &weights, &transfer],
+            &[(0, &layout), (1, &rows), (2, &weights), (3, &transfer)],
             (vertices * n2) as u32,
         );
+        let shared = Shared {
+            layout: &layout,
+            rows: &rows,
+            shading: &shading,
+            transfer: &transfer,
+        };
+        let proxies = match info.has_proxies() {
+            true => Some(GpuProxies::new(gpu, &info, shared)?),
+            false => None,
+        };
         Ok(GpuModel {
             info,
             lit,
@@ -181,6 +203,7 @@ impl GpuModel {
             transfer,
             shade_kernel,
             transfer_kernel,
+            proxies,
         })
     }
 
@@ -196,7 +219,7 @@ impl GpuModel {
         let q = self.info.lit_values(lit)?;
         gpu.queue()
             .write_buffer(&self.lit, 0, bytemuck::cast_slice(q));
-        self.submit(gpu, &self.shade_kernel);
+        self.shade_kernel.submit(gpu);
         Ok(())
     }
 
@@ -213,14 +236,42 @@ impl GpuModel {
         self.info.transfer_weights(pose, &mut w)?;
         gpu.queue()
             .write_buffer(&self.weights, 0, bytemuck::cast_slice(&w));
-        self.submit(gpu, &self.transfer_kernel);
+        self.transfer_kernel.submit(gpu);
         Ok(())
     }
 
-    fn submit(&self, gpu: &Gpu, kernel: &Kernel) {
-        let mut encoder = gpu.device().create_command_encoder(&Default::default());
-        kernel.record(gpu, &mut encoder);
-        gpu.queue().submit([encoder.finish()]);
+    /// Subtracts the occluder proxies' occlusion under the world SH `lighting` (as given to
+    /// [`Model::light`]) from [`GpuModel::shading`]: call after [`GpuModel::shade`], with the
+    /// frame's proxies posed by [`Model::pose_proxies`] and the skinned mesh's world
+    /// positions and normals, as [`Model::occlude`] takes them. Everything is checked by
+    /// aprt-core before anything is written; a model without proxies refuses.
+    pub fn occlude(
+        &self,
+        gpu: &Gpu,
+        (frame, lighting): (&ProxyFrame, &[f32]),
+        vertices: Vertices<'_>,
+    ) -> Result<(), FrameError> {
+        self.proxies()?
+            .occlude(gpu, &self.info, (frame, lighting), vertices)
+    }
+
+    /// Subtracts the proxies' occlusion from [`GpuModel::transfer_values`], each vertex's in
+    /// its bone's frame (`rotations` as given to [`Model::light`]), as
+    /// [`Model::occlude_transfer`] does: call after [`GpuModel::transfer`].
+    pub fn occlude_transfer(
+        &self,
+        gpu: &Gpu,
+        (frame, rotations): (&ProxyFrame, &[Rotation]),
+        vertices: Vertices<'_>,
+    ) -> Result<(), FrameError> {
+        self.proxies()?
+            .occlude_transfer(gpu, &self.info, (frame, rotations), vertices)
+    }
+
+    fn proxies(&self) -> Result<&GpuProxies, FrameError> {
+        self.proxies
+            .as_ref()
+            .ok_or(FrameError::Core(aprt_core::Error::NoProxies))
     }
 
     /// The last shading, one f32 per vertex: bind it as a vertex buffer (`Float32`), or

@@ -6,7 +6,7 @@ mod common;
 
 use std::path::Path;
 
-use aprt_core::{Error, LitWeights, Model, PoseWeights, Rotation};
+use aprt_core::{Error, LitWeights, Model, PoseWeights, ProxyFrame, Rotation, Skinning};
 use aprt_gpu::{FrameError, Gpu, GpuModel, TOLERANCE};
 use common::{builtin_models, gpu_or_skip, trainer};
 
@@ -92,7 +92,115 @@ fn check_model(gpu: &Gpu, what: &str, blob: &[u8]) {
         on_gpu.transfer(gpu, &pose).unwrap();
         let transfer = on_gpu.read_transfer(gpu).unwrap();
         assert_close(&format!("{what}, frame {frame}, transfer"), &transfer, &cpu);
+        if info.has_proxies() {
+            let what = format!("{what}, frame {frame}");
+            check_proxies(
+                gpu,
+                (&model, &on_gpu),
+                (&pose, &lit),
+                (&lighting, &bones),
+                &what,
+            );
+        }
     }
+}
+
+/// Each bone's skinning matrix: its rotation and a small translation.
+fn skinning(rotations: &[Rotation]) -> Vec<Skinning> {
+    (0..)
+        .zip(rotations)
+        .map(|(b, r)| {
+            let t = [0.01 * b as f32, -0.02, 0.005 * b as f32];
+            [0, 1, 2].map(|i| [r[i][0], r[i][1], r[i][2], t[i]])
+        })
+        .map(|rows| rows.concat().try_into().unwrap())
+        .collect()
+}
+
+/// Vertices the proxies reach in every way: each vertex of a bone with proxies sits near one
+/// of them, at 0.8 to 3 radii from its centre (inside it, touching, far), its normal turned
+/// anywhere from facing the sphere to facing away (the horizon cuts many caps).
+fn vertices_near_proxies(model: &Model<'_>, frame: &ProxyFrame) -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
+    let info = model.info();
+    let v = info.vertices();
+    let zeros = vec![[0.0f32; 3]; v];
+    let view = info
+        .proxy_inputs(frame, (&zeros, &zeros), None, None)
+        .unwrap();
+    let mut bones = vec![0u16; v];
+    model.vertex_bones(0, &mut bones).unwrap();
+    let (mut positions, mut normals) = (Vec::new(), Vec::new());
+    for (j, &bone) in bones.iter().enumerate() {
+        let mask = view.mask(usize::from(bone));
+        let t = j as f32;
+        let direction = [(1.3 * t).sin(), (0.7 * t).cos(), (2.9 * t).sin()];
+        let normal = [(0.5 * t).cos(), (1.1 * t).sin(), 0.3 + (0.2 * t).cos()];
+        let position = match mask {
+            0 => [t.sin(), t.cos(), 0.1 * t],
+            m => {
+                let ones: Vec<usize> = (0..64).filter(|i| m >> i & 1 == 1).collect();
+                let (centre, radius, _) = view.sphere(ones[j % ones.len()]);
+                let length = direction
+                    .iter()
+                    .map(|x| x * x)
+                    .sum::<f32>()
+                    .sqrt()
+                    .max(1e-3);
+                let distance = radius * (0.8 + 2.2 * (0.37 * t).sin().abs()) / length;
+                [0, 1, 2].map(|k| centre[k] + distance * direction[k])
+            }
+        };
+        positions.push(position);
+        normals.push(normal);
+    }
+    (positions, normals)
+}
+
+/// The proxies' correction of the shading and the transfer, on the device and on the CPU; at
+/// least a tenth of the vertices must be reached in each, or the comparison shows little.
+fn check_proxies(
+    gpu: &Gpu,
+    (model, on_gpu): (&Model<'_>, &GpuModel),
+    (pose, lit): (&PoseWeights, &LitWeights),
+    (lighting, bones): (&[f32], &[Rotation]),
+    what: &str,
+) {
+    let info = model.info();
+    let mut frame = ProxyFrame::new();
+    model.pose_proxies(&skinning(bones), &mut frame).unwrap();
+    let (positions, normals) = vertices_near_proxies(model, &frame);
+    let vertices = (&positions[..], &normals[..]);
+
+    let mut shaded = vec![0.0; info.vertices()];
+    model.shade(lit, 0, &mut shaded).unwrap();
+    let mut cpu = shaded.clone();
+    model
+        .occlude(&frame, lighting, &positions, &normals, 0, &mut cpu)
+        .unwrap();
+    let reached = cpu.iter().zip(&shaded).filter(|(a, b)| a != b).count();
+    assert!(10 * reached >= info.vertices(), "{what}: {reached} reached");
+    on_gpu.shade(gpu, lit).unwrap();
+    on_gpu.occlude(gpu, (&frame, lighting), vertices).unwrap();
+    let occluded = on_gpu.read_shading(gpu).unwrap();
+    assert_close(&format!("{what}, occluded shading"), &occluded, &cpu);
+
+    let mut transfer = vec![0.0; info.vertices() * info.coeffs()];
+    model.transfer(pose, 0, &mut transfer).unwrap();
+    let mut cpu = transfer.clone();
+    model
+        .occlude_transfer(&frame, bones, &positions, &normals, 0, &mut cpu)
+        .unwrap();
+    let reached = cpu
+        .chunks(info.coeffs())
+        .zip(transfer.chunks(info.coeffs()));
+    let reached = reached.filter(|(a, b)| a != b).count();
+    assert!(10 * reached >= info.vertices(), "{what}: {reached} reached");
+    on_gpu.transfer(gpu, pose).unwrap();
+    on_gpu
+        .occlude_transfer(gpu, (&frame, bones), vertices)
+        .unwrap();
+    let occluded = on_gpu.read_transfer(gpu).unwrap();
+    assert_close(&format!("{what}, occluded transfer"), &occluded, &cpu);
 }
 
 #[test]
@@ -160,4 +268,57 @@ fn the_builtin_characters_model_agrees_in_every_precision() {
         assert!(Model::parse(&blob).unwrap().info().has_proxies());
         check_model(&gpu, &format!("built-in, {precision}"), &blob);
     }
+}
+
+/// The proxies' inputs are checked by aprt-core before anything is written: a frame never
+/// posed, normals of the wrong count, a position that is not finite, a model without
+/// proxies; the last shading stays as it was.
+#[test]
+fn proxy_inputs_are_refused_before_upload() {
+    let Some(gpu) = gpu_or_skip("proxy_inputs_are_refused_before_upload") else {
+        return;
+    };
+    let blob = golden("v1-proxies.aprt");
+    let model = Model::parse(&blob).unwrap();
+    let info = *model.info();
+    let on_gpu = GpuModel::upload(&gpu, &model).unwrap();
+    let (mut pose, mut lit) = (PoseWeights::new(), LitWeights::new());
+    let bones = rotations(info.bones());
+    let lighting = vec![0.5; info.coeffs()];
+    model
+        .set_pose(&vec![0.1; info.pose_len()], &mut pose)
+        .unwrap();
+    model.light(&pose, &lighting, &bones, &mut lit).unwrap();
+    let mut frame = ProxyFrame::new();
+    model.pose_proxies(&skinning(&bones), &mut frame).unwrap();
+    let (positions, normals) = vertices_near_proxies(&model, &frame);
+    on_gpu.shade(&gpu, &lit).unwrap();
+    on_gpu
+        .occlude(&gpu, (&frame, &lighting), (&positions, &normals))
+        .unwrap();
+    let before = on_gpu.read_shading(&gpu).unwrap();
+
+    let refused = |r: Result<(), FrameError>| match r {
+        Err(FrameError::Core(e)) => e,
+        other => panic!("{other:?}"),
+    };
+    let unposed = ProxyFrame::new();
+    let e = refused(on_gpu.occlude(&gpu, (&unposed, &lighting), (&positions, &normals)));
+    assert_eq!(e, Error::WeightsNotSet);
+    let short = &normals[1..];
+    let e = refused(on_gpu.occlude(&gpu, (&frame, &lighting), (&positions, short)));
+    assert!(matches!(e, Error::WrongLength { .. }), "{e:?}");
+    let mut nan = positions.clone();
+    nan[0][1] = f32::NAN;
+    let e = refused(on_gpu.occlude(&gpu, (&frame, &lighting), (&nan, &normals)));
+    assert!(matches!(e, Error::NonFinitePosition { index: 0 }), "{e:?}");
+    let e = refused(on_gpu.occlude_transfer(&gpu, (&frame, &bones[1..]), (&positions, &normals)));
+    assert!(matches!(e, Error::WrongLength { .. }), "{e:?}");
+    assert_eq!(on_gpu.read_shading(&gpu).unwrap(), before);
+
+    let world = golden("v1-world.aprt");
+    let world = GpuModel::upload(&gpu, &Model::parse(&world).unwrap()).unwrap();
+    let none = vec![[0.0; 3]; world.info().vertices()];
+    let e = refused(world.occlude(&gpu, (&frame, &[1.0; 9]), (&none, &none)));
+    assert_eq!(e, Error::NoProxies);
 }

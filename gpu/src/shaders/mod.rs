@@ -33,5 +33,23 @@ pub const TRANSFER: Shader = Shader {
     source: concat!(include_str!("rows.wgsl"), include_str!("transfer.wgsl")),
 };
 
+/// The real SH basis up to order 6 as aprt-core evaluates it (`sh_basis`), for the kernels
+/// that turn directions into coefficients.
+pub const SH: Shader = Shader {
+    name: "sh.wgsl",
+    source: include_str!("sh.wgsl"),
+};
+
+/// The occluder proxies' correction of shading and transfer (entry points `occlude_shading`
+/// and `occlude_transfer`); see [`GpuModel::occlude`](crate::GpuModel::occlude).
+pub const OCCLUDE: Shader = Shader {
+    name: "occlude.wgsl",
+    source: concat!(
+        include_str!("rows.wgsl"),
+        include_str!("sh.wgsl"),
+        include_str!("occlude.wgsl")
+    ),
+};
+
 /// Every shader of the crate.
-pub const ALL: &[Shader] = &[ROWS, SHADE, TRANSFER];
+pub const ALL: &[Shader] = &[ROWS, SHADE, TRANSFER, SH, OCCLUDE];
