@@ -290,6 +290,25 @@ fn every_golden_blob_shades_and_transfers_as_on_the_cpu() {
     }
 }
 
+/// An engine's own device and queue serve as well as the crate's.
+#[test]
+fn an_engines_device_runs_the_kernels() {
+    let Some(own) = gpu_or_skip("an_engines_device_runs_the_kernels") else {
+        return;
+    };
+    let engine = (
+        own.device().clone(),
+        own.queue().clone(),
+        own.info().clone(),
+    );
+    let gpu = Gpu::from_parts(engine.0, engine.1, engine.2);
+    check_model(
+        &gpu,
+        "v1-bones.aprt on the engine's device",
+        &golden("v1-bones.aprt"),
+    );
+}
+
 /// Weights computed for another model, or never set, are refused before anything is written:
 /// the last frame's output stays as it was.
 #[test]
