@@ -76,9 +76,9 @@ pub use irradiance_rig::{
     light_strength,
 };
 pub use light::{
-    DERIVATIVE_COS2_FLOOR, DirectionalLight, GRADIENT_STEP, Light, LightError, POINT_LIGHT_RADIUS,
-    PointLight, Rgb, SphereLight, Window, apply_window, irradiance_sh, sphere_light_bands,
-    sphere_light_derivative_bands,
+    DERIVATIVE_COS2_FLOOR, DirectionalLight, GRADIENT_STEP, Light, LightError, LightShape,
+    POINT_LIGHT_RADIUS, PointLight, Rgb, SphereLight, Window, apply_window, irradiance_sh,
+    sphere_light_bands, sphere_light_derivative_bands,
 };
 pub use lightmap::LightMap;
 pub use model::{Model, StreamNeeds, StreamedModel};

@@ -105,6 +105,18 @@ impl Gpu {
         })
     }
 
+    /// An engine's own device and queue (wgpu 30, as this crate pins), with its adapter's
+    /// info: the kernels then run beside the engine's passes and their output buffers bind in
+    /// its pipelines. The device's limits are the engine's to choose; a buffer beyond them is
+    /// refused before upload.
+    pub fn from_parts(device: wgpu::Device, queue: wgpu::Queue, info: wgpu::AdapterInfo) -> Gpu {
+        Gpu {
+            device,
+            queue,
+            info,
+        }
+    }
+
     /// The device, to create buffers and pipelines.
     pub fn device(&self) -> &wgpu::Device {
         &self.device

@@ -8,6 +8,7 @@
 //! shading languages.
 
 mod device;
+mod lights;
 mod model;
 mod proxies;
 pub mod shaders;

@@ -6,9 +6,12 @@
 
 use std::fmt;
 
-use aprt_core::{Basis, Encoding, LitWeights, Model, ModelInfo, PoseWeights, ProxyFrame, Rotation};
+use aprt_core::{
+    Basis, Encoding, Light, LitWeights, Model, ModelInfo, PoseWeights, ProxyFrame, Rotation,
+};
 
 use crate::device::{Gpu, GpuError};
+use crate::lights::GpuLights;
 use crate::proxies::{GpuProxies, Shared};
 use crate::shaders::{SHADE, Shader, TRANSFER};
 
@@ -58,6 +61,8 @@ pub type Vertices<'a> = (&'a [[f32; 3]], &'a [[f32; 3]]);
 pub(crate) struct Kernel {
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
+    /// Its shader's name, for labels.
+    label: &'static str,
     /// Invocations of a frame.
     invocations: u32,
 }
@@ -71,23 +76,18 @@ impl Kernel {
         invocations: u32,
     ) -> Kernel {
         let pipeline = gpu.pipeline(shader, entry);
-        let entries: Vec<_> = bindings
-            .iter()
-            .map(|&(binding, buffer)| wgpu::BindGroupEntry {
-                binding,
-                resource: buffer.as_entire_binding(),
-            })
-            .collect();
-        let bind_group = gpu.device().create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(shader.name),
-            layout: &pipeline.get_bind_group_layout(0),
-            entries: &entries,
-        });
+        let bind_group = bind_group(gpu, &pipeline, shader.name, bindings);
         Kernel {
             pipeline,
             bind_group,
+            label: shader.name,
             invocations,
         }
+    }
+
+    /// Binds `bindings` in place of the kernel's buffers (one that outgrew its buffer).
+    pub(crate) fn rebind(&mut self, gpu: &Gpu, bindings: &[(u32, &wgpu::Buffer)]) {
+        self.bind_group = bind_group(gpu, &self.pipeline, self.label, bindings);
     }
 
     /// Records the kernel into `encoder`: rows of at most the device's workgroups per
@@ -109,6 +109,27 @@ impl Kernel {
     }
 }
 
+/// `pipeline`'s bind group with each buffer of `bindings` at its binding.
+fn bind_group(
+    gpu: &Gpu,
+    pipeline: &wgpu::ComputePipeline,
+    label: &str,
+    bindings: &[(u32, &wgpu::Buffer)],
+) -> wgpu::BindGroup {
+    let entries: Vec<_> = bindings
+        .iter()
+        .map(|&(binding, buffer)| wgpu::BindGroupEntry {
+            binding,
+            resource: buffer.as_entire_binding(),
+        })
+        .collect();
+    gpu.device().create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &entries,
+    })
+}
+
 /// A model's vertex rows on the device and the kernels bound to them. Each frame, compute the
 /// pose and lighting weights with aprt-core's [`Model::set_pose`] and [`Model::light`] (the
 /// same calls, the same bits as on the CPU), then call [`GpuModel::shade`] or
@@ -124,6 +145,7 @@ pub struct GpuModel {
     shade_kernel: Kernel,
     transfer_kernel: Kernel,
     proxies: Option<GpuProxies>,
+    lights: GpuLights,
 }
 
 impl GpuModel {
@@ -195,6 +217,7 @@ impl GpuModel {
             true => Some(GpuProxies::new(gpu, &info, shared)?),
             false => None,
         };
+        let lights = GpuLights::new(gpu, &info, [layout.clone(), rows.clone(), weights.clone()])?;
         Ok(GpuModel {
             info,
             lit,
@@ -204,6 +227,7 @@ impl GpuModel {
             shade_kernel,
             transfer_kernel,
             proxies,
+            lights,
         })
     }
 
@@ -266,6 +290,35 @@ impl GpuModel {
     ) -> Result<(), FrameError> {
         self.proxies()?
             .occlude_transfer(gpu, &self.info, (frame, rotations), vertices)
+    }
+
+    /// The RGB shading of every vertex under `lights`, each scaled by its weight, evaluated at
+    /// the vertex's world position (`positions`, the skinned mesh) against its transfer for
+    /// `pose`, into [`GpuModel::lights_rgb`], as [`Model::shade_lights`] adds it (`bones` as
+    /// given to [`Model::light`]). Everything is checked by aprt-core before anything is
+    /// written. Takes `&mut self`: the lights' buffer grows to the most lights a frame has had.
+    pub fn shade_lights<const P: usize>(
+        &mut self,
+        gpu: &Gpu,
+        (pose, bones): (&PoseWeights<P>, &[Rotation]),
+        lights: (&[Light], &[f32]),
+        positions: &[[f32; 3]],
+    ) -> Result<(), FrameError> {
+        self.info.light_inputs(pose, bones, lights, positions)?;
+        let mut w = vec![0f32; self.info.transfer_weights_len()];
+        self.info.transfer_weights(pose, &mut w)?;
+        self.lights.shade(gpu, &w, lights, (positions, bones))
+    }
+
+    /// The last [`GpuModel::shade_lights`], RGB, three f32 per vertex.
+    pub fn lights_rgb(&self) -> &wgpu::Buffer {
+        self.lights.rgb()
+    }
+
+    /// The last [`GpuModel::shade_lights`], read back (a blocking wait).
+    pub fn read_lights(&self, gpu: &Gpu) -> Result<Vec<[f32; 3]>, GpuError> {
+        let values: Vec<f32> = gpu.read_back(self.lights.rgb(), 3 * self.info.vertices())?;
+        Ok(values.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
     }
 
     fn proxies(&self) -> Result<&GpuProxies, FrameError> {

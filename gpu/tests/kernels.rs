@@ -6,7 +6,10 @@ mod common;
 
 use std::path::Path;
 
-use aprt_core::{Error, LitWeights, Model, PoseWeights, ProxyFrame, Rotation, Skinning};
+use aprt_core::{
+    DirectionalLight, Error, Light, LitWeights, Model, PointLight, PoseWeights, ProxyFrame,
+    Rotation, Skinning, SphereLight,
+};
 use aprt_gpu::{FrameError, Gpu, GpuModel, TOLERANCE};
 use common::{builtin_models, gpu_or_skip, trainer};
 
@@ -69,7 +72,7 @@ fn assert_close(what: &str, gpu: &[f32], cpu: &[f32]) {
 fn check_model(gpu: &Gpu, what: &str, blob: &[u8]) {
     let model = Model::parse(blob).unwrap();
     let info = *model.info();
-    let on_gpu = GpuModel::upload(gpu, &model).unwrap();
+    let mut on_gpu = GpuModel::upload(gpu, &model).unwrap();
     let (mut pose, mut lit) = (PoseWeights::new(), LitWeights::new());
     let n2 = info.coeffs();
     let bones = rotations(info.bones());
@@ -92,6 +95,12 @@ fn check_model(gpu: &Gpu, what: &str, blob: &[u8]) {
         on_gpu.transfer(gpu, &pose).unwrap();
         let transfer = on_gpu.read_transfer(gpu).unwrap();
         assert_close(&format!("{what}, frame {frame}, transfer"), &transfer, &cpu);
+        check_lights(
+            gpu,
+            (&model, &mut on_gpu),
+            (&pose, &bones),
+            &format!("{what}, frame {frame}"),
+        );
         if info.has_proxies() {
             let what = format!("{what}, frame {frame}");
             check_proxies(
@@ -103,6 +112,73 @@ fn check_model(gpu: &Gpu, what: &str, blob: &[u8]) {
             );
         }
     }
+}
+
+/// Per-vertex lights of every kind at vertices spread around them: inside the sphere light,
+/// near the point light, one light of weight 0.
+fn check_lights(
+    gpu: &Gpu,
+    (model, on_gpu): (&Model<'_>, &mut GpuModel),
+    (pose, bones): (&PoseWeights, &[Rotation]),
+    what: &str,
+) {
+    let info = model.info();
+    // Vertex 0 inside the sphere light; the others around the lights.
+    let positions: Vec<[f32; 3]> = (0..info.vertices())
+        .map(|j| match j {
+            0 => [0.3, 0.25, 0.1],
+            _ => {
+                let t = j as f32;
+                [t.sin(), (1.3 * t).cos(), 0.5 * (0.7 * t).sin()]
+            }
+        })
+        .collect();
+    let lights = [
+        Light::Sphere(SphereLight {
+            position: [0.3, 0.2, 0.1],
+            radius: 0.4,
+            radiance: [1.0, 0.8, 0.6],
+        }),
+        Light::Point(PointLight {
+            position: [1.2, 0.0, 0.2],
+            intensity: [0.02, 0.03, 0.04],
+        }),
+        Light::Directional(DirectionalLight {
+            direction: [0.2, -1.0, 0.5],
+            irradiance: [0.7, 0.7, 0.9],
+        }),
+        Light::Point(PointLight {
+            position: [0.0, 0.0, 3.0],
+            intensity: [5.0; 3],
+        }),
+    ];
+    let weights = [0.8, 1.0, 0.5, 0.0];
+    let negative = on_gpu.shade_lights(
+        gpu,
+        (pose, bones),
+        (&lights, &[0.8, -1.0, 0.5, 0.0]),
+        &positions,
+    );
+    assert!(
+        matches!(
+            negative,
+            Err(FrameError::Core(Error::BadLightWeight { index: 1 }))
+        ),
+        "{what}: {negative:?}"
+    );
+    let mut cpu = vec![[0.0; 3]; info.vertices()];
+    model
+        .shade_lights(pose, bones, &lights, &weights, &positions, 0, &mut cpu)
+        .unwrap();
+    on_gpu
+        .shade_lights(gpu, (pose, bones), (&lights, &weights), &positions)
+        .unwrap();
+    let rgb = on_gpu.read_lights(gpu).unwrap();
+    assert_close(
+        &format!("{what}, per-vertex lights"),
+        rgb.as_flattened(),
+        cpu.as_flattened(),
+    );
 }
 
 /// Each bone's skinning matrix: its rotation and a small translation.
@@ -211,6 +287,25 @@ fn every_golden_blob_shades_and_transfers_as_on_the_cpu() {
     for name in GOLDEN {
         check_model(&gpu, name, &golden(name));
     }
+}
+
+/// An engine's own device and queue serve as well as the crate's.
+#[test]
+fn an_engines_device_runs_the_kernels() {
+    let Some(own) = gpu_or_skip("an_engines_device_runs_the_kernels") else {
+        return;
+    };
+    let engine = (
+        own.device().clone(),
+        own.queue().clone(),
+        own.info().clone(),
+    );
+    let gpu = Gpu::from_parts(engine.0, engine.1, engine.2);
+    check_model(
+        &gpu,
+        "v1-bones.aprt on the engine's device",
+        &golden("v1-bones.aprt"),
+    );
 }
 
 /// Weights computed for another model, or never set, are refused before anything is written:

@@ -157,6 +157,23 @@ impl ModelInfo {
     }
 }
 
+impl ModelInfo {
+    /// Checks the inputs of per-vertex lights over every vertex as `Model::shade_lights`
+    /// checks them (pose weights of this model, its bones' rotations, valid lights, one
+    /// finite non-negative weight per light, one finite position per vertex), for a device
+    /// that evaluates them itself ([`Light::shape`](crate::Light::shape) gives each light's
+    /// geometry).
+    pub fn light_inputs<const P: usize>(
+        &self,
+        pose: &PoseWeights<P>,
+        bones: &[Rotation],
+        (lights, weights): (&[crate::Light], &[f32]),
+        positions: &[[f32; 3]],
+    ) -> Result<(), Error> {
+        self.check_light_inputs(pose, bones, (lights, weights), (positions, self.vertices))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use crate::{Error, LitWeights, Model, PoseWeights, ProxyFrame, VERTEX_BLOCK};
