@@ -151,6 +151,19 @@ impl Gpu {
         }
     }
 
+    /// Blocks until the device has finished everything submitted so far. [`GpuModel::shade`]
+    /// and [`GpuModel::transfer`] only submit, as a frame loop wants; a caller that times a
+    /// frame, or hands the output to work outside this queue, waits here.
+    ///
+    /// [`GpuModel::shade`]: crate::GpuModel::shade
+    /// [`GpuModel::transfer`]: crate::GpuModel::transfer
+    pub fn wait(&self) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(drop)
+            .map_err(GpuError::Poll)
+    }
+
     /// A compute pipeline for `entry` of `shader`, its bind group layout taken from the WGSL.
     pub(crate) fn pipeline(&self, shader: &Shader, entry: &str) -> wgpu::ComputePipeline {
         let module = self
@@ -254,9 +267,7 @@ impl Gpu {
             // The receiver is alive until `recv` below returns.
             let _ = sender.send(mapped);
         });
-        self.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(GpuError::Poll)?;
+        self.wait()?;
         // `poll` ran the callback before returning, so the value is there.
         receiver
             .recv()

@@ -134,7 +134,8 @@ fn bind_group(
 /// pose and lighting weights with aprt-core's [`Model::set_pose`] and [`Model::light`] (the
 /// same calls, the same bits as on the CPU), then call [`GpuModel::shade`] or
 /// [`GpuModel::transfer`]; the results are in [`GpuModel::shading`] and
-/// [`GpuModel::transfer_values`].
+/// [`GpuModel::transfer_values`]. Those calls submit the work and return: later work on the
+/// same queue sees the results, and [`Gpu::wait`] blocks until they are there.
 pub struct GpuModel {
     info: ModelInfo,
     lit: wgpu::Buffer,

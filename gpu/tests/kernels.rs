@@ -4,15 +4,14 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
 use aprt_core::{
     DirectionalLight, Error, Light, LitWeights, Model, PointLight, PoseWeights, ProxyFrame,
     Rotation, Skinning, SphereLight,
 };
 use aprt_gpu::{FrameError, Gpu, GpuModel, TOLERANCE};
-use common::gpu_or_skip;
+use common::{builtin_models, gpu_or_skip, trainer};
 
 const GOLDEN: [&str; 5] = [
     "v1-world.aprt",
@@ -350,31 +349,7 @@ fn weights_of_another_model_are_refused_before_upload() {
     assert_eq!(on_gpu.read_transfer(&gpu).unwrap(), transfer);
 }
 
-/// The `aprt` binary of the root workspace (`cargo build --release -p aprt-trainer` builds
-/// it; `.ci/run` has, before this crate's tests), or `None` after saying why the test skips;
-/// with `$APRT_REQUIRE_GPU` its absence fails the test.
-fn trainer(test: &str) -> Option<PathBuf> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let bin = std::env::var_os("APRT_BIN")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| root.join("target/release/aprt"));
-    if bin.exists() {
-        return Some(bin);
-    }
-    assert!(
-        std::env::var_os("APRT_REQUIRE_GPU").is_none(),
-        "{test}: needs {} (cargo build --release -p aprt-trainer)",
-        bin.display()
-    );
-    eprintln!(
-        "skipping {test}: no {} (cargo build --release -p aprt-trainer)",
-        bin.display()
-    );
-    None
-}
-
-/// The built-in character's model, as the demo's default is shaped (bone frames, occluder
-/// proxies, k_v 22, 13,022 vertices) but baked with few rays on one clip, in each precision.
+/// The built-in character's model ([`builtin_models`]) in each precision.
 #[test]
 fn the_builtin_characters_model_agrees_in_every_precision() {
     let test = "the_builtin_characters_model_agrees_in_every_precision";
@@ -384,29 +359,10 @@ fn the_builtin_characters_model_agrees_in_every_precision() {
     let Some(aprt) = trainer(test) else {
         return;
     };
-    let dir = std::env::temp_dir().join(format!("aprt-gpu-{}", std::process::id()));
-    let checkpoint = dir.join("checkpoint");
-    for (i, precision) in ["f32", "f16", "i8"].into_iter().enumerate() {
-        let out = dir.join(format!("builtin-{precision}.aprt"));
-        let mut command = Command::new(&aprt);
-        command.args(["train", "--builtin", "--clip", "wave", "--rays", "8"]);
-        command.args(["--validation-poses", "0", "--proxies", "on"]);
-        command.args(["--precision", precision, "--checkpoint"]);
-        command.arg(&checkpoint).arg("-o").arg(&out);
-        if i > 0 {
-            command.arg("--resume");
-        }
-        let run = command.output().unwrap();
-        assert!(
-            run.status.success(),
-            "{}",
-            String::from_utf8_lossy(&run.stderr)
-        );
-        let blob = std::fs::read(&out).unwrap();
+    for (precision, blob) in builtin_models(&aprt) {
         assert!(Model::parse(&blob).unwrap().info().has_proxies());
         check_model(&gpu, &format!("built-in, {precision}"), &blob);
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// The proxies' inputs are checked by aprt-core before anything is written: a frame never

@@ -1,4 +1,9 @@
-//! The device for a test, or why there is none.
+//! What the device tests and the frame bench (`benches/frame.rs`, which includes this file)
+//! share: the device or why there is none, and the built-in character's model as the root
+//! workspace's `aprt` binary trains it.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
 
 use aprt_gpu::Gpu;
 
@@ -27,4 +32,66 @@ pub fn gpu_or_skip(test: &str) -> Option<Gpu> {
             None
         }
     }
+}
+
+/// The `aprt` binary of the root workspace (`cargo build --release -p aprt-trainer` builds
+/// it; `.ci/run` has, before this crate's tests), or `None` after saying why the test skips;
+/// with `$APRT_REQUIRE_GPU` its absence fails the test.
+pub fn trainer(test: &str) -> Option<PathBuf> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let bin = std::env::var_os("APRT_BIN")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root.join("target/release/aprt"));
+    if bin.exists() {
+        return Some(bin);
+    }
+    assert!(
+        std::env::var_os("APRT_REQUIRE_GPU").is_none(),
+        "{test}: needs {} (cargo build --release -p aprt-trainer)",
+        bin.display()
+    );
+    eprintln!(
+        "skipping {test}: no {} (cargo build --release -p aprt-trainer)",
+        bin.display()
+    );
+    None
+}
+
+/// The `aprt` arguments of [`builtin_models`] before the precision, one string so the bench
+/// can print what it ran.
+pub const BUILTIN_TRAIN: &str =
+    "train --builtin --clip wave --rays 8 --validation-poses 0 --proxies on --precision";
+
+/// The built-in character's model, as the demo's default is shaped (bone frames, occluder
+/// proxies, k_v 22, 13,022 vertices) but baked with few rays on one clip, in f32, f16 and i8
+/// rows, each with its precision's name. Baked once: the later precisions resume from the
+/// first one's checkpoint.
+pub fn builtin_models(aprt: &Path) -> Vec<(&'static str, Vec<u8>)> {
+    let dir = std::env::temp_dir().join(format!("aprt-gpu-{}", std::process::id()));
+    let checkpoint = dir.join("checkpoint");
+    let models = ["f32", "f16", "i8"]
+        .into_iter()
+        .enumerate()
+        .map(|(i, precision)| {
+            let out = dir.join(format!("builtin-{precision}.aprt"));
+            let mut command = Command::new(aprt);
+            command
+                .args(BUILTIN_TRAIN.split(' '))
+                .arg(precision)
+                .arg("--checkpoint");
+            command.arg(&checkpoint).arg("-o").arg(&out);
+            if i > 0 {
+                command.arg("--resume");
+            }
+            let run = command.output().unwrap();
+            assert!(
+                run.status.success(),
+                "{}",
+                String::from_utf8_lossy(&run.stderr)
+            );
+            (precision, std::fs::read(&out).unwrap())
+        })
+        .collect();
+    std::fs::remove_dir_all(&dir).unwrap();
+    models
 }
