@@ -205,7 +205,7 @@ impl GpuModel {
             gpu,
             (&TRANSFER, "transfer_values"),
             &[(0, &layout), (1, &rows), (2, &weights), (3, &transfer)],
-            (vertices * n2) as u32,
+            vertices as u32,
         );
         let shared = Shared {
             layout: &layout,

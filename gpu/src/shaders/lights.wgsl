@@ -64,11 +64,7 @@ fn shade_lights(
         return;
     }
     let order = info.order;
-    let n2 = order * order;
-    var t: array<f32, 36>;
-    for (var c = 0u; c < n2; c++) {
-        t[c] = transfer_value(v, c);
-    }
+    let t = vertex_transfer(v);
     let p = vec3<f32>(positions[3u * v], positions[3u * v + 1u], positions[3u * v + 2u]);
     let b = 9u * vertex_bone(v);
     var acc = vec3<f32>(0.0);

@@ -4,20 +4,27 @@
 
 @group(0) @binding(2) var<storage, read> weights: array<f32>;
 
-// Coefficient `c` of vertex `v`'s transfer, in its bone's frame for a bone-frame model.
-fn transfer_value(v: u32, c: u32) -> f32 {
+// Vertex `v`'s n² transfer values (in its bone's frame for a bone-frame model; the rest 0).
+// Each row value is decoded once; each coefficient sums its terms in row order, as aprt-core
+// does.
+fn vertex_transfer(v: u32) -> array<f32, 36> {
     let n2 = shape.coeffs;
-    var sum = 0.0;
+    var t: array<f32, 36>;
     if shape.identity == 0u {
         for (var k = 0u; k < shape.row_width; k++) {
-            sum += weights[k * n2 + c] * row_value(v, shape.lead_rows + k);
+            let u = row_value(v, shape.lead_rows + k);
+            for (var c = 0u; c < n2; c++) {
+                t[c] += weights[k * n2 + c] * u;
+            }
         }
     } else {
         let per = shape.row_width / n2;
-        for (var i = 0u; i < per; i++) {
-            let r = c * per + i;
-            sum += weights[r] * row_value(v, shape.lead_rows + r);
+        for (var c = 0u; c < n2; c++) {
+            for (var i = 0u; i < per; i++) {
+                let r = c * per + i;
+                t[c] += weights[r] * row_value(v, shape.lead_rows + r);
+            }
         }
     }
-    return sum;
+    return t;
 }

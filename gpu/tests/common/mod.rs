@@ -1,10 +1,11 @@
 //! What the device tests and the frame bench (`benches/frame.rs`, which includes this file)
-//! share: the device or why there is none, and the built-in character's model as the root
-//! workspace's `aprt` binary trains it.
+//! share: the device or why there is none, the built-in character's model as the root
+//! workspace's `aprt` binary trains it, and a frame's bones and vertices.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use aprt_core::{Model, ProxyFrame, Rotation, Skinning};
 use aprt_gpu::Gpu;
 
 /// The adapter `Gpu::new` finds, or `None` after saying on stderr why `test` is skipped; with
@@ -94,4 +95,72 @@ pub fn builtin_models(aprt: &Path) -> Vec<(&'static str, Vec<u8>)> {
         .collect();
     std::fs::remove_dir_all(&dir).unwrap();
     models
+}
+
+/// A proper rotation per bone, each about its own axis by its own angle.
+pub fn rotations(bones: usize) -> Vec<Rotation> {
+    (0..bones)
+        .map(|b| {
+            let (s, c) = (0.3 + 0.7 * b as f32).sin_cos();
+            match b % 3 {
+                0 => [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]],
+                1 => [[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]],
+                _ => [[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]],
+            }
+        })
+        .collect()
+}
+
+/// Each bone's skinning matrix: its rotation and a small translation.
+pub fn skinning(rotations: &[Rotation]) -> Vec<Skinning> {
+    (0..)
+        .zip(rotations)
+        .map(|(b, r)| {
+            let t = [0.01 * b as f32, -0.02, 0.005 * b as f32];
+            [0, 1, 2].map(|i| [r[i][0], r[i][1], r[i][2], t[i]])
+        })
+        .map(|rows| rows.concat().try_into().unwrap())
+        .collect()
+}
+
+/// Vertices the proxies reach in every way: each vertex of a bone with proxies sits near one
+/// of them, at 0.8 to 3 radii from its centre (inside it, touching, far), its normal turned
+/// anywhere from facing the sphere to facing away (the horizon cuts many caps).
+pub fn vertices_near_proxies(
+    model: &Model<'_>,
+    frame: &ProxyFrame,
+) -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
+    let info = model.info();
+    let v = info.vertices();
+    let zeros = vec![[0.0f32; 3]; v];
+    let view = info
+        .proxy_inputs(frame, (&zeros, &zeros), None, None)
+        .unwrap();
+    let mut bones = vec![0u16; v];
+    model.vertex_bones(0, &mut bones).unwrap();
+    let (mut positions, mut normals) = (Vec::new(), Vec::new());
+    for (j, &bone) in bones.iter().enumerate() {
+        let mask = view.mask(usize::from(bone));
+        let t = j as f32;
+        let direction = [(1.3 * t).sin(), (0.7 * t).cos(), (2.9 * t).sin()];
+        let normal = [(0.5 * t).cos(), (1.1 * t).sin(), 0.3 + (0.2 * t).cos()];
+        let position = match mask {
+            0 => [t.sin(), t.cos(), 0.1 * t],
+            m => {
+                let ones: Vec<usize> = (0..64).filter(|i| m >> i & 1 == 1).collect();
+                let (centre, radius, _) = view.sphere(ones[j % ones.len()]);
+                let length = direction
+                    .iter()
+                    .map(|x| x * x)
+                    .sum::<f32>()
+                    .sqrt()
+                    .max(1e-3);
+                let distance = radius * (0.8 + 2.2 * (0.37 * t).sin().abs()) / length;
+                [0, 1, 2].map(|k| centre[k] + distance * direction[k])
+            }
+        };
+        positions.push(position);
+        normals.push(normal);
+    }
+    (positions, normals)
 }
