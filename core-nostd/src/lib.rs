@@ -67,16 +67,18 @@ pub use blob::{
     AngleNames, BlobSource, Dim, Error, Input, MAX_ATLAS_RESOLUTION, MAX_ATLAS_TRIANGLES,
     ModelInfo, SourceError, TexelAtlas,
 };
-pub use eval::{LitWeights, MAX_POSE_WEIGHTS, PoseWeights, VertexRows, use_portable_kernels};
+pub use eval::{
+    LitWeights, MAX_POSE_WEIGHTS, PoseWeights, ProxyView, VertexRows, use_portable_kernels,
+};
 pub use irradiance_rig::{
     AxisKind, DEFAULT_BAND, IrradianceRig, MAX_LATTICE, MAX_RIG_SAMPLES, MAX_RIG_TABLE,
     MAX_RIG_VECTORS, Placement, RIG_SUPPORT, RigLayout, RigLitWeights, RigShape, RigWeights,
     light_strength,
 };
 pub use light::{
-    DERIVATIVE_COS2_FLOOR, DirectionalLight, GRADIENT_STEP, Light, LightError, POINT_LIGHT_RADIUS,
-    PointLight, Rgb, SphereLight, Window, apply_window, irradiance_sh, sphere_light_bands,
-    sphere_light_derivative_bands,
+    DERIVATIVE_COS2_FLOOR, DirectionalLight, GRADIENT_STEP, Light, LightError, LightShape,
+    POINT_LIGHT_RADIUS, PointLight, Rgb, SphereLight, Window, apply_window, irradiance_sh,
+    sphere_light_bands, sphere_light_derivative_bands,
 };
 pub use lightmap::LightMap;
 pub use model::{Model, StreamNeeds, StreamedModel};

@@ -67,14 +67,20 @@ pub enum Light {
     Directional(DirectionalLight),
 }
 
-/// A light as its SH and irradiance are computed: a sphere of uniform `radiance` per unit of
-/// the light's colour, or a direction.
-enum Shape {
+/// A light as its SH and irradiance are computed ([`Light::shape`]): a sphere of uniform
+/// `radiance` per unit of the light's colour, or a direction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightShape {
+    /// A sphere light, or a point light as the sphere of [`POINT_LIGHT_RADIUS`].
     Sphere {
+        /// Its centre.
         centre: [f32; 3],
+        /// Its radius.
         radius: f32,
+        /// Its radiance per unit of the light's colour.
         radiance: f32,
     },
+    /// A directional light: towards the light, any non-zero length.
     Directional([f32; 3]),
 }
 
@@ -234,21 +240,21 @@ impl Light {
     }
 
     /// What the light is geometrically: a point light is the sphere of [`POINT_LIGHT_RADIUS`]
-    /// and intensity `colour`.
-    fn shape(&self) -> Shape {
+    /// and intensity `colour`; for a device that evaluates lights itself (a GPU).
+    pub fn shape(&self) -> LightShape {
         const POINT_RADIANCE: f32 = 1.0 / (PI * POINT_LIGHT_RADIUS * POINT_LIGHT_RADIUS);
         match self {
-            Light::Sphere(s) => Shape::Sphere {
+            Light::Sphere(s) => LightShape::Sphere {
                 centre: s.position,
                 radius: s.radius,
                 radiance: 1.0,
             },
-            Light::Point(p) => Shape::Sphere {
+            Light::Point(p) => LightShape::Sphere {
                 centre: p.position,
                 radius: POINT_LIGHT_RADIUS,
                 radiance: POINT_RADIANCE,
             },
-            Light::Directional(d) => Shape::Directional(d.direction),
+            Light::Directional(d) => LightShape::Directional(d.direction),
         }
     }
 
@@ -269,7 +275,7 @@ impl Light {
         at: [f32; 3],
     ) -> Result<([f32; MAX_ORDER], Option<[f32; 3]>), LightError> {
         match self.shape() {
-            Shape::Sphere {
+            LightShape::Sphere {
                 centre,
                 radius,
                 radiance,
@@ -278,7 +284,9 @@ impl Light {
                 let bands = sphere_light_bands(radius, d)?.map(|b| b * radiance);
                 Ok((bands, dir.filter(|_| d >= radius)))
             }
-            Shape::Directional(direction) => Ok((delta_bands(1.0), Some(normalise(direction)?))),
+            LightShape::Directional(direction) => {
+                Ok((delta_bands(1.0), Some(normalise(direction)?)))
+            }
         }
     }
 
@@ -342,8 +350,8 @@ impl Light {
         let n2 = check(order, gx.len().min(gy.len()).min(gz.len()))?;
         let (bands, dir) = self.zonal(at)?;
         let (along, d) = match self.shape() {
-            Shape::Directional(_) => return Ok(()),
-            Shape::Sphere {
+            LightShape::Directional(_) => return Ok(()),
+            LightShape::Sphere {
                 centre,
                 radius,
                 radiance,
@@ -402,9 +410,9 @@ impl Light {
         let (bands, dir) = self.zonal(at)?;
         let rgb = self.colour();
         let scale = match (self.shape(), dir) {
-            (Shape::Sphere { radiance, .. }, None) => PI * radiance,
+            (LightShape::Sphere { radiance, .. }, None) => PI * radiance,
             (
-                Shape::Sphere {
+                LightShape::Sphere {
                     centre,
                     radius,
                     radiance,
@@ -415,7 +423,7 @@ impl Light {
                 sphere_irradiance(radius, d, dot(n, w)) * radiance
             }
             // A delta of weight bands[0], whose direction is never `None`.
-            (Shape::Directional(_), w) => bands[0] * w.map_or(0.0, |w| dot(n, w).max(0.0)),
+            (LightShape::Directional(_), w) => bands[0] * w.map_or(0.0, |w| dot(n, w).max(0.0)),
         };
         let e = rgb.map(|c| c * scale);
         finite3(e).map_err(|_| LightError::Overflow)

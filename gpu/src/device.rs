@@ -105,6 +105,18 @@ impl Gpu {
         })
     }
 
+    /// An engine's own device and queue (wgpu 30, as this crate pins), with its adapter's
+    /// info: the kernels then run beside the engine's passes and their output buffers bind in
+    /// its pipelines. The device's limits are the engine's to choose; a buffer beyond them is
+    /// refused before upload.
+    pub fn from_parts(device: wgpu::Device, queue: wgpu::Queue, info: wgpu::AdapterInfo) -> Gpu {
+        Gpu {
+            device,
+            queue,
+            info,
+        }
+    }
+
     /// The device, to create buffers and pipelines.
     pub fn device(&self) -> &wgpu::Device {
         &self.device
@@ -137,6 +149,19 @@ impl Gpu {
             ("", info) | (info, "") => info.to_owned(),
             (driver, info) => format!("{driver}, {info}"),
         }
+    }
+
+    /// Blocks until the device has finished everything submitted so far. [`GpuModel::shade`]
+    /// and [`GpuModel::transfer`] only submit, as a frame loop wants; a caller that times a
+    /// frame, or hands the output to work outside this queue, waits here.
+    ///
+    /// [`GpuModel::shade`]: crate::GpuModel::shade
+    /// [`GpuModel::transfer`]: crate::GpuModel::transfer
+    pub fn wait(&self) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(drop)
+            .map_err(GpuError::Poll)
     }
 
     /// A compute pipeline for `entry` of `shader`, its bind group layout taken from the WGSL.
@@ -242,9 +267,7 @@ impl Gpu {
             // The receiver is alive until `recv` below returns.
             let _ = sender.send(mapped);
         });
-        self.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(GpuError::Poll)?;
+        self.wait()?;
         // `poll` ran the callback before returning, so the value is there.
         receiver
             .recv()

@@ -8,11 +8,13 @@
 //! shading languages.
 
 mod device;
+mod lights;
 mod model;
+mod proxies;
 pub mod shaders;
 
 pub use device::{Gpu, GpuError, NoAdapter};
-pub use model::{FrameError, GpuModel};
+pub use model::{FrameError, GpuModel, Vertices};
 
 /// How far a kernel's output may be from aprt-core's, relative to the largest magnitude of
 /// the frame's output (its peak): WGSL allows a device to fuse multiply-adds and to sum in

@@ -6,9 +6,13 @@
 
 use std::fmt;
 
-use aprt_core::{Basis, Encoding, LitWeights, Model, ModelInfo, PoseWeights};
+use aprt_core::{
+    Basis, Encoding, Light, LitWeights, Model, ModelInfo, PoseWeights, ProxyFrame, Rotation,
+};
 
 use crate::device::{Gpu, GpuError};
+use crate::lights::GpuLights;
+use crate::proxies::{GpuProxies, Shared};
 use crate::shaders::{SHADE, Shader, TRANSFER};
 
 /// Threads per workgroup, as `@workgroup_size` in the kernels.
@@ -50,40 +54,40 @@ impl From<aprt_core::Error> for FrameError {
     }
 }
 
+/// The caller's skinned mesh this frame: world positions and normals, one per vertex.
+pub type Vertices<'a> = (&'a [[f32; 3]], &'a [[f32; 3]]);
+
 /// One kernel bound to a model's buffers.
-struct Kernel {
+pub(crate) struct Kernel {
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
+    /// Its shader's name, for labels.
+    label: &'static str,
     /// Invocations of a frame.
     invocations: u32,
 }
 
 impl Kernel {
-    /// `shader`'s `entry` over `invocations`, with `buffers` bound in their binding order.
-    fn new(
+    /// `shader`'s `entry` over `invocations`, with each buffer of `bindings` at its binding.
+    pub(crate) fn new(
         gpu: &Gpu,
         (shader, entry): (&Shader, &str),
-        buffers: &[&wgpu::Buffer],
+        bindings: &[(u32, &wgpu::Buffer)],
         invocations: u32,
     ) -> Kernel {
         let pipeline = gpu.pipeline(shader, entry);
-        let entries: Vec<_> = (0..)
-            .zip(buffers)
-            .map(|(binding, buffer)| wgpu::BindGroupEntry {
-                binding,
-                resource: buffer.as_entire_binding(),
-            })
-            .collect();
-        let bind_group = gpu.device().create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(shader.name),
-            layout: &pipeline.get_bind_group_layout(0),
-            entries: &entries,
-        });
+        let bind_group = bind_group(gpu, &pipeline, shader.name, bindings);
         Kernel {
             pipeline,
             bind_group,
+            label: shader.name,
             invocations,
         }
+    }
+
+    /// Binds `bindings` in place of the kernel's buffers (one that outgrew its buffer).
+    pub(crate) fn rebind(&mut self, gpu: &Gpu, bindings: &[(u32, &wgpu::Buffer)]) {
+        self.bind_group = bind_group(gpu, &self.pipeline, self.label, bindings);
     }
 
     /// Records the kernel into `encoder`: rows of at most the device's workgroups per
@@ -96,13 +100,42 @@ impl Kernel {
         pass.set_bind_group(0, &self.bind_group, &[]);
         pass.dispatch_workgroups(groups.min(max), groups.div_ceil(max), 1);
     }
+
+    /// Records the kernel alone and submits it.
+    pub(crate) fn submit(&self, gpu: &Gpu) {
+        let mut encoder = gpu.device().create_command_encoder(&Default::default());
+        self.record(gpu, &mut encoder);
+        gpu.queue().submit([encoder.finish()]);
+    }
+}
+
+/// `pipeline`'s bind group with each buffer of `bindings` at its binding.
+fn bind_group(
+    gpu: &Gpu,
+    pipeline: &wgpu::ComputePipeline,
+    label: &str,
+    bindings: &[(u32, &wgpu::Buffer)],
+) -> wgpu::BindGroup {
+    let entries: Vec<_> = bindings
+        .iter()
+        .map(|&(binding, buffer)| wgpu::BindGroupEntry {
+            binding,
+            resource: buffer.as_entire_binding(),
+        })
+        .collect();
+    gpu.device().create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &entries,
+    })
 }
 
 /// A model's vertex rows on the device and the kernels bound to them. Each frame, compute the
 /// pose and lighting weights with aprt-core's [`Model::set_pose`] and [`Model::light`] (the
 /// same calls, the same bits as on the CPU), then call [`GpuModel::shade`] or
 /// [`GpuModel::transfer`]; the results are in [`GpuModel::shading`] and
-/// [`GpuModel::transfer_values`].
+/// [`GpuModel::transfer_values`]. Those calls submit the work and return: later work on the
+/// same queue sees the results, and [`Gpu::wait`] blocks until they are there.
 pub struct GpuModel {
     info: ModelInfo,
     lit: wgpu::Buffer,
@@ -111,6 +144,8 @@ pub struct GpuModel {
     transfer: wgpu::Buffer,
     shade_kernel: Kernel,
     transfer_kernel: Kernel,
+    proxies: Option<GpuProxies>,
+    lights: GpuLights,
 }
 
 impl GpuModel {
@@ -163,15 +198,26 @@ impl GpuModel {
         let shade_kernel = Kernel::new(
             gpu,
             (&SHADE, "shade"),
-            &[&layout, &rows, &lit, &shading],
+            &[(0, &layout), (1, &rows), (2, &lit), (3, &shading)],
             vertices as u32,
         );
         let transfer_kernel = Kernel::new(
             gpu,
             (&TRANSFER, "transfer_values"),
-            &[&layout, &rows, &weights, &transfer],
-            (vertices * n2) as u32,
+            &[(0, &layout), (1, &rows), (2, &weights), (3, &transfer)],
+            vertices as u32,
         );
+        let shared = Shared {
+            layout: &layout,
+            rows: &rows,
+            shading: &shading,
+            transfer: &transfer,
+        };
+        let proxies = match info.has_proxies() {
+            true => Some(GpuProxies::new(gpu, &info, shared)?),
+            false => None,
+        };
+        let lights = GpuLights::new(gpu, &info, [layout.clone(), rows.clone(), weights.clone()])?;
         Ok(GpuModel {
             info,
             lit,
@@ -180,6 +226,8 @@ impl GpuModel {
             transfer,
             shade_kernel,
             transfer_kernel,
+            proxies,
+            lights,
         })
     }
 
@@ -195,7 +243,7 @@ impl GpuModel {
         let q = self.info.lit_values(lit)?;
         gpu.queue()
             .write_buffer(&self.lit, 0, bytemuck::cast_slice(q));
-        self.submit(gpu, &self.shade_kernel);
+        self.shade_kernel.submit(gpu);
         Ok(())
     }
 
@@ -212,14 +260,71 @@ impl GpuModel {
         self.info.transfer_weights(pose, &mut w)?;
         gpu.queue()
             .write_buffer(&self.weights, 0, bytemuck::cast_slice(&w));
-        self.submit(gpu, &self.transfer_kernel);
+        self.transfer_kernel.submit(gpu);
         Ok(())
     }
 
-    fn submit(&self, gpu: &Gpu, kernel: &Kernel) {
-        let mut encoder = gpu.device().create_command_encoder(&Default::default());
-        kernel.record(gpu, &mut encoder);
-        gpu.queue().submit([encoder.finish()]);
+    /// Subtracts the occluder proxies' occlusion under the world SH `lighting` (as given to
+    /// [`Model::light`]) from [`GpuModel::shading`]: call after [`GpuModel::shade`], with the
+    /// frame's proxies posed by [`Model::pose_proxies`] and the skinned mesh's world
+    /// positions and normals, as [`Model::occlude`] takes them. Everything is checked by
+    /// aprt-core before anything is written; a model without proxies refuses.
+    pub fn occlude(
+        &self,
+        gpu: &Gpu,
+        (frame, lighting): (&ProxyFrame, &[f32]),
+        vertices: Vertices<'_>,
+    ) -> Result<(), FrameError> {
+        self.proxies()?
+            .occlude(gpu, &self.info, (frame, lighting), vertices)
+    }
+
+    /// Subtracts the proxies' occlusion from [`GpuModel::transfer_values`], each vertex's in
+    /// its bone's frame (`rotations` as given to [`Model::light`]), as
+    /// [`Model::occlude_transfer`] does: call after [`GpuModel::transfer`].
+    pub fn occlude_transfer(
+        &self,
+        gpu: &Gpu,
+        (frame, rotations): (&ProxyFrame, &[Rotation]),
+        vertices: Vertices<'_>,
+    ) -> Result<(), FrameError> {
+        self.proxies()?
+            .occlude_transfer(gpu, &self.info, (frame, rotations), vertices)
+    }
+
+    /// The RGB shading of every vertex under `lights`, each scaled by its weight, evaluated at
+    /// the vertex's world position (`positions`, the skinned mesh) against its transfer for
+    /// `pose`, into [`GpuModel::lights_rgb`], as [`Model::shade_lights`] adds it (`bones` as
+    /// given to [`Model::light`]). Everything is checked by aprt-core before anything is
+    /// written. Takes `&mut self`: the lights' buffer grows to the most lights a frame has had.
+    pub fn shade_lights<const P: usize>(
+        &mut self,
+        gpu: &Gpu,
+        (pose, bones): (&PoseWeights<P>, &[Rotation]),
+        lights: (&[Light], &[f32]),
+        positions: &[[f32; 3]],
+    ) -> Result<(), FrameError> {
+        self.info.light_inputs(pose, bones, lights, positions)?;
+        let mut w = vec![0f32; self.info.transfer_weights_len()];
+        self.info.transfer_weights(pose, &mut w)?;
+        self.lights.shade(gpu, &w, lights, (positions, bones))
+    }
+
+    /// The last [`GpuModel::shade_lights`], RGB, three f32 per vertex.
+    pub fn lights_rgb(&self) -> &wgpu::Buffer {
+        self.lights.rgb()
+    }
+
+    /// The last [`GpuModel::shade_lights`], read back (a blocking wait).
+    pub fn read_lights(&self, gpu: &Gpu) -> Result<Vec<[f32; 3]>, GpuError> {
+        let values: Vec<f32> = gpu.read_back(self.lights.rgb(), 3 * self.info.vertices())?;
+        Ok(values.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+    }
+
+    fn proxies(&self) -> Result<&GpuProxies, FrameError> {
+        self.proxies
+            .as_ref()
+            .ok_or(FrameError::Core(aprt_core::Error::NoProxies))
     }
 
     /// The last shading, one f32 per vertex: bind it as a vertex buffer (`Float32`), or

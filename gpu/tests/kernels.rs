@@ -4,12 +4,14 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
-use aprt_core::{Error, LitWeights, Model, PoseWeights, Rotation};
+use aprt_core::{
+    DirectionalLight, Error, Light, LitWeights, Model, PointLight, PoseWeights, ProxyFrame,
+    Rotation, SphereLight,
+};
 use aprt_gpu::{FrameError, Gpu, GpuModel, TOLERANCE};
-use common::gpu_or_skip;
+use common::{builtin_models, gpu_or_skip, rotations, skinning, trainer, vertices_near_proxies};
 
 const GOLDEN: [&str; 5] = [
     "v1-world.aprt",
@@ -24,20 +26,6 @@ fn golden(name: &str) -> Vec<u8> {
         .join("../fixtures/golden")
         .join(name);
     std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-}
-
-/// A proper rotation per bone, each about its own axis by its own angle.
-fn rotations(bones: usize) -> Vec<Rotation> {
-    (0..bones)
-        .map(|b| {
-            let (s, c) = (0.3 + 0.7 * b as f32).sin_cos();
-            match b % 3 {
-                0 => [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]],
-                1 => [[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]],
-                _ => [[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]],
-            }
-        })
-        .collect()
 }
 
 /// `gpu` against `cpu`, every value within [`TOLERANCE`] of the largest `cpu` magnitude.
@@ -70,7 +58,7 @@ fn assert_close(what: &str, gpu: &[f32], cpu: &[f32]) {
 fn check_model(gpu: &Gpu, what: &str, blob: &[u8]) {
     let model = Model::parse(blob).unwrap();
     let info = *model.info();
-    let on_gpu = GpuModel::upload(gpu, &model).unwrap();
+    let mut on_gpu = GpuModel::upload(gpu, &model).unwrap();
     let (mut pose, mut lit) = (PoseWeights::new(), LitWeights::new());
     let n2 = info.coeffs();
     let bones = rotations(info.bones());
@@ -93,7 +81,137 @@ fn check_model(gpu: &Gpu, what: &str, blob: &[u8]) {
         on_gpu.transfer(gpu, &pose).unwrap();
         let transfer = on_gpu.read_transfer(gpu).unwrap();
         assert_close(&format!("{what}, frame {frame}, transfer"), &transfer, &cpu);
+        check_lights(
+            gpu,
+            (&model, &mut on_gpu),
+            (&pose, &bones),
+            &format!("{what}, frame {frame}"),
+        );
+        if info.has_proxies() {
+            let what = format!("{what}, frame {frame}");
+            check_proxies(
+                gpu,
+                (&model, &on_gpu),
+                (&pose, &lit),
+                (&lighting, &bones),
+                &what,
+            );
+        }
     }
+}
+
+/// Per-vertex lights of every kind at vertices spread around them: inside the sphere light,
+/// near the point light, one light of weight 0.
+fn check_lights(
+    gpu: &Gpu,
+    (model, on_gpu): (&Model<'_>, &mut GpuModel),
+    (pose, bones): (&PoseWeights, &[Rotation]),
+    what: &str,
+) {
+    let info = model.info();
+    // Vertex 0 inside the sphere light; the others around the lights.
+    let positions: Vec<[f32; 3]> = (0..info.vertices())
+        .map(|j| match j {
+            0 => [0.3, 0.25, 0.1],
+            _ => {
+                let t = j as f32;
+                [t.sin(), (1.3 * t).cos(), 0.5 * (0.7 * t).sin()]
+            }
+        })
+        .collect();
+    let lights = [
+        Light::Sphere(SphereLight {
+            position: [0.3, 0.2, 0.1],
+            radius: 0.4,
+            radiance: [1.0, 0.8, 0.6],
+        }),
+        Light::Point(PointLight {
+            position: [1.2, 0.0, 0.2],
+            intensity: [0.02, 0.03, 0.04],
+        }),
+        Light::Directional(DirectionalLight {
+            direction: [0.2, -1.0, 0.5],
+            irradiance: [0.7, 0.7, 0.9],
+        }),
+        Light::Point(PointLight {
+            position: [0.0, 0.0, 3.0],
+            intensity: [5.0; 3],
+        }),
+    ];
+    let weights = [0.8, 1.0, 0.5, 0.0];
+    let negative = on_gpu.shade_lights(
+        gpu,
+        (pose, bones),
+        (&lights, &[0.8, -1.0, 0.5, 0.0]),
+        &positions,
+    );
+    assert!(
+        matches!(
+            negative,
+            Err(FrameError::Core(Error::BadLightWeight { index: 1 }))
+        ),
+        "{what}: {negative:?}"
+    );
+    let mut cpu = vec![[0.0; 3]; info.vertices()];
+    model
+        .shade_lights(pose, bones, &lights, &weights, &positions, 0, &mut cpu)
+        .unwrap();
+    on_gpu
+        .shade_lights(gpu, (pose, bones), (&lights, &weights), &positions)
+        .unwrap();
+    let rgb = on_gpu.read_lights(gpu).unwrap();
+    assert_close(
+        &format!("{what}, per-vertex lights"),
+        rgb.as_flattened(),
+        cpu.as_flattened(),
+    );
+}
+
+/// The proxies' correction of the shading and the transfer, on the device and on the CPU; at
+/// least a tenth of the vertices must be reached in each, or the comparison shows little.
+fn check_proxies(
+    gpu: &Gpu,
+    (model, on_gpu): (&Model<'_>, &GpuModel),
+    (pose, lit): (&PoseWeights, &LitWeights),
+    (lighting, bones): (&[f32], &[Rotation]),
+    what: &str,
+) {
+    let info = model.info();
+    let mut frame = ProxyFrame::new();
+    model.pose_proxies(&skinning(bones), &mut frame).unwrap();
+    let (positions, normals) = vertices_near_proxies(model, &frame);
+    let vertices = (&positions[..], &normals[..]);
+
+    let mut shaded = vec![0.0; info.vertices()];
+    model.shade(lit, 0, &mut shaded).unwrap();
+    let mut cpu = shaded.clone();
+    model
+        .occlude(&frame, lighting, &positions, &normals, 0, &mut cpu)
+        .unwrap();
+    let reached = cpu.iter().zip(&shaded).filter(|(a, b)| a != b).count();
+    assert!(10 * reached >= info.vertices(), "{what}: {reached} reached");
+    on_gpu.shade(gpu, lit).unwrap();
+    on_gpu.occlude(gpu, (&frame, lighting), vertices).unwrap();
+    let occluded = on_gpu.read_shading(gpu).unwrap();
+    assert_close(&format!("{what}, occluded shading"), &occluded, &cpu);
+
+    let mut transfer = vec![0.0; info.vertices() * info.coeffs()];
+    model.transfer(pose, 0, &mut transfer).unwrap();
+    let mut cpu = transfer.clone();
+    model
+        .occlude_transfer(&frame, bones, &positions, &normals, 0, &mut cpu)
+        .unwrap();
+    let reached = cpu
+        .chunks(info.coeffs())
+        .zip(transfer.chunks(info.coeffs()));
+    let reached = reached.filter(|(a, b)| a != b).count();
+    assert!(10 * reached >= info.vertices(), "{what}: {reached} reached");
+    on_gpu.transfer(gpu, pose).unwrap();
+    on_gpu
+        .occlude_transfer(gpu, (&frame, bones), vertices)
+        .unwrap();
+    let occluded = on_gpu.read_transfer(gpu).unwrap();
+    assert_close(&format!("{what}, occluded transfer"), &occluded, &cpu);
 }
 
 #[test]
@@ -104,6 +222,25 @@ fn every_golden_blob_shades_and_transfers_as_on_the_cpu() {
     for name in GOLDEN {
         check_model(&gpu, name, &golden(name));
     }
+}
+
+/// An engine's own device and queue serve as well as the crate's.
+#[test]
+fn an_engines_device_runs_the_kernels() {
+    let Some(own) = gpu_or_skip("an_engines_device_runs_the_kernels") else {
+        return;
+    };
+    let engine = (
+        own.device().clone(),
+        own.queue().clone(),
+        own.info().clone(),
+    );
+    let gpu = Gpu::from_parts(engine.0, engine.1, engine.2);
+    check_model(
+        &gpu,
+        "v1-bones.aprt on the engine's device",
+        &golden("v1-bones.aprt"),
+    );
 }
 
 /// Weights computed for another model, or never set, are refused before anything is written:
@@ -147,31 +284,7 @@ fn weights_of_another_model_are_refused_before_upload() {
     assert_eq!(on_gpu.read_transfer(&gpu).unwrap(), transfer);
 }
 
-/// The `aprt` binary of the root workspace (`cargo build --release -p aprt-trainer` builds
-/// it; `.ci/run` has, before this crate's tests), or `None` after saying why the test skips;
-/// with `$APRT_REQUIRE_GPU` its absence fails the test.
-fn trainer(test: &str) -> Option<PathBuf> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let bin = std::env::var_os("APRT_BIN")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| root.join("target/release/aprt"));
-    if bin.exists() {
-        return Some(bin);
-    }
-    assert!(
-        std::env::var_os("APRT_REQUIRE_GPU").is_none(),
-        "{test}: needs {} (cargo build --release -p aprt-trainer)",
-        bin.display()
-    );
-    eprintln!(
-        "skipping {test}: no {} (cargo build --release -p aprt-trainer)",
-        bin.display()
-    );
-    None
-}
-
-/// The built-in character's model, as the demo's default is shaped (bone frames, occluder
-/// proxies, k_v 22, 13,022 vertices) but baked with few rays on one clip, in each precision.
+/// The built-in character's model ([`builtin_models`]) in each precision.
 #[test]
 fn the_builtin_characters_model_agrees_in_every_precision() {
     let test = "the_builtin_characters_model_agrees_in_every_precision";
@@ -181,27 +294,61 @@ fn the_builtin_characters_model_agrees_in_every_precision() {
     let Some(aprt) = trainer(test) else {
         return;
     };
-    let dir = std::env::temp_dir().join(format!("aprt-gpu-{}", std::process::id()));
-    let checkpoint = dir.join("checkpoint");
-    for (i, precision) in ["f32", "f16", "i8"].into_iter().enumerate() {
-        let out = dir.join(format!("builtin-{precision}.aprt"));
-        let mut command = Command::new(&aprt);
-        command.args(["train", "--builtin", "--clip", "wave", "--rays", "8"]);
-        command.args(["--validation-poses", "0", "--proxies", "on"]);
-        command.args(["--precision", precision, "--checkpoint"]);
-        command.arg(&checkpoint).arg("-o").arg(&out);
-        if i > 0 {
-            command.arg("--resume");
-        }
-        let run = command.output().unwrap();
-        assert!(
-            run.status.success(),
-            "{}",
-            String::from_utf8_lossy(&run.stderr)
-        );
-        let blob = std::fs::read(&out).unwrap();
+    for (precision, blob) in builtin_models(&aprt) {
         assert!(Model::parse(&blob).unwrap().info().has_proxies());
         check_model(&gpu, &format!("built-in, {precision}"), &blob);
     }
-    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The proxies' inputs are checked by aprt-core before anything is written: a frame never
+/// posed, normals of the wrong count, a position that is not finite, a model without
+/// proxies; the last shading stays as it was.
+#[test]
+fn proxy_inputs_are_refused_before_upload() {
+    let Some(gpu) = gpu_or_skip("proxy_inputs_are_refused_before_upload") else {
+        return;
+    };
+    let blob = golden("v1-proxies.aprt");
+    let model = Model::parse(&blob).unwrap();
+    let info = *model.info();
+    let on_gpu = GpuModel::upload(&gpu, &model).unwrap();
+    let (mut pose, mut lit) = (PoseWeights::new(), LitWeights::new());
+    let bones = rotations(info.bones());
+    let lighting = vec![0.5; info.coeffs()];
+    model
+        .set_pose(&vec![0.1; info.pose_len()], &mut pose)
+        .unwrap();
+    model.light(&pose, &lighting, &bones, &mut lit).unwrap();
+    let mut frame = ProxyFrame::new();
+    model.pose_proxies(&skinning(&bones), &mut frame).unwrap();
+    let (positions, normals) = vertices_near_proxies(&model, &frame);
+    on_gpu.shade(&gpu, &lit).unwrap();
+    on_gpu
+        .occlude(&gpu, (&frame, &lighting), (&positions, &normals))
+        .unwrap();
+    let before = on_gpu.read_shading(&gpu).unwrap();
+
+    let refused = |r: Result<(), FrameError>| match r {
+        Err(FrameError::Core(e)) => e,
+        other => panic!("{other:?}"),
+    };
+    let unposed = ProxyFrame::new();
+    let e = refused(on_gpu.occlude(&gpu, (&unposed, &lighting), (&positions, &normals)));
+    assert_eq!(e, Error::WeightsNotSet);
+    let short = &normals[1..];
+    let e = refused(on_gpu.occlude(&gpu, (&frame, &lighting), (&positions, short)));
+    assert!(matches!(e, Error::WrongLength { .. }), "{e:?}");
+    let mut nan = positions.clone();
+    nan[0][1] = f32::NAN;
+    let e = refused(on_gpu.occlude(&gpu, (&frame, &lighting), (&nan, &normals)));
+    assert!(matches!(e, Error::NonFinitePosition { index: 0 }), "{e:?}");
+    let e = refused(on_gpu.occlude_transfer(&gpu, (&frame, &bones[1..]), (&positions, &normals)));
+    assert!(matches!(e, Error::WrongLength { .. }), "{e:?}");
+    assert_eq!(on_gpu.read_shading(&gpu).unwrap(), before);
+
+    let world = golden("v1-world.aprt");
+    let world = GpuModel::upload(&gpu, &Model::parse(&world).unwrap()).unwrap();
+    let none = vec![[0.0; 3]; world.info().vertices()];
+    let e = refused(world.occlude(&gpu, (&frame, &[1.0; 9]), (&none, &none)));
+    assert_eq!(e, Error::NoProxies);
 }

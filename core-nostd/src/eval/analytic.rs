@@ -20,17 +20,15 @@ use crate::sh::{MAX_COEFFS, MAX_ORDER, eval_basis_lanes, normalise};
 const Y00: f32 = 0.282_094_8;
 
 impl ModelInfo {
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn shade_lights<R: Reader, const P: usize>(
+    /// What `shade_lights` checks of its inputs: pose weights of this model, its bones'
+    /// rotations, every light valid, one finite non-negative weight per light, `count`
+    /// finite positions (one per vertex shaded).
+    pub(super) fn check_light_inputs<const P: usize>(
         &self,
-        r: &mut R,
         pose: &PoseWeights<P>,
         bones: &[Rotation],
-        lights: &[Light],
-        weights: &[f32],
-        positions: &[[f32; 3]],
-        first: usize,
-        out: &mut [[f32; 3]],
+        (lights, weights): (&[Light], &[f32]),
+        (positions, count): (&[[f32; 3]], usize),
     ) -> Result<(), Error> {
         self.check_lighting_inputs(pose, bones)?;
         for (index, light) in lights.iter().enumerate() {
@@ -48,9 +46,25 @@ impl ModelInfo {
         if let Some(index) = weights.iter().position(|w| !(w.is_finite() && *w >= 0.0)) {
             return Err(Error::BadLightWeight { index });
         }
-        check_positions(positions, out.len())?;
+        check_positions(positions, count)?;
+        self.check_rotations(bones)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn shade_lights<R: Reader, const P: usize>(
+        &self,
+        r: &mut R,
+        pose: &PoseWeights<P>,
+        bones: &[Rotation],
+        lights: &[Light],
+        weights: &[f32],
+        positions: &[[f32; 3]],
+        first: usize,
+        out: &mut [[f32; 3]],
+    ) -> Result<(), Error> {
+        let lit = (lights, weights);
+        self.check_light_inputs(pose, bones, lit, (positions, out.len()))?;
         self.check_range(first, out.len())?;
-        self.check_rotations(bones)?;
 
         let (order, n2) = (self.order, self.coeffs());
         let world = self.frame == Frame::World;

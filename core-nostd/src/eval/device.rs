@@ -6,6 +6,8 @@
 use super::weights::{LitWeights, PoseWeights, check_stamp};
 use crate::blob::format::{Basis, Encoding, VERTEX_BLOCK};
 use crate::blob::{Error, ModelInfo, Span};
+use crate::proxies::{MAX_PROXIES, ProxyFrame};
+use crate::rotation::Rotation;
 
 /// The per-vertex rows of a resident model, as stored: blocks of [`VERTEX_BLOCK`] vertices,
 /// each `lead_rows` rows of bone indices (bone-frame models) then `row_width` rows, every row
@@ -93,9 +95,123 @@ impl ModelInfo {
     }
 }
 
+/// A frame's posed occluder proxies as a device reads them, checked against the per-vertex
+/// inputs of the frame ([`ModelInfo::proxy_inputs`]): every proxy's posed sphere, each bone's
+/// mask of the proxies that may reach its vertices, and the cull. A vertex of bone `b` loses
+/// the caps of the proxies of `mask(b)` within their reach, summed in proxy order and
+/// combined as aprt-core's `Model::occlude` combines them.
+#[derive(Clone, Copy, Debug)]
+pub struct ProxyView<'f> {
+    frame: &'f ProxyFrame,
+    bones: usize,
+}
+
+impl ProxyView<'_> {
+    /// `sin²α` below which a cap is dropped (faded in over `[cull, 2 cull]`).
+    pub fn cull(&self) -> f32 {
+        self.frame.cull
+    }
+
+    /// Proxy `i` (below [`MAX_PROXIES`]): posed centre, radius and reach (`r / √cull`,
+    /// infinite when nothing is culled). Proxies no mask holds are zero.
+    pub fn sphere(&self, i: usize) -> ([f32; 3], f32, f32) {
+        let s = self.frame.sphere(i % MAX_PROXIES);
+        (s.centre, s.radius, s.reach)
+    }
+
+    /// The proxies that may reach bone `bone`'s vertices this frame, bit `i` for proxy `i`.
+    pub fn mask(&self, bone: usize) -> u64 {
+        self.frame.candidates.get(bone).copied().unwrap_or(0)
+    }
+
+    /// Bones with a mask: [`ModelInfo::bones`].
+    pub fn bones(&self) -> usize {
+        self.bones
+    }
+}
+
+impl ModelInfo {
+    /// The posed proxies of `frame` for a device that subtracts them from every vertex's
+    /// shading or transfer, after the checks `Model::occlude` and `Model::occlude_transfer`
+    /// make: `frame` posed for this model, one finite position and normal per vertex, the
+    /// lighting (`Some`, for shading) n² finite values, the rotations (`Some`, for transfer)
+    /// one proper rotation per bone.
+    pub fn proxy_inputs<'f>(
+        &self,
+        frame: &'f ProxyFrame,
+        (positions, normals): (&[[f32; 3]], &[[f32; 3]]),
+        lighting: Option<&[f32]>,
+        rotations: Option<&[Rotation]>,
+    ) -> Result<ProxyView<'f>, Error> {
+        if let Some(lighting) = lighting {
+            self.check_sh_lighting(lighting)?;
+        }
+        if let Some(bones) = rotations {
+            self.check_bone_rotations(bones)?;
+        }
+        self.check_occlusion_inputs(frame, positions, normals, 0, self.vertices)?;
+        Ok(ProxyView {
+            frame,
+            bones: self.bones(),
+        })
+    }
+}
+
+impl ModelInfo {
+    /// Checks the inputs of per-vertex lights over every vertex as `Model::shade_lights`
+    /// checks them (pose weights of this model, its bones' rotations, valid lights, one
+    /// finite non-negative weight per light, one finite position per vertex), for a device
+    /// that evaluates them itself ([`Light::shape`](crate::Light::shape) gives each light's
+    /// geometry).
+    pub fn light_inputs<const P: usize>(
+        &self,
+        pose: &PoseWeights<P>,
+        bones: &[Rotation],
+        (lights, weights): (&[crate::Light], &[f32]),
+        positions: &[[f32; 3]],
+    ) -> Result<(), Error> {
+        self.check_light_inputs(pose, bones, (lights, weights), (positions, self.vertices))
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use crate::{LitWeights, Model, PoseWeights, VERTEX_BLOCK};
+    use crate::{Error, LitWeights, Model, PoseWeights, ProxyFrame, VERTEX_BLOCK};
+
+    /// The proxy view refuses what `occlude` and `occlude_transfer` refuse, and shows the
+    /// frame's masks and spheres.
+    #[test]
+    fn the_proxy_view_checks_what_occlude_checks() {
+        let model =
+            Model::parse(include_bytes!("../../../fixtures/golden/v1-proxies.aprt")).unwrap();
+        let info = *model.info();
+        let identity = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let still = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+        let bones = [identity; 2];
+        let mut frame = ProxyFrame::new();
+        let v = info.vertices();
+        let (p, n) = ([[0.0f32; 3]; 64], [[0.0f32, 0.0, 1.0]; 64]);
+        let vertices = (&p[..v], &n[..v]);
+        let light = [1.0f32; 36];
+        let n2 = info.coeffs();
+        let unposed = info.proxy_inputs(&frame, vertices, None, None);
+        assert_eq!(unposed.err(), Some(Error::WeightsNotSet));
+        model.pose_proxies(&[still; 2], &mut frame).unwrap();
+        let view = info
+            .proxy_inputs(&frame, vertices, Some(&light[..n2]), Some(&bones))
+            .unwrap();
+        assert_eq!(view.bones(), info.bones());
+        for b in 0..info.bones() {
+            assert_eq!(view.mask(b).count_ones(), frame.candidates(b));
+        }
+        assert!(view.sphere(0).1 > 0.0);
+        let short = (&p[..v - 1], &n[..v - 1]);
+        assert!(info.proxy_inputs(&frame, short, None, None).is_err());
+        let wrong_lighting = info.proxy_inputs(&frame, vertices, Some(&light[..n2 - 1]), None);
+        assert!(wrong_lighting.is_err());
+        let one_bone = info.proxy_inputs(&frame, vertices, None, Some(&bones[..1]));
+        assert!(one_bone.is_err());
+    }
 
     /// Every golden blob: shading and transfer recomputed from the rows and the weights these
     /// calls give, in f64 and in plain row order, match `shade` and `transfer` within f32

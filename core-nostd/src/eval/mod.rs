@@ -22,7 +22,7 @@ mod bounds;
 mod device;
 mod features;
 pub(crate) mod kernels;
-pub use device::VertexRows;
+pub use device::{ProxyView, VertexRows};
 pub use kernels::use_portable_kernels;
 mod occlude;
 mod rig;

@@ -11,8 +11,21 @@ use crate::rotation::{IDENTITY, Rotation};
 use crate::sh::MAX_COEFFS;
 
 impl ModelInfo {
+    /// One proper rotation per bone, whatever the frame (the occlusion's transfer is in the
+    /// vertices' bone frames).
+    pub(super) fn check_bone_rotations(&self, bones: &[Rotation]) -> Result<(), Error> {
+        if bones.len() != self.bones() {
+            return Err(Error::WrongLength {
+                what: Input::BoneRotations,
+                expected: self.bones(),
+                found: bones.len(),
+            });
+        }
+        self.check_rotations(bones)
+    }
+
     /// Checks the per-vertex inputs of an occlusion call over `count` vertices from `first`.
-    fn check_occlusion_inputs(
+    pub(super) fn check_occlusion_inputs(
         &self,
         frame: &ProxyFrame,
         positions: &[[f32; 3]],
@@ -172,14 +185,7 @@ impl ModelInfo {
         out: &mut [f32],
     ) -> Result<(), Error> {
         let n2 = self.coeffs();
-        if bones.len() != self.bones() {
-            return Err(Error::WrongLength {
-                what: Input::BoneRotations,
-                expected: self.bones(),
-                found: bones.len(),
-            });
-        }
-        self.check_rotations(bones)?;
+        self.check_bone_rotations(bones)?;
         let count = self.transfer_vertices(out.len())?;
         self.check_occlusion_inputs(frame, positions, normals, first, count)?;
         let range = (first, count);

@@ -26,12 +26,53 @@ pub const SHADE: Shader = Shader {
     source: concat!(include_str!("rows.wgsl"), include_str!("shade.wgsl")),
 };
 
+/// This frame's transfer weights and a vertex's transfer from them (`transfer_value`), for
+/// the kernels that need the transfer.
+pub const WEIGHTS: Shader = Shader {
+    name: "weights.wgsl",
+    source: concat!(include_str!("rows.wgsl"), include_str!("weights.wgsl")),
+};
+
 /// Per-vertex transfer from the transfer weights (entry point `transfer_values`); see
 /// [`GpuModel::transfer`](crate::GpuModel::transfer).
 pub const TRANSFER: Shader = Shader {
     name: "transfer.wgsl",
-    source: concat!(include_str!("rows.wgsl"), include_str!("transfer.wgsl")),
+    source: concat!(
+        include_str!("rows.wgsl"),
+        include_str!("weights.wgsl"),
+        include_str!("transfer.wgsl")
+    ),
+};
+
+/// The real SH basis up to order 6 as aprt-core evaluates it (`sh_basis`), for the kernels
+/// that turn directions into coefficients.
+pub const SH: Shader = Shader {
+    name: "sh.wgsl",
+    source: include_str!("sh.wgsl"),
+};
+
+/// The occluder proxies' correction of shading and transfer (entry points `occlude_shading`
+/// and `occlude_transfer`); see [`GpuModel::occlude`](crate::GpuModel::occlude).
+pub const OCCLUDE: Shader = Shader {
+    name: "occlude.wgsl",
+    source: concat!(
+        include_str!("rows.wgsl"),
+        include_str!("sh.wgsl"),
+        include_str!("occlude.wgsl")
+    ),
+};
+
+/// Per-vertex lights through each vertex's transfer (entry point `shade_lights`); see
+/// [`GpuModel::shade_lights`](crate::GpuModel::shade_lights).
+pub const LIGHTS: Shader = Shader {
+    name: "lights.wgsl",
+    source: concat!(
+        include_str!("rows.wgsl"),
+        include_str!("sh.wgsl"),
+        include_str!("weights.wgsl"),
+        include_str!("lights.wgsl")
+    ),
 };
 
 /// Every shader of the crate.
-pub const ALL: &[Shader] = &[ROWS, SHADE, TRANSFER];
+pub const ALL: &[Shader] = &[ROWS, WEIGHTS, SHADE, TRANSFER, SH, OCCLUDE, LIGHTS];

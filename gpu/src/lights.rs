@@ -1,0 +1,170 @@
+//! Per-vertex lights on the device: each frame the lights' geometry (aprt-core's
+//! `Light::shape`), colours and weights, the skinned positions and the bones' rotations are
+//! written, and `lights.wgsl` shades every vertex through its own transfer.
+
+use aprt_core::{Light, LightShape, ModelInfo, Rotation};
+use bytemuck::Zeroable;
+
+use crate::device::{Gpu, GpuError};
+use crate::model::{FrameError, Kernel};
+use crate::shaders::LIGHTS;
+
+/// The struct `Light` of `lights.wgsl`, field for field (48 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct LightRecord {
+    position: [f32; 3],
+    radius: f32,
+    colour: [f32; 3],
+    radiance: f32,
+    weight: f32,
+    directional: u32,
+    pad: [u32; 2],
+}
+
+impl LightRecord {
+    fn of(light: &Light, weight: f32) -> LightRecord {
+        let (position, radius, radiance, directional) = match light.shape() {
+            LightShape::Sphere {
+                centre,
+                radius,
+                radiance,
+            } => (centre, radius, radiance, 0),
+            LightShape::Directional(direction) => (direction, 0.0, 0.0, 1),
+        };
+        LightRecord {
+            position,
+            radius,
+            colour: light.colour(),
+            radiance,
+            weight,
+            directional,
+            pad: [0; 2],
+        }
+    }
+}
+
+/// The uniform block `LightsInfo` of `lights.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct LightsInfo {
+    count: u32,
+    order: u32,
+}
+
+/// The buffers of per-vertex lights and the kernel bound to them; the lights' buffer grows to
+/// the most lights a frame has had.
+pub(crate) struct GpuLights {
+    /// The model's rows layout, rows and transfer weights, which the kernel reads.
+    shared: [wgpu::Buffer; 3],
+    info: wgpu::Buffer,
+    lights: wgpu::Buffer,
+    capacity: usize,
+    positions: wgpu::Buffer,
+    rotations: wgpu::Buffer,
+    rgb: wgpu::Buffer,
+    kernel: Kernel,
+}
+
+impl GpuLights {
+    /// The buffers, zeroed, with room for one light, and the kernel bound to them and to
+    /// `shared` (the model's rows layout, rows and transfer weights).
+    pub(crate) fn new(
+        gpu: &Gpu,
+        info: &ModelInfo,
+        shared: [wgpu::Buffer; 3],
+    ) -> Result<Self, GpuError> {
+        let input = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+        let uniform = wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST;
+        let vertices = info.vertices();
+        let block = LightsInfo {
+            count: 0,
+            order: info.order() as u32,
+        };
+        let bones = info.bones().max(1);
+        let info = gpu.buffer("lights info", &[block], uniform)?;
+        let lights = gpu.buffer("lights", &[LightRecord::zeroed()], input)?;
+        let positions = gpu.buffer("light positions", &vec![0f32; 3 * vertices], input)?;
+        let rotations = gpu.buffer("light rotations", &vec![0f32; 9 * bones], input)?;
+        let rgb = gpu.output::<f32>("lights rgb", 3 * vertices)?;
+        let kernel = Kernel::new(
+            gpu,
+            (&LIGHTS, "shade_lights"),
+            &bindings(&shared, [&rgb, &lights, &positions, &rotations, &info]),
+            vertices as u32,
+        );
+        Ok(GpuLights {
+            shared,
+            info,
+            lights,
+            capacity: 1,
+            positions,
+            rotations,
+            rgb,
+            kernel,
+        })
+    }
+
+    /// The RGB shading of the last [`GpuLights::shade`], three f32 per vertex.
+    pub(crate) fn rgb(&self) -> &wgpu::Buffer {
+        &self.rgb
+    }
+
+    /// Shades every vertex under `lights` (each scaled by its weight) at `positions`, after
+    /// aprt-core's checks; `transfer_weights` are the frame's, from the same pose.
+    pub(crate) fn shade(
+        &mut self,
+        gpu: &Gpu,
+        transfer_weights: &[f32],
+        (lights, weights): (&[Light], &[f32]),
+        (positions, bones): (&[[f32; 3]], &[Rotation]),
+    ) -> Result<(), FrameError> {
+        if lights.len() > self.capacity {
+            self.grow(gpu, lights.len())?;
+        }
+        let records: Vec<LightRecord> = lights
+            .iter()
+            .zip(weights)
+            .map(|(light, &weight)| LightRecord::of(light, weight))
+            .collect();
+        let count = LightsInfo {
+            count: lights.len() as u32,
+            order: 0,
+        };
+        let queue = gpu.queue();
+        queue.write_buffer(&self.shared[2], 0, bytemuck::cast_slice(transfer_weights));
+        queue.write_buffer(&self.lights, 0, bytemuck::cast_slice(&records));
+        // The count alone: the order stays as written at creation.
+        queue.write_buffer(&self.info, 0, &bytemuck::bytes_of(&count)[..4]);
+        queue.write_buffer(&self.positions, 0, bytemuck::cast_slice(positions));
+        if !bones.is_empty() {
+            queue.write_buffer(&self.rotations, 0, bytemuck::cast_slice(bones));
+        }
+        self.kernel.submit(gpu);
+        Ok(())
+    }
+
+    /// Room for `count` lights: a new buffer, bound in place of the old one.
+    fn grow(&mut self, gpu: &Gpu, count: usize) -> Result<(), GpuError> {
+        let input = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+        self.lights = gpu.buffer("lights", &vec![LightRecord::zeroed(); count], input)?;
+        self.capacity = count;
+        let own = [
+            &self.rgb,
+            &self.lights,
+            &self.positions,
+            &self.rotations,
+            &self.info,
+        ];
+        self.kernel.rebind(gpu, &bindings(&self.shared, own));
+        Ok(())
+    }
+}
+
+/// The kernel's bindings in `lights.wgsl`'s order: the model's three, then its own five.
+fn bindings<'a>(
+    shared: &'a [wgpu::Buffer; 3],
+    own: [&'a wgpu::Buffer; 5],
+) -> Vec<(u32, &'a wgpu::Buffer)> {
+    (0..).zip(shared.iter().chain(own)).collect()
+}
