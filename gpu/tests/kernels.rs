@@ -415,3 +415,18 @@ fn proxy_inputs_are_refused_before_upload() {
     let e = refused(world.occlude(&gpu, (&frame, &[1.0; 9]), (&none, &none)));
     assert_eq!(e, Error::NoProxies);
 }
+
+/// Any model file, when `$APRT_GPU_MODEL` names one (for example the model `aprt demo`
+/// writes), checked as the built-in ones are; skipped, saying so, without it.
+#[test]
+fn the_model_file_named_agrees() {
+    let Some(path) = std::env::var_os("APRT_GPU_MODEL") else {
+        eprintln!("skipping the_model_file_named_agrees: $APRT_GPU_MODEL names no model file");
+        return;
+    };
+    let Some(gpu) = gpu_or_skip("the_model_file_named_agrees") else {
+        return;
+    };
+    let blob = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    check_model(&gpu, &path.to_string_lossy(), &blob);
+}
