@@ -5,7 +5,7 @@
 use aprt_core::{IrradianceRig, ModelInfo, Placement, RigShape};
 use bytemuck::Zeroable;
 
-use crate::device::{Gpu, GpuError};
+use crate::device::{Gpu, GpuError, Growing};
 use crate::model::{FrameError, Kernel};
 use crate::shaders::RIG;
 
@@ -44,14 +44,12 @@ impl RigBlock {
     }
 }
 
-/// The buffers of rig shading and the kernel bound to them; the weights' buffer grows to the
-/// largest rig a frame has had.
+/// The buffers of rig shading and the kernel bound to them.
 pub(crate) struct GpuRig {
     /// The model's rows layout and rows, which the kernel reads.
     shared: [wgpu::Buffer; 2],
     block: wgpu::Buffer,
-    lit: wgpu::Buffer,
-    capacity: usize,
+    lit: Growing,
     positions: wgpu::Buffer,
     rgb: wgpu::Buffer,
     kernel: Kernel,
@@ -69,21 +67,19 @@ impl GpuRig {
         let uniform = wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST;
         let vertices = info.vertices();
         let block = gpu.buffer("rig", &[RigBlock::zeroed()], uniform)?;
-        let capacity = info.lit_weights_len();
-        let lit = gpu.buffer("rig weights", &vec![0f32; capacity], input)?;
+        let lit = Growing::new(gpu, "rig weights", 4 * info.lit_weights_len())?;
         let positions = gpu.buffer("rig positions", &vec![0f32; 3 * vertices], input)?;
         let rgb = gpu.output::<f32>("rig rgb", 3 * vertices)?;
         let kernel = Kernel::new(
             gpu,
             (&RIG, "shade_rig"),
-            &bindings(&shared, [&lit, &rgb, &positions, &block]),
+            &bindings(&shared, [lit.buffer(), &rgb, &positions, &block]),
             vertices as u32,
         );
         Ok(GpuRig {
             shared,
             block,
             lit,
-            capacity,
             positions,
             rgb,
             kernel,
@@ -104,25 +100,15 @@ impl GpuRig {
         (q, rig, placement): (&[f32], &IrradianceRig<'_>, &Placement),
         positions: &[[f32; 3]],
     ) -> Result<(), FrameError> {
-        if q.len() > self.capacity {
-            self.grow(gpu, q.len())?;
-        }
         let block = RigBlock::of(rig, placement, info.lit_weights_len());
         let queue = gpu.queue();
-        queue.write_buffer(&self.lit, 0, bytemuck::cast_slice(q));
         queue.write_buffer(&self.block, 0, bytemuck::bytes_of(&block));
         queue.write_buffer(&self.positions, 0, bytemuck::cast_slice(positions));
+        if self.lit.write(gpu, q)? {
+            let own = [self.lit.buffer(), &self.rgb, &self.positions, &self.block];
+            self.kernel.rebind(gpu, &bindings(&self.shared, own));
+        }
         self.kernel.submit(gpu);
-        Ok(())
-    }
-
-    /// Room for `len` weights: a new buffer, bound in place of the old one.
-    fn grow(&mut self, gpu: &Gpu, len: usize) -> Result<(), GpuError> {
-        let input = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
-        self.lit = gpu.buffer("rig weights", &vec![0f32; len], input)?;
-        self.capacity = len;
-        let own = [&self.lit, &self.rgb, &self.positions, &self.block];
-        self.kernel.rebind(gpu, &bindings(&self.shared, own));
         Ok(())
     }
 }
