@@ -25,7 +25,8 @@ use std::time::Duration;
 use aprt_core::{LitWeights, Model, PoseWeights, ProxyFrame, Rotation};
 use aprt_gpu::{Gpu, GpuModel};
 use common::{
-    BUILTIN_TRAIN, builtin_models, gpu_or_skip, rotations, skinning, trainer, vertices_near_proxies,
+    BUILTIN_RIGS, BUILTIN_TRAIN, builtin_models, gpu_or_skip, rotations, skinning, trainer,
+    vertices_near_proxies,
 };
 use timing::{interleaved_seconds, median_ratio};
 
@@ -56,9 +57,14 @@ fn main() {
             let Some(aprt) = trainer(bench) else {
                 return;
             };
+            let rigs: Vec<String> = BUILTIN_RIGS
+                .iter()
+                .map(|(precision, rig)| format!("--rig {rig} --precision {precision}"))
+                .collect();
             println!(
-                "model: the built-in character, `{} {BUILTIN_TRAIN} f32|f16|i8`",
-                aprt.display()
+                "model: the built-in character, `{} {BUILTIN_TRAIN}` with {}",
+                aprt.display(),
+                rigs.join(" | ")
             );
             builtin_models(&aprt)
         }

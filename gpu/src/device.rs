@@ -282,6 +282,41 @@ impl Gpu {
     }
 }
 
+/// A storage input whose size each frame decides (its lights, its rig's weights): it grows to
+/// the largest a frame has had, and says when it did, so the kernels reading it bind it again.
+pub(crate) struct Growing {
+    label: &'static str,
+    buffer: wgpu::Buffer,
+}
+
+impl Growing {
+    /// A buffer of `bytes` zeros (at least a word).
+    pub(crate) fn new(gpu: &Gpu, label: &'static str, bytes: usize) -> Result<Self, GpuError> {
+        let zeros = vec![0u32; bytes.div_ceil(4).max(1)];
+        let buffer = gpu.buffer(label, &zeros, Self::USAGE)?;
+        Ok(Growing { label, buffer })
+    }
+
+    const USAGE: wgpu::BufferUsages =
+        wgpu::BufferUsages::STORAGE.union(wgpu::BufferUsages::COPY_DST);
+
+    /// The buffer, to bind.
+    pub(crate) fn buffer(&self) -> &wgpu::Buffer {
+        &self.buffer
+    }
+
+    /// Writes `values`, in a new buffer when they outgrow this one: `true` when it is new.
+    pub(crate) fn write<T: Pod>(&mut self, gpu: &Gpu, values: &[T]) -> Result<bool, GpuError> {
+        let bytes: &[u8] = bytemuck::cast_slice(values);
+        if bytes.len() as u64 > self.buffer.size() {
+            self.buffer = gpu.buffer(self.label, values, Self::USAGE)?;
+            return Ok(true);
+        }
+        gpu.queue.write_buffer(&self.buffer, 0, bytes);
+        Ok(false)
+    }
+}
+
 impl fmt::Display for Gpu {
     /// `name (backend, driver)`, the line the tests print.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {

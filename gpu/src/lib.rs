@@ -11,6 +11,7 @@ mod device;
 mod lights;
 mod model;
 mod proxies;
+mod rig;
 pub mod shaders;
 
 pub use device::{Gpu, GpuError, NoAdapter};

@@ -3,9 +3,8 @@
 //! written, and `lights.wgsl` shades every vertex through its own transfer.
 
 use aprt_core::{Light, LightShape, ModelInfo, Rotation};
-use bytemuck::Zeroable;
 
-use crate::device::{Gpu, GpuError};
+use crate::device::{Gpu, GpuError, Growing};
 use crate::model::{FrameError, Kernel};
 use crate::shaders::LIGHTS;
 
@@ -52,14 +51,12 @@ struct LightsInfo {
     order: u32,
 }
 
-/// The buffers of per-vertex lights and the kernel bound to them; the lights' buffer grows to
-/// the most lights a frame has had.
+/// The buffers of per-vertex lights and the kernel bound to them.
 pub(crate) struct GpuLights {
     /// The model's rows layout, rows and transfer weights, which the kernel reads.
     shared: [wgpu::Buffer; 3],
     info: wgpu::Buffer,
-    lights: wgpu::Buffer,
-    capacity: usize,
+    lights: Growing,
     positions: wgpu::Buffer,
     rotations: wgpu::Buffer,
     rgb: wgpu::Buffer,
@@ -83,21 +80,23 @@ impl GpuLights {
         };
         let bones = info.bones().max(1);
         let info = gpu.buffer("lights info", &[block], uniform)?;
-        let lights = gpu.buffer("lights", &[LightRecord::zeroed()], input)?;
+        let lights = Growing::new(gpu, "lights", size_of::<LightRecord>())?;
         let positions = gpu.buffer("light positions", &vec![0f32; 3 * vertices], input)?;
         let rotations = gpu.buffer("light rotations", &vec![0f32; 9 * bones], input)?;
         let rgb = gpu.output::<f32>("lights rgb", 3 * vertices)?;
         let kernel = Kernel::new(
             gpu,
             (&LIGHTS, "shade_lights"),
-            &bindings(&shared, [&rgb, &lights, &positions, &rotations, &info]),
+            &bindings(
+                &shared,
+                [&rgb, lights.buffer(), &positions, &rotations, &info],
+            ),
             vertices as u32,
         );
         Ok(GpuLights {
             shared,
             info,
             lights,
-            capacity: 1,
             positions,
             rotations,
             rgb,
@@ -119,9 +118,6 @@ impl GpuLights {
         (lights, weights): (&[Light], &[f32]),
         (positions, bones): (&[[f32; 3]], &[Rotation]),
     ) -> Result<(), FrameError> {
-        if lights.len() > self.capacity {
-            self.grow(gpu, lights.len())?;
-        }
         let records: Vec<LightRecord> = lights
             .iter()
             .zip(weights)
@@ -133,30 +129,23 @@ impl GpuLights {
         };
         let queue = gpu.queue();
         queue.write_buffer(&self.shared[2], 0, bytemuck::cast_slice(transfer_weights));
-        queue.write_buffer(&self.lights, 0, bytemuck::cast_slice(&records));
         // The count alone: the order stays as written at creation.
         queue.write_buffer(&self.info, 0, &bytemuck::bytes_of(&count)[..4]);
         queue.write_buffer(&self.positions, 0, bytemuck::cast_slice(positions));
         if !bones.is_empty() {
             queue.write_buffer(&self.rotations, 0, bytemuck::cast_slice(bones));
         }
+        if self.lights.write(gpu, &records)? {
+            let own = [
+                &self.rgb,
+                self.lights.buffer(),
+                &self.positions,
+                &self.rotations,
+                &self.info,
+            ];
+            self.kernel.rebind(gpu, &bindings(&self.shared, own));
+        }
         self.kernel.submit(gpu);
-        Ok(())
-    }
-
-    /// Room for `count` lights: a new buffer, bound in place of the old one.
-    fn grow(&mut self, gpu: &Gpu, count: usize) -> Result<(), GpuError> {
-        let input = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
-        self.lights = gpu.buffer("lights", &vec![LightRecord::zeroed(); count], input)?;
-        self.capacity = count;
-        let own = [
-            &self.rgb,
-            &self.lights,
-            &self.positions,
-            &self.rotations,
-            &self.info,
-        ];
-        self.kernel.rebind(gpu, &bindings(&self.shared, own));
         Ok(())
     }
 }

@@ -7,12 +7,14 @@
 use std::fmt;
 
 use aprt_core::{
-    Basis, Encoding, Light, LitWeights, Model, ModelInfo, PoseWeights, ProxyFrame, Rotation,
+    Basis, Encoding, IrradianceRig, Light, LitWeights, Model, ModelInfo, Placement, PoseWeights,
+    ProxyFrame, RigLitWeights, Rotation,
 };
 
 use crate::device::{Gpu, GpuError};
 use crate::lights::GpuLights;
 use crate::proxies::{GpuProxies, Shared};
+use crate::rig::GpuRig;
 use crate::shaders::{SHADE, Shader, TRANSFER};
 
 /// Threads per workgroup, as `@workgroup_size` in the kernels.
@@ -146,6 +148,7 @@ pub struct GpuModel {
     transfer_kernel: Kernel,
     proxies: Option<GpuProxies>,
     lights: GpuLights,
+    rig: GpuRig,
 }
 
 impl GpuModel {
@@ -218,6 +221,7 @@ impl GpuModel {
             false => None,
         };
         let lights = GpuLights::new(gpu, &info, [layout.clone(), rows.clone(), weights.clone()])?;
+        let rig = GpuRig::new(gpu, &info, [layout.clone(), rows.clone()])?;
         Ok(GpuModel {
             info,
             lit,
@@ -228,6 +232,7 @@ impl GpuModel {
             transfer_kernel,
             proxies,
             lights,
+            rig,
         })
     }
 
@@ -317,8 +322,33 @@ impl GpuModel {
 
     /// The last [`GpuModel::shade_lights`], read back (a blocking wait).
     pub fn read_lights(&self, gpu: &Gpu) -> Result<Vec<[f32; 3]>, GpuError> {
-        let values: Vec<f32> = gpu.read_back(self.lights.rgb(), 3 * self.info.vertices())?;
-        Ok(values.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+        read_rgb(gpu, self.lights.rgb(), self.info.vertices())
+    }
+
+    /// The RGB shading of every vertex under an irradiance rig's lighting at its own world
+    /// position (`positions`, the skinned mesh), from the weights of [`Model::light_rig`],
+    /// into [`GpuModel::rig_rgb`], as [`Model::shade_rig`] gives it. Everything is checked by
+    /// aprt-core before anything is written. Takes `&mut self`: the weights' buffer grows to
+    /// the largest rig a frame has had.
+    pub fn shade_rig(
+        &mut self,
+        gpu: &Gpu,
+        (lit, rig, placement): (&RigLitWeights<'_>, &IrradianceRig<'_>, &Placement),
+        positions: &[[f32; 3]],
+    ) -> Result<(), FrameError> {
+        let q = self.info.rig_inputs(lit, rig, positions)?;
+        self.rig
+            .shade(gpu, &self.info, (q, rig, placement), positions)
+    }
+
+    /// The last [`GpuModel::shade_rig`], RGB, three f32 per vertex.
+    pub fn rig_rgb(&self) -> &wgpu::Buffer {
+        self.rig.rgb()
+    }
+
+    /// The last [`GpuModel::shade_rig`], read back (a blocking wait).
+    pub fn read_rig(&self, gpu: &Gpu) -> Result<Vec<[f32; 3]>, GpuError> {
+        read_rgb(gpu, self.rig.rgb(), self.info.vertices())
     }
 
     fn proxies(&self) -> Result<&GpuProxies, FrameError> {
@@ -347,6 +377,12 @@ impl GpuModel {
     pub fn read_transfer(&self, gpu: &Gpu) -> Result<Vec<f32>, GpuError> {
         gpu.read_back(&self.transfer, self.info.vertices() * self.info.coeffs())
     }
+}
+
+/// `vertices` RGB triples of `buffer`, read back.
+fn read_rgb(gpu: &Gpu, buffer: &wgpu::Buffer, vertices: usize) -> Result<Vec<[f32; 3]>, GpuError> {
+    let values: Vec<f32> = gpu.read_back(buffer, 3 * vertices)?;
+    Ok(values.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
 }
 
 impl fmt::Display for FrameError {

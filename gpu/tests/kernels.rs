@@ -7,8 +7,8 @@ mod common;
 use std::path::Path;
 
 use aprt_core::{
-    DirectionalLight, Error, Light, LitWeights, Model, PointLight, PoseWeights, ProxyFrame,
-    Rotation, SphereLight,
+    DirectionalLight, Error, IrradianceRig, Light, LitWeights, Model, Placement, PointLight,
+    PoseWeights, ProxyFrame, RigLitWeights, Rotation, SphereLight,
 };
 use aprt_gpu::{FrameError, Gpu, GpuModel, TOLERANCE};
 use common::{builtin_models, gpu_or_skip, rotations, skinning, trainer, vertices_near_proxies};
@@ -81,6 +81,10 @@ fn check_model(gpu: &Gpu, what: &str, blob: &[u8]) {
         on_gpu.transfer(gpu, &pose).unwrap();
         let transfer = on_gpu.read_transfer(gpu).unwrap();
         assert_close(&format!("{what}, frame {frame}, transfer"), &transfer, &cpu);
+        if let Some(rig) = model.irradiance_rig() {
+            let what = format!("{what}, frame {frame}");
+            check_rig(gpu, (&model, &mut on_gpu), (&pose, &bones), &rig, &what);
+        }
         check_lights(
             gpu,
             (&model, &mut on_gpu),
@@ -98,6 +102,65 @@ fn check_model(gpu: &Gpu, what: &str, blob: &[u8]) {
             );
         }
     }
+}
+
+/// Shading under the model's irradiance rig, placed turned and moved, at vertices spread over
+/// and beyond its box (a lattice clamps them to its faces).
+fn check_rig(
+    gpu: &Gpu,
+    (model, on_gpu): (&Model<'_>, &mut GpuModel),
+    (pose, bones): (&PoseWeights, &[Rotation]),
+    rig: &IrradianceRig<'_>,
+    what: &str,
+) {
+    let info = model.info();
+    let n2 = info.coeffs();
+    let vectors: Vec<[f32; 3]> = (0..rig.vectors() * n2)
+        .map(|i| {
+            let t = i as f32;
+            [
+                0.5 + 0.4 * t.sin(),
+                0.4 + 0.3 * (1.7 * t).cos(),
+                0.3 / (1.0 + t),
+            ]
+        })
+        .collect();
+    let mut buffer = vec![0.0; info.rig_lit_weights_len(rig.vectors())];
+    let mut lit = RigLitWeights::new(&mut buffer);
+    let unset = on_gpu.shade_rig(gpu, (&lit, rig, &Placement::IDENTITY), &[]);
+    assert!(
+        matches!(unset, Err(FrameError::Core(Error::WeightsNotSet))),
+        "{what}: {unset:?}"
+    );
+    model.light_rig(pose, &vectors, bones, &mut lit).unwrap();
+    let (s, c) = 0.4f32.sin_cos();
+    let placement = Placement {
+        rotation: [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]],
+        translation: [0.2, -0.1, 0.05],
+    };
+    let centre = rig.centre();
+    let half = rig.half();
+    let positions: Vec<[f32; 3]> = (0..info.vertices())
+        .map(|j| {
+            let t = j as f32;
+            let root =
+                [0, 1, 2].map(|k| centre[k] + 1.3 * half[k] * (t * (0.7 + 0.4 * k as f32)).sin());
+            placement.to_world(root)
+        })
+        .collect();
+    let mut cpu = vec![[0.0; 3]; info.vertices()];
+    model
+        .shade_rig(&lit, rig, &placement, &positions, 0, &mut cpu)
+        .unwrap();
+    on_gpu
+        .shade_rig(gpu, (&lit, rig, &placement), &positions)
+        .unwrap();
+    let rgb = on_gpu.read_rig(gpu).unwrap();
+    assert_close(
+        &format!("{what}, irradiance rig"),
+        rgb.as_flattened(),
+        cpu.as_flattened(),
+    );
 }
 
 /// Per-vertex lights of every kind at vertices spread around them: inside the sphere light,
@@ -351,4 +414,19 @@ fn proxy_inputs_are_refused_before_upload() {
     let none = vec![[0.0; 3]; world.info().vertices()];
     let e = refused(world.occlude(&gpu, (&frame, &[1.0; 9]), (&none, &none)));
     assert_eq!(e, Error::NoProxies);
+}
+
+/// Any model file, when `$APRT_GPU_MODEL` names one (for example the model `aprt demo`
+/// writes), checked as the built-in ones are; skipped, saying so, without it.
+#[test]
+fn the_model_file_named_agrees() {
+    let Some(path) = std::env::var_os("APRT_GPU_MODEL") else {
+        eprintln!("skipping the_model_file_named_agrees: $APRT_GPU_MODEL names no model file");
+        return;
+    };
+    let Some(gpu) = gpu_or_skip("the_model_file_named_agrees") else {
+        return;
+    };
+    let blob = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    check_model(&gpu, &path.to_string_lossy(), &blob);
 }

@@ -6,6 +6,7 @@
 use super::weights::{LitWeights, PoseWeights, check_stamp};
 use crate::blob::format::{Basis, Encoding, VERTEX_BLOCK};
 use crate::blob::{Error, ModelInfo, Span};
+use crate::irradiance_rig::{IrradianceRig, RigLitWeights};
 use crate::proxies::{MAX_PROXIES, ProxyFrame};
 use crate::rotation::Rotation;
 
@@ -171,6 +172,23 @@ impl ModelInfo {
         positions: &[[f32; 3]],
     ) -> Result<(), Error> {
         self.check_light_inputs(pose, bones, (lights, weights), (positions, self.vertices))
+    }
+}
+
+impl ModelInfo {
+    /// The rig-lit weights of `lit` (from `Model::light_rig`, `3 K` sets of
+    /// [`ModelInfo::lit_weights_len`] values, set `3k + channel` for vector k), after the
+    /// checks `Model::shade_rig` makes: weights of this model and of `rig`, one finite position
+    /// per vertex. A vertex's shading in a channel is `Σ_k φ_k(p) Σ_r q_k[bone · width + r]
+    /// U_r`, `φ_k` from [`IrradianceRig::weights_at`](crate::IrradianceRig::weights_at).
+    pub fn rig_inputs<'l>(
+        &self,
+        lit: &'l RigLitWeights<'_>,
+        rig: &IrradianceRig<'_>,
+        positions: &[[f32; 3]],
+    ) -> Result<&'l [f32], Error> {
+        self.check_rig_inputs(lit, rig, (positions, self.vertices))?;
+        Ok(&lit.q[..self.rig_lit_weights_len(lit.vectors)])
     }
 }
 

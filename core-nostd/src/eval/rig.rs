@@ -65,6 +65,21 @@ impl ModelInfo {
         Ok(())
     }
 
+    /// What `shade_rig` checks of its inputs: rig weights of this model and this rig, `count`
+    /// finite positions.
+    pub(super) fn check_rig_inputs(
+        &self,
+        lit: &RigLitWeights<'_>,
+        rig: &IrradianceRig<'_>,
+        (positions, count): (&[[f32; 3]], usize),
+    ) -> Result<(), Error> {
+        check_stamp(lit.stamp, self)?;
+        if lit.vectors != rig.vectors() {
+            return Err(Error::WeightsForOtherRig);
+        }
+        check_positions(positions, count)
+    }
+
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn shade_rig<R: Reader>(
         &self,
@@ -76,11 +91,7 @@ impl ModelInfo {
         first: usize,
         out: &mut [[f32; 3]],
     ) -> Result<(), Error> {
-        check_stamp(lit.stamp, self)?;
-        if lit.vectors != rig.vectors() {
-            return Err(Error::WeightsForOtherRig);
-        }
-        check_positions(positions, out.len())?;
+        self.check_rig_inputs(lit, rig, (positions, out.len()))?;
         self.check_range(first, out.len())?;
         let (width, lit_len) = (self.row_width(), self.lit_weights_len());
         let encoding = self.rows.encoding;

@@ -74,5 +74,12 @@ pub const LIGHTS: Shader = Shader {
     ),
 };
 
+/// Shading under an irradiance rig's lighting at each vertex's position (entry point
+/// `shade_rig`); see [`GpuModel::shade_rig`](crate::GpuModel::shade_rig).
+pub const RIG: Shader = Shader {
+    name: "rig.wgsl",
+    source: concat!(include_str!("rows.wgsl"), include_str!("rig.wgsl")),
+};
+
 /// Every shader of the crate.
-pub const ALL: &[Shader] = &[ROWS, WEIGHTS, SHADE, TRANSFER, SH, OCCLUDE, LIGHTS];
+pub const ALL: &[Shader] = &[ROWS, WEIGHTS, SHADE, TRANSFER, SH, OCCLUDE, LIGHTS, RIG];

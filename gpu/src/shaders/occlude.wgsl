@@ -169,9 +169,31 @@ fn next_proxy(mask: ptr<function, vec2<u32>>) -> u32 {
     return MAX_PROXIES;
 }
 
-// The scale that takes a vertex's summed caps to their union, π (1 − Π (1 − F_i/π)) / Σ F_i.
-fn union_scale(total: f32, visible: f32) -> f32 {
-    return PI * (1.0 - visible) / total;
+// The union of a vertex's caps: their form factors' sum and the share of the lobe none of
+// them blocks.
+struct Union {
+    total: f32,
+    visible: f32,
+}
+
+fn union_add(u: ptr<function, Union>, f: f32) {
+    (*u).total += f;
+    (*u).visible *= max(1.0 - f * (1.0 / PI), 0.0);
+}
+
+// The scale that takes the summed caps to their union, π (1 − Π (1 − F_i/π)) / Σ F_i.
+fn union_scale(u: Union) -> f32 {
+    return PI * (1.0 - u.visible) / u.total;
+}
+
+// The vertex of an invocation that some proxy may reach: `valid` false for any other (beyond
+// the model's vertices, no mask, or a normal without a direction).
+fn occluded_vertex(id: vec3<u32>, groups: vec3<u32>) -> Receiver {
+    let v = invocation(id, groups);
+    if v >= shape.vertices {
+        return Receiver(vec3<f32>(0.0), vec3<f32>(0.0), vec2<u32>(0u), false);
+    }
+    return receiver(v);
 }
 
 @group(0) @binding(5) var<storage, read> lighting: array<f32>;
@@ -183,18 +205,13 @@ fn occlude_shading(
     @builtin(global_invocation_id) id: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
 ) {
-    let v = invocation(id, groups);
-    if v >= shape.vertices {
-        return;
-    }
-    let r = receiver(v);
+    let r = occluded_vertex(id, groups);
     if !r.valid {
         return;
     }
     let order = proxies.order;
     var mask = r.mask;
-    var total = 0.0;
-    var visible = 1.0;
+    var u = Union(0.0, 1.0);
     var sum = 0.0;
     for (var i = next_proxy(&mask); i < MAX_PROXIES; i = next_proxy(&mask)) {
         let c = cap(i, r.p, r.n);
@@ -212,11 +229,10 @@ fn occlude_shading(
             bands += ratios[l] * band;
         }
         sum += c.f * bands;
-        total += c.f;
-        visible *= max(1.0 - c.f * (1.0 / PI), 0.0);
+        union_add(&u, c.f);
     }
-    if 0.0 < total {
-        shading[v] -= sum * union_scale(total, visible);
+    if 0.0 < u.total {
+        shading[invocation(id, groups)] -= sum * union_scale(u);
     }
 }
 
@@ -236,20 +252,15 @@ fn occlude_transfer(
     @builtin(global_invocation_id) id: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
 ) {
-    let v = invocation(id, groups);
-    if v >= shape.vertices {
-        return;
-    }
-    let r = receiver(v);
+    let r = occluded_vertex(id, groups);
     if !r.valid {
         return;
     }
+    let v = invocation(id, groups);
     let order = proxies.order;
-    let n2 = order * order;
     let b = 9u * vertex_bone(v);
     var mask = r.mask;
-    var total = 0.0;
-    var visible = 1.0;
+    var u = Union(0.0, 1.0);
     var sums: array<f32, 36>;
     for (var i = next_proxy(&mask); i < MAX_PROXIES; i = next_proxy(&mask)) {
         let c = cap(i, r.p, r.n);
@@ -271,11 +282,11 @@ fn occlude_transfer(
                 sums[k] += weight * y[k];
             }
         }
-        total += c.f;
-        visible *= max(1.0 - c.f * (1.0 / PI), 0.0);
+        union_add(&u, c.f);
     }
-    if 0.0 < total {
-        let scale = union_scale(total, visible);
+    if 0.0 < u.total {
+        let scale = union_scale(u);
+        let n2 = order * order;
         for (var k = 0u; k < n2; k++) {
             transfer[v * n2 + k] -= sums[k] * scale;
         }

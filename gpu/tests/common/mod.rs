@@ -58,27 +58,35 @@ pub fn trainer(test: &str) -> Option<PathBuf> {
     None
 }
 
-/// The `aprt` arguments of [`builtin_models`] before the precision, one string so the bench
-/// can print what it ran.
+/// The `aprt` arguments of [`builtin_models`] before the rig and the precision, one string so
+/// the bench can print what it ran.
 pub const BUILTIN_TRAIN: &str =
-    "train --builtin --clip wave --rays 8 --validation-poses 0 --proxies on --precision";
+    "train --builtin --clip wave --rays 8 --validation-poses 0 --proxies on";
+
+/// Each precision of [`builtin_models`] and the irradiance rig its model carries: between
+/// them every kind of rig axis (lattice, gradient, constant) and the gradient rig.
+pub const BUILTIN_RIGS: [(&str, &str); 3] = [
+    ("f32", "mixed:x=lattice3,y=gradient,z=constant"),
+    ("f16", "lattice:4x3x2"),
+    ("i8", "gradient"),
+];
 
 /// The built-in character's model, as the demo's default is shaped (bone frames, occluder
-/// proxies, k_v 22, 13,022 vertices) but baked with few rays on one clip, in f32, f16 and i8
-/// rows, each with its precision's name. Baked once: the later precisions resume from the
-/// first one's checkpoint.
+/// proxies, an irradiance rig, k_v 22, 13,022 vertices) but baked with few rays on one clip,
+/// in f32, f16 and i8 rows ([`BUILTIN_RIGS`]), each with its precision's name. Baked once:
+/// the later precisions resume from the first one's checkpoint.
 pub fn builtin_models(aprt: &Path) -> Vec<(&'static str, Vec<u8>)> {
     let dir = std::env::temp_dir().join(format!("aprt-gpu-{}", std::process::id()));
     let checkpoint = dir.join("checkpoint");
-    let models = ["f32", "f16", "i8"]
+    let models = BUILTIN_RIGS
         .into_iter()
         .enumerate()
-        .map(|(i, precision)| {
+        .map(|(i, (precision, rig))| {
             let out = dir.join(format!("builtin-{precision}.aprt"));
             let mut command = Command::new(aprt);
             command
                 .args(BUILTIN_TRAIN.split(' '))
-                .arg(precision)
+                .args(["--rig", rig, "--precision", precision])
                 .arg("--checkpoint");
             command.arg(&checkpoint).arg("-o").arg(&out);
             if i > 0 {
