@@ -1,7 +1,8 @@
 // The aprt core in the page: web/wasm compiled to a raw wasm32 module (no wasm-bindgen, no
 // allocator). The module keeps its buffers in statics and exports their addresses; this file
 // copies a frame's inputs in, calls `aprt_shade` (and `aprt_occlude` for a model with
-// occluder proxies) and hands back a view of the shading.
+// occluder proxies) and hands back a view of the shading. On the WebGPU path (webgpu.js) it
+// calls `aprt_light` instead and hands back the lighting weights, for the GPU's loop.
 
 /** Loads `aprt-simd.wasm` when the browser validates it (or `choice` is 'simd'), else
  *  `aprt-scalar.wasm`; `choice` 'scalar' forces the scalar build. */
@@ -61,6 +62,12 @@ export class Core {
       proxies: this.e.aprt_has_proxies() === 1,
     };
     this.info.coeffs = this.info.order * this.info.order;
+    const rows = this.e.aprt_vertex_rows();
+    if (rows === 0) throw this.error();
+    // The nine u32 of `RowsLayout` (web/wasm/src/session.rs), in its order.
+    const [offset, len, encoding, leadRows, rowWidth, blocks, bones, coeffs, litLen] =
+      new Uint32Array(this.e.memory.buffer, rows, 9);
+    this.rows = { offset, len, encoding, leadRows, rowWidth, blocks, bones, coeffs, litLen };
   }
 
   /** The lighting: the SH `environment` plus a directional light from `dir` of `strength`. */
@@ -92,6 +99,20 @@ export class Core {
   /** One frame through the core (set_pose, light, shade); returns a view of the shading. */
   shade() {
     if (this.e.aprt_shade() !== 0) throw this.error();
+    return this.shading();
+  }
+
+  /** `shade` without its loop over the vertices (set_pose, light), for a device that runs
+   *  that loop itself: a view of the lighting weights (`rows.litLen`). */
+  light() {
+    const ptr = this.e.aprt_light();
+    if (ptr === 0) throw this.error();
+    return this.f32(ptr, this.rows.litLen);
+  }
+
+  /** A view of the module's shading: where `shade` leaves it, and where a device that ran
+   *  the loop itself writes it for `occlude`. */
+  shading() {
     return this.f32(this.e.aprt_shading(), this.info.vertices);
   }
 

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Builds the core for the page twice, scalar and with wasm SIMD (+simd128), into
 # web/aprt-scalar.wasm and web/aprt-simd.wasm, shrinks both with `wasm-opt -Oz` when binaryen
-# is installed, and prints their bytes. Run from anywhere; needs the wasm32 target
+# is installed, and prints their bytes; copies the WebGPU path's kernel, aprt-gpu's WGSL, into
+# web/wgsl/. Run from anywhere; needs the wasm32 target
 # (`rustup target add wasm32-unknown-unknown`).
 set -euo pipefail
 web="$(cd "$(dirname "$0")" && pwd)"
@@ -35,3 +36,9 @@ build() { # flavour, extra rustflags
 
 build scalar ""
 build simd "-C target-feature=+simd128"
+
+# The page is served from web/ alone (`python3 -m http.server` there, or any static host), so
+# it cannot fetch gpu/src/shaders/: it gets a copy, byte for byte, which trainer/tests/browser.rs
+# checks against the source (a stale copy fails `cargo test`, not the page).
+mkdir -p "$web/wgsl"
+cp gpu/src/shaders/rows.wgsl gpu/src/shaders/shade.wgsl "$web/wgsl/"

@@ -1,9 +1,12 @@
 // The page: plays the exported clip, shades every frame through the core (aprt.js) under an
 // SH environment plus the light the user drags, with the model's occluder proxies when it has
-// them, draws it (render.js) and shows the frame time and the core's µs per frame.
-// `window.aprtPage` exposes the state the browser test reads.
+// them, draws it (render.js) and shows the frame time and the core's µs per frame. The loop
+// over the vertices runs on WebGPU (webgpu.js) when the browser gives an adapter and a
+// device, else in the core; `?path=wasm` or `?path=webgpu` forces one. `window.aprtPage`
+// exposes the state the browser test reads.
 
 import { loadCore } from './aprt.js';
+import { openWebGpu } from './webgpu.js';
 import { frameAt, loadClip, poseOf, skinFrame } from './clip.js';
 import { Renderer, camera } from './render.js';
 
@@ -15,6 +18,9 @@ const startSeconds = asked === null || (Number.isFinite(Number(asked)) && Number
 const notice = startSeconds === Number(asked ?? 0) ? null : `?t=${asked.slice(0, 32)} is not a time in seconds: playing from 0`;
 const frozen = params.get('freeze') === '1';
 const dataDir = new URL(params.get('data') ?? 'data/', location.href);
+/** `?path=`: 'wasm' or 'webgpu' forces that path (a forced WebGPU without an adapter is an
+ *  error, not a silent fallback); otherwise WebGPU when the browser has it. */
+const path = params.get('path');
 
 /** The environment: a sky brighter above (z up) than below, order² SH coefficients. */
 function environment(order) {
@@ -46,8 +52,20 @@ class Mean {
 }
 
 async function main() {
+  if (path !== null && path !== 'wasm' && path !== 'webgpu') throw new Error(`?path=${path.slice(0, 32)}: wasm or webgpu`);
   const [core, clip] = await Promise.all([loadCore(location.href, params.get('wasm') ?? 'auto'), loadClip(dataDir)]);
   core.load(clip.blob);
+  const gpu = path === 'wasm' ? null : await openWebGpu(core, clip.blob, new URL('wgsl/', location.href));
+  if (!gpu && path === 'webgpu') throw new Error('?path=webgpu: this browser gives no WebGPU adapter and device');
+  /** A frame's shading before the proxies' correction, as a view of the module's: the
+   *  core's three calls, or the core's pose and lighting weights and the GPU's loop. */
+  const shade = gpu
+    ? async () => {
+      const out = core.shading();
+      await gpu.shade(core.light(), out);
+      return out;
+    }
+    : async () => core.shade();
   const m = clip.manifest;
   const canvas = document.getElementById('view');
   const renderer = new Renderer(canvas, clip.arrays.indices, m.vertices);
@@ -57,19 +75,20 @@ async function main() {
   const shadeMean = new Mean(120);
   const proxiesMean = new Mean(120);
   const frameMean = new Mean(120);
-  const page = { ready: false, frame: -1, core, manifest: m, shading: null, lighting: null, notice };
+  const page = { ready: false, frame: -1, core, manifest: m, shading: null, lighting: null, notice,
+    path: gpu ? 'webgpu' : 'wasm', adapter: gpu?.adapter };
   window.aprtPage = page;
 
   /** One frame: skin the mesh into the core, pose and light it, shade and correct by the
    *  proxies (each timed alone), draw. */
-  function render(f) {
+  async function render(f) {
     const { angles, rotations, skinning } = poseOf(clip, f);
     const mesh = core.mesh();
     skinFrame(clip, f, mesh.positions, mesh.normals);
     core.setPose(angles, rotations, skinning);
     core.setLighting(env, direction(light.azimuth, light.elevation), light.strength);
     const t0 = performance.now();
-    const shading = core.shade();
+    const shading = await shade();
     shadeMean.push(performance.now() - t0);
     if (core.info.proxies) {
       page.unoccluded = Float32Array.from(shading);
@@ -83,12 +102,13 @@ async function main() {
     page.lighting = core.lighting();
   }
 
-  /** µs per `aprt_shade` over `n` calls of the current frame (the page's own timer is coarse),
-   *  each followed by `aprt_occlude` when `proxies` is set (for a model with them). */
-  page.bench = (n, proxies = false) => {
+  /** µs per shading of the current frame over `n` calls (the page's own timer is coarse):
+   *  `aprt_shade`, or on WebGPU `aprt_light`, the dispatch and the read-back; each followed by
+   *  `aprt_occlude` when `proxies` is set (for a model with them). */
+  page.bench = async (n, proxies = false) => {
     const t0 = performance.now();
     for (let i = 0; i < n; i++) {
-      core.shade();
+      await shade();
       if (proxies) core.occlude();
     }
     return ((performance.now() - t0) * 1000) / n;
@@ -100,6 +120,8 @@ async function main() {
   page.liveProxiesUs = () => proxiesMean.value * 1000;
 
   let dragging = null;
+  /** A frozen frame to draw again: the light moved. */
+  let moved = false;
   canvas.addEventListener('pointerdown', (e) => (dragging = { x: e.clientX, y: e.clientY }));
   window.addEventListener('pointerup', () => (dragging = null));
   window.addEventListener('pointermove', (e) => {
@@ -107,18 +129,23 @@ async function main() {
     light.azimuth -= (e.clientX - dragging.x) * 0.01;
     light.elevation = Math.max(-1.5, Math.min(1.5, light.elevation + (e.clientY - dragging.y) * 0.01));
     dragging = { x: e.clientX, y: e.clientY };
-    if (frozen) render(page.frame);
+    moved = frozen;
   });
 
   const stats = document.getElementById('stats');
   const started = performance.now();
   let last = started;
-  function tick(now) {
+  /** One frame at a time: the next is asked for once this one is drawn (on WebGPU, after its
+   *  read-back). */
+  async function tick(now) {
     frameMean.push(now - last);
     last = now;
     const seconds = frozen ? startSeconds : startSeconds + (now - started) / 1000;
     try {
-      if (!frozen || page.frame < 0) render(frameAt(m, seconds));
+      if (!frozen || page.frame < 0 || moved) {
+        moved = false;
+        await render(frameAt(m, seconds));
+      }
     } catch (err) {
       // A frame the core refuses stops the page with its message, never silently.
       stats.textContent = `error: ${err.message}`;
@@ -130,9 +157,10 @@ async function main() {
       `clip ${m.clip}: frame ${page.frame + 1} of ${m.frames} at ${m.fps} fps`,
       `${m.vertices} vertices, order ${core.info.order}, ${core.info.bones} bones` +
         (core.info.proxies ? ', occluder proxies' : ''),
-      `wasm ${core.flavour}, ${core.wasmBytes} bytes`,
+      gpu ? `shading on WebGPU (${gpu.adapter}), pose and lighting in wasm ${core.flavour}, ${core.wasmBytes} bytes`
+        : `shading in wasm ${core.flavour}, ${core.wasmBytes} bytes`,
       `frame time   ${frameMean.value.toFixed(2)} ms`,
-      `core shade   ${(shadeMean.value * 1000).toFixed(0)} µs per frame`,
+      `${(gpu ? 'GPU shade' : 'core shade').padEnd(13)}${(shadeMean.value * 1000).toFixed(0)} µs per frame`,
       ...(core.info.proxies ? [`proxies      ${(proxiesMean.value * 1000).toFixed(0)} µs per frame`] : []),
       `light az ${light.azimuth.toFixed(2)} el ${light.elevation.toFixed(2)}`,
     ].join('\n');

@@ -1,13 +1,15 @@
 //! The web page (`web/`) against the trainer: the checked-in export is what `aprt export-web`
-//! writes today, of a model with occluder proxies, and, in headless Chromium, the page skins
-//! the mesh bit for bit as the trainer does, its per-vertex shading with the proxies equals
-//! `aprt eval` of the same frame (≤ 1e-5 relative) and its render matches
-//! `web/test/reference.png` (`web/test/browser-test.mjs` does the browser half).
+//! writes today, of a model with occluder proxies, the page's WebGPU kernel is aprt-gpu's
+//! WGSL, and, in headless Chromium, the page skins the mesh bit for bit as the trainer does,
+//! its per-vertex shading with the proxies equals `aprt eval` of the same frame (≤ 1e-5
+//! relative) on both of its paths, the WebAssembly core's and WebGPU's, its render matches
+//! `web/test/reference.png`, and WebGPU's render the core's (`web/test/browser-test.mjs`
+//! does the browser half).
 //!
 //! The browser half needs `node`, Chromium (`/usr/bin/chromium`, or `$APRT_CHROMIUM`) and
 //! `web/test/node_modules` (`npm ci` there). Without them it prints why it skipped; with
 //! `$APRT_REQUIRE_BROWSER` set (as `.ci/run` does) it fails instead, so CI cannot pass by
-//! skipping.
+//! skipping; so does its WebGPU half when that Chromium offers no WebGPU adapter.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -67,6 +69,20 @@ fn the_checked_in_web_export_is_current() {
         );
     }
     std::fs::remove_dir_all(out).unwrap();
+}
+
+/// The page's WebGPU path runs aprt-gpu's kernel: `web/build.sh` copies the WGSL into
+/// `web/wgsl/` (the page is served from `web/` alone), and a stale copy fails here.
+#[test]
+fn the_pages_wgsl_is_aprt_gpus() {
+    let shaders = Path::new(env!("CARGO_MANIFEST_DIR")).join("../gpu/src/shaders");
+    for file in ["rows.wgsl", "shade.wgsl"] {
+        assert!(
+            std::fs::read(web().join("wgsl").join(file)).unwrap()
+                == std::fs::read(shaders.join(file)).unwrap(),
+            "web/wgsl/{file} differs from gpu/src/shaders/{file}: rerun web/build.sh"
+        );
+    }
 }
 
 /// `aprt export-web` refuses what the page could not play, with one line saying why, and
@@ -178,5 +194,13 @@ fn the_page_in_chromium_shades_as_aprt_eval_and_renders_the_reference() {
         "the browser test failed (screenshots in {}):\n{log}",
         out.display()
     );
+    // Past the harness's capture, as the skip above: a Chromium without WebGPU shows in a plain
+    // `cargo test` (with $APRT_REQUIRE_BROWSER the script failed instead).
+    if let Some(skip) = log
+        .lines()
+        .find(|l| l.starts_with("skipped the WebGPU half"))
+    {
+        std::io::Write::write_all(&mut std::io::stderr(), format!("{skip}\n").as_bytes()).unwrap();
+    }
     std::fs::remove_dir_all(out).unwrap();
 }

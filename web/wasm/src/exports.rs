@@ -17,6 +17,12 @@
 //! row-major), `aprt_positions()` and `aprt_normals()` (vertices × 3 f32, the posed mesh)
 //! and `aprt_occlude()`, which corrects `aprt_shading()` in place. A call that fails returns
 //! −1 and leaves its message at `aprt_error()` (`aprt_error_len()` bytes of UTF-8).
+//!
+//! A page that runs the loop over the vertices on its own device (`web/webgpu.js`, WebGPU)
+//! reads `aprt_vertex_rows()` once after loading (where the rows lie in the blob, and their
+//! layout), then each frame calls `aprt_light()` instead of `aprt_shade()` and multiplies the
+//! lighting weights it returns by the rows; its shading, written to `aprt_shading()`, takes
+//! `aprt_occlude()` as the core's does.
 #![allow(unsafe_code)]
 
 use core::cell::UnsafeCell;
@@ -24,7 +30,7 @@ use core::fmt::Write;
 
 use aprt_core::{MAX_BONES, MAX_COEFFS, MAX_POSE_LEN, Rotation, Skinning};
 
-use crate::session::{BLOB_CAPACITY, MAX_SHADED, Session, add_directional};
+use crate::session::{BLOB_CAPACITY, MAX_SHADED, RowsLayout, Session, add_directional};
 
 /// A static JavaScript and Rust share; see the module documentation for why it is sound.
 struct Shared<T>(UnsafeCell<T>);
@@ -61,6 +67,17 @@ static SHADING: Shared<[f32; MAX_SHADED]> = Shared::new([0.0; MAX_SHADED]);
 static SKINNING: Shared<[Skinning; MAX_BONES]> = Shared::new([[0.0; 12]; MAX_BONES]);
 static POSITIONS: Shared<[[f32; 3]; MAX_SHADED]> = Shared::new([[0.0; 3]; MAX_SHADED]);
 static NORMALS: Shared<[[f32; 3]; MAX_SHADED]> = Shared::new([[0.0; 3]; MAX_SHADED]);
+static ROWS: Shared<RowsLayout> = Shared::new(RowsLayout {
+    offset: 0,
+    len: 0,
+    encoding: 0,
+    lead_rows: 0,
+    row_width: 0,
+    blocks: 0,
+    bones: 0,
+    coeffs: 0,
+    lit_len: 0,
+});
 static ERROR: Shared<Message> = Shared::new(Message {
     bytes: [0; 256],
     len: 0,
@@ -204,9 +221,10 @@ pub extern "C" fn aprt_normals() -> *mut f32 {
     NORMALS.ptr().cast()
 }
 
-/// Where [`aprt_shade`] leaves one value per vertex.
+/// Where [`aprt_shade`] leaves one value per vertex, and where a device that ran the loop
+/// itself writes its shading for [`aprt_occlude`].
 #[unsafe(no_mangle)]
-pub extern "C" fn aprt_shading() -> *const f32 {
+pub extern "C" fn aprt_shading() -> *mut f32 {
     SHADING.ptr().cast()
 }
 
@@ -224,6 +242,24 @@ pub extern "C" fn aprt_add_directional(x: f32, y: f32, z: f32, strength: f32) ->
     }
 }
 
+/// A frame's pose vector, bones' rotations and lighting, as long as the model reads them: the
+/// inputs of [`aprt_shade`] and [`aprt_light`].
+///
+/// # Safety
+/// No other reference to ANGLES, BONES or LIGHTING may live while these do (module docs).
+unsafe fn frame_inputs(
+    info: &aprt_core::ModelInfo,
+) -> (&'static [f32], &'static [Rotation], &'static [f32]) {
+    // SAFETY: the caller's promise.
+    unsafe {
+        (
+            &ANGLES.get()[..info.pose_len()],
+            &BONES.get()[..info.bones()],
+            &LIGHTING.get()[..info.coeffs()],
+        )
+    }
+}
+
 /// One frame through the core: set_pose, light and shade of every vertex: 0, or −1.
 #[unsafe(no_mangle)]
 pub extern "C" fn aprt_shade() -> i32 {
@@ -232,17 +268,45 @@ pub extern "C" fn aprt_shade() -> i32 {
     };
     let info = *session.info();
     // SAFETY: the buffers are distinct statics, none borrowed elsewhere during this export.
-    let (angles, bones, lighting, shading) = unsafe {
-        (
-            &ANGLES.get()[..info.pose_len()],
-            &BONES.get()[..info.bones()],
-            &LIGHTING.get()[..info.coeffs()],
-            SHADING.get(),
-        )
-    };
+    let ((angles, bones, lighting), shading) = unsafe { (frame_inputs(&info), SHADING.get()) };
     match session.shade(angles, lighting, bones, shading) {
         Ok(()) => 0,
         Err(err) => fail(err),
+    }
+}
+
+/// The loaded model's vertex rows for a device that shades them itself: the address of nine
+/// u32 ([`RowsLayout`]: their offset and length in the blob, and their layout), or null
+/// without a model.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_vertex_rows() -> *const u32 {
+    let Some(session) = session() else {
+        fail("no model is loaded");
+        return core::ptr::null();
+    };
+    // SAFETY: no other reference to ROWS lives during an export.
+    unsafe { *ROWS.get() = session.rows_layout() };
+    ROWS.ptr().cast()
+}
+
+/// [`aprt_shade`] without its loop over the vertices (set_pose and light), for a device that
+/// runs that loop itself: the address of the lighting weights (`lit_len` f32 of
+/// [`aprt_vertex_rows`], valid until the next call), or null.
+#[unsafe(no_mangle)]
+pub extern "C" fn aprt_light() -> *const f32 {
+    let Some(session) = session() else {
+        fail("no model is loaded");
+        return core::ptr::null();
+    };
+    let info = *session.info();
+    // SAFETY: the buffers are distinct statics, none borrowed elsewhere during this export.
+    let (angles, bones, lighting) = unsafe { frame_inputs(&info) };
+    match session.light(angles, lighting, bones) {
+        Ok(q) => q.as_ptr(),
+        Err(err) => {
+            fail(err);
+            core::ptr::null()
+        }
     }
 }
 
@@ -327,6 +391,7 @@ mod tests {
     fn the_javascript_calling_sequence() {
         assert_eq!(aprt_shade(), -1);
         assert_eq!(error_text(), "no model is loaded");
+        assert!(aprt_vertex_rows().is_null() && aprt_light().is_null());
         assert!(aprt_blob(BLOB_CAPACITY + 1).is_null());
         assert!(error_text().contains("exceed"), "{}", error_text());
 
@@ -359,6 +424,7 @@ mod tests {
             .shade(&angles, &lighting, &bones, &mut expected)
             .unwrap();
         assert_eq!(shading(info.vertices()), expected);
+        the_sequence_of_a_device(&mut session, (&angles, &lighting, &bones));
         assert_eq!(aprt_has_proxies(), 0);
         assert_eq!(aprt_occlude(), -1);
         assert!(
@@ -368,6 +434,22 @@ mod tests {
         );
         the_sequence_with_proxies();
     }
+
+    /// `web/webgpu.js`'s calls: the rows' layout once, then each frame's lighting weights,
+    /// both [`Session`]'s, with the same inputs as the frame just shaded.
+    fn the_sequence_of_a_device(session: &mut Session<'_>, (angles, lighting, bones): Frame<'_>) {
+        // SAFETY: the export returns the address of nine u32; no borrow is live.
+        let layout = unsafe { *aprt_vertex_rows().cast::<RowsLayout>() };
+        assert_eq!(layout, session.rows_layout());
+        let q = aprt_light();
+        assert!(!q.is_null(), "{}", error_text());
+        // SAFETY: `lit_len` values at the returned address; no borrow is live.
+        let q = unsafe { core::slice::from_raw_parts(q, layout.lit_len as usize) };
+        assert_eq!(q, session.light(angles, lighting, bones).unwrap());
+    }
+
+    /// A frame's angles, lighting and bones' rotations.
+    type Frame<'a> = (&'a [f32], &'a [f32], &'a [[[f32; 3]; 3]]);
 
     /// [`the_javascript_calling_sequence`] for a model with proxies: skinning matrices and
     /// the posed mesh written, then `aprt_occlude` after `aprt_shade`.

@@ -18,7 +18,7 @@ extern crate std;
 pub mod exports;
 mod session;
 
-pub use session::{BLOB_CAPACITY, MAX_SHADED, Session, add_directional};
+pub use session::{BLOB_CAPACITY, MAX_SHADED, RowsLayout, Session, add_directional};
 
 /// On wasm32 a panic (which the core never raises: every call returns a `Result`) traps.
 #[cfg(all(target_arch = "wasm32", not(test)))]

@@ -5,6 +5,32 @@ use aprt_core::{
     Error, LitWeights, Model, ModelInfo, PoseWeights, ProxyFrame, Rotation, ShError, Skinning,
 };
 
+/// Where a model's vertex rows lie in its blob and how they are laid out
+/// ([`aprt_core::VertexRows`]), for a device that runs the shading loop itself: `web/webgpu.js`
+/// reads these nine u32, in this order, into the `Rows` block of aprt-gpu's `rows.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RowsLayout {
+    /// Byte offset of the rows section in the blob.
+    pub offset: u32,
+    /// Its length in bytes (whole 32-bit words).
+    pub len: u32,
+    /// The blob's encoding tag, which `rows.wgsl` numbers alike: 0 f32, 1 f16, 2 i8.
+    pub encoding: u32,
+    /// Rows of bone indices per block: 1 for a bone-frame model, else 0.
+    pub lead_rows: u32,
+    /// Rows of values per block.
+    pub row_width: u32,
+    /// Blocks of eight vertices.
+    pub blocks: u32,
+    /// Bones, at least 1: the lighting weights hold `row_width` values per bone.
+    pub bones: u32,
+    /// SH coefficients n².
+    pub coeffs: u32,
+    /// Lighting weights [`Session::light`] returns (`bones · row_width`).
+    pub lit_len: u32,
+}
+
 /// The largest blob the page can load (16 MiB of linear memory, zero until written, so it
 /// costs no `.wasm` bytes).
 pub const BLOB_CAPACITY: usize = 16 << 20;
@@ -46,6 +72,42 @@ impl<'a> Session<'a> {
         self.model.info()
     }
 
+    /// Where the vertex rows lie in the blob and their layout, for a device that shades them
+    /// itself from [`Session::light`]'s weights. Every figure fits a u32: the blob is at most
+    /// [`BLOB_CAPACITY`] bytes.
+    pub fn rows_layout(&self) -> RowsLayout {
+        let info = self.model.info();
+        let rows = self.model.vertex_rows();
+        RowsLayout {
+            // The rows are a slice of the blob (`Model::vertex_rows`): their distance from its
+            // start is their offset in it.
+            offset: (rows.bytes.as_ptr() as usize - self.model.blob().as_ptr() as usize) as u32,
+            len: rows.bytes.len() as u32,
+            encoding: rows.encoding as u32,
+            lead_rows: rows.lead_rows as u32,
+            row_width: rows.row_width as u32,
+            blocks: rows.blocks as u32,
+            bones: info.bones().max(1) as u32,
+            coeffs: info.coeffs() as u32,
+            lit_len: info.lit_weights_len() as u32,
+        }
+    }
+
+    /// A frame's pose and lighting: `set_pose(angles)`, `light(lighting, bones)`, the core's
+    /// first two calls of [`Session::shade`]. Returns the lighting weights
+    /// ([`ModelInfo::lit_values`]) for a device that runs the loop over the vertices itself.
+    pub fn light(
+        &mut self,
+        angles: &[f32],
+        lighting: &[f32],
+        bones: &[Rotation],
+    ) -> Result<&[f32], Error> {
+        self.model.set_pose(angles, &mut self.pose)?;
+        self.model
+            .light(&self.pose, lighting, bones, &mut self.lit)?;
+        self.model.info().lit_values(&self.lit)
+    }
+
     /// One frame: `set_pose(angles)`, `light(lighting, bones)`, then the shading of every
     /// vertex into `shading[..vertices]`. Exactly the core's three calls, nothing more, so
     /// the page's timing of this is the shading's cost per frame (a model with occluder
@@ -58,9 +120,7 @@ impl<'a> Session<'a> {
         shading: &mut [f32],
     ) -> Result<(), Error> {
         let info = *self.model.info();
-        self.model.set_pose(angles, &mut self.pose)?;
-        self.model
-            .light(&self.pose, lighting, bones, &mut self.lit)?;
+        self.light(angles, lighting, bones)?;
         let out = shading
             .get_mut(..info.vertices())
             .ok_or(Error::BufferTooSmall {
@@ -144,6 +204,44 @@ mod tests {
         model.shade(&lit, 0, &mut expected).unwrap();
         assert_eq!(shading[..info.vertices()], expected[..]);
         assert_eq!(shading[info.vertices()..], [0.0; 3]);
+    }
+
+    /// A device's view of the model: the layout names the core's vertex rows in the blob, and
+    /// `light` gives the core's lighting weights, which the rows turn into `shade`'s values.
+    #[test]
+    fn the_rows_layout_and_light_are_the_cores() {
+        const WORLD: &[u8] = include_bytes!("../../../fixtures/golden/v1-world.aprt");
+        for blob in [BONES, WORLD] {
+            let mut session = Box::new(Session::open(blob).unwrap());
+            let info = *session.info();
+            let model = Model::parse(blob).unwrap();
+            let rows = model.vertex_rows();
+            let layout = session.rows_layout();
+            let (offset, len) = (layout.offset as usize, layout.len as usize);
+            assert_eq!(&blob[offset..offset + len], rows.bytes);
+            assert_eq!(
+                [layout.encoding, layout.lead_rows, layout.row_width],
+                [
+                    rows.encoding as u32,
+                    rows.lead_rows as u32,
+                    rows.row_width as u32
+                ]
+            );
+            assert_eq!(layout.blocks as usize, rows.blocks);
+            assert_eq!(layout.bones as usize, info.bones().max(1));
+            assert_eq!(layout.coeffs as usize, info.coeffs());
+
+            let angles = vec![0.2; info.pose_len()];
+            let lighting = vec![0.5; info.coeffs()];
+            let turn = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
+            let bones = vec![turn; info.bones()];
+            let q = session.light(&angles, &lighting, &bones).unwrap().to_vec();
+            assert_eq!(q.len(), layout.lit_len as usize);
+            let (mut pose, mut lit) = (Box::new(PoseWeights::new()), Box::new(LitWeights::new()));
+            model.set_pose(&angles, &mut pose).unwrap();
+            model.light(&pose, &lighting, &bones, &mut lit).unwrap();
+            assert_eq!(q, info.lit_values(&lit).unwrap());
+        }
     }
 
     /// A frame with proxies is the core's five calls, and the proxies take something off:
