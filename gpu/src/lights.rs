@@ -3,6 +3,7 @@
 //! written, and `lights.wgsl` shades every vertex through its own transfer.
 
 use aprt_core::{Light, LightShape, ModelInfo, Rotation};
+use bytemuck::Zeroable;
 
 use crate::device::{Gpu, GpuError, Growing};
 use crate::model::{FrameError, Kernel};
@@ -55,7 +56,7 @@ struct LightsInfo {
 pub(crate) struct GpuLights {
     /// The model's rows layout, rows and transfer weights, which the kernel reads.
     shared: [wgpu::Buffer; 3],
-    info: wgpu::Buffer,
+    block: wgpu::Buffer,
     lights: Growing,
     positions: wgpu::Buffer,
     rotations: wgpu::Buffer,
@@ -74,12 +75,8 @@ impl GpuLights {
         let input = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
         let uniform = wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST;
         let vertices = info.vertices();
-        let block = LightsInfo {
-            count: 0,
-            order: info.order() as u32,
-        };
         let bones = info.bones().max(1);
-        let info = gpu.buffer("lights info", &[block], uniform)?;
+        let block = gpu.buffer("lights info", &[LightsInfo::zeroed()], uniform)?;
         let lights = Growing::new(gpu, "lights", size_of::<LightRecord>())?;
         let positions = gpu.buffer("light positions", &vec![0f32; 3 * vertices], input)?;
         let rotations = gpu.buffer("light rotations", &vec![0f32; 9 * bones], input)?;
@@ -89,13 +86,13 @@ impl GpuLights {
             (&LIGHTS, "shade_lights"),
             &bindings(
                 &shared,
-                [&rgb, lights.buffer(), &positions, &rotations, &info],
+                [&rgb, lights.buffer(), &positions, &rotations, &block],
             ),
             vertices as u32,
         );
         Ok(GpuLights {
             shared,
-            info,
+            block,
             lights,
             positions,
             rotations,
@@ -114,6 +111,7 @@ impl GpuLights {
     pub(crate) fn shade(
         &mut self,
         gpu: &Gpu,
+        info: &ModelInfo,
         transfer_weights: &[f32],
         (lights, weights): (&[Light], &[f32]),
         (positions, bones): (&[[f32; 3]], &[Rotation]),
@@ -123,14 +121,13 @@ impl GpuLights {
             .zip(weights)
             .map(|(light, &weight)| LightRecord::of(light, weight))
             .collect();
-        let count = LightsInfo {
+        let block = LightsInfo {
             count: lights.len() as u32,
-            order: 0,
+            order: info.order() as u32,
         };
         let queue = gpu.queue();
         queue.write_buffer(&self.shared[2], 0, bytemuck::cast_slice(transfer_weights));
-        // The count alone: the order stays as written at creation.
-        queue.write_buffer(&self.info, 0, &bytemuck::bytes_of(&count)[..4]);
+        queue.write_buffer(&self.block, 0, bytemuck::bytes_of(&block));
         queue.write_buffer(&self.positions, 0, bytemuck::cast_slice(positions));
         if !bones.is_empty() {
             queue.write_buffer(&self.rotations, 0, bytemuck::cast_slice(bones));
@@ -141,7 +138,7 @@ impl GpuLights {
                 self.lights.buffer(),
                 &self.positions,
                 &self.rotations,
-                &self.info,
+                &self.block,
             ];
             self.kernel.rebind(gpu, &bindings(&self.shared, own));
         }

@@ -312,7 +312,8 @@ impl GpuModel {
         self.info.light_inputs(pose, bones, lights, positions)?;
         let mut w = vec![0f32; self.info.transfer_weights_len()];
         self.info.transfer_weights(pose, &mut w)?;
-        self.lights.shade(gpu, &w, lights, (positions, bones))
+        self.lights
+            .shade(gpu, &self.info, &w, lights, (positions, bones))
     }
 
     /// The last [`GpuModel::shade_lights`], RGB, three f32 per vertex.

@@ -16,8 +16,7 @@ use crate::shaders::OCCLUDE;
 struct ProxyBlock {
     cull: f32,
     order: u32,
-    bones: u32,
-    pad: u32,
+    pad: [u32; 2],
     spheres: [[f32; 4]; 2 * MAX_PROXIES],
 }
 
@@ -100,7 +99,6 @@ impl GpuProxies {
         let mut block = ProxyBlock {
             cull: view.cull(),
             order: info.order() as u32,
-            bones: view.bones().max(1) as u32,
             ..ProxyBlock::zeroed()
         };
         for i in 0..MAX_PROXIES {

@@ -13,9 +13,7 @@ struct Proxies {
     cull: f32,
     // SH order of the model.
     order: u32,
-    // Bones with a mask.
-    bones: u32,
-    pad: u32,
+    pad: vec2<u32>,
     // Proxy i: [2i] = posed centre and radius, [2i + 1].x = reach.
     spheres: array<vec4<f32>, 128>,
 }
@@ -148,7 +146,8 @@ fn receiver(v: u32) -> Receiver {
     let p = vec3<f32>(vertices[base], vertices[base + 1u], vertices[base + 2u]);
     let n = vec3<f32>(vertices[base + 3u], vertices[base + 4u], vertices[base + 5u]);
     let length = sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
-    let mask = masks[min(vertex_bone(v), proxies.bones - 1u)];
+    // `vertex_bone` is below the bone count (1 for a world-frame model): one mask each.
+    let mask = masks[vertex_bone(v)];
     // A finite length: at most f32's largest.
     let valid = 1e-20 < length && length <= 3.4028234e38 && any(mask != vec2<u32>(0u));
     return Receiver(p, n / length, mask, valid);
