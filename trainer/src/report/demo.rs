@@ -13,6 +13,7 @@ use crate::bake::clip::BakedClip;
 use crate::io::atomic::write_atomic;
 use crate::irradiance_rig::fit::FIT_POSES;
 use crate::irradiance_rig::{RigKind, fit_rig};
+use crate::model::LinearModel;
 use crate::model::export::{Precision, encode_model_with_rig};
 use crate::model::predict::predict_world;
 use crate::progress::Reporter;
@@ -207,20 +208,7 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
         reporter,
     )?;
     let default = result.model(experiment::DEFAULT_CONFIG)?;
-    // The model carries an irradiance rig fitted over the bind and training poses.
-    let kind: RigKind = DEMO_RIG.parse()?;
-    let meshes: Vec<&Mesh> = std::iter::once(bind)
-        .chain(
-            train
-                .meshes
-                .iter()
-                .step_by(train.meshes.len().div_ceil(FIT_POSES).max(1)),
-        )
-        .collect();
-    let mut rig = fit_rig(kind, &meshes, None);
-    rig.tabulate(bind, order)
-        .context("tabulating the irradiance rig's error")?;
-    let blob = encode_model_with_rig(&default.fit.model, Precision::F32, Some(&rig.bytes()))?;
+    let (kind, blob) = with_demo_rig(&default.fit.model, bind, train, order)?;
     write_atomic(&out.join("model.aprt"), &blob)
         .with_context(|| format!("cannot write {}", out.join("model.aprt").display()))?;
 
@@ -274,6 +262,26 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
     let markdown = report.markdown(test, frame);
     write_atomic(&out.join("report.md"), markdown.as_bytes())?;
     Ok(markdown)
+}
+
+/// `model` in f32 with the demo's irradiance rig ([`DEMO_RIG`]) fitted over the bind pose
+/// and the training poses, and that rig's kind.
+fn with_demo_rig(
+    model: &LinearModel,
+    bind: &Mesh,
+    train: &BakedClip,
+    order: usize,
+) -> Result<(RigKind, Vec<u8>)> {
+    let kind: RigKind = DEMO_RIG.parse()?;
+    let stride = train.meshes.len().div_ceil(FIT_POSES).max(1);
+    let meshes: Vec<&Mesh> = std::iter::once(bind)
+        .chain(train.meshes.iter().step_by(stride))
+        .collect();
+    let mut rig = fit_rig(kind, &meshes, None);
+    rig.tabulate(bind, order)
+        .context("tabulating the irradiance rig's error")?;
+    let blob = encode_model_with_rig(model, Precision::F32, Some(&rig.bytes()))?;
+    Ok((kind, blob))
 }
 
 /// The demo's short sweep (every order, then k_v at the model's order, f32, f16 and i8) on the
