@@ -35,6 +35,7 @@ pub mod progress;
 pub mod report;
 pub mod rig;
 pub mod scene;
+pub mod surface;
 pub mod text;
 
 // Module paths the tests, benches and fuzz harnesses use.

@@ -35,6 +35,7 @@ pub mod pack;
 mod raster;
 mod sample;
 mod surface;
+pub use surface::point_on;
 
 #[cfg(test)]
 mod tests;
