@@ -99,22 +99,24 @@ fn radii(points: &SurfacePoints, mesh: &Mesh) -> Vec<f32> {
         .collect()
 }
 
-/// A round upper end for the error scale: the 99th percentile of `errors` (grey levels)
+/// A round upper end for the error scale: the 99.9th percentile of `errors` (grey levels)
 /// rounded up to 1, 2 or 5 times a power of ten, so a few saturated points do not wash the
-/// rest out and the bar reads as a plain number.
+/// rest out and the bar reads as a plain number. Not lower: every point's truth carries the
+/// Monte Carlo noise of its rays, a few grey levels, which a scale near the bulk of the
+/// errors paints over the whole surface, hiding the shadows a method misses.
 fn error_scale(errors: &[f32]) -> f32 {
     let mut sorted: Vec<f32> = errors.iter().copied().filter(|e| e.is_finite()).collect();
     sorted.sort_by(f32::total_cmp);
-    let p99 = sorted
-        .get(sorted.len() * 99 / 100)
+    let high = sorted
+        .get(sorted.len() * 999 / 1000)
         .copied()
         .unwrap_or(1.0)
         .max(1.0);
-    let power = 10f32.powf(p99.log10().floor());
+    let power = 10f32.powf(high.log10().floor());
     [1.0, 2.0, 5.0, 10.0]
         .into_iter()
         .map(|m| m * power)
-        .find(|&s| s >= p99)
+        .find(|&s| s >= high)
         .unwrap_or(10.0 * power)
 }
 
@@ -237,10 +239,11 @@ pub fn save_surface_picture(
 mod tests {
     use super::*;
 
-    /// The scale's end is the 99th percentile rounded up to 1, 2 or 5 × 10^k, at least 1.
+    /// The scale's end is the 99.9th percentile rounded up to 1, 2 or 5 × 10^k, at least 1.
     #[test]
     fn error_scales_round_up_to_plain_numbers() {
-        let ramp = |top: f32| -> Vec<f32> { (0..=100).map(|i| top * i as f32 / 100.0).collect() };
+        let ramp =
+            |top: f32| -> Vec<f32> { (0..=1000).map(|i| top * i as f32 / 1000.0).collect() };
         assert_eq!(error_scale(&ramp(30.0)), 50.0);
         assert_eq!(error_scale(&ramp(15.0)), 20.0);
         assert_eq!(error_scale(&ramp(0.1)), 1.0);
