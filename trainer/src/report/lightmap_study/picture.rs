@@ -80,23 +80,20 @@ fn shadings(
     })
 }
 
-/// Each point's disc radius on `mesh`: the radius of a disc of its triangle's area shared
-/// evenly among the triangle's points, [`SPLAT_SCALE`] larger.
+/// Each point's disc radius on `mesh`: a disc of the posed surface's area shared evenly among
+/// the points, [`SPLAT_SCALE`] larger. One radius for all, as the points are spread at one
+/// density: a sliver triangle's lone point, given a disc of its own triangle's area, would
+/// leave the sliver's length uncovered, and a pixel there would show the surface behind.
 fn radii(points: &SurfacePoints, mesh: &Mesh) -> Vec<f32> {
-    let mut per_triangle = vec![0usize; mesh.triangles.len()];
-    for p in &points.points {
-        per_triangle[p.triangle as usize] += 1;
-    }
-    points
-        .points
-        .iter()
-        .map(|p| {
-            let t = p.triangle as usize;
-            let [a, b, c] = mesh.triangles[t].map(|v| Vec3::from(mesh.positions[v as usize]));
-            let area = 0.5 * (b - a).cross(c - a).length() / per_triangle[t] as f32;
-            SPLAT_SCALE * (area / std::f32::consts::PI).sqrt()
+    let area: f32 = (mesh.triangles.iter())
+        .map(|t| {
+            let [a, b, c] = t.map(|v| Vec3::from(mesh.positions[v as usize]));
+            0.5 * (b - a).cross(c - a).length()
         })
-        .collect()
+        .filter(|a| a.is_finite())
+        .sum();
+    let share = area / points.len().max(1) as f32;
+    vec![SPLAT_SCALE * (share / std::f32::consts::PI).sqrt(); points.len()]
 }
 
 /// A round upper end for the error scale: the 99.9th percentile of `errors` (grey levels)
@@ -242,8 +239,7 @@ mod tests {
     /// The scale's end is the 99.9th percentile rounded up to 1, 2 or 5 × 10^k, at least 1.
     #[test]
     fn error_scales_round_up_to_plain_numbers() {
-        let ramp =
-            |top: f32| -> Vec<f32> { (0..=1000).map(|i| top * i as f32 / 1000.0).collect() };
+        let ramp = |top: f32| -> Vec<f32> { (0..=1000).map(|i| top * i as f32 / 1000.0).collect() };
         assert_eq!(error_scale(&ramp(30.0)), 50.0);
         assert_eq!(error_scale(&ramp(15.0)), 20.0);
         assert_eq!(error_scale(&ramp(0.1)), 1.0);
