@@ -264,6 +264,35 @@ fn vertex_model_row(
     })
 }
 
+/// Per-vertex ray-traced truth interpolated at the surface points, on each clip: the floor
+/// of every per-vertex method at the surface (exact at the vertices), what vertices cannot
+/// hold between them however well a model predicts them. Bytes: its f32 values.
+fn vertex_truth_row(truths: &Truths<'_>, bake_s: f64) -> Row {
+    let errors = |truth: &ClipTruth| {
+        let n2 = truths.probe.lighting.len();
+        let vertices = truth.vertices.transfer.clone();
+        let points = truths.probe.of_vertices(&vertices, n2);
+        truths.errors(
+            &Prediction {
+                vertices,
+                points,
+                n2,
+            },
+            truth,
+        )
+    };
+    let values: usize = truths.train.vertices.transfer.iter().map(Vec::len).sum();
+    Row {
+        method: "per-vertex ray-traced truth, interpolated (floor of any per-vertex method)",
+        bytes: 4 * values,
+        bake_s,
+        fit_s: None,
+        ms_per_frame: 0.0,
+        train: errors(truths.train),
+        test: errors(truths.test),
+    }
+}
+
 /// A case's surface points (the study's count, and a quarter of it: the figure at both says
 /// whether the count is enough) and the luminance lighting its grey levels are measured under.
 pub struct CaseSurface {
@@ -325,13 +354,15 @@ pub fn run_case(
     for frame in [ModelFrame::World, ModelFrame::Bone] {
         rows.push(light_map_model_row(case, &layout, &baked, &truths, frame)?);
     }
+    let vertex_bake_s = train.vertex_s * case.train.frames.len() as f64;
     rows.push(vertex_model_row(
         case,
         &layout,
         &truths,
-        train.vertex_s * case.train.frames.len() as f64,
+        vertex_bake_s,
         bake.order,
     )?);
+    rows.push(vertex_truth_row(&truths, vertex_bake_s));
     Ok(section(case, &baked, points.len(), &rows))
 }
 
