@@ -30,6 +30,8 @@ pub struct MethodDecision {
     pub precision: Option<Precision>,
     /// One sentence: why.
     pub reason: String,
+    /// Wall-clock seconds the choice took (0 when the scene fixes the method).
+    pub seconds: f64,
 }
 
 /// Whether choosing `scene`'s method needs the sweep: its method is `auto`, or a light map
@@ -64,6 +66,7 @@ pub fn fixed_method(scene: &Scene) -> Option<MethodDecision> {
         resolution,
         precision,
         reason: format!("method {}, as the scene asks", method.name()),
+        seconds: 0.0,
     })
 }
 
@@ -75,6 +78,7 @@ pub fn swept_method(
     clips: &SceneClips<'_>,
     reporter: &dyn Reporter,
 ) -> Result<MethodDecision> {
+    let started = std::time::Instant::now();
     reporter.note("choosing the method by `aprt report`'s sweep of both (1 frame in 3)");
     let settings = ReportSettings {
         budget_us: None,
@@ -86,7 +90,9 @@ pub fn swept_method(
     sweep::check_stride(clips.train, CHOICE_STRIDE)?;
     let report = sweep::run(scene, lighting.clone(), clips, &settings, reporter)
         .context("choosing the method by the report's sweep")?;
-    decision_from(&report)
+    let mut decision = decision_from(&report)?;
+    decision.seconds = started.elapsed().as_secs_f64();
+    Ok(decision)
 }
 
 /// The method of `report`'s recommendation, or of its most accurate setting when none fits the
@@ -124,5 +130,6 @@ pub fn decision_from(report: &sweep::SweepReport) -> Result<MethodDecision> {
             chosen.us_per_frame,
             chosen.bytes
         ),
+        seconds: 0.0,
     })
 }

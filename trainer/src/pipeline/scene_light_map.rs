@@ -37,6 +37,7 @@ pub fn train_scene_light_map(
     reporter: &dyn Reporter,
 ) -> Result<SceneOutcome> {
     let started = Instant::now();
+    let choice_s = decision.seconds;
     let Poses::Rig { rig, clips, .. } = poses else {
         bail!(
             "{}: method = \"lightmap\" needs a character: an OBJ sequence has no bind mesh the light map's texels could ride",
@@ -143,7 +144,8 @@ pub fn train_scene_light_map(
         },
         computed,
         skipped,
-        seconds: started.elapsed().as_secs_f64(),
+        // The method's choice ran before this call: the command's seconds include it.
+        seconds: choice_s + started.elapsed().as_secs_f64(),
         stages: RunSeconds {
             bake: trained.seconds.0,
             fit: trained.seconds.1,
