@@ -90,25 +90,19 @@ pub fn swept_method(
     sweep::check_stride(clips.train, CHOICE_STRIDE)?;
     let report = sweep::run(scene, lighting.clone(), clips, &settings, reporter)
         .context("choosing the method by the report's sweep")?;
-    let mut decision = decision_from(&report)?;
+    let mut decision = decision_from(&report.points, report.recommended)?;
     decision.seconds = started.elapsed().as_secs_f64();
     Ok(decision)
 }
 
-/// The method of `report`'s recommendation, or of its most accurate setting when none fits the
-/// budget, with the sentence that says why.
-pub fn decision_from(report: &sweep::SweepReport) -> Result<MethodDecision> {
-    let best = |p: &&Point| p.error;
-    let (chosen, why) = match report.recommended {
-        Some(i) => (&report.points[i], "recommended within the scene's budget"),
-        None => match report
-            .points
-            .iter()
-            .min_by(|a, b| best(a).total_cmp(&best(b)))
-        {
-            Some(p) => (p, "the most accurate: no setting fits the scene's budget"),
-            None => bail!("the report's sweep measured no setting to choose the method by"),
-        },
+/// The method of a sweep's recommended point (`recommended`, an index into `points`), or of
+/// its most accurate setting when none fits the budget, with the sentence that says why.
+pub fn decision_from(points: &[Point], recommended: Option<usize>) -> Result<MethodDecision> {
+    let most_accurate = points.iter().min_by(|a, b| a.error.total_cmp(&b.error));
+    let (chosen, why) = match (recommended, most_accurate) {
+        (Some(i), _) => (&points[i], "recommended within the scene's budget"),
+        (None, Some(p)) => (p, "the most accurate: no setting fits the scene's budget"),
+        (None, None) => bail!("the report's sweep measured no setting to choose the method by"),
     };
     let method = match chosen.setting.method {
         "lightmap" => Method::LightMap,
@@ -124,7 +118,7 @@ pub fn decision_from(report: &sweep::SweepReport) -> Result<MethodDecision> {
         reason: format!(
             "method {}: `aprt report`'s sweep ({} settings, error over the surface on the test clips) has {} {why}, {:.2} grey levels at {:.1} µs a frame and {} bytes",
             method.name(),
-            report.points.len(),
+            points.len(),
             chosen.setting.label,
             chosen.error,
             chosen.us_per_frame,
@@ -132,4 +126,68 @@ pub fn decision_from(report: &sweep::SweepReport) -> Result<MethodDecision> {
         ),
         seconds: 0.0,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::sweep::Setting;
+    use crate::report::sweep::measure::Measured;
+
+    fn point(method: &'static str, precision: &'static str, error: f64) -> Point {
+        Point {
+            setting: Setting {
+                label: format!("{method} {precision}"),
+                method,
+                resolution: (method == "lightmap").then_some(128),
+                order: 3,
+                pose_dims: "auto".into(),
+                coef_dims: "auto".into(),
+                fitted: (4, 15),
+                precision,
+                rays: 128,
+                bounces: 0,
+                proxies: ("none", false),
+            },
+            error,
+            us_per_frame: 100.0,
+            bytes: 1000,
+            pareto: false,
+            pareto_bytes: false,
+            measured: Measured::default(),
+            bake_s_per_frame: 0.0,
+            fit_s: 0.0,
+            blob: Vec::new(),
+        }
+    }
+
+    /// The recommendation's kind is written, a light map with its resolution and precision;
+    /// with no recommendation (nothing fits the budget) the most accurate setting's kind, and
+    /// the reason says which.
+    #[test]
+    fn the_kind_is_the_recommendations_or_the_most_accurate() {
+        let points = vec![point("vertex", "f32", 5.0), point("lightmap", "i8", 4.0)];
+        let chosen = decision_from(&points, Some(0)).unwrap();
+        assert_eq!(
+            (chosen.method, chosen.resolution, chosen.precision),
+            (Method::Vertex, None, None)
+        );
+        assert!(
+            chosen.reason.contains("recommended within"),
+            "{}",
+            chosen.reason
+        );
+        let fallback = decision_from(&points, None).unwrap();
+        assert_eq!(fallback.method, Method::LightMap);
+        assert_eq!(
+            (fallback.resolution, fallback.precision),
+            (Some(128), Some(Precision::I8))
+        );
+        assert!(
+            fallback.reason.contains("no setting fits"),
+            "{}",
+            fallback.reason
+        );
+        assert!(decision_from(&[], None).is_err());
+    }
 }
