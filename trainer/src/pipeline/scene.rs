@@ -9,7 +9,6 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use aprt_core::{MAX_ORDER, Rgb};
 
-use super::method::MethodDecision;
 use super::scene_light_map::train_scene_light_map;
 use crate::bake::checkpoint::OnExisting;
 use crate::bake::shard::Shard;
@@ -28,6 +27,7 @@ use crate::scene::file::{Choice, Scene};
 use crate::scene::frame_cost::{self, BudgetCheck};
 use crate::scene::irradiance_rig_choice::{CANDIDATES, RigDecision, choose_rig};
 use crate::scene::lighting::SceneLighting;
+use crate::scene::method::MethodDecision;
 use crate::scene::{BakePlan, plan_bake};
 
 /// Poses the full simulation is timed on, at most.
@@ -152,6 +152,8 @@ pub fn train_scene(
         return train_scene_light_map(scene, lighting, poses, (options, method), reporter);
     }
     let started = Instant::now();
+    // The method's choice ran before this call; the command's seconds include it.
+    let choice_s = options.method.seconds;
     check_validation_poses(&poses, options.validation_poses)?;
     let fitting = fitting_surfaces(&poses)?;
     let bind = &fitting[0];
@@ -240,7 +242,7 @@ pub fn train_scene(
         precision_reason: trained.precision.1.clone(),
         computed,
         skipped,
-        seconds: started.elapsed().as_secs_f64(),
+        seconds: choice_s + started.elapsed().as_secs_f64(),
         stages: trained.seconds,
         validation_poses: trained.validation_poses,
         validation_bake_s: trained.validation_bake_s,

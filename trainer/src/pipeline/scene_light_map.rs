@@ -7,7 +7,6 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 
-use super::method::MethodDecision;
 use super::scene::{SceneOutcome, SceneTrainOptions, SceneTrainReport};
 use crate::io::atomic::write_atomic;
 use crate::io::source::{Poses, joined};
@@ -21,6 +20,7 @@ use crate::scene::file::{Choice, LIGHTMAP_RESOLUTIONS, Scene};
 use crate::scene::frame_cost::{self, BudgetCheck, FrameCost};
 use crate::scene::irradiance_rig_choice::RigDecision;
 use crate::scene::lighting::SceneLighting;
+use crate::scene::method::MethodDecision;
 use crate::scene::{SHADOWS, plan_bake, shadows_sentence};
 
 /// Precision of a light map whose scene leaves it to `auto` and whose choice did not measure
@@ -37,6 +37,7 @@ pub fn train_scene_light_map(
     reporter: &dyn Reporter,
 ) -> Result<SceneOutcome> {
     let started = Instant::now();
+    let choice_s = decision.seconds;
     let Poses::Rig { rig, clips, .. } = poses else {
         bail!(
             "{}: method = \"lightmap\" needs a character: an OBJ sequence has no bind mesh the light map's texels could ride",
@@ -143,7 +144,8 @@ pub fn train_scene_light_map(
         },
         computed,
         skipped,
-        seconds: started.elapsed().as_secs_f64(),
+        // The method's choice ran before this call: the command's seconds include it.
+        seconds: choice_s + started.elapsed().as_secs_f64(),
         stages: RunSeconds {
             bake: trained.seconds.0,
             fit: trained.seconds.1,

@@ -198,7 +198,8 @@ pub fn markdown(report: &SweepReport, command: &str) -> String {
     if let Some(presets) = report.presets {
         let _ = writeln!(
             s,
-            "| preset | setting | grey RMS | µs/frame | bytes |\n|---|---|---:|---:|---:|"
+            "| preset | setting | grey RMS ({}) | µs/frame | bytes |\n|---|---|---:|---:|---:|",
+            report.error_at
         );
         for (name, i) in [
             ("fastest", presets.fastest),

@@ -170,8 +170,9 @@ impl Fitted<'_> {
                 .with_context(|| format!("measuring {label}, {}", precision.name()))?;
             let info = *aprt_core::Model::parse(&blob)?.info();
             let bake = sweep.bake;
-            points.push(Point {
-                setting: Setting {
+            let bake_s = self.baked.seconds / self.train.frames.len().max(1) as f64;
+            points.push(Point::new(
+                Setting {
                     label: format!("{label}, {}", precision.name()),
                     method: "lightmap",
                     resolution: Some(r),
@@ -184,16 +185,9 @@ impl Fitted<'_> {
                     bounces: bake.bounces,
                     proxies: ("none", false),
                 },
-                error: measured.grey_rms,
-                us_per_frame: measured.us_per_frame,
-                bytes: blob.len(),
-                pareto: false,
-                pareto_bytes: false,
-                measured,
-                bake_s_per_frame: self.baked.seconds / self.train.frames.len().max(1) as f64,
-                fit_s,
-                blob,
-            });
+                (measured, blob),
+                (bake_s, fit_s),
+            ));
         }
         Ok(points)
     }

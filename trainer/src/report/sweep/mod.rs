@@ -11,6 +11,7 @@
 //! vertices ([`crate::surface`]); the front then ranks by the surface error, the only one in
 //! which a light map's texels and a vertex's interpolation are judged alike.
 
+pub mod choice;
 pub mod document;
 pub mod lightmaps;
 pub mod measure;
@@ -130,6 +131,30 @@ pub struct Point {
     /// The model, for `--write-model`.
     #[serde(skip)]
     pub blob: Vec<u8>,
+}
+
+impl Point {
+    /// `setting`, measured as `measured` with model `blob`, its bake's seconds per training
+    /// frame and its fit's seconds; off both fronts until they are marked, its error the
+    /// vertices' until the sweep says otherwise.
+    pub fn new(
+        setting: Setting,
+        (measured, blob): (Measured, Vec<u8>),
+        (bake_s_per_frame, fit_s): (f64, f64),
+    ) -> Point {
+        Point {
+            setting,
+            error: measured.grey_rms,
+            us_per_frame: measured.us_per_frame,
+            bytes: blob.len(),
+            pareto: false,
+            pareto_bytes: false,
+            measured,
+            bake_s_per_frame,
+            fit_s,
+            blob,
+        }
+    }
 }
 
 /// Everything `aprt report` measured.
@@ -744,8 +769,8 @@ fn fit_and_measure(
         let measured = measure(&blob, truth)
             .with_context(|| format!("measuring {}, {}", candidate.label, precision.name()))?;
         let info = *aprt_core::Model::parse(&blob)?.info();
-        points.push(Point {
-            setting: Setting {
+        points.push(Point::new(
+            Setting {
                 label: format!("{}, {}", candidate.label, precision.name()),
                 method: "vertex",
                 resolution: None,
@@ -774,16 +799,9 @@ fn fit_and_measure(
                 },
                 proxies: (candidate.proxies.name(), info.has_proxies()),
             },
-            error: measured.grey_rms,
-            us_per_frame: measured.us_per_frame,
-            bytes: blob.len(),
-            pareto: false,
-            pareto_bytes: false,
-            measured,
-            bake_s_per_frame: data.seconds,
-            fit_s,
-            blob,
-        });
+            (measured, blob),
+            (data.seconds, fit_s),
+        ));
     }
     Ok(points)
 }
