@@ -264,6 +264,20 @@ struct Screen {
     scale: f32,
 }
 
+/// Points of a surface to draw as discs ([`render_splats`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Splats<'a> {
+    /// Each point's position.
+    pub positions: &'a [[f32; 3]],
+    /// Each point's normal: points facing away from the camera are not drawn, as an engine
+    /// culls back faces. A disc faces the camera whichever way its surface does, so without
+    /// them the far side of a thin shell, or an inner layer close under the skin, can win a
+    /// pixel where the nearer discs' flat depth misses the surface's slope.
+    pub normals: Option<&'a [[f32; 3]]>,
+    /// Each point's disc radius in world units.
+    pub radii: &'a [f32],
+}
+
 /// Points of a surface drawn as discs facing the camera, nearest first through a z-buffer:
 /// point `i` at `positions[i]` with world radius `radii[i]` (at least the pixel it falls in)
 /// and colour `colour(i)`, framed as [`render_scalar`] frames a mesh. Dense enough, the discs
@@ -271,25 +285,33 @@ struct Screen {
 /// that varies inside a triangle shows as it is, not as its corners' blend. Ties keep the
 /// earlier point, so the picture is deterministic.
 pub fn render_splats(
-    positions: &[[f32; 3]],
-    radii: &[f32],
+    splats: &Splats<'_>,
     view: View,
     (width, height): (u32, u32),
     colour: impl Fn(usize) -> Rgb<u8>,
 ) -> Result<RgbImage, RenderError> {
-    if radii.len() != positions.len() {
+    let (positions, radii) = (splats.positions, splats.radii);
+    let counts = [
+        radii.len(),
+        splats.normals.map_or(positions.len(), <[_]>::len),
+    ];
+    if let Some(&values) = counts.iter().find(|&&n| n != positions.len()) {
         return Err(RenderError::ValueCount {
-            values: radii.len(),
+            values,
             vertices: positions.len(),
         });
     }
+    let (_, _, forward) = view.basis();
     let mut image = RgbImage::from_pixel(width, height, BACKGROUND);
     let Some(screen) = project(positions, view, width, height)? else {
         return Ok(image);
     };
     let mut depth = vec![f32::INFINITY; (width * height) as usize];
     for (i, (p, &radius)) in screen.points.iter().zip(radii).enumerate() {
-        if !p.is_finite() {
+        let away = splats
+            .normals
+            .is_some_and(|n| Vec3::from(n[i]).dot(forward) > 0.0);
+        if !p.is_finite() || away {
             continue;
         }
         let r = (radius * screen.scale).max(0.5);
@@ -543,8 +565,21 @@ mod tests {
             yaw: 0.0,
             pitch: 0.0,
         };
-        let square = render_splats(&positions, &radii, front, (100, 100), |_| Rgb([9, 9, 9]));
-        let square = square.unwrap();
+        fn splats<'a>(
+            positions: &'a [[f32; 3]],
+            normals: Option<&'a [[f32; 3]]>,
+            radii: &'a [f32],
+        ) -> Splats<'a> {
+            Splats {
+                positions,
+                normals,
+                radii,
+            }
+        }
+        let square = render_splats(&splats(&positions, None, &radii), front, (100, 100), |_| {
+            Rgb([9, 9, 9])
+        })
+        .unwrap();
         // The points span 0.975 of the unit square around its centre: pixels 6..94.
         for y in 8..92 {
             for x in 8..92 {
@@ -556,16 +591,28 @@ mod tests {
         positions.push([0.5, 1.0, 0.5]);
         radii.extend([0.1, 0.1]);
         let near = positions.len() - 2;
-        let image = render_splats(&positions, &radii, front, (100, 100), |i| match i {
+        let colour = |i: usize| match i {
             i if i == near => Rgb([255, 0, 0]),
             i if i == near + 1 => Rgb([0, 0, 255]),
             _ => Rgb([9, 9, 9]),
-        })
-        .unwrap();
+        };
+        let image = render_splats(&splats(&positions, None, &radii), front, (100, 100), colour);
+        let image = image.unwrap();
         assert_eq!(*image.get_pixel(50, 50), Rgb([255, 0, 0]));
         assert!(image.pixels().all(|p| *p != Rgb([0, 0, 255])));
+        // Facing away from the camera (+y is into the scene), the near point is culled.
+        let mut normals = vec![[0.0, -1.0, 0.0]; positions.len()];
+        normals[near] = [0.0, 1.0, 0.0];
+        let culled = splats(&positions, Some(&normals), &radii);
+        let image = render_splats(&culled, front, (100, 100), colour).unwrap();
+        assert_eq!(*image.get_pixel(50, 50), Rgb([9, 9, 9]));
         assert!(matches!(
-            render_splats(&positions, &radii[1..], front, (10, 10), |_| BACKGROUND),
+            render_splats(
+                &splats(&positions, None, &radii[1..]),
+                front,
+                (10, 10),
+                |_| { BACKGROUND }
+            ),
             Err(RenderError::ValueCount { .. })
         ));
     }
