@@ -29,4 +29,5 @@ mod quality;
 mod resume;
 mod scene;
 mod shlm;
+mod simulate_surface;
 mod sources;
