@@ -31,3 +31,4 @@ mod scene;
 mod shlm;
 mod simulate_surface;
 mod sources;
+mod surface_quad;
