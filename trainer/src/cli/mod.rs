@@ -793,6 +793,15 @@ fn report(args: &ReportArgs) -> Result<()> {
 mod tests {
     use super::*;
 
+    /// Clap's own consistency checks over every command's flags (no two flags of one command
+    /// share a name, every `requires` and `conflicts_with` names a flag), which it runs by
+    /// itself in debug builds only.
+    #[test]
+    fn every_command_line_is_consistent() {
+        use clap::CommandFactory;
+        Cli::command().debug_assert();
+    }
+
     /// A cause its parent already quotes is said once; distinct causes all are.
     #[test]
     fn each_cause_is_said_once() {
