@@ -698,3 +698,84 @@ fn confined_scenes_refuse_paths_outside_their_directory() {
     ]);
     assert!(model.exists());
 }
+
+/// `method = "auto"` puts both methods on one front: every point names its method (a light
+/// map its resolution) and is measured over the surface beside the vertices, the front ranks
+/// by the surface error, and `aprt train --scene` writes the kind the report recommends. A
+/// scene that fixes a light map gets one: a model whose rows are texels, timed as it ships.
+#[test]
+fn an_auto_scene_sweeps_both_methods_and_train_writes_the_recommended_kind() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let file = scene(
+        d,
+        "auto.toml",
+        "method = \"auto\"\nlightmap_resolution = 64\n",
+    );
+    let out = d.join("report");
+    succeed(&["report", &file, "--out", path(&out)]);
+    let report = json(&out.join("report.json"));
+    assert_eq!(report["error_at"], "surface", "{report}");
+    assert_eq!(report["surface_points"], 8192);
+    let points = report["points"].as_array().unwrap();
+    for p in points {
+        let m = &p["measured"];
+        for key in ["surface_grey_rms", "surface_transfer_error", "grey_rms"] {
+            assert!(m[key].as_f64().unwrap().is_finite(), "{key}: {p}");
+        }
+        assert_eq!(p["error"], m["surface_grey_rms"], "{p}");
+        let resolution = &p["setting"]["resolution"];
+        match p["setting"]["method"].as_str().unwrap() {
+            "vertex" => assert!(resolution.is_null(), "{p}"),
+            "lightmap" => assert_eq!(resolution, 64, "{p}"),
+            other => panic!("method {other}"),
+        }
+    }
+    let count = |m: &str| {
+        points
+            .iter()
+            .filter(|p| p["setting"]["method"] == m)
+            .count()
+    };
+    assert!(count("vertex") >= 20 && count("lightmap") == 9, "{report}");
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("| surface grey RMS |") && md.contains("light map 64²"));
+    let recommended = &points[report["recommended"].as_u64().unwrap() as usize];
+    let (model, json_path) = (d.join("auto.aprt"), d.join("auto.json"));
+    succeed(&[
+        "train",
+        "--scene",
+        &file,
+        "-o",
+        path(&model),
+        "--report",
+        path(&json_path),
+    ]);
+    let trained = json(&json_path);
+    assert_eq!(
+        trained["method"]["method"], recommended["setting"]["method"],
+        "{trained}"
+    );
+    let fixed = scene(
+        d,
+        "lightmap.toml",
+        "method = \"lightmap\"\nlightmap_resolution = 64\nprecision = \"f16\"\n",
+    );
+    let lm = d.join("lightmap.aprt");
+    succeed(&[
+        "train",
+        "--scene",
+        &fixed,
+        "-o",
+        path(&lm),
+        "--report",
+        path(&json_path),
+    ]);
+    let trained = json(&json_path);
+    assert_eq!(trained["method"]["method"], "lightmap", "{trained}");
+    assert_eq!(trained["method"]["resolution"], 64, "{trained}");
+    assert!(trained["full_simulation"].is_null(), "{trained}");
+    assert!(trained["us_per_frame"].as_f64().unwrap() > 0.0);
+    let inspected = String::from_utf8(succeed(&["inspect", path(&lm)])).unwrap();
+    assert!(inspected.contains("texel"), "{inspected}");
+}

@@ -15,6 +15,7 @@ use crate::model::occluders::Occluders;
 use crate::pipeline::train::{OptionError, check_options};
 use crate::report::demo::DemoSettings;
 use crate::rig::pose_sampler::DEFAULT_VALIDATION_POSES;
+use crate::surface::DEFAULT_SURFACE_POINTS;
 
 /// `aprt results`.
 #[derive(Debug, Args)]
@@ -70,6 +71,11 @@ pub struct ReportArgs {
     /// scene's validation clips, or held-out runs of the training frames).
     #[arg(long, value_name = "N", default_value_t = DEFAULT_VALIDATION_POSES)]
     pub validation_poses: usize,
+    /// Points spread over the character's surface by area, where every setting's surface
+    /// error is measured (the method read there as a renderer shows it) beside the vertex
+    /// error; their transfer is baked on every test frame at the reference settings.
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_SURFACE_POINTS, value_parser = clap::value_parser!(u64).range(1..))]
+    pub surface_points: u64,
 }
 
 /// `aprt irradiance-rig-study`.

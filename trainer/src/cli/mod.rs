@@ -33,6 +33,7 @@ use crate::io::outputs::{Input, Output, check};
 use crate::io::source::ClipSpec;
 use crate::model::ModelFrame;
 use crate::model::predict::{predict_clip, predict_world};
+use crate::pipeline::method::{MethodDecision, fixed_method, swept_method};
 use crate::pipeline::scene::{SceneOutcome, SceneTrainOptions, SceneTrainReport, train_scene};
 use crate::pipeline::train::{Outcome, TrainSettings};
 use crate::progress::Reporter;
@@ -535,8 +536,12 @@ fn train(args: &TrainArgs) -> Result<()> {
     check(&outputs, &inputs)?;
     let existing = on_existing(args.resume);
     if let Some(scene) = &scene {
-        let poses = scene_poses(&source, scene)?;
+        let (poses, tests) = scene_poses(&source, scene)?;
         let lighting = SceneLighting::of(scene, poses.up())?;
+        let method = match fixed_method(scene) {
+            Some(fixed) => fixed,
+            None => source.in_origin(scene_method(scene, &lighting, (&poses, &tests), args))?,
+        };
         let options = SceneTrainOptions {
             output: &args.output,
             checkpoint: checkpoint.path,
@@ -544,6 +549,7 @@ fn train(args: &TrainArgs) -> Result<()> {
             fit: args.fit.options()?,
             shard: args.shard,
             validation_poses: args.validation_poses,
+            method,
         };
         return match source.in_origin(train_scene(scene, &lighting, poses, options, &Terminal))? {
             SceneOutcome::Trained(report) => print_scene_report(&report, args.report.as_deref()),
@@ -608,18 +614,58 @@ fn validation_sentence(poses: usize, seconds: f64) -> String {
 }
 
 /// The poses `aprt train --scene` trains on: the scene's OBJ sequence, or its character's
-/// `train` clips with its `validate` clips held out. Its `test` clips are taken too, so a
-/// missing one is refused before the bake rather than by the report that needs it.
-fn scene_poses(source: &SourceArgs, scene: &Scene) -> Result<crate::io::source::Poses> {
+/// `train` clips with its `validate` clips held out; and its `test` clips, which choose an
+/// automatic method (and a missing one is refused before the bake rather than by the report
+/// that needs it).
+fn scene_poses(
+    source: &SourceArgs,
+    scene: &Scene,
+) -> Result<(crate::io::source::Poses, Vec<crate::rig::Clip>)> {
     if !source.names_rig() {
-        return source.poses(&[], &Terminal);
+        return Ok((source.poses(&[], &Terminal)?, Vec::new()));
     }
-    let (rig, [clips, validation, _test]) = source.load_scene(scene, &Terminal)?;
-    Ok(crate::io::source::Poses::Rig {
+    let (rig, [clips, validation, tests]) = source.load_scene(scene, &Terminal)?;
+    let poses = crate::io::source::Poses::Rig {
         rig,
         clips,
         validation,
-    })
+    };
+    Ok((poses, tests))
+}
+
+/// The method the report's sweep recommends for `scene` (`method`, or a light map's
+/// resolution or precision, left to `auto`), on its character's clips and `tests`. Refused
+/// for a shard, whose choice would time models on one machine of the farm, and for an OBJ
+/// sequence, which has no test clips to choose on.
+fn scene_method(
+    scene: &Scene,
+    lighting: &SceneLighting,
+    (poses, tests): (&crate::io::source::Poses, &[crate::rig::Clip]),
+    args: &TrainArgs,
+) -> Result<MethodDecision> {
+    let file = scene.path.display();
+    if args.shard.is_some() {
+        bail!(
+            "{file}: [effects] method, lightmap_resolution or a light map's precision is \"auto\", which times models to choose: a shard cannot, so fix them (run aprt report {file} to see which to fix)"
+        );
+    }
+    let crate::io::source::Poses::Rig {
+        rig,
+        clips,
+        validation,
+    } = poses
+    else {
+        bail!(
+            "{file}: [effects] method = \"auto\" chooses on a character's test clips, and an OBJ sequence has none: give method = \"vertex\""
+        );
+    };
+    let clips = crate::report::sweep::SceneClips {
+        rig: rig.as_ref(),
+        train: clips,
+        validation,
+        tests,
+    };
+    swept_method(scene, lighting, &clips, &Terminal)
 }
 
 /// The files a scene reads besides its character: itself, its environment map and the BVH
@@ -639,7 +685,7 @@ fn scene_inputs(scene: &Scene) -> Vec<Input> {
 
 /// Prints what `aprt train --scene` computed and skipped, and writes it as JSON to `json`.
 fn print_scene_report(report: &SceneTrainReport, json: Option<&Path>) -> Result<()> {
-    let full = &report.full_simulation;
+    eprintln!("method: {}", report.method.reason);
     eprintln!("computed:");
     for line in &report.computed {
         eprintln!("  - {line}");
@@ -672,13 +718,13 @@ fn print_scene_report(report: &SceneTrainReport, json: Option<&Path>) -> Result<
             }
         ),
     }
-    if full.poses_timed == 0 {
-        eprintln!(
+    match &report.full_simulation {
+        None => {}
+        Some(full) if full.poses_timed == 0 => eprintln!(
             "the scene needs the full simulation ({}): nothing saved",
             full.settings
-        );
-    } else {
-        eprintln!(
+        ),
+        Some(full) => eprintln!(
             "the full simulation ({}) takes {:.3} s a pose against this scene's {:.4} s ({:.1}x, measured on {} poses): about {:.1} s saved",
             full.settings,
             full.seconds_per_pose,
@@ -686,7 +732,7 @@ fn print_scene_report(report: &SceneTrainReport, json: Option<&Path>) -> Result<
             full.speedup,
             full.poses_timed,
             full.saved_seconds
-        );
+        ),
     }
     if let Some(path) = json {
         let text = serde_json::to_string_pretty(report)? + "\n";
@@ -731,6 +777,7 @@ fn report(args: &ReportArgs) -> Result<()> {
         budget_bytes: args.budget_bytes,
         stride: args.stride as usize,
         validation_poses: args.validation_poses,
+        surface_points: args.surface_points as usize,
     };
     let scene_clips = SceneClips {
         rig: rig.as_ref(),
@@ -755,6 +802,9 @@ fn report(args: &ReportArgs) -> Result<()> {
     }
     if args.validation_poses != crate::rig::pose_sampler::DEFAULT_VALIDATION_POSES {
         command += &format!(" --validation-poses {}", args.validation_poses);
+    }
+    if args.surface_points != crate::surface::DEFAULT_SURFACE_POINTS {
+        command += &format!(" --surface-points {}", args.surface_points);
     }
     document::write(&report, &args.out, &command)?;
     match report.recommended {

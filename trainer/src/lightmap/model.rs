@@ -22,6 +22,7 @@ use crate::bake::BakeSettings;
 use crate::io::source::joined;
 use crate::irradiance_rig::RigKind;
 use crate::irradiance_rig::fit::{fit_irradiance_rig, rig_fitting_surfaces};
+use crate::model::LinearModel;
 use crate::model::ModelFrame;
 use crate::model::export::{Extras, Precision, TexelAtlasExtra, encode_model_with};
 use crate::model::fit::{FitOptions, FitReport, fit};
@@ -145,10 +146,8 @@ pub fn train_light_maps(
 }
 
 /// Fits the light-map model to `baked`, the maps of every frame of `clip` of `rig`, on
-/// `layout`'s pose entries, and encodes it: the blob, the fit's report and the seconds the
-/// fit took (with the frame change, without encoding). In bone
-/// frames each frame's rows are moved into their texel's bone frame (by the bone's rotation
-/// in that frame) before the fit, and the blob records each row's bone as it does a vertex's.
+/// `layout`'s pose entries ([`fit_light_map_model`]), and encodes it: the blob, the fit's
+/// report and the seconds the fit took (with the frame change, without encoding).
 pub fn fit_light_maps(
     rig: &dyn Rig,
     layout: &PoseLayout,
@@ -169,9 +168,38 @@ pub fn fit_light_maps_with_rig(
     irradiance_rig: Option<&[u8]>,
 ) -> Result<(Vec<u8>, FitReport, f64)> {
     let start = Instant::now();
+    let fitted = fit_light_map_model(rig, layout, clip, baked, model.options, model.frame)?;
+    let seconds = start.elapsed().as_secs_f64();
+    let blob = encode_light_map(&fitted, &baked.sequence, model.precision, irradiance_rig)?;
+    Ok((blob, fitted.report, seconds))
+}
+
+/// A light-map model fitted and not yet encoded: the linear model and which texel each of its
+/// rows is.
+pub struct FittedLightMap {
+    /// The model, its rows the filled texels.
+    pub model: LinearModel,
+    /// The texel index of each row, ascending.
+    pub rows: Vec<u32>,
+    /// The fit's choices.
+    pub report: FitReport,
+}
+
+/// Fits the light-map model to `baked`, the maps of every frame of `clip` of `rig`, on
+/// `layout`'s pose entries, with `options`, in `frame`. In bone frames each frame's rows are
+/// moved into their texel's bone frame (by the bone's rotation in that frame) before the fit,
+/// and the model records each row's bone as it does a vertex's.
+pub fn fit_light_map_model(
+    rig: &dyn Rig,
+    layout: &PoseLayout,
+    clip: &Clip,
+    baked: &BakedMaps,
+    options: &FitOptions,
+    frame: ModelFrame,
+) -> Result<FittedLightMap> {
     let sequence = &baked.sequence;
     let (rows, world) = filled_rows(sequence);
-    let bones = (model.frame == ModelFrame::Bone)
+    let bones = (frame == ModelFrame::Bone)
         .then(|| dominant_texel_bones(rig.skin(), rig.bind_mesh(), &baked.atlas));
     let transfers = match &bones {
         Some(b) => {
@@ -182,23 +210,36 @@ pub fn fit_light_maps_with_rig(
     };
     let angles: Vec<Vec<f64>> = clip.frames.iter().map(|p| layout.reduce(p)).collect();
     let a = DMatrix::from_fn(angles.len(), layout.names().len(), |i, j| angles[i][j]);
-    let mut fitted = fit(&a, &transfers, sequence.order, model.options)?;
+    let mut fitted = fit(&a, &transfers, sequence.order, options)?;
     fitted.model.angle_names = layout.names().to_vec();
     fitted.model.bones = bones;
-    let seconds = start.elapsed().as_secs_f64();
-    let blob = encode_model_with(
+    Ok(FittedLightMap {
+        model: fitted.model,
+        rows,
+        report: fitted.report,
+    })
+}
+
+/// `fitted` encoded in `precision` with the texel atlas of `sequence` (its resolution, the
+/// rows' texels and any generated UVs) and the irradiance rig section `irradiance_rig`.
+pub fn encode_light_map(
+    fitted: &FittedLightMap,
+    sequence: &MapSequence,
+    precision: Precision,
+    irradiance_rig: Option<&[u8]>,
+) -> Result<Vec<u8>> {
+    Ok(encode_model_with(
         &fitted.model,
-        model.precision,
+        precision,
         &Extras {
             irradiance_rig,
             texel_atlas: Some(TexelAtlasExtra {
                 resolution: sequence.resolution as u32,
-                texels: &rows,
+                texels: &fitted.rows,
                 corner_uvs: sequence.layout.as_ref().map(|l| l.corners.as_slice()),
             }),
         },
-    )?;
-    Ok((blob, fitted.report, seconds))
+    )?)
 }
 
 /// The light-map UVs a light-map model `blob` (called `model_name`) records in its texel

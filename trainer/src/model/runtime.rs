@@ -682,8 +682,8 @@ pub fn static_model(normals: &[[f32; 3]], order: usize) -> LinearModel {
     }
 }
 
-/// Median microseconds of `f` over repeated calls within about a tenth of a second.
-fn median_us(mut f: impl FnMut()) -> f64 {
+/// Median µs of `f` over repeated runs: at least 5, up to a tenth of a second or 1,000.
+pub fn median_us(mut f: impl FnMut()) -> f64 {
     let mut times = Vec::new();
     let start = Instant::now();
     while times.len() < 5 || (start.elapsed() < Duration::from_millis(100) && times.len() < 1000) {

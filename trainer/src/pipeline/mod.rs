@@ -4,5 +4,7 @@
 //! (`scene.rs`, `aprt train --scene`). bake/, lighting/, irradiance_rig/ and model/ each offer
 //! one step; only this stage calls them in order.
 
+pub mod method;
 pub mod scene;
+pub mod scene_light_map;
 pub mod train;

@@ -9,6 +9,8 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use aprt_core::{MAX_ORDER, Rgb};
 
+use super::method::MethodDecision;
+use super::scene_light_map::train_scene_light_map;
 use crate::bake::checkpoint::OnExisting;
 use crate::bake::shard::Shard;
 use crate::bake::{BakeSettings, bake_poses};
@@ -21,6 +23,7 @@ use crate::pipeline::train::{
 use crate::progress::{Reporter, Silent};
 use crate::rig::mesh::Mesh;
 use crate::rig::pose_sampler::DEFAULT_VALIDATION_POSES;
+use crate::scene::file::Method;
 use crate::scene::file::{Choice, Scene};
 use crate::scene::frame_cost::{self, BudgetCheck};
 use crate::scene::irradiance_rig_choice::{CANDIDATES, RigDecision, choose_rig};
@@ -37,6 +40,8 @@ pub struct SceneTrainReport {
     pub scene: PathBuf,
     /// The model written.
     pub model: PathBuf,
+    /// Its method (per vertex or a light map) and why.
+    pub method: MethodDecision,
     /// Visibility rays cast by the bake.
     pub rays_cast: u64,
     /// Inter-reflection passes after the direct pass.
@@ -66,8 +71,9 @@ pub struct SceneTrainReport {
     /// Seconds this run spent baking them (part of `stages.bake`); poses read back from a
     /// checkpoint cost 0 here.
     pub validation_bake_s: f64,
-    /// The full simulation, timed on a few poses of the same run.
-    pub full_simulation: FullSimulation,
+    /// The full simulation, timed on a few poses of the same run (not for a light map, whose
+    /// bake is per texel).
+    pub full_simulation: Option<FullSimulation>,
     /// Model bytes.
     pub bytes: usize,
     /// The written model's median µs a frame through aprt-core, as
@@ -117,6 +123,8 @@ pub struct SceneTrainOptions<'a> {
     /// Validation poses to sample and bake (`--validation-poses`; None: the default, see
     /// [`TrainSettings::validation_poses`]).
     pub validation_poses: Option<usize>,
+    /// The method to write, and why ([`crate::pipeline::method::decide_method`]).
+    pub method: MethodDecision,
 }
 
 /// What `aprt train --scene` did: trained the model, or baked one shard of it.
@@ -139,7 +147,13 @@ pub fn train_scene(
     options: SceneTrainOptions<'_>,
     reporter: &dyn Reporter,
 ) -> Result<SceneOutcome> {
+    if options.method.method == Method::LightMap {
+        let method = options.method.clone();
+        return train_scene_light_map(scene, lighting, poses, (options, method), reporter);
+    }
     let started = Instant::now();
+    // The method's choice ran before this call; the command's seconds include it.
+    let choice_s = options.method.seconds;
     check_validation_poses(&poses, options.validation_poses)?;
     let fitting = fitting_surfaces(&poses)?;
     let bind = &fitting[0];
@@ -217,6 +231,7 @@ pub fn train_scene(
     Ok(SceneOutcome::Trained(Box::new(SceneTrainReport {
         scene: scene.path.clone(),
         model: options.output.to_owned(),
+        method: options.method,
         rays_cast: plan.bake.rays_cast(bind.vertex_count()) * trained.baked_poses as u64,
         bounce_passes: plan.bake.bounces,
         sh_order: order,
@@ -227,11 +242,11 @@ pub fn train_scene(
         precision_reason: trained.precision.1.clone(),
         computed,
         skipped,
-        seconds: started.elapsed().as_secs_f64(),
+        seconds: choice_s + started.elapsed().as_secs_f64(),
         stages: trained.seconds,
         validation_poses: trained.validation_poses,
         validation_bake_s: trained.validation_bake_s,
-        full_simulation: full,
+        full_simulation: Some(full),
         bytes: trained.info.bytes,
         us_per_frame: cost.us,
         within_budget: budget.map(|b| b.within()),

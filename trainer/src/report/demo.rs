@@ -173,6 +173,7 @@ pub fn run(args: &DemoSettings, reporter: &dyn Reporter) -> Result<String> {
         budget_bytes: None,
         stride: args.stride,
         validation_poses: args.validation_poses,
+        surface_points: crate::surface::DEFAULT_SURFACE_POINTS as usize,
     };
     let reference = sweep::bake_reference(&scene, lighting, &clips, &sweep_settings, reporter)?;
     let plan = &reference.plan;

@@ -23,6 +23,9 @@
 //! irradiance_rig = "auto"  # "none", a rig kind ("gradient", "lattice:2x2x2", …) or auto
 //! precision = "auto"       # f32 | f16 | i8 | auto
 //! frame = "bone"           # bone | world: the frame the model learns transfer in
+//! method = "vertex"        # vertex | lightmap | auto: transfer per vertex, or per texel of
+//!                          # a pose-driven SH light map; auto: what the report recommends
+//! lightmap_resolution = "auto"  # or 8..=8192 texels a side; auto: 64, 128 or 256 by the report
 //!
 //! [budget]                 # optional
 //! us_per_frame = 100
@@ -225,7 +228,39 @@ pub struct Effects {
     pub precision: Choice<Precision>,
     /// The frame transfer is learned in.
     pub frame: ModelFrame,
+    /// Per-vertex transfer, a pose-driven light map, or whichever the report recommends.
+    pub method: Choice<Method>,
+    /// Texels a side of a light map (`Auto`: [`LIGHTMAP_RESOLUTIONS`], by the report).
+    pub lightmap_resolution: Choice<usize>,
 }
+
+/// How a scene's transfer reaches the screen.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Per vertex, interpolated across each triangle by the renderer.
+    Vertex,
+    /// Per texel of the character's light-map atlas, predicted from the pose (the pose-driven
+    /// light map) and composed under the lighting each frame.
+    #[serde(rename = "lightmap")]
+    LightMap,
+}
+
+impl Method {
+    /// The scene file's word for it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Vertex => "vertex",
+            Method::LightMap => "lightmap",
+        }
+    }
+}
+
+/// The light-map resolutions `lightmap_resolution = "auto"` chooses between.
+pub const LIGHTMAP_RESOLUTIONS: [usize; 3] = [64, 128, 256];
+
+/// Fewest texels a side a scene's light map may have: below it a character's charts do not fit.
+const MIN_LIGHTMAP_RESOLUTION: usize = 8;
 
 impl Default for Effects {
     /// Shadows, no bounces, 256 rays, every choice automatic at one grey level, bone frames.
@@ -240,6 +275,8 @@ impl Default for Effects {
             rig: RigChoice::Auto,
             precision: Choice::Auto,
             frame: ModelFrame::Bone,
+            method: Choice::Fixed(Method::Vertex),
+            lightmap_resolution: Choice::Auto,
         }
     }
 }
@@ -332,6 +369,8 @@ struct RawEffects {
     irradiance_rig: Option<String>,
     precision: Option<String>,
     frame: Option<String>,
+    method: Option<String>,
+    lightmap_resolution: Option<Word>,
 }
 
 #[derive(Default, Deserialize)]
@@ -700,6 +739,7 @@ fn effects(raw: &RawEffects) -> Result<Effects, (&'static str, String)> {
         Some("world") => ModelFrame::World,
         Some(other) => return Err(("frame", format!("{other:?}: expected bone or world"))),
     };
+    (e.method, e.lightmap_resolution) = method(raw)?;
     if e.bounces > 0 && !e.shadows {
         return Err((
             "bounces",
@@ -707,6 +747,50 @@ fn effects(raw: &RawEffects) -> Result<Effects, (&'static str, String)> {
         ));
     }
     Ok(e)
+}
+
+/// What an `[effects]` key's value is refused for: the key and the message.
+type Refusal = (&'static str, String);
+
+/// The method and light-map resolution of `raw`.
+fn method(raw: &RawEffects) -> Result<(Choice<Method>, Choice<usize>), Refusal> {
+    let method = match raw.method.as_deref() {
+        None | Some("vertex") => Choice::Fixed(Method::Vertex),
+        Some("lightmap") => Choice::Fixed(Method::LightMap),
+        Some("auto") => Choice::Auto,
+        Some(other) => {
+            return Err((
+                "method",
+                format!("{other:?}: expected vertex, lightmap or auto"),
+            ));
+        }
+    };
+    let range = MIN_LIGHTMAP_RESOLUTION..=crate::rig::uv::MAX_RESOLUTION;
+    let expected = format!(
+        "expected {} to {} texels a side or \"auto\"",
+        range.start(),
+        range.end()
+    );
+    let resolution = match &raw.lightmap_resolution {
+        None => Choice::Auto,
+        Some(Word::Text(t)) if t == "auto" => Choice::Auto,
+        Some(Word::Number(n)) if usize::try_from(*n).is_ok_and(|n| range.contains(&n)) => {
+            Choice::Fixed(*n as usize)
+        }
+        Some(Word::Number(n)) => return Err(("lightmap_resolution", format!("{n}: {expected}"))),
+        Some(Word::Text(t)) => return Err(("lightmap_resolution", format!("{t:?}: {expected}"))),
+        Some(Word::Other(v)) => {
+            let v = crate::text::excerpt(&v.to_string());
+            return Err(("lightmap_resolution", format!("{v}: {expected}")));
+        }
+    };
+    if method == Choice::Fixed(Method::Vertex) && raw.lightmap_resolution.is_some() {
+        return Err((
+            "lightmap_resolution",
+            "a light-map resolution needs method = \"lightmap\" or \"auto\": the scene's method is vertex".into(),
+        ));
+    }
+    Ok((method, resolution))
 }
 
 fn budget(raw: &RawBudget) -> Result<Budget, (&'static str, String)> {
@@ -819,12 +903,42 @@ mod tests {
         assert!(matches!(e.rig, RigChoice::Kind(_)));
         assert_eq!(e.precision, Choice::Fixed(Precision::F16));
         assert_eq!(e.frame, ModelFrame::World);
+        assert_eq!(e.method, Choice::Fixed(Method::Vertex));
+        let methods = format!(
+            "[source]\nbuiltin = \"creature\"\ntrain = [\"training\"]\n[effects]\nmethod = \"lightmap\"\nlightmap_resolution = 128\n{LIGHT}"
+        );
+        let e = parse(&methods).unwrap().effects;
+        assert_eq!(e.method, Choice::Fixed(Method::LightMap));
+        assert_eq!(e.lightmap_resolution, Choice::Fixed(128));
+        let auto = methods
+            .replace("\"lightmap\"", "\"auto\"")
+            .replace("128", "\"auto\"");
+        let e = parse(&auto).unwrap().effects;
+        assert_eq!(
+            (e.method, e.lightmap_resolution),
+            (Choice::Auto, Choice::Auto)
+        );
     }
 
     #[test]
     fn bad_scenes_name_the_item_and_what_is_wrong() {
         let base = "[source]\nbuiltin = \"human\"\ntrain = [\"training\"]\n";
         let cases = [
+            (
+                format!("{base}[effects]\nmethod = \"texel\"\n{LIGHT}"),
+                "[effects] method",
+                "expected vertex, lightmap or auto",
+            ),
+            (
+                format!("{base}[effects]\nmethod = \"auto\"\nlightmap_resolution = 4\n{LIGHT}"),
+                "[effects] lightmap_resolution",
+                "4: expected 8 to 8192",
+            ),
+            (
+                format!("{base}[effects]\nlightmap_resolution = 128\n{LIGHT}"),
+                "[effects] lightmap_resolution",
+                "needs method",
+            ),
             (
                 "[source]\ntrain = [\"a\"]\n".to_owned() + LIGHT,
                 "[source]",

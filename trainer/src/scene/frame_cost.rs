@@ -3,11 +3,11 @@
 //! `aprt report` ranks its settings by, so the two agree.
 
 use anyhow::{Context, Result};
-use aprt_core::{DEFAULT_BAND, Model, Rgb};
+use aprt_core::{DEFAULT_BAND, LightMap, Model, PoseWeights, Rgb};
 
 use crate::irradiance_rig::fit::bounds;
 use crate::model::export::Precision;
-use crate::model::runtime::{CoreFrame, FrameInputs};
+use crate::model::runtime::{CoreFrame, FrameInputs, median_us};
 use crate::rig::mesh::Mesh;
 use crate::scene::lighting::SceneLighting;
 
@@ -72,6 +72,34 @@ pub fn us_per_frame(
             false => 0,
         },
     })
+}
+
+/// Median µs of one frame of light-map model `blob` (its rows the texels of an atlas) through
+/// aprt-core, as an engine ships it: set the pose, every texel's transfer
+/// ([`Model::transfer`]), and the RGB light map composed under the scene's `lighting`
+/// projected at `bind`'s centre ([`LightMap::compose`]), which the renderer then samples.
+/// A bone-frame model's texels are composed under one lighting here; an engine turns the
+/// lighting into each bone's frame first, n² × bones multiply-adds that do not show beside
+/// the texels'.
+pub fn light_map_us_per_frame(blob: &[u8], bind: &Mesh, lighting: &SceneLighting) -> Result<f64> {
+    let model = Model::parse(blob)?;
+    let info = *model.info();
+    let (texels, n2) = (info.vertices(), info.coeffs());
+    let composed: Vec<Rgb> = lighting.sh_at_centre(info.order(), bind)?;
+    let map = LightMap::new(info.order())?;
+    let angles = vec![0.0f32; info.pose_len()];
+    let mut pose = Box::new(PoseWeights::new());
+    let mut transfer = vec![0.0f32; texels * n2];
+    let mut rgb = vec![[0.0f32; 3]; texels];
+    let mut frame = || -> Result<(), aprt_core::Error> {
+        model.set_pose(&angles, &mut pose)?;
+        model.transfer(&pose, 0, &mut transfer)?;
+        map.compose(&transfer, &composed, &mut rgb)
+    };
+    frame().context("timing a light-map frame through aprt-core")?;
+    Ok(median_us(|| {
+        let _ = frame();
+    }))
 }
 
 /// A model's cost a frame under a scene's lighting.

@@ -67,11 +67,7 @@ pub fn plan_bake(
     )];
     let mut skipped = Vec::new();
     if e.shadows {
-        computed.push(format!(
-            "shadows: {} visibility rays ({} per vertex, {v} vertices, {poses} poses)",
-            group(bake.rays_cast(v) * poses as u64),
-            e.rays
-        ));
+        computed.push(shadows_sentence(&bake, (v, "vertex"), poses));
     } else {
         skipped.push(format!(
             "visibility rays: the scene casts no shadows, so each vertex's transfer is the clamped cosine lobe turned to its normal, in closed form (0 rays instead of {})",
@@ -103,6 +99,27 @@ pub fn plan_bake(
         computed,
         skipped,
     })
+}
+
+/// How the sentence on the shadows a bake computes begins.
+pub const SHADOWS: &str = "shadows:";
+
+/// The sentence on the visibility rays `bake` casts at `points` (a count and what each is,
+/// `"vertex"` or `"texel"`) of each of `poses` poses.
+pub fn shadows_sentence(
+    bake: &BakeSettings,
+    (points, unit): (usize, &str),
+    poses: usize,
+) -> String {
+    let units = match unit {
+        "vertex" => "vertices".to_owned(),
+        other => format!("{other}s"),
+    };
+    format!(
+        "{SHADOWS} {} visibility rays ({} per {unit}, {points} {units}, {poses} poses)",
+        group(bake.rays_cast(points) * poses as u64),
+        bake.rays
+    )
 }
 
 /// `n` with commas between thousands, as the reports print counts.

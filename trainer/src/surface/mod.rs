@@ -19,6 +19,10 @@ use crate::progress::BakeProgress;
 use crate::rig::mesh::Mesh;
 use crate::rig::uv::{UvLayout, point_on, sample_bilinear_by};
 
+/// Surface points `aprt report` measures at unless told otherwise: about five per vertex of
+/// the Fox, so each of its faces holds several.
+pub const DEFAULT_SURFACE_POINTS: u64 = 8192;
+
 /// One point of the surface: where it lies on the mesh and the share of the surface's area it
 /// stands for.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -244,6 +248,20 @@ impl BakeTarget for SurfaceTarget<'_> {
             progress,
         )
     }
+}
+
+/// The transfer at `points` on every mesh of `meshes` (posed from the bind mesh they were
+/// spread on), `order²` values per point, one vector per mesh: [`SurfaceTarget`] pose by pose.
+pub fn bake_surface(
+    points: &SurfacePoints,
+    meshes: &[Mesh],
+    settings: &BakeSettings,
+) -> Result<Vec<Vec<f32>>, BakeError> {
+    let target = SurfaceTarget(points);
+    meshes
+        .iter()
+        .map(|mesh| target.bake(mesh, settings, &crate::progress::Silent))
+        .collect()
 }
 
 #[cfg(test)]

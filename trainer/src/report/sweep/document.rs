@@ -55,7 +55,14 @@ fn plot(
     x: &str,
     axis: impl Fn(&Point) -> (f64, bool),
 ) -> Result<()> {
-    let all: Vec<(f64, f64)> = report.points.iter().map(|p| (axis(p).0, p.error)).collect();
+    let of = |method: &str| -> Vec<(f64, f64)> {
+        report
+            .points
+            .iter()
+            .filter(|p| p.setting.method == method)
+            .map(|p| (axis(p).0, p.error))
+            .collect()
+    };
     let mut front: Vec<(f64, f64)> = report
         .points
         .iter()
@@ -63,20 +70,25 @@ fn plot(
         .map(|p| (axis(p).0, p.error))
         .collect();
     front.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut series = vec![
-        Series {
-            name: "setting".into(),
-            points: all,
-            markers: true,
-            line: false,
-        },
-        Series {
-            name: "Pareto front".into(),
-            points: front,
-            markers: true,
-            line: true,
-        },
-    ];
+    let mut series: Vec<Series> = [
+        ("vertex", "per-vertex setting"),
+        ("lightmap", "light-map setting"),
+    ]
+    .into_iter()
+    .map(|(method, name)| Series {
+        name: name.into(),
+        points: of(method),
+        markers: true,
+        line: false,
+    })
+    .filter(|s| !s.points.is_empty())
+    .collect();
+    series.extend([Series {
+        name: "Pareto front".into(),
+        points: front,
+        markers: true,
+        line: true,
+    }]);
     if let Some(i) = report.recommended {
         let p = &report.points[i];
         series.push(Series {
@@ -97,7 +109,10 @@ fn plot(
     let axes = Axes {
         title: "shading error against cost, on the test clips",
         x,
-        y: "RMS shading error (8-bit grey levels)",
+        y: match report.error_at {
+            "surface" => "RMS shading error over the surface (8-bit grey levels)",
+            _ => "RMS shading error at the vertices (8-bit grey levels)",
+        },
         log_x: hi > 10.0 * lo,
         log_y: false,
     };
@@ -136,8 +151,18 @@ pub fn markdown(report: &SweepReport, command: &str) -> String {
     );
     let _ = writeln!(
         s,
-        "**Error** is the RMS shading error on the test clips in 8-bit grey levels (a white Lambertian surface under the scene's lighting projected at the character's centre, radiance 1 = white), against the ground truth at order 6; the transfer error is the paper's relative error ‖pred − truth‖/‖truth‖ over every coefficient of the truth. **µs** is one frame through aprt-core on one core, median over a tenth of a second, as `aprt train --scene` measures the model it writes: the pose, the scene's lighting through the irradiance rig every setting carries ({}) or projected at the centre without one, every vertex shaded, the lights the rig leaves to each vertex, and the occluder proxies of a model that has them. **Transfer µs** is the full per-vertex transfer instead.\n",
+        "**Error** is the RMS shading error on the test clips in 8-bit grey levels (a white Lambertian surface under the scene's lighting projected at the character's centre, radiance 1 = white), against the ground truth at order 6; the transfer error is the paper's relative error ‖pred − truth‖/‖truth‖ over every coefficient of the truth. **µs** is one frame through aprt-core on one core, median over a tenth of a second, as `aprt train --scene` measures the model it writes: the pose, the scene's lighting through the irradiance rig every setting carries ({}) or projected at the centre without one, every vertex shaded, the lights the rig leaves to each vertex, and the occluder proxies of a model that has them. **Transfer µs** is the full per-vertex transfer instead. A light-map setting's µs is the pose, every texel's transfer and the RGB map composed through aprt-core's `LightMap` under the lighting at the centre (the renderer's filtered fetch is not counted); it carries no irradiance rig.\n",
         report.irradiance_rig.kind.as_deref().unwrap_or("none")
+    );
+    let _ = writeln!(
+        s,
+        "**Surface** figures are measured at {} points spread over the surface by area (each weighted by the area it stands for) on every test frame, against their own ray-cast transfer at the reference settings: per-vertex transfer interpolated across each triangle as a renderer interpolates it, a light map filtered bilinearly at each point's light-map UV. What a vertex cannot hold (a shadow inside a large triangle) counts there and not at the vertices. The fronts and the recommendation rank by the error {}.\n",
+        report.surface_points,
+        match report.error_at {
+            "surface" =>
+                "over the surface: the scene weighs light maps, and only there are texels and vertices judged alike",
+            _ => "at the vertices (a vertex scene; the surface error is beside it)",
+        }
     );
     let _ = writeln!(s, "Irradiance rig: {}.\n", report.irradiance_rig.reason);
     let _ = writeln!(s, "![error against µs per frame]({}.png)\n", TIME_PLOT);
@@ -173,7 +198,8 @@ pub fn markdown(report: &SweepReport, command: &str) -> String {
     if let Some(presets) = report.presets {
         let _ = writeln!(
             s,
-            "| preset | setting | grey RMS | µs/frame | bytes |\n|---|---|---:|---:|---:|"
+            "| preset | setting | grey RMS ({}) | µs/frame | bytes |\n|---|---|---:|---:|---:|",
+            report.error_at
         );
         for (name, i) in [
             ("fastest", presets.fastest),
@@ -191,21 +217,23 @@ pub fn markdown(report: &SweepReport, command: &str) -> String {
     }
     let _ = writeln!(
         s,
-        "## Every setting\n\n★: on the error-against-time front; ◆: on the error-against-bytes front.\n\n| setting | k_a, k_v | grey RMS | grey max | transfer error | µs/frame | transfer µs | Mops | bytes | bake s/frame | fit s |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+        "## Every setting\n\n★: on the error-against-time front; ◆: on the error-against-bytes front.\n\n| setting | k_a, k_v | grey RMS | surface grey RMS | grey max | transfer error | surface transfer error | µs/frame | transfer µs | Mops | bytes | bake s/frame | fit s |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
     );
     for p in &report.points {
         let m = &p.measured;
         let _ = writeln!(
             s,
-            "| {}{}{} | {}, {} | {:.2} | {:.1} | {:.4} | {:.1} | {:.1} | {:.2} | {} | {:.2} | {:.1} |",
+            "| {}{}{} | {}, {} | {:.2} | {:.2} | {:.1} | {:.4} | {:.4} | {:.1} | {:.1} | {:.2} | {} | {:.2} | {:.1} |",
             p.setting.label,
             if p.pareto { " ★" } else { "" },
             if p.pareto_bytes { " ◆" } else { "" },
             p.setting.fitted.0,
             p.setting.fitted.1,
-            p.error,
+            m.grey_rms,
+            m.surface_grey_rms,
             m.grey_max,
             m.transfer_error,
+            m.surface_transfer_error,
             p.us_per_frame,
             m.transfer_us,
             m.megaops,

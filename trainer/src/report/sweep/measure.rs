@@ -1,17 +1,20 @@
 //! Measuring one blob against ground truth on the test clips: the paper's relative transfer
-//! error (section 6), the shading error in 8-bit grey levels under the scene's lighting, and
-//! the per-frame cost through aprt-core on one core under the scene's lighting
-//! ([`frame_cost::us_per_frame`], the figure `aprt train --scene` quotes).
+//! error (section 6) and the shading error in 8-bit grey levels under the scene's lighting,
+//! at the vertices and over the whole surface ([`crate::surface`]: per-vertex transfer
+//! interpolated across each triangle, a light map read at each point's UV), and the per-frame
+//! cost through aprt-core on one core under the scene's lighting ([`frame_cost`], the figure
+//! `aprt train --scene` quotes).
 
 use anyhow::{Result, bail};
 
 use crate::bake::clip::BakedClip;
-use crate::lighting::GREY_PER_IRRADIANCE;
 use crate::model::predict::predict_world;
 use crate::report::experiment::{megaops, transfer_us};
 use crate::rig::mesh::Mesh;
 use crate::scene::frame_cost;
 use crate::scene::lighting::SceneLighting;
+use crate::surface::SurfacePoints;
+use crate::surface::error::{Accuracy, ErrorSum};
 
 /// The ground truth a blob is measured against.
 pub struct Truth<'a> {
@@ -19,14 +22,45 @@ pub struct Truth<'a> {
     pub tests: &'a [BakedClip],
     /// The scene's lighting at the character's centre, luminance, order 6 (36 values).
     pub lighting: &'a [f32],
-    /// Coefficients per vertex of the truth.
-    pub n2: usize,
     /// The scene's lighting, which each frame is timed under.
     pub scene: &'a SceneLighting,
     /// The character's bind pose, which each frame is timed on.
     pub bind: &'a Mesh,
     /// The rig's error target, grey levels: what splits each light between rig and vertex.
     pub target: f32,
+    /// Points spread over the surface, where the surface error is measured.
+    pub surface: &'a SurfacePoints,
+    /// Transfer at those points in every frame of every test clip, at the reference settings.
+    pub surface_tests: &'a [Vec<Vec<f32>>],
+}
+
+impl Truth<'_> {
+    /// Sums of a prediction's error at the vertices and over the surface: one frame at a
+    /// time through [`Truth::add_frame`], then [`Truth::finish`].
+    pub fn sums(&self) -> (ErrorSum<'_>, ErrorSum<'_>) {
+        (ErrorSum::new(self.lighting), ErrorSum::new(self.lighting))
+    }
+
+    /// Adds frame `f` of test clip `clip`: `at_vertices` and `at_points` hold `m2` values per
+    /// vertex and per surface point.
+    pub fn add_frame(
+        &self,
+        sums: &mut (ErrorSum<'_>, ErrorSum<'_>),
+        (clip, f): (usize, usize),
+        (at_vertices, at_points): (&[f32], &[f32]),
+        m2: usize,
+    ) {
+        let weights: Vec<f64> = self.surface.points.iter().map(|p| p.weight).collect();
+        sums.0
+            .add(at_vertices, m2, &self.tests[clip].transfer[f], None);
+        sums.1
+            .add(at_points, m2, &self.surface_tests[clip][f], Some(&weights));
+    }
+}
+
+/// The error figures of a [`Measured`], at the vertices and over the surface.
+pub fn accuracy(sums: &(ErrorSum<'_>, ErrorSum<'_>)) -> (Accuracy, Accuracy) {
+    (sums.0.finish(), sums.1.finish())
 }
 
 /// What one blob measured.
@@ -47,6 +81,12 @@ pub struct Measured {
     pub transfer_us: f64,
     /// Million multiply-adds per frame for RGB shading.
     pub megaops: f64,
+    /// RMS shading error over the whole surface, grey levels: every test frame at points
+    /// spread by area, each weighted by the area it stands for, the method read there as a
+    /// renderer shows it (per-vertex values interpolated, a light map filtered).
+    pub surface_grey_rms: f64,
+    /// `‖pred − truth‖ / ‖truth‖` at those points.
+    pub surface_transfer_error: f64,
 }
 
 impl Measured {
@@ -60,51 +100,62 @@ impl Measured {
             ("µs per frame", self.us_per_frame),
             ("transfer µs per frame", self.transfer_us),
             ("million multiply-adds per frame", self.megaops),
+            ("RMS shading error over the surface", self.surface_grey_rms),
+            (
+                "relative transfer error over the surface",
+                self.surface_transfer_error,
+            ),
         ]
         .into_iter()
         .find(|(_, v)| !v.is_finite())
     }
 }
 
-/// Measures `blob` on `truth`; refuses a figure that is not finite, naming it.
+/// Measures per-vertex model `blob` on `truth`; refuses a figure that is not finite, naming
+/// it.
 pub fn measure(blob: &[u8], truth: &Truth<'_>) -> Result<Measured> {
     let info = *aprt_core::Model::parse(blob)?.info();
     let m2 = info.coeffs();
-    let lighting = &truth.lighting[..m2];
-    let (mut diff, mut norm, mut grey2, mut grey_max, mut count) = (0.0, 0.0, 0.0, 0.0f64, 0usize);
-    for clip in truth.tests {
+    let mut sums = truth.sums();
+    let triangles = &truth.bind.triangles;
+    for (c, clip) in truth.tests.iter().enumerate() {
         let predicted = predict_world(blob, &clip.angles, &clip.rotations, Some(clip.geometry()))?;
-        for (p, t) in predicted.iter().zip(&clip.transfer) {
-            for (pv, tv) in p.chunks_exact(m2).zip(t.chunks_exact(truth.n2)) {
-                let mut shade = 0.0f64;
-                let mut exact = 0.0f64;
-                for c in 0..truth.n2 {
-                    let tc = f64::from(tv[c]);
-                    let pc = pv.get(c).map_or(0.0, |&x| f64::from(x));
-                    diff += (pc - tc).powi(2);
-                    norm += tc * tc;
-                    exact += f64::from(truth.lighting[c]) * tc;
-                    if c < m2 {
-                        shade += f64::from(lighting[c]) * pc;
-                    }
-                }
-                let grey = (shade - exact).abs() * GREY_PER_IRRADIANCE;
-                grey2 += grey * grey;
-                grey_max = grey_max.max(grey);
-                count += 1;
-            }
+        for (f, p) in predicted.iter().enumerate() {
+            let at_points = truth.surface.from_vertices(p, m2, triangles);
+            truth.add_frame(&mut sums, (c, f), (p, &at_points), m2);
         }
     }
     let us_per_frame = frame_cost::us_per_frame(blob, truth.bind, truth.scene, truth.target)?.us;
     let transfer_us = transfer_us(blob, &truth.tests[0].angles[0])?;
-    let measured = Measured {
-        grey_rms: (grey2 / count.max(1) as f64).sqrt(),
-        grey_max,
-        transfer_error: (diff / norm.max(f64::MIN_POSITIVE)).sqrt(),
+    finite(measured(
+        accuracy(&sums),
         us_per_frame,
         transfer_us,
-        megaops: megaops(&info),
-    };
+        megaops(&info),
+    ))
+}
+
+/// The figures of a measurement.
+pub fn measured(
+    (vertices, surface): (Accuracy, Accuracy),
+    us_per_frame: f64,
+    transfer_us: f64,
+    megaops: f64,
+) -> Measured {
+    Measured {
+        grey_rms: vertices.grey_rms,
+        grey_max: vertices.grey_max,
+        transfer_error: vertices.transfer_error,
+        us_per_frame,
+        transfer_us,
+        megaops,
+        surface_grey_rms: surface.grey_rms,
+        surface_transfer_error: surface.transfer_error,
+    }
+}
+
+/// `measured`, or the error naming its first figure that is not finite.
+pub fn finite(measured: Measured) -> Result<Measured> {
     match measured.non_finite() {
         Some((figure, value)) => bail!(
             "its {figure} is {value}: the lighting or the model's values are beyond what f32 \
@@ -127,6 +178,8 @@ mod tests {
             us_per_frame: 50.0,
             transfer_us: 900.0,
             megaops: 1.5,
+            surface_grey_rms: 1.5,
+            surface_transfer_error: 0.12,
         };
         assert_eq!(fine.non_finite(), None);
         let nan = Measured {

@@ -6,9 +6,13 @@
 //! what `aprt train --scene` quotes for the model it writes
 //! ([`crate::scene::frame_cost::us_per_frame`]): the model carries the rig the scene would
 //! choose, and is timed under the scene's lighting with the lights that rig leaves to each
-//! vertex.
+//! vertex. A scene whose `method` is `lightmap` or `auto` sweeps pose-driven light maps too
+//! ([`lightmaps`]), and every setting is measured over the whole surface as well as at the
+//! vertices ([`crate::surface`]); the front then ranks by the surface error, the only one in
+//! which a light map's texels and a vertex's interpolation are judged alike.
 
 pub mod document;
+pub mod lightmaps;
 pub mod measure;
 pub mod pareto;
 
@@ -19,7 +23,7 @@ use anyhow::{Context, Result, bail};
 use aprt_core::MAX_ORDER;
 
 use crate::bake::BakeSettings;
-use crate::bake::clip::{BakedClip, bake_clip, bake_rest};
+use crate::bake::clip::{BakedClip, bake_clip, bake_rest, pose_all};
 use crate::irradiance_rig::RigKind;
 use crate::irradiance_rig::fit::{fit_irradiance_rig, rig_fitting_surfaces};
 use crate::lighting::luminance;
@@ -33,10 +37,12 @@ use crate::report::experiment::baked_validation_poses;
 use crate::rig::mesh::Mesh;
 use crate::rig::pose_layout::PoseLayout;
 use crate::rig::{Clip, Rig};
-use crate::scene::file::Scene;
+use crate::scene::file::{Choice, Method, Scene};
 use crate::scene::irradiance_rig_choice::{CANDIDATES, RigDecision, choose_rig};
 use crate::scene::lighting::SceneLighting;
 use crate::scene::{BakePlan, plan_bake};
+use crate::surface::{SurfacePoints, bake_surface};
+use lightmaps::{LightMapSweep, light_map_candidates, sweep_light_maps};
 use measure::{Measured, Truth, measure};
 use pareto::{Cost, Presets, front, presets, recommend};
 
@@ -52,6 +58,9 @@ pub struct ReportSettings {
     /// Validation poses sampled from the (strided) training frames and baked with every bake
     /// of the sweep, as `aprt train --scene` samples them to choose its model by.
     pub validation_poses: usize,
+    /// Points spread over the surface by area, where every test frame's surface error is
+    /// measured.
+    pub surface_points: usize,
 }
 
 /// The clips of a scene's character, loaded.
@@ -71,6 +80,10 @@ pub struct SceneClips<'a> {
 pub struct Setting {
     /// A short name for tables and plots.
     pub label: String,
+    /// `"vertex"` (per-vertex transfer) or `"lightmap"` (a pose-driven light map).
+    pub method: &'static str,
+    /// Texels a side of a light map; `None` for the vertex method.
+    pub resolution: Option<usize>,
     /// SH order.
     pub order: usize,
     /// Pose dimensions k_a asked for (`auto`: chosen by held-out error).
@@ -95,7 +108,8 @@ pub struct Setting {
 pub struct Point {
     /// The setting.
     pub setting: Setting,
-    /// RMS shading error on the test clips, 8-bit grey levels.
+    /// RMS shading error on the test clips, 8-bit grey levels: over the surface when the
+    /// scene weighs light maps (`SweepReport::error_at`), at the vertices otherwise.
     pub error: f64,
     /// µs per frame through aprt-core, one core, as `aprt train --scene` measures the model it
     /// writes: pose, the scene's lighting under its rig, every vertex shaded, the lights the
@@ -118,6 +132,30 @@ pub struct Point {
     pub blob: Vec<u8>,
 }
 
+impl Point {
+    /// `setting`, measured as `measured` with model `blob`, its bake's seconds per training
+    /// frame and its fit's seconds; off both fronts until they are marked, its error the
+    /// vertices' until the sweep says otherwise.
+    pub fn new(
+        setting: Setting,
+        (measured, blob): (Measured, Vec<u8>),
+        (bake_s_per_frame, fit_s): (f64, f64),
+    ) -> Point {
+        Point {
+            setting,
+            error: measured.grey_rms,
+            us_per_frame: measured.us_per_frame,
+            bytes: blob.len(),
+            pareto: false,
+            pareto_bytes: false,
+            measured,
+            bake_s_per_frame,
+            fit_s,
+            blob,
+        }
+    }
+}
+
 /// Everything `aprt report` measured.
 #[derive(Debug, serde::Serialize)]
 pub struct SweepReport {
@@ -137,6 +175,11 @@ pub struct SweepReport {
     pub validation_bake_s: f64,
     /// The order the scene's lighting needs, and why.
     pub scene_order: (usize, String),
+    /// Surface points every test frame's surface error is measured at.
+    pub surface_points: usize,
+    /// Where `error` and the fronts measure: `"surface"` when the scene's method is
+    /// `lightmap` or `auto`, `"vertices"` for a vertex scene.
+    pub error_at: &'static str,
     /// The settings, in sweep order.
     pub points: Vec<Point>,
     /// Index into `points` of the recommended setting: the cheapest of those within the
@@ -212,6 +255,10 @@ pub struct Reference {
     pub irradiance_rig: (Option<RigKind>, RigDecision),
     /// The surfaces that rig is fitted over (the bind pose first).
     pub fitting: Vec<Mesh>,
+    /// Points spread over the bind surface, where the surface error is measured.
+    pub surface: SurfacePoints,
+    /// Transfer at those points in every frame of every test clip, at the reference settings.
+    pub surface_tests: Vec<Vec<Vec<f32>>>,
 }
 
 /// Refuses a `stride` (`--stride`) that keeps fewer than two frames of the training clips
@@ -280,6 +327,7 @@ pub fn bake_reference(
         .map(|c| strided(c, stride))
         .map(|c| Ok(bake_clip(rig, &layout, &c.name, c.frames, &settings, &Silent)?.0))
         .collect::<Result<Vec<_>>>()?;
+    let (surface, surface_tests) = bake_surface_truth(clips, stride, &settings, report, reporter)?;
     Ok(Reference {
         layout,
         base,
@@ -291,7 +339,37 @@ pub fn bake_reference(
         validation_poses: poses,
         irradiance_rig,
         fitting,
+        surface,
+        surface_tests,
     })
+}
+
+/// `report.surface_points` points spread over the character's bind surface, and their
+/// transfer in every (`stride`-th) frame of every test clip with `settings`.
+fn bake_surface_truth(
+    clips: &SceneClips<'_>,
+    stride: usize,
+    settings: &BakeSettings,
+    report: &ReportSettings,
+    reporter: &dyn Reporter,
+) -> Result<(SurfacePoints, Vec<Vec<Vec<f32>>>)> {
+    let rig = clips.rig;
+    let surface = SurfacePoints::spread(rig.bind_mesh(), report.surface_points)
+        .with_context(|| format!("--surface-points {}", report.surface_points))?;
+    reporter.note(&format!(
+        "baking the surface truth: {} points spread by area on every test frame",
+        surface.len()
+    ));
+    let truth = clips
+        .tests
+        .iter()
+        .map(|c| {
+            let clip = strided(c, stride);
+            let meshes = pose_all(rig, &clip.name, &clip.frames)?;
+            Ok(bake_surface(&surface, &meshes, settings)?)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok((surface, truth))
 }
 
 /// Sweeps the knobs on `scene` and returns the measured points.
@@ -304,7 +382,11 @@ pub fn run(
 ) -> Result<SweepReport> {
     let started = Instant::now();
     let reference = bake_reference(scene, lighting, clips, settings, reporter)?;
-    let list = candidates(scene, reference.plan.order.order, Knobs::All);
+    // A light-map scene sweeps light maps alone (`sweep` adds them for any but a vertex scene).
+    let list = match scene.effects.method {
+        Choice::Fixed(Method::LightMap) => Vec::new(),
+        _ => candidates(scene, reference.plan.order.order, Knobs::All),
+    };
     let mut report = sweep(scene, clips, &reference, &list, settings, reporter)?;
     report.seconds = started.elapsed().as_secs_f64();
     Ok(report)
@@ -331,13 +413,18 @@ pub fn sweep(
     let truth = Truth {
         tests: &reference.tests,
         lighting: &lum,
-        n2: MAX_ORDER * MAX_ORDER,
         scene: &reference.lighting,
         bind,
         target: e.error_target,
+        surface: &reference.surface,
+        surface_tests: &reference.surface_tests,
+    };
+    let light_maps = match e.method {
+        Choice::Fixed(Method::Vertex) => None,
+        _ => Some(light_map_candidates(scene)),
     };
     let rig_sections = rig_sections(reference, candidates)?;
-    let progress = reporter.step_progress(candidates.len() + 1);
+    let progress = reporter.step_progress(candidates.len() + 2);
     let mut points = Vec::new();
     let mut extra: Option<(Data, Baked)> = None;
     for candidate in candidates {
@@ -370,6 +457,29 @@ pub fn sweep(
             irradiance_rig: rig_sections[candidate.order].as_deref(),
         };
         points.extend(fit_and_measure(&fit, candidate, &data, scene, &truth)?);
+    }
+    progress.step("light maps");
+    let mut not_swept = not_swept(scene);
+    if let Some(light_maps) = &light_maps {
+        let sweep = LightMapSweep {
+            clips,
+            stride: reference.stride,
+            layout: &reference.layout,
+            bake: plan.bake,
+            frame: e.frame,
+        };
+        let (maps, notes) = sweep_light_maps(&sweep, light_maps, &truth, reporter)?;
+        points.extend(maps);
+        not_swept.extend(notes);
+    }
+    let error_at = match e.method {
+        Choice::Fixed(Method::Vertex) => "vertices",
+        _ => "surface",
+    };
+    if error_at == "surface" {
+        for p in &mut points {
+            p.error = p.measured.surface_grey_rms;
+        }
     }
     progress.step("the Pareto fronts");
     mark_fronts(&mut points);
@@ -405,11 +515,13 @@ pub fn sweep(
         validation_bake_s: base.validation_bake_s,
         scene_order: (plan.order.order, plan.order.reason.clone()),
         presets: presets(&costs),
+        surface_points: reference.surface.len(),
+        error_at,
         points,
         recommended,
         irradiance_rig: reference.irradiance_rig.1.clone(),
         budget: (budget_us, budget_bytes),
-        not_swept: not_swept(scene),
+        not_swept,
         seconds: started.elapsed().as_secs_f64(),
     })
 }
@@ -542,9 +654,15 @@ fn not_swept(scene: &Scene) -> Vec<String> {
         "irradiance-rig kinds: every setting carries the rig `aprt train --scene` chooses for the scene and is timed with it; the kinds are compared for the scene's lights by `aprt irradiance-rig` and `aprt train --scene` (irradiance_rig = \"auto\"), not in this sweep"
             .into(),
     );
-    out.push(
-        "light-map representations: measured by `aprt lightmap study` (docs/results/lightmaps), not in this sweep".into(),
-    );
+    if e.method == Choice::Fixed(Method::Vertex) {
+        out.push(
+            "light maps: the scene's method is vertex (method = \"auto\" sweeps pose-driven light maps beside the vertex settings); stored light-map sequences, which hold only the clips they were baked from, are measured by `aprt lightmap study` (docs/results/lightmaps)".into(),
+        );
+    } else {
+        out.push(
+            "light maps with an irradiance rig or near lights per texel: each light map is composed under the scene's lighting at the character's centre; stored light-map sequences, which hold only the clips they were baked from, are measured by `aprt lightmap study`".into(),
+        );
+    }
     out
 }
 
@@ -650,9 +768,11 @@ fn fit_and_measure(
         let measured = measure(&blob, truth)
             .with_context(|| format!("measuring {}, {}", candidate.label, precision.name()))?;
         let info = *aprt_core::Model::parse(&blob)?.info();
-        points.push(Point {
-            setting: Setting {
+        points.push(Point::new(
+            Setting {
                 label: format!("{}, {}", candidate.label, precision.name()),
+                method: "vertex",
+                resolution: None,
                 order: candidate.order,
                 pose_dims: match candidate.pose_dims {
                     Dims::Count(k) => k.to_string(),
@@ -678,16 +798,9 @@ fn fit_and_measure(
                 },
                 proxies: (candidate.proxies.name(), info.has_proxies()),
             },
-            error: measured.grey_rms,
-            us_per_frame: measured.us_per_frame,
-            bytes: blob.len(),
-            pareto: false,
-            pareto_bytes: false,
-            measured,
-            bake_s_per_frame: data.seconds,
-            fit_s,
-            blob,
-        });
+            (measured, blob),
+            (data.seconds, fit_s),
+        ));
     }
     Ok(points)
 }
