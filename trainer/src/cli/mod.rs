@@ -33,13 +33,14 @@ use crate::io::outputs::{Input, Output, check};
 use crate::io::source::ClipSpec;
 use crate::model::ModelFrame;
 use crate::model::predict::{predict_clip, predict_world};
-use crate::pipeline::method::{MethodDecision, fixed_method, swept_method};
 use crate::pipeline::scene::{SceneOutcome, SceneTrainOptions, SceneTrainReport, train_scene};
 use crate::pipeline::train::{Outcome, TrainSettings};
 use crate::progress::Reporter;
+use crate::report::sweep::choice::swept_method;
 use crate::rig::mesh::degenerate_note;
 use crate::scene::file::{CLIP_KEYS, Environment, Scene, SceneSource, read_scene};
 use crate::scene::lighting::SceneLighting;
+use crate::scene::method::{MethodDecision, fixed_method};
 
 /// Pose-driven precomputed radiance transfer for skinned characters.
 #[derive(Debug, Parser)]

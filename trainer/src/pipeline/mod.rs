@@ -4,7 +4,6 @@
 //! (`scene.rs`, `aprt train --scene`). bake/, lighting/, irradiance_rig/ and model/ each offer
 //! one step; only this stage calls them in order.
 
-pub mod method;
 pub mod scene;
 pub mod scene_light_map;
 pub mod train;

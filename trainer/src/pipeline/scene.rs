@@ -9,7 +9,6 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use aprt_core::{MAX_ORDER, Rgb};
 
-use super::method::MethodDecision;
 use super::scene_light_map::train_scene_light_map;
 use crate::bake::checkpoint::OnExisting;
 use crate::bake::shard::Shard;
@@ -28,6 +27,7 @@ use crate::scene::file::{Choice, Scene};
 use crate::scene::frame_cost::{self, BudgetCheck};
 use crate::scene::irradiance_rig_choice::{CANDIDATES, RigDecision, choose_rig};
 use crate::scene::lighting::SceneLighting;
+use crate::scene::method::MethodDecision;
 use crate::scene::{BakePlan, plan_bake};
 
 /// Poses the full simulation is timed on, at most.

@@ -7,7 +7,6 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 
-use super::method::MethodDecision;
 use super::scene::{SceneOutcome, SceneTrainOptions, SceneTrainReport};
 use crate::io::atomic::write_atomic;
 use crate::io::source::{Poses, joined};
@@ -21,6 +20,7 @@ use crate::scene::file::{Choice, LIGHTMAP_RESOLUTIONS, Scene};
 use crate::scene::frame_cost::{self, BudgetCheck, FrameCost};
 use crate::scene::irradiance_rig_choice::RigDecision;
 use crate::scene::lighting::SceneLighting;
+use crate::scene::method::MethodDecision;
 use crate::scene::{SHADOWS, plan_bake, shadows_sentence};
 
 /// Precision of a light map whose scene leaves it to `auto` and whose choice did not measure

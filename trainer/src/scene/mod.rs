@@ -9,6 +9,7 @@ pub mod file;
 pub mod frame_cost;
 pub mod irradiance_rig_choice;
 pub mod lighting;
+pub mod method;
 pub mod order;
 
 use aprt_core::MAX_ORDER;

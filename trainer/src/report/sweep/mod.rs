@@ -11,6 +11,7 @@
 //! vertices ([`crate::surface`]); the front then ranks by the surface error, the only one in
 //! which a light map's texels and a vertex's interpolation are judged alike.
 
+pub mod choice;
 pub mod document;
 pub mod lightmaps;
 pub mod measure;

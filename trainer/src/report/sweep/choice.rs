@@ -1,74 +1,22 @@
-//! Which method `aprt train --scene` writes: the scene's `[effects] method` when it fixes one
-//! (and, for a light map, its resolution and precision), otherwise the kind `aprt report`
-//! recommends for the scene. The choice runs the report's own sweep ([`crate::report::sweep`],
-//! every setting of both methods on the scene's test clips, at the report's default stride and
-//! surface points), so the two commands agree on the kind by construction: there is one
+//! The method `aprt train --scene` writes when its scene leaves it to `auto` (or a light map's
+//! resolution or precision): the kind `aprt report` recommends, chosen by running the report's
+//! own sweep (every setting of both methods on the scene's test clips, at the report's default
+//! stride and surface points), so the two commands agree on the kind by construction: one
 //! measure of what a method costs and what it shows over the surface, not two.
 
 use anyhow::{Context, Result, bail};
 
+use super::{Point, ReportSettings, SceneClips, check_stride, run};
 use crate::model::export::Precision;
 use crate::progress::Reporter;
-use crate::report::sweep::{self, Point, ReportSettings, SceneClips};
 use crate::rig::pose_sampler::DEFAULT_VALIDATION_POSES;
-use crate::scene::file::{Choice, Method, Scene};
+use crate::scene::file::{Method, Scene};
 use crate::scene::lighting::SceneLighting;
+use crate::scene::method::MethodDecision;
 use crate::surface::DEFAULT_SURFACE_POINTS;
 
 /// Frames of each clip the choice's sweep uses: one in three, `aprt report`'s default.
 pub const CHOICE_STRIDE: usize = 3;
-
-/// The method a scene's model is written with, and why.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct MethodDecision {
-    /// `vertex` or `lightmap`.
-    pub method: Method,
-    /// Texels a side of a light map.
-    pub resolution: Option<usize>,
-    /// The light map's precision, when the choice measured it.
-    #[serde(skip)]
-    pub precision: Option<Precision>,
-    /// One sentence: why.
-    pub reason: String,
-    /// Wall-clock seconds the choice took (0 when the scene fixes the method).
-    pub seconds: f64,
-}
-
-/// Whether choosing `scene`'s method needs the sweep: its method is `auto`, or a light map
-/// whose resolution or precision is `auto`.
-pub fn needs_sweep(scene: &Scene) -> bool {
-    let e = &scene.effects;
-    match e.method {
-        Choice::Auto => true,
-        Choice::Fixed(Method::Vertex) => false,
-        Choice::Fixed(Method::LightMap) => {
-            e.lightmap_resolution == Choice::Auto || e.precision == Choice::Auto
-        }
-    }
-}
-
-/// The method `scene` fixes, with its light map's resolution and precision; `None` when any
-/// of them is left to `auto` and the sweep must choose ([`swept_method`]).
-pub fn fixed_method(scene: &Scene) -> Option<MethodDecision> {
-    let e = &scene.effects;
-    if needs_sweep(scene) {
-        return None;
-    }
-    let Choice::Fixed(method) = e.method else {
-        return None;
-    };
-    let (resolution, precision) = match (method, e.lightmap_resolution, e.precision) {
-        (Method::LightMap, Choice::Fixed(r), Choice::Fixed(p)) => (Some(r), Some(p)),
-        _ => (None, None),
-    };
-    Some(MethodDecision {
-        method,
-        resolution,
-        precision,
-        reason: format!("method {}, as the scene asks", method.name()),
-        seconds: 0.0,
-    })
-}
 
 /// The method the report's sweep of `scene` on `clips` under `lighting` recommends
 /// ([`decision_from`]). Progress and notes go to `reporter`.
@@ -87,8 +35,8 @@ pub fn swept_method(
         validation_poses: DEFAULT_VALIDATION_POSES,
         surface_points: DEFAULT_SURFACE_POINTS as usize,
     };
-    sweep::check_stride(clips.train, CHOICE_STRIDE)?;
-    let report = sweep::run(scene, lighting.clone(), clips, &settings, reporter)
+    check_stride(clips.train, CHOICE_STRIDE)?;
+    let report = run(scene, lighting.clone(), clips, &settings, reporter)
         .context("choosing the method by the report's sweep")?;
     let mut decision = decision_from(&report.points, report.recommended)?;
     decision.seconds = started.elapsed().as_secs_f64();
