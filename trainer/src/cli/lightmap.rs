@@ -27,6 +27,7 @@ use crate::lightmap::summary::summarize;
 use crate::model::ModelFrame;
 use crate::progress::Reporter;
 use crate::report::lightmap_preview::{ComposeSource, save_preview};
+use crate::report::lightmap_study::StudySettings;
 use crate::rig::uv::generate::{DEFAULT_HARD_ANGLE_DEG, DEFAULT_MARGIN_TEXELS};
 
 /// `aprt lightmap`.
@@ -68,6 +69,11 @@ pub struct LightmapStudyArgs {
     /// Atlas width and height in texels.
     #[arg(long, default_value_t = 256, value_parser = parse_resolution)]
     pub resolution: usize,
+    /// Points spread over each character by area where every method's surface error is read
+    /// (each baked on every frame the study measures, as the vertices are). The study also
+    /// reports the figure at a quarter as many, which says whether this count is enough.
+    #[arg(long, default_value_t = 16384, value_parser = clap::value_parser!(u32).range(4..=4_000_000))]
+    pub surface_points: u32,
     /// Simulation settings.
     #[command(flatten)]
     pub bake: BakeArgs,
@@ -526,20 +532,20 @@ fn study(args: &LightmapStudyArgs) -> Result<()> {
     let bake = args.bake.settings();
     bake.validate()?;
     let command = format!(
-        "cargo run --release -p aprt-trainer --bin aprt -- shlm study --out {} --resolution {} --order {} --rays {}",
+        "cargo run --release -p aprt-trainer --bin aprt -- lightmap study --out {} --resolution {} --order {} --rays {} --surface-points {}",
         args.out.display(),
         args.resolution,
         bake.order,
-        bake.rays
+        bake.rays,
+        args.surface_points,
     );
-    let path = crate::report::lightmap_study::run(
-        &assets,
-        &args.out,
-        args.resolution,
-        &bake,
-        &command,
-        &Terminal,
-    )?;
+    let settings = StudySettings {
+        resolution: args.resolution,
+        bake: &bake,
+        surface_points: args.surface_points as usize,
+    };
+    let path =
+        crate::report::lightmap_study::run(&assets, &args.out, &settings, &command, &Terminal)?;
     eprintln!("wrote {}", path.display());
     Ok(())
 }

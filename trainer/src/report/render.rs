@@ -171,44 +171,13 @@ pub fn render_with(
     height: u32,
     shade: impl Fn(usize, [f32; 3]) -> Rgb<u8>,
 ) -> Result<RgbImage, RenderError> {
-    if width == 0 || height == 0 {
-        return Err(RenderError::EmptyImage { width, height });
-    }
-    let (right, up, forward) = view.basis();
-    let camera: Vec<Vec3> = mesh
-        .positions
-        .iter()
-        .map(|&p| {
-            let p = Vec3::from(p);
-            Vec3::new(p.dot(right), p.dot(up), p.dot(forward))
-        })
-        .collect();
-    let (lo, hi) = camera.iter().filter(|p| p.is_finite()).fold(
-        (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY)),
-        |(lo, hi), p| (lo.min(p.truncate()), hi.max(p.truncate())),
-    );
     let mut image = RgbImage::from_pixel(width, height, BACKGROUND);
-    if lo.x > hi.x {
+    let Some(screen) = project(&mesh.positions, view, width, height)? else {
         return Ok(image);
-    }
-    let size = Vec2::new(width as f32, height as f32);
-    let extent = (hi - lo).max(Vec2::splat(f32::EPSILON));
-    let scale = ((1.0 - 2.0 * MARGIN) * size / extent).min_element();
-    let centre = 0.5 * (lo + hi);
-    // Screen: x right, y down, origin at the top-left corner; z is depth (smaller is nearer).
-    let screen: Vec<Vec3> = camera
-        .iter()
-        .map(|p| {
-            Vec3::new(
-                0.5 * size.x + (p.x - centre.x) * scale,
-                0.5 * size.y - (p.y - centre.y) * scale,
-                p.z,
-            )
-        })
-        .collect();
+    };
     let mut depth = vec![f32::INFINITY; (width * height) as usize];
     for (index, t) in mesh.triangles.iter().enumerate() {
-        let [a, b, c] = t.map(|i| screen[i as usize]);
+        let [a, b, c] = t.map(|i| screen.points[i as usize]);
         if !(a.is_finite() && b.is_finite() && c.is_finite()) {
             continue;
         }
@@ -237,6 +206,106 @@ pub fn render_with(
                 if z < *slot {
                     *slot = z;
                     image.put_pixel(x, y, shade(index, [wa, wb, wc]));
+                }
+            }
+        }
+    }
+    Ok(image)
+}
+
+/// `points` seen from `view` on a `width`×`height` image: each point's pixel x and y (origin
+/// at the top-left corner, y down) and depth (smaller is nearer), scaled so their projected
+/// bounding box fills the image with a small margin and keeps its aspect ratio; `None` when
+/// no point is finite.
+fn project(
+    points: &[[f32; 3]],
+    view: View,
+    width: u32,
+    height: u32,
+) -> Result<Option<Screen>, RenderError> {
+    if width == 0 || height == 0 {
+        return Err(RenderError::EmptyImage { width, height });
+    }
+    let (right, up, forward) = view.basis();
+    let camera: Vec<Vec3> = points
+        .iter()
+        .map(|&p| {
+            let p = Vec3::from(p);
+            Vec3::new(p.dot(right), p.dot(up), p.dot(forward))
+        })
+        .collect();
+    let (lo, hi) = camera.iter().filter(|p| p.is_finite()).fold(
+        (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(p.truncate()), hi.max(p.truncate())),
+    );
+    if lo.x > hi.x {
+        return Ok(None);
+    }
+    let size = Vec2::new(width as f32, height as f32);
+    let extent = (hi - lo).max(Vec2::splat(f32::EPSILON));
+    let scale = ((1.0 - 2.0 * MARGIN) * size / extent).min_element();
+    let centre = 0.5 * (lo + hi);
+    let points = camera
+        .iter()
+        .map(|p| {
+            Vec3::new(
+                0.5 * size.x + (p.x - centre.x) * scale,
+                0.5 * size.y - (p.y - centre.y) * scale,
+                p.z,
+            )
+        })
+        .collect();
+    Ok(Some(Screen { points, scale }))
+}
+
+/// Points on the screen ([`project`]): pixel x, y and depth, and pixels per world unit.
+struct Screen {
+    points: Vec<Vec3>,
+    scale: f32,
+}
+
+/// Points of a surface drawn as discs facing the camera, nearest first through a z-buffer:
+/// point `i` at `positions[i]` with world radius `radii[i]` (at least the pixel it falls in)
+/// and colour `colour(i)`, framed as [`render_scalar`] frames a mesh. Dense enough, the discs
+/// cover the surface, and each pixel shows the one point nearest the camera there: a value
+/// that varies inside a triangle shows as it is, not as its corners' blend. Ties keep the
+/// earlier point, so the picture is deterministic.
+pub fn render_splats(
+    positions: &[[f32; 3]],
+    radii: &[f32],
+    view: View,
+    (width, height): (u32, u32),
+    colour: impl Fn(usize) -> Rgb<u8>,
+) -> Result<RgbImage, RenderError> {
+    if radii.len() != positions.len() {
+        return Err(RenderError::ValueCount {
+            values: radii.len(),
+            vertices: positions.len(),
+        });
+    }
+    let mut image = RgbImage::from_pixel(width, height, BACKGROUND);
+    let Some(screen) = project(positions, view, width, height)? else {
+        return Ok(image);
+    };
+    let mut depth = vec![f32::INFINITY; (width * height) as usize];
+    for (i, (p, &radius)) in screen.points.iter().zip(radii).enumerate() {
+        if !p.is_finite() {
+            continue;
+        }
+        let r = (radius * screen.scale).max(0.5);
+        let x0 = (p.x - r).floor().max(0.0) as u32;
+        let y0 = (p.y - r).floor().max(0.0) as u32;
+        let x1 = ((p.x + r).ceil().max(0.0) as u32).min(width);
+        let y1 = ((p.y + r).ceil().max(0.0) as u32).min(height);
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let (dx, dy) = (x as f32 + 0.5 - p.x, y as f32 + 0.5 - p.y);
+                let inside = dx * dx + dy * dy <= r * r;
+                let own_pixel = x == p.x as u32 && y == p.y as u32;
+                let slot = &mut depth[(y * width + x) as usize];
+                if (inside || own_pixel) && p.z < *slot {
+                    *slot = p.z;
+                    image.put_pixel(x, y, colour(i));
                 }
             }
         }
@@ -453,6 +522,51 @@ mod tests {
         assert!(matches!(
             save_png_atomic(&dir.path().join("missing/dir/x.png"), &joined),
             Err(RenderError::Io { .. })
+        ));
+    }
+
+    /// A grid of points on a square facing the camera, each a disc of its share of the area,
+    /// covers the square's pixels without a gap; a nearer point in front of it wins its disc
+    /// whatever the drawing order, and a farther one behind it shows nowhere.
+    #[test]
+    fn splats_cover_their_surface_and_the_nearest_point_wins() {
+        let n = 40;
+        let mut positions: Vec<[f32; 3]> = (0..n * n)
+            .map(|i| {
+                let (x, z) = ((i % n) as f32 + 0.5, (i / n) as f32 + 0.5);
+                [x / n as f32, 0.0, z / n as f32]
+            })
+            .collect();
+        let share = (1.0 / (n * n) as f32 / std::f32::consts::PI).sqrt();
+        let mut radii = vec![1.5 * share; n * n];
+        let front = View {
+            yaw: 0.0,
+            pitch: 0.0,
+        };
+        let square = render_splats(&positions, &radii, front, (100, 100), |_| Rgb([9, 9, 9]));
+        let square = square.unwrap();
+        // The points span 0.975 of the unit square around its centre: pixels 6..94.
+        for y in 8..92 {
+            for x in 8..92 {
+                assert_eq!(*square.get_pixel(x, y), Rgb([9, 9, 9]), "gap at {x}, {y}");
+            }
+        }
+        // One point in front of the centre (−y is toward the camera), one behind it.
+        positions.push([0.5, -1.0, 0.5]);
+        positions.push([0.5, 1.0, 0.5]);
+        radii.extend([0.1, 0.1]);
+        let near = positions.len() - 2;
+        let image = render_splats(&positions, &radii, front, (100, 100), |i| match i {
+            i if i == near => Rgb([255, 0, 0]),
+            i if i == near + 1 => Rgb([0, 0, 255]),
+            _ => Rgb([9, 9, 9]),
+        })
+        .unwrap();
+        assert_eq!(*image.get_pixel(50, 50), Rgb([255, 0, 0]));
+        assert!(image.pixels().all(|p| *p != Rgb([0, 0, 255])));
+        assert!(matches!(
+            render_splats(&positions, &radii[1..], front, (10, 10), |_| BACKGROUND),
+            Err(RenderError::ValueCount { .. })
         ));
     }
 }

@@ -22,8 +22,8 @@ pub(super) fn surface(samples: &[TexelSample], mesh: &Mesh) -> (Vec<[f32; 3]>, V
 }
 
 /// The position and unit normal at barycentric coordinates `bary` of triangle `triangle` of
-/// `mesh`, as [`super::Atlas::surface`] gives a texel sample's (and [`crate::surface`] a
-/// surface point's).
+/// `mesh`, as [`Atlas::surface`](super::Atlas::surface) gives a texel sample's (and
+/// [`crate::surface`] a surface point's).
 pub fn point_on(mesh: &Mesh, triangle: u32, bary: [f32; 3]) -> ([f32; 3], [f32; 3]) {
     let t = mesh.triangles[triangle as usize];
     let corner = |data: &[[f32; 3]], k: usize| glam::Vec3::from(data[t[k] as usize]).as_dvec3();
