@@ -29,4 +29,6 @@ mod quality;
 mod resume;
 mod scene;
 mod shlm;
+mod simulate_surface;
 mod sources;
+mod surface_quad;

@@ -102,6 +102,22 @@ impl Workload {
         }
     }
 
+    /// Baking `frames` poses of `mesh` at `points` points spread over its surface instead of
+    /// its vertices (`aprt simulate --surface`), holding `copies` of their transfer.
+    pub fn surface_points(
+        frames: usize,
+        mesh: &Mesh,
+        points: usize,
+        settings: &BakeSettings,
+        copies: usize,
+    ) -> Workload {
+        Workload {
+            points,
+            point_name: "surface points",
+            ..Workload::bake(frames, mesh, settings, copies)
+        }
+    }
+
     /// The same work with every frame saved to a checkpoint file.
     pub fn with_checkpoint(self) -> Workload {
         Workload {
@@ -223,10 +239,10 @@ impl BudgetError {
             Bound::Bytes => format!(
                 "one run holds at most {}: take fewer frames, a lower frame rate{} or a lower SH order",
                 bytes(MAX_BYTES),
-                if w.point_name == "texels" {
-                    ", a lower --resolution"
-                } else {
-                    ""
+                match w.point_name {
+                    "texels" => ", a lower --resolution",
+                    "surface points" => ", fewer --surface points",
+                    _ => "",
                 }
             ),
             Bound::Rays => format!(

@@ -325,9 +325,39 @@ pub struct SimulateArgs {
     /// Simulation settings.
     #[command(flatten)]
     pub bake: BakeArgs,
-    /// Output .npy file, float32 (frames, vertices, n²).
+    /// Output .npy file, float32 (frames, vertices, n²); with --surface N, (frames, N, n²).
     #[arg(long)]
     pub npy: PathBuf,
+    /// Bake N points spread over the bind surface by area instead of the vertices: each
+    /// triangle gets its share of N by area, evenly spread inside it, and every point rides
+    /// the skin (the same blend of its triangle's corners in every pose). The truth a
+    /// renderer's per-vertex interpolation or light map is judged against between the
+    /// vertices. Baked through a checkpoint, like `aprt train`'s, so --resume and --shard
+    /// apply.
+    #[arg(long, value_name = "N", value_parser = parse_surface_points)]
+    pub surface: Option<usize>,
+    /// With --surface: also write the points to this .npy, float32 (N, 5), one row per point
+    /// in the order of --npy's: column 0 its triangle's index in the bind mesh (exact in
+    /// float32 below 2^24 triangles), columns 1–3 its barycentric coordinates (the weights of
+    /// the triangle's first, second and third corner, summing to 1), column 4 the share of the
+    /// bind surface's area it stands for (the column sums to 1). Evaluate any method at these
+    /// points to compare it with the truth there. Written with --npy (a --shard run writes
+    /// neither).
+    #[arg(long, value_name = "FILE.npy")]
+    pub points: Option<PathBuf>,
+    /// With --surface: checkpoint directory, every baked frame is saved there until the .npy
+    /// is written (default: the --npy path + .bake).
+    #[arg(long)]
+    pub checkpoint: Option<PathBuf>,
+    /// With --surface: continue an interrupted bake from its checkpoint (same inputs, points
+    /// and bake settings).
+    #[arg(long)]
+    pub resume: bool,
+    /// With --surface: bake only shard I of N (frames f with f % N == I, 0-based) into the
+    /// checkpoint and stop; when every shard is done, the same command with --resume instead
+    /// writes the .npy (see docs/guide/bake-farms.md).
+    #[arg(long, value_name = "I/N")]
+    pub shard: Option<crate::bake::shard::Shard>,
 }
 
 /// `aprt eval`.
@@ -481,6 +511,15 @@ pub fn parse_rays(text: &str) -> std::result::Result<usize, String> {
     match text.parse::<usize>() {
         Ok(rays) if (1..=max).contains(&rays) => Ok(rays),
         _ => Err(format!("expected 1 to {max} directions per vertex")),
+    }
+}
+
+/// `--surface`: at least one point (an upper bound is the run's budget, checked with the
+/// character's frames).
+pub fn parse_surface_points(text: &str) -> std::result::Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(points) if points >= 1 => Ok(points),
+        _ => Err("expected a whole number of surface points, 1 or more".to_owned()),
     }
 }
 

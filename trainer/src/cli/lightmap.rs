@@ -7,13 +7,12 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand};
 
-use crate::bake::checkpoint::{Checkpoint, OnExisting};
 use crate::bake::shard::Shard;
 use crate::cli::args::{BakeArgs, FitArgs, PrecisionArg, parse_rays, parse_resolution};
 use crate::cli::source::SourceArgs;
 use crate::cli::stdout::outln;
 use crate::cli::terminal::Terminal;
-use crate::cli::{read_file, shard_done, write_npy};
+use crate::cli::{checkpoint_output, on_existing, read_file, shard_done, write_npy};
 use crate::input::InputKind;
 use crate::io::atomic::write_atomic;
 use crate::io::outputs::{Input, Output, check};
@@ -252,38 +251,11 @@ pub fn run(args: &LightmapArgs) -> Result<()> {
     }
 }
 
-/// The checkpoint output of a command writing `output`, and the files of a checkpoint being
-/// resumed (inputs, which the output must not land on).
-fn checkpoint_output(atlas: &AtlasArgs, output: &std::path::Path) -> (Output, Vec<Input>) {
-    let checkpoint = match &atlas.checkpoint {
-        Some(dir) => Output::directory(dir, "--checkpoint", &[]),
-        None => Output::directory(
-            Checkpoint::default_dir(output),
-            "the checkpoint directory (-o's path + .bake)",
-            &[],
-        ),
-    };
-    let stored = std::fs::read_dir(&checkpoint.path).into_iter().flatten();
-    let inputs = stored
-        .flatten()
-        .map(|e| Input::new(e.path(), "a file of the checkpoint"))
-        .collect();
-    (checkpoint, inputs)
-}
-
 /// What errors about the source call it: the character, or the OBJ sequence's directory.
 fn subject(source: &SourceArgs) -> String {
     match &source.obj_seq {
         Some(dir) if !source.names_rig() => format!("the OBJ sequence {}", dir.display()),
         _ => "the character".to_owned(),
-    }
-}
-
-fn existing(atlas: &AtlasArgs) -> OnExisting {
-    if atlas.resume {
-        OnExisting::Resume
-    } else {
-        OnExisting::Refuse
     }
 }
 
@@ -295,7 +267,7 @@ fn prepare(
     source: &SourceArgs,
     bake: &BakeArgs,
 ) -> Result<(PathBuf, crate::bake::BakeSettings)> {
-    let (checkpoint, mut inputs) = checkpoint_output(atlas, output);
+    let (checkpoint, mut inputs) = checkpoint_output(atlas.checkpoint.as_deref(), output, "-o");
     inputs.extend(source.inputs());
     check(&[Output::file(output, "-o"), checkpoint.clone()], &inputs)?;
     let settings = bake.settings();
@@ -328,7 +300,7 @@ fn bake(args: &LightmapBakeArgs) -> Result<()> {
         &settings,
         &CheckpointSettings {
             dir: &checkpoint,
-            existing: existing(&args.atlas),
+            existing: on_existing(args.atlas.resume),
         },
         &Terminal,
     ))?;
@@ -510,7 +482,7 @@ fn train(args: &LightmapTrainArgs) -> Result<()> {
         },
         checkpoint: CheckpointSettings {
             dir: &checkpoint,
-            existing: existing(&args.atlas),
+            existing: on_existing(args.atlas.resume),
         },
         irradiance_rig: args.rig,
     };

@@ -5,6 +5,7 @@
 mod args;
 mod irradiance_rig;
 mod lightmap;
+mod simulate;
 mod source;
 mod stdout;
 mod terminal;
@@ -125,7 +126,7 @@ fn command(command: Command) -> Result<()> {
         Command::Demo(args) => demo(&args),
         Command::Transfer(args) => transfer(&args),
         Command::Train(args) => train(&args),
-        Command::Simulate(args) => simulate(&args),
+        Command::Simulate(args) => simulate::run(&args),
         Command::Eval(args) => eval(&args),
         Command::ExportWeb(args) => export_web(&args),
         Command::Inspect(args) => inspect(&args),
@@ -428,17 +429,33 @@ fn irradiance_rig_study(args: &RigStudyArgs) -> Result<()> {
     Ok(())
 }
 
-fn simulate(args: &SimulateArgs) -> Result<()> {
-    check(&[Output::file(&args.npy, "--npy")], &args.source.inputs())?;
-    let settings = args.bake.settings();
-    let meshes = args.source.meshes(&settings, &Terminal)?;
-    let transfer = crate::bake::bake_poses(&meshes, &settings, &Terminal)?;
-    let n2 = settings.order * settings.order;
-    write_npy(
-        &args.npy,
-        &[meshes.len(), meshes[0].vertex_count(), n2],
-        &transfer.concat(),
-    )
+/// The checkpoint directory of a command writing `output` (named `output_flag` on the command
+/// line): `--checkpoint`'s `dir`, or `OUTPUT.bake` beside the output; and the files of a
+/// checkpoint being resumed there, which are inputs the outputs must not land on.
+fn checkpoint_output(dir: Option<&Path>, output: &Path, output_flag: &str) -> (Output, Vec<Input>) {
+    let checkpoint = match dir {
+        Some(dir) => Output::directory(dir, "--checkpoint", &[]),
+        None => Output::directory(
+            Checkpoint::default_dir(output),
+            format!("the checkpoint directory ({output_flag}'s path + .bake)"),
+            &[],
+        ),
+    };
+    let stored = std::fs::read_dir(&checkpoint.path).into_iter().flatten();
+    let inputs = stored
+        .flatten()
+        .map(|e| Input::new(e.path(), "a file of the checkpoint"))
+        .collect();
+    (checkpoint, inputs)
+}
+
+/// What `--resume` asks of a checkpoint that is already there.
+fn on_existing(resume: bool) -> OnExisting {
+    if resume {
+        OnExisting::Resume
+    } else {
+        OnExisting::Refuse
+    }
 }
 
 /// Prints what a shard of `command` baked, and what finishes the bake.
@@ -505,36 +522,20 @@ fn train(args: &TrainArgs) -> Result<()> {
         Some(scene) => (SourceArgs::from_scene(scene), Vec::new()),
         None => (args.source.clone(), args.validate.clone()),
     };
-    let checkpoint = match &args.checkpoint {
-        Some(dir) => Output::directory(dir, "--checkpoint", &[]),
-        None => Output::directory(
-            Checkpoint::default_dir(&args.output),
-            "the checkpoint directory (-o's path + .bake)",
-            &[],
-        ),
-    };
     // A checkpoint being resumed is read too: the model must not land on one of its files.
-    let mut inputs = source.inputs();
+    let (checkpoint, mut inputs) =
+        checkpoint_output(args.checkpoint.as_deref(), &args.output, "-o");
+    inputs.extend(source.inputs());
     inputs.extend(source.validation_inputs(&validate));
     if let Some(scene) = &scene {
         inputs.extend(scene_inputs(scene));
     }
-    let stored = std::fs::read_dir(&checkpoint.path).into_iter().flatten();
-    inputs.extend(
-        stored
-            .flatten()
-            .map(|e| Input::new(e.path(), "a file of the checkpoint")),
-    );
     let mut outputs = vec![Output::file(&args.output, "-o"), checkpoint.clone()];
     if let Some(report) = &args.report {
         outputs.push(Output::file(report, "--report"));
     }
     check(&outputs, &inputs)?;
-    let existing = if args.resume {
-        OnExisting::Resume
-    } else {
-        OnExisting::Refuse
-    };
+    let existing = on_existing(args.resume);
     if let Some(scene) = &scene {
         let (poses, tests) = scene_poses(&source, scene)?;
         let lighting = SceneLighting::of(scene, poses.up())?;
@@ -842,6 +843,15 @@ fn report(args: &ReportArgs) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Clap's own consistency checks over every command's flags (no two flags of one command
+    /// share a name, every `requires` and `conflicts_with` names a flag), which it runs by
+    /// itself in debug builds only.
+    #[test]
+    fn every_command_line_is_consistent() {
+        use clap::CommandFactory;
+        Cli::command().debug_assert();
+    }
 
     /// A cause its parent already quotes is said once; distinct causes all are.
     #[test]

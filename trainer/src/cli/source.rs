@@ -70,6 +70,15 @@ pub struct SourceArgs {
     pub root_translation: bool,
 }
 
+/// What a bake of `aprt simulate` works on ([`SourceArgs::meshes`]).
+pub struct PosedMeshes {
+    /// The mesh whose topology every pose shares: the character's bind mesh, or the first
+    /// mesh of an OBJ sequence. Surface points are spread on it.
+    pub bind: Mesh,
+    /// One posed mesh per frame.
+    pub poses: Vec<Mesh>,
+}
+
 /// `--character`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum CharacterArg {
@@ -395,26 +404,44 @@ impl SourceArgs {
     }
 
     /// The meshes to bake with `settings`, without angles: every OBJ of --obj-seq (--angles
-    /// is not needed), or the rig posed at every frame of its clips. A bake beyond the budget
-    /// of one run ([`crate::bake::budget`]) is refused before any frame is posed.
-    pub fn meshes(&self, settings: &BakeSettings, reporter: &dyn Reporter) -> Result<Vec<Mesh>> {
+    /// is not needed), or the rig posed at every frame of its clips; with the bind mesh whose
+    /// topology they share (the rig's, or the sequence's first mesh). Baked at the vertices,
+    /// or with `surface` at that many points of the surface (checkpointed). A bake beyond the
+    /// budget of one run ([`crate::bake::budget`]) is refused before any frame is posed.
+    pub fn meshes(
+        &self,
+        settings: &BakeSettings,
+        surface: Option<usize>,
+        reporter: &dyn Reporter,
+    ) -> Result<PosedMeshes> {
         settings.validate()?;
         // The bake's result, the array written and its encoding.
         let copies = 3;
+        let work = |frames: usize, bind: &Mesh| match surface {
+            None => Workload::bake(frames, bind, settings, copies),
+            Some(points) => {
+                Workload::surface_points(frames, bind, points, settings, copies).with_checkpoint()
+            }
+        };
         if self.names_rig() {
             let (rig, clip) = self.rig(reporter)?;
-            let work = Workload::bake(clip.frames.len(), rig.bind_mesh(), settings, copies);
-            self.in_origin(work.check(&format!("clip {}", clip.name)))?;
-            return pose_all(rig.as_ref(), &clip.name, &clip.frames);
+            let estimate = work(clip.frames.len(), rig.bind_mesh());
+            self.in_origin(estimate.check(&format!("clip {}", clip.name)))?;
+            return Ok(PosedMeshes {
+                poses: pose_all(rig.as_ref(), &clip.name, &clip.frames)?,
+                bind: rig.bind_mesh().clone(),
+            });
         }
         self.check_flags()?;
         let Some(dir) = &self.obj_seq else {
             bail!("give a character (--builtin, --gltf or --bvh) or --obj-seq DIR");
         };
         let meshes = obj_sequence_meshes(dir, reporter)?;
-        Workload::bake(meshes.len(), &meshes[0], settings, copies)
-            .check(&dir.display().to_string())?;
-        Ok(meshes)
+        work(meshes.len(), &meshes[0]).check(&dir.display().to_string())?;
+        Ok(PosedMeshes {
+            bind: meshes[0].clone(),
+            poses: meshes,
+        })
     }
 
     /// The poses the options name: a rig's clips (with the clips `validate` names held out to

@@ -32,7 +32,8 @@ pub struct SurfacePoint {
     /// Barycentric coordinates in that triangle (non-negative, summing to one).
     pub bary: [f32; 3],
     /// Its triangle's share of the bind surface's area, split evenly between the triangle's
-    /// points: the weights sum to one.
+    /// points: the weights sum to one. Triangles too small to get a point (fewer points than
+    /// triangles) leave their area to those that did, so the weights still sum to one.
     pub weight: f64,
 }
 
@@ -88,9 +89,15 @@ impl SurfacePoints {
         for &t in by_remainder.iter().take(missing) {
             counts[t] += 1;
         }
+        // Zero-area triangles never get a point (their remainder is 0), so this is positive.
+        let represented: f64 = areas
+            .iter()
+            .zip(&counts)
+            .map(|(&a, &n)| if n > 0 { a } else { 0.0 })
+            .sum();
         let mut points = Vec::with_capacity(count);
         for (t, &n) in counts.iter().enumerate() {
-            let weight = areas[t] / total / n.max(1) as f64;
+            let weight = areas[t] / represented / n.max(1) as f64;
             points.extend((0..n).map(|i| SurfacePoint {
                 triangle: t as u32,
                 bary: r2_barycentric(i),

@@ -39,6 +39,35 @@ fn points_spread_by_area_inside_their_triangles() {
     assert!((total - 1.0).abs() < 1e-12);
 }
 
+/// With fewer points than triangles, the triangles left without a point leave their area to
+/// those that got one: the weights still sum to one, each in proportion to its triangle's
+/// area (a bug once: they summed to the share of the surface the points' triangles cover).
+#[test]
+fn weights_sum_to_one_with_fewer_points_than_triangles() {
+    // A fan of 10 triangles of areas 1..=10 (55 in all) around the origin.
+    let mut positions = vec![[0.0f32, 0.0, 0.0]];
+    let mut triangles = Vec::new();
+    for t in 0..10u32 {
+        positions.push([0.0, 0.0, 0.0]);
+        positions.push([0.0, 0.0, 0.0]);
+        let area = (t + 1) as f32;
+        let (i, j) = (2 * t + 1, 2 * t + 2);
+        positions[i as usize] = [10.0 * t as f32, 1.0, 0.0];
+        positions[j as usize] = [10.0 * t as f32 + 2.0 * area, 1.0, 0.0];
+        triangles.push([0, i, j]);
+    }
+    let mesh = Mesh::with_area_weighted_normals(positions, triangles);
+    let spread = SurfacePoints::spread(&mesh, 3).unwrap();
+    assert_eq!(spread.len(), 3);
+    let total: f64 = spread.points.iter().map(|p| p.weight).sum();
+    assert!((total - 1.0).abs() < 1e-12, "{spread:?}");
+    // Shares 30/55, 27/55 and 24/55 of 3 points: the three largest triangles, one each.
+    let on: Vec<u32> = spread.points.iter().map(|p| p.triangle).collect();
+    assert_eq!(on, [7, 8, 9]);
+    let w = |i: usize| spread.points[i].weight;
+    assert!((w(0) / w(2) - 0.8).abs() < 1e-12 && (w(1) / w(2) - 0.9).abs() < 1e-12);
+}
+
 /// A triangle with no area (or a non-finite one) gets no point; a mesh with no area and a
 /// count of zero are refused.
 #[test]
