@@ -123,7 +123,8 @@ pub struct SceneTrainOptions<'a> {
     /// Validation poses to sample and bake (`--validation-poses`; None: the default, see
     /// [`TrainSettings::validation_poses`]).
     pub validation_poses: Option<usize>,
-    /// The method to write, and why ([`crate::pipeline::method::decide_method`]).
+    /// The method to write, and why: the scene's ([`crate::scene::method::fixed_method`]), or
+    /// the kind `aprt report` recommends (the report's `sweep::choice`).
     pub method: MethodDecision,
 }
 

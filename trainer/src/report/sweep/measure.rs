@@ -36,7 +36,7 @@ pub struct Truth<'a> {
 
 impl Truth<'_> {
     /// Sums of a prediction's error at the vertices and over the surface: one frame at a
-    /// time through [`Truth::add_frame`], then [`Truth::finish`].
+    /// time through [`Truth::add_frame`], then [`accuracy`].
     pub fn sums(&self) -> (ErrorSum<'_>, ErrorSum<'_>) {
         (ErrorSum::new(self.lighting), ErrorSum::new(self.lighting))
     }
