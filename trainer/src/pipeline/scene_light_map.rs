@@ -21,11 +21,14 @@ use crate::scene::frame_cost::{self, BudgetCheck, FrameCost};
 use crate::scene::irradiance_rig_choice::RigDecision;
 use crate::scene::lighting::SceneLighting;
 use crate::scene::method::MethodDecision;
-use crate::scene::{SHADOWS, plan_bake, shadows_sentence};
+use crate::scene::{BakePlan, SHADOWS, plan_bake, shadows_sentence};
 
 /// Precision of a light map whose scene leaves it to `auto` and whose choice did not measure
 /// one: f16, which the sweeps find within a hundredth of a grey level of f32 at half the bytes.
 const DEFAULT_PRECISION: Precision = Precision::F16;
+
+/// Why a light map stores no irradiance rig.
+const NO_RIG: &str = "a light map is composed under the scene's lighting at the character's centre";
 
 /// Trains `scene`'s pose-driven light map from `poses` into `options.output` as `decision`
 /// chose it (or bakes one shard of it), and reports what was computed and skipped.
@@ -99,27 +102,13 @@ pub fn train_scene_light_map(
         budget,
         precision,
     });
-    // The plan counts rays per vertex; a light map casts them per texel.
-    let mut computed: Vec<String> = plan
-        .computed
-        .iter()
-        .filter(|l| !l.starts_with(SHADOWS))
-        .cloned()
-        .collect();
-    if scene.effects.shadows {
-        computed.push(shadows_sentence(
-            &plan.bake,
-            (texels, "texel"),
-            trained.frames,
-        ));
-    }
-    computed.push(format!(
-        "light map {resolution}x{resolution} on generated UVs ({texels} texels as the model's rows): {}",
-        decision.reason
-    ));
-    computed.push(format!("precision {}", precision.name()));
-    let mut skipped = plan.skipped.clone();
-    skipped.push("irradiance rig: a light map is composed under the scene's lighting at the character's centre".into());
+    let (computed, skipped) = sentences(
+        scene,
+        &plan,
+        (texels, trained.frames),
+        (resolution, precision),
+        &decision.reason,
+    );
     Ok(SceneOutcome::Trained(Box::new(SceneTrainReport {
         scene: scene.path.clone(),
         model: options.output.to_owned(),
@@ -131,8 +120,7 @@ pub fn train_scene_light_map(
         grey_by_order: plan.order.grey_by_order.clone(),
         rig: RigDecision {
             kind: None,
-            reason: "a light map is composed under the scene's lighting at the character's centre"
-                .into(),
+            reason: NO_RIG.into(),
         },
         precision: precision.name().to_owned(),
         precision_reason: match scene.effects.precision {
@@ -158,4 +146,32 @@ pub fn train_scene_light_map(
         within_budget: budget.map(|b| b.within()),
         over_budget: budget.and_then(|b| b.miss_message()),
     })))
+}
+
+/// What the light map's training computed and skipped, one sentence each: the plan's, its
+/// shadows counted at the `texels` of each of `frames` poses (the plan counts vertices), the
+/// map at `resolution`² and why, and its `precision`.
+fn sentences(
+    scene: &Scene,
+    plan: &BakePlan,
+    (texels, frames): (usize, usize),
+    (resolution, precision): (usize, Precision),
+    reason: &str,
+) -> (Vec<String>, Vec<String>) {
+    let mut computed: Vec<String> = plan
+        .computed
+        .iter()
+        .filter(|l| !l.starts_with(SHADOWS))
+        .cloned()
+        .collect();
+    if scene.effects.shadows {
+        computed.push(shadows_sentence(&plan.bake, (texels, "texel"), frames));
+    }
+    computed.push(format!(
+        "light map {resolution}x{resolution} on generated UVs ({texels} texels as the model's rows): {reason}"
+    ));
+    computed.push(format!("precision {}", precision.name()));
+    let mut skipped = plan.skipped.clone();
+    skipped.push(format!("irradiance rig: {NO_RIG}"));
+    (computed, skipped)
 }

@@ -154,16 +154,8 @@ pub fn markdown(report: &SweepReport, command: &str) -> String {
         "**Error** is the RMS shading error on the test clips in 8-bit grey levels (a white Lambertian surface under the scene's lighting projected at the character's centre, radiance 1 = white), against the ground truth at order 6; the transfer error is the paper's relative error ‖pred − truth‖/‖truth‖ over every coefficient of the truth. **µs** is one frame through aprt-core on one core, median over a tenth of a second, as `aprt train --scene` measures the model it writes: the pose, the scene's lighting through the irradiance rig every setting carries ({}) or projected at the centre without one, every vertex shaded, the lights the rig leaves to each vertex, and the occluder proxies of a model that has them. **Transfer µs** is the full per-vertex transfer instead. A light-map setting's µs is the pose, every texel's transfer and the RGB map composed through aprt-core's `LightMap` under the lighting at the centre (the renderer's filtered fetch is not counted); it carries no irradiance rig.\n",
         report.irradiance_rig.kind.as_deref().unwrap_or("none")
     );
-    let _ = writeln!(
-        s,
-        "**Surface** figures are measured at {} points spread over the surface by area (each weighted by the area it stands for) on every test frame, against their own ray-cast transfer at the reference settings: per-vertex transfer interpolated across each triangle as a renderer interpolates it, a light map filtered bilinearly at each point's light-map UV. What a vertex cannot hold (a shadow inside a large triangle) counts there and not at the vertices. The fronts and the recommendation rank by the error {}.\n",
-        report.surface_points,
-        match report.error_at {
-            "surface" =>
-                "over the surface: the scene weighs light maps, and only there are texels and vertices judged alike",
-            _ => "at the vertices (a vertex scene; the surface error is beside it)",
-        }
-    );
+    s.push_str(&surface_paragraph(report));
+    s.push('\n');
     let _ = writeln!(s, "Irradiance rig: {}.\n", report.irradiance_rig.reason);
     let _ = writeln!(s, "![error against µs per frame]({}.png)\n", TIME_PLOT);
     let _ = writeln!(s, "![error against bytes]({}.png)\n", BYTES_PLOT);
@@ -249,6 +241,19 @@ pub fn markdown(report: &SweepReport, command: &str) -> String {
         }
     }
     s
+}
+
+/// What the surface figures are and which error the fronts rank by.
+fn surface_paragraph(report: &SweepReport) -> String {
+    format!(
+        "**Surface** figures are measured at {} points spread over the surface by area (each weighted by the area it stands for) on every test frame, against their own ray-cast transfer at the reference settings: per-vertex transfer interpolated across each triangle as a renderer interpolates it, a light map filtered bilinearly at each point's light-map UV. What a vertex cannot hold (a shadow inside a large triangle) counts there and not at the vertices. The fronts and the recommendation rank by the error {}.\n",
+        report.surface_points,
+        match report.error_at {
+            "surface" =>
+                "over the surface: the scene weighs light maps, and only there are texels and vertices judged alike",
+            _ => "at the vertices (a vertex scene; the surface error is beside it)",
+        }
+    )
 }
 
 #[cfg(test)]

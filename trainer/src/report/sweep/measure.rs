@@ -32,6 +32,8 @@ pub struct Truth<'a> {
     pub surface: &'a SurfacePoints,
     /// Transfer at those points in every frame of every test clip, at the reference settings.
     pub surface_tests: &'a [Vec<Vec<f32>>],
+    /// Each point's area weight, in point order (gathered once for every frame's sum).
+    pub surface_weights: Vec<f64>,
 }
 
 impl Truth<'_> {
@@ -50,11 +52,14 @@ impl Truth<'_> {
         (at_vertices, at_points): (&[f32], &[f32]),
         m2: usize,
     ) {
-        let weights: Vec<f64> = self.surface.points.iter().map(|p| p.weight).collect();
         sums.0
             .add(at_vertices, m2, &self.tests[clip].transfer[f], None);
-        sums.1
-            .add(at_points, m2, &self.surface_tests[clip][f], Some(&weights));
+        sums.1.add(
+            at_points,
+            m2,
+            &self.surface_tests[clip][f],
+            Some(&self.surface_weights),
+        );
     }
 }
 

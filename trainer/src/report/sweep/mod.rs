@@ -419,10 +419,7 @@ pub fn sweep(
         target: e.error_target,
         surface: &reference.surface,
         surface_tests: &reference.surface_tests,
-    };
-    let light_maps = match e.method {
-        Choice::Fixed(Method::Vertex) => None,
-        _ => Some(light_map_candidates(scene)),
+        surface_weights: reference.surface.points.iter().map(|p| p.weight).collect(),
     };
     let rig_sections = rig_sections(reference, candidates)?;
     let progress = reporter.step_progress(candidates.len() + 2);
@@ -461,27 +458,11 @@ pub fn sweep(
     }
     progress.step("light maps");
     let mut not_swept = not_swept(scene);
-    if let Some(light_maps) = &light_maps {
-        let sweep = LightMapSweep {
-            clips,
-            stride: reference.stride,
-            layout: &reference.layout,
-            bake: plan.bake,
-            frame: e.frame,
-        };
-        let (maps, notes) = sweep_light_maps(&sweep, light_maps, &truth, reporter)?;
-        points.extend(maps);
-        not_swept.extend(notes);
-    }
-    let error_at = match e.method {
-        Choice::Fixed(Method::Vertex) => "vertices",
-        _ => "surface",
-    };
-    if error_at == "surface" {
-        for p in &mut points {
-            p.error = p.measured.surface_grey_rms;
-        }
-    }
+    let error_at = with_light_maps(scene, (clips, reference), &truth, &mut points, reporter)?
+        .map_or("vertices", |notes| {
+            not_swept.extend(notes);
+            "surface"
+        });
     progress.step("the Pareto fronts");
     mark_fronts(&mut points);
     let budget_us = settings.budget_us.or(scene.budget.us_per_frame);
@@ -525,6 +506,36 @@ pub fn sweep(
         not_swept,
         seconds: started.elapsed().as_secs_f64(),
     })
+}
+
+/// For a scene whose method is not `vertex`: adds the pose-driven light maps to `points`
+/// (measured against `truth`) and ranks every point by its error over the surface, the only
+/// one in which texels and interpolated vertices are judged alike; returns the resolutions
+/// left out and why. `None` for a vertex scene, whose points keep their vertex error.
+fn with_light_maps(
+    scene: &Scene,
+    (clips, reference): (&SceneClips<'_>, &Reference),
+    truth: &Truth<'_>,
+    points: &mut Vec<Point>,
+    reporter: &dyn Reporter,
+) -> Result<Option<Vec<String>>> {
+    let e = &scene.effects;
+    if e.method == Choice::Fixed(Method::Vertex) {
+        return Ok(None);
+    }
+    let sweep = LightMapSweep {
+        clips,
+        stride: reference.stride,
+        layout: &reference.layout,
+        bake: reference.plan.bake,
+        frame: e.frame,
+    };
+    let (maps, notes) = sweep_light_maps(&sweep, &light_map_candidates(scene), truth, reporter)?;
+    points.extend(maps);
+    for p in points.iter_mut() {
+        p.error = p.measured.surface_grey_rms;
+    }
+    Ok(Some(notes))
 }
 
 /// The irradiance rig section the scene's model carries, at each order `candidates` fit (its
